@@ -1,0 +1,58 @@
+// Minimal command-line helpers for qnav commands: `--name value` options, `--flag` switches and
+// positional arguments. Options may appear anywhere after the sub-command words.
+#pragma once
+
+#include <cstdlib>
+#include <cstring>
+
+namespace qnav::cli {
+
+// Value of `--name VALUE`, or fallback when absent.
+inline const char* option(int argc, char** argv, const char* name, const char* fallback = nullptr) noexcept {
+  for (int i = 0; i + 1 < argc; ++i)
+    if (std::strcmp(argv[i], name) == 0) return argv[i + 1];
+  return fallback;
+}
+inline bool flag(int argc, char** argv, const char* name) noexcept {
+  for (int i = 0; i < argc; ++i)
+    if (std::strcmp(argv[i], name) == 0) return true;
+  return false;
+}
+// Parses a double option; returns false when present but not a number.
+inline bool option_double(int argc, char** argv, const char* name, double& out) noexcept {
+  const char* v = option(argc, argv, name);
+  if (v == nullptr) return true;
+  char* end = nullptr;
+  const double d = std::strtod(v, &end);
+  if (end == v || *end != '\0') return false;
+  out = d;
+  return true;
+}
+inline bool option_long(int argc, char** argv, const char* name, long& out) noexcept {
+  const char* v = option(argc, argv, name);
+  if (v == nullptr) return true;
+  char* end = nullptr;
+  const long l = std::strtol(v, &end, 10);
+  if (end == v || *end != '\0') return false;
+  out = l;
+  return true;
+}
+// The i-th positional argument (not an option, not an option's value), counting from argv[first].
+// `valued` lists the options that take a value, null-terminated.
+inline const char* positional(int argc, char** argv, int first, int index, const char* const* valued) noexcept {
+  int seen = 0;
+  for (int i = first; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--", 2) == 0) {
+      for (const char* const* v = valued; v != nullptr && *v != nullptr; ++v)
+        if (std::strcmp(*v, argv[i]) == 0) {
+          ++i;
+          break;
+        }
+      continue;
+    }
+    if (seen++ == index) return argv[i];
+  }
+  return nullptr;
+}
+
+}  // namespace qnav::cli

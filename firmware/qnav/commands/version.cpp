@@ -1,0 +1,15 @@
+// qnav version: build facts an engineer needs when reporting a result.
+#include <cstdio>
+
+#include "firmware/qnav/command.hpp"
+#include "nav/core/byte_order.hpp"
+
+namespace {
+int run_version(int, char**) {
+  std::printf("qnav %s (%s, %s-endian, %zu-bit, C++%ld)\n", QNAV_VERSION, QNAV_BUILD_TYPE,
+              qnav::host_is_big_endian() ? "big" : "little", sizeof(void*) * 8, __cplusplus / 100 % 100 + 0L);
+  return 0;
+}
+}  // namespace
+
+QNAV_COMMAND("version", "print version and build facts", run_version);

@@ -1,0 +1,54 @@
+// Allocation guard for tests: proves "no heap after init" (DESIGN.md, fixed allocation).
+// Linking qnav_test_support replaces global operator new/delete (all forms) and, on dynamically
+// linked glibc hosts without sanitizers, malloc/calloc/realloc/free (not posix_memalign/aligned_alloc),
+// with versions that count every call before forwarding to the real allocator. Counting covers all
+// threads.
+//
+//   qnav::test::AllocationGuard guard;          // snapshot the counters
+//   pipeline.step(frame);                        // the region under test
+//   EXPECT_EQ(guard.allocations(), 0u) << guard.report();
+//
+// or QNAV_EXPECT_NO_ALLOC(statement);
+// malloc_counted() tells whether malloc-level counting is active in this build (it is not under
+// ASan, which owns malloc, nor in static builds such as leon3, where glibc's malloc cannot be
+// interposed); operator new is counted everywhere.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace qnav::test {
+
+struct AllocationCounts {
+  std::uint64_t news = 0;     // operator new / new[] calls
+  std::uint64_t deletes = 0;  // operator delete / delete[] calls with a non-null pointer
+  std::uint64_t mallocs = 0;  // malloc / calloc / realloc / aligned allocations (when counted)
+  std::uint64_t frees = 0;
+};
+
+AllocationCounts allocation_counts() noexcept;
+bool malloc_counted() noexcept;
+
+class AllocationGuard {
+ public:
+  AllocationGuard() noexcept : start_(allocation_counts()) {}
+  // Allocations (new + malloc) since construction.
+  std::uint64_t allocations() const noexcept;
+  std::uint64_t deallocations() const noexcept;
+  std::string report() const;
+
+ private:
+  AllocationCounts start_;
+};
+
+}  // namespace qnav::test
+
+#define QNAV_EXPECT_NO_ALLOC(statement)                                            \
+  do {                                                                            \
+    ::qnav::test::AllocationGuard qnav_alloc_guard_;                              \
+    statement;                                                                    \
+    const auto qnav_allocs_ = qnav_alloc_guard_.allocations();                    \
+    EXPECT_EQ(qnav_allocs_, 0u) << "heap allocation in: " #statement " ("         \
+                                << qnav_alloc_guard_.report() << ")";             \
+  } while (0)
