@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace qnav {
 namespace {
@@ -13,7 +14,7 @@ TEST(Geometry, WrapAngleStaysInHalfOpenInterval) {
   EXPECT_NEAR(wrap_angle_rad(2.0 * kPi + 0.25), 0.25, 1e-12);
   EXPECT_NEAR(wrap_angle_rad(-0.25), -0.25, 1e-12);
   EXPECT_TRUE(std::isnan(wrap_angle_rad(std::nan(""))));
-  EXPECT_TRUE(std::isnan(wrap_angle_rad(INFINITY)));
+  EXPECT_TRUE(std::isnan(wrap_angle_rad(std::numeric_limits<double>::infinity())));
 }
 
 TEST(Geometry, Pose2ComposeAndInverseRoundTrip) {
