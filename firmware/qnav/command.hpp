@@ -24,5 +24,6 @@ const Command* command_at(int i) noexcept;
 
 #define QNAV_COMMAND_CAT2(a, b) a##b
 #define QNAV_COMMAND_CAT(a, b) QNAV_COMMAND_CAT2(a, b)
-#define QNAV_COMMAND(name, summary, fn) \
-  static const bool QNAV_COMMAND_CAT(qnav_command_registered_, __LINE__) = ::qnav::cli::register_command({name, summary, fn})
+#define QNAV_COMMAND(name, summary, fn)                                    \
+  static const bool QNAV_COMMAND_CAT(qnav_command_registered_, __LINE__) = \
+      ::qnav::cli::register_command({name, summary, fn})

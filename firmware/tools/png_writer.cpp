@@ -73,13 +73,15 @@ Status write_png_rgb8(const char* path, const std::uint8_t* rgb, int width, int 
   if (rgb == nullptr || width <= 0 || height <= 0 || stride_bytes < width * 3)
     return Status(StatusCode::kInvalidArgument, "png: bad rgb buffer");
   std::vector<const std::uint8_t*> rows(static_cast<std::size_t>(height));
-  for (int y = 0; y < height; ++y) rows[static_cast<std::size_t>(y)] = rgb + static_cast<std::ptrdiff_t>(y) * stride_bytes;
+  for (int y = 0; y < height; ++y)
+    rows[static_cast<std::size_t>(y)] = rgb + static_cast<std::ptrdiff_t>(y) * stride_bytes;
   return write_rows(path, rows.data(), width, height, PNG_COLOR_TYPE_RGB);
 }
 
 Status write_png_float(const char* path, ConstImageViewF32 image, float lo, float hi) noexcept {
   if (image.empty()) return Status(StatusCode::kInvalidArgument, "png: empty image");
-  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return Status(StatusCode::kInvalidArgument, "png: bad range");
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
+    return Status(StatusCode::kInvalidArgument, "png: bad range");
   const std::size_t w = static_cast<std::size_t>(image.width());
   std::vector<std::uint8_t> px(w * static_cast<std::size_t>(image.height()));
   const float scale = 255.0f / (hi - lo);

@@ -29,7 +29,8 @@ class ImageView {
   static Result<ImageView> make(T* data, int width, int height, std::ptrdiff_t stride) noexcept {
     if (data == nullptr) return Status(StatusCode::kInvalidArgument, "image data is null");
     if (width <= 0 || height <= 0) return Status(StatusCode::kInvalidArgument, "image has zero or negative size");
-    if (width > kMaxImageSide || height > kMaxImageSide) return Status(StatusCode::kInvalidArgument, "image side too large");
+    if (width > kMaxImageSide || height > kMaxImageSide)
+      return Status(StatusCode::kInvalidArgument, "image side too large");
     if (stride < width) return Status(StatusCode::kInvalidArgument, "image stride smaller than width");
     return ImageView(data, width, height, stride);
   }
@@ -40,7 +41,9 @@ class ImageView {
   int height() const noexcept { return height_; }
   std::ptrdiff_t stride() const noexcept { return stride_; }
   bool empty() const noexcept { return data_ == nullptr; }
-  std::size_t pixel_count() const noexcept { return static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_); }
+  std::size_t pixel_count() const noexcept {
+    return static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  }
   bool contains(int x, int y) const noexcept { return x >= 0 && y >= 0 && x < width_ && y < height_; }
 
   T* row(int y) const noexcept { return data_ + static_cast<std::ptrdiff_t>(y) * stride_; }
@@ -122,7 +125,8 @@ class Image {
  private:
   static Status check_size(int width, int height) noexcept {
     if (width <= 0 || height <= 0) return Status(StatusCode::kInvalidArgument, "image has zero or negative size");
-    if (width > kMaxImageSide || height > kMaxImageSide) return Status(StatusCode::kInvalidArgument, "image side too large");
+    if (width > kMaxImageSide || height > kMaxImageSide)
+      return Status(StatusCode::kInvalidArgument, "image side too large");
     return Status::ok();
   }
   ImageView<T> view_;
@@ -139,7 +143,8 @@ using ImageF32 = Image<float>;
 // Copies pixels between views of the same size. Returns kInvalidArgument on a size mismatch.
 template <typename T>
 Status copy_pixels(ImageView<const T> src, ImageView<T> dst) noexcept {
-  if (src.width() != dst.width() || src.height() != dst.height()) return Status(StatusCode::kInvalidArgument, "image sizes differ");
+  if (src.width() != dst.width() || src.height() != dst.height())
+    return Status(StatusCode::kInvalidArgument, "image sizes differ");
   for (int y = 0; y < src.height(); ++y) {
     const T* s = src.row(y);
     T* d = dst.row(y);

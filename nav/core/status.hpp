@@ -18,12 +18,12 @@ enum class StatusCode : std::uint8_t {
   kCapacityExceeded,  // a fixed-capacity container or arena is full
   kEmpty,             // nothing to pop / no data
   kNotFound,
-  kCorrupt,           // a checksum, magic number or length field does not agree
-  kTruncated,         // the input ended inside a record
-  kUnsupported,       // a valid input we do not handle (format version, pixel format, ...)
-  kIoError,           // an OS or device call failed (only above nav/)
+  kCorrupt,      // a checksum, magic number or length field does not agree
+  kTruncated,    // the input ended inside a record
+  kUnsupported,  // a valid input we do not handle (format version, pixel format, ...)
+  kIoError,      // an OS or device call failed (only above nav/)
   kTimeout,
-  kDegenerate,        // geometry without a unique answer (collinear points, singular matrix, ...)
+  kDegenerate,  // geometry without a unique answer (collinear points, singular matrix, ...)
   kNotReady,
 };
 
@@ -151,8 +151,8 @@ class [[nodiscard]] Result {
 }  // namespace qnav
 
 // Propagate a non-ok Status from an expression that yields a Status.
-#define QNAV_RETURN_IF_ERROR(expr)              \
-  do {                                          \
-    const ::qnav::Status qnav_status_ = (expr); \
+#define QNAV_RETURN_IF_ERROR(expr)                  \
+  do {                                              \
+    const ::qnav::Status qnav_status_ = (expr);     \
     if (!qnav_status_.is_ok()) return qnav_status_; \
   } while (0)

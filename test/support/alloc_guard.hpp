@@ -44,11 +44,10 @@ class AllocationGuard {
 
 }  // namespace qnav::test
 
-#define QNAV_EXPECT_NO_ALLOC(statement)                                            \
-  do {                                                                            \
-    ::qnav::test::AllocationGuard qnav_alloc_guard_;                              \
-    statement;                                                                    \
-    const auto qnav_allocs_ = qnav_alloc_guard_.allocations();                    \
-    EXPECT_EQ(qnav_allocs_, 0u) << "heap allocation in: " #statement " ("         \
-                                << qnav_alloc_guard_.report() << ")";             \
+#define QNAV_EXPECT_NO_ALLOC(statement)                                                                         \
+  do {                                                                                                          \
+    ::qnav::test::AllocationGuard qnav_alloc_guard_;                                                            \
+    statement;                                                                                                  \
+    const auto qnav_allocs_ = qnav_alloc_guard_.allocations();                                                  \
+    EXPECT_EQ(qnav_allocs_, 0u) << "heap allocation in: " #statement " (" << qnav_alloc_guard_.report() << ")"; \
   } while (0)

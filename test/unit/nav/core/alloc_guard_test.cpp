@@ -54,7 +54,10 @@ TEST(AllocationGuard, FixedContainersDoNotAllocate) {
 
 // The macro reports a failure when the region allocates (checked with a nested expectation).
 TEST(AllocationGuard, NoAllocMacroFailsOnAllocation) {
-  EXPECT_NONFATAL_FAILURE(QNAV_EXPECT_NO_ALLOC({ auto p = std::make_unique<double>(1.0); g_escape = p.get(); }),
+  EXPECT_NONFATAL_FAILURE(QNAV_EXPECT_NO_ALLOC({
+                            auto p = std::make_unique<double>(1.0);
+                            g_escape = p.get();
+                          }),
                           "heap allocation in");
 }
 

@@ -28,7 +28,7 @@ TEST(Arena, RequestThatDoesNotFitFailsAndIsCounted) {
   ASSERT_EQ(a.allocate<std::uint32_t>(10).size(), 10u);  // 40 bytes
   EXPECT_TRUE(a.allocate<std::uint32_t>(7).empty());     // 28 > 24 remaining
   EXPECT_EQ(a.failed_requests(), 1u);
-  EXPECT_EQ(a.used(), 40u);  // a failed request consumes nothing
+  EXPECT_EQ(a.used(), 40u);                            // a failed request consumes nothing
   EXPECT_EQ(a.allocate<std::uint32_t>(6).size(), 6u);  // exactly fills the block
   EXPECT_EQ(a.remaining(), 0u);
   EXPECT_EQ(a.allocate_bytes(1, 1), nullptr);

@@ -78,7 +78,12 @@ TEST(Result, MoveOnlyValuesAreMovedAndDestroyedOnce) {
 TEST(ResultDeathTest, ValueOfErrorTraps) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   Result<int> r = Status(StatusCode::kEmpty, "none");
-  EXPECT_DEATH({ volatile int v = r.value(); (void)v; }, "");
+  EXPECT_DEATH(
+      {
+        volatile int v = r.value();
+        (void)v;
+      },
+      "");
 }
 
 }  // namespace
