@@ -1,0 +1,171 @@
+#include "hal/core/candump.hpp"
+
+#include <cstdio>
+#include <cstring>
+
+namespace qnav::hal {
+
+namespace {
+int hex_value(char c) noexcept {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+bool is_space(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+}  // namespace
+
+Status validate_can_frame(const CanFrame& f) noexcept {
+  if (f.extended ? (f.id > kCanEffMask) : (f.id > kCanSffMask)) {
+    if (!f.error) return Status(StatusCode::kOutOfRange, "CAN id does not fit its format");
+  }
+  if (f.fd) {
+    if (f.rtr) return Status(StatusCode::kInvalidArgument, "CAN FD has no remote frames");
+    if (!can_fd_len_valid(f.len)) return Status(StatusCode::kOutOfRange, "CAN FD length not a valid DLC size");
+  } else {
+    if (f.len > kCanMaxDataClassic) return Status(StatusCode::kOutOfRange, "classic CAN length > 8");
+    if (f.brs || f.esi) return Status(StatusCode::kInvalidArgument, "BRS/ESI on a classic frame");
+  }
+  return Status::ok();
+}
+
+bool can_filter_matches(const CanFilter& f, const CanFrame& frame) noexcept {
+  bool match = ((frame.id ^ f.id) & f.mask) == 0;
+  if (f.match_ide_rtr) match = match && frame.extended == f.extended && !frame.rtr;
+  return f.invert ? !match : match;
+}
+
+Status parse_can_log_line(const char* line, std::size_t n, CanLogRecord& out) noexcept {
+  if (line == nullptr) return Status(StatusCode::kInvalidArgument, "null line");
+  if (n > kMaxCanLogLine) return Status(StatusCode::kTruncated, "CAN log line too long");
+  while (n > 0 && is_space(line[n - 1])) --n;
+  std::size_t i = 0;
+  while (i < n && is_space(line[i])) ++i;
+  out = CanLogRecord{};
+  if (i < n && line[i] == '(') {
+    ++i;
+    std::int64_t sec = 0;
+    std::int64_t usec = 0;
+    int digits = 0;
+    while (i < n && line[i] >= '0' && line[i] <= '9' && digits < 12) sec = sec * 10 + (line[i++] - '0'), ++digits;
+    if (digits == 0 || i >= n || line[i] != '.') return Status(StatusCode::kCorrupt, "bad timestamp");
+    ++i;
+    int frac = 0;
+    while (i < n && line[i] >= '0' && line[i] <= '9' && frac < 6) usec = usec * 10 + (line[i++] - '0'), ++frac;
+    if (frac != 6 || i >= n || line[i] != ')') return Status(StatusCode::kCorrupt, "bad timestamp");
+    ++i;
+    out.has_time = true;
+    out.time_us = sec * 1000000 + usec;
+    while (i < n && is_space(line[i])) ++i;
+    std::size_t k = 0;
+    while (i < n && !is_space(line[i])) {
+      if (k + 1 >= sizeof out.interface) return Status(StatusCode::kCorrupt, "interface name too long");
+      out.interface[k++] = line[i++];
+    }
+    out.interface[k] = '\0';
+    while (i < n && is_space(line[i])) ++i;
+  }
+  // Identifier.
+  std::size_t id_digits = 0;
+  std::uint32_t id = 0;
+  while (i < n && line[i] != '#') {
+    const int h = hex_value(line[i]);
+    if (h < 0 || id_digits >= 8) return Status(StatusCode::kCorrupt, "bad CAN id");
+    id = (id << 4) | static_cast<std::uint32_t>(h);
+    ++id_digits;
+    ++i;
+  }
+  if (i >= n) return Status(StatusCode::kTruncated, "no '#' in CAN frame");
+  ++i;  // '#'
+  CanFrame& f = out.frame;
+  if (id_digits == 3) {
+    if (id > kCanSffMask) return Status(StatusCode::kOutOfRange, "11-bit id > 0x7FF");
+    f.id = id;
+  } else if (id_digits == 8) {
+    if (id & kCanErrFlag) {
+      f.error = true;
+      f.extended = false;
+      f.id = id & kCanEffMask & ~kCanErrFlag;
+    } else {
+      if (id > kCanEffMask) return Status(StatusCode::kOutOfRange, "29-bit id too large");
+      f.extended = true;
+      f.id = id;
+    }
+  } else {
+    return Status(StatusCode::kCorrupt, "CAN id must have 3 or 8 hex digits");
+  }
+  std::size_t cap = kCanMaxDataClassic;
+  if (i < n && line[i] == '#') {
+    ++i;
+    if (i >= n) return Status(StatusCode::kTruncated, "FD frame without flags");
+    const int flags = hex_value(line[i++]);
+    if (flags < 0) return Status(StatusCode::kCorrupt, "bad FD flags");
+    f.fd = true;
+    f.brs = (flags & 1) != 0;
+    f.esi = (flags & 2) != 0;
+    cap = kCanMaxDataFd;
+  } else if (i < n && (line[i] == 'R' || line[i] == 'r')) {
+    ++i;
+    f.rtr = true;
+    if (i < n) {
+      const int l = hex_value(line[i++]);
+      if (l < 0 || l > 8 || i != n) return Status(StatusCode::kCorrupt, "bad RTR length");
+      f.len = static_cast<std::uint8_t>(l);
+    }
+    return Status::ok();
+  }
+  std::size_t len = 0;
+  while (i < n) {
+    if (line[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (i + 1 >= n) return Status(StatusCode::kTruncated, "odd number of hex digits");
+    const int hi = hex_value(line[i]);
+    const int lo = hex_value(line[i + 1]);
+    if (hi < 0 || lo < 0) return Status(StatusCode::kCorrupt, "bad hex data");
+    if (len >= cap) return Status(StatusCode::kOutOfRange, "too many data bytes");
+    f.data[len++] = static_cast<std::uint8_t>((hi << 4) | lo);
+    i += 2;
+  }
+  if (f.fd && !can_fd_len_valid(len)) return Status(StatusCode::kOutOfRange, "FD length not a DLC size");
+  f.len = static_cast<std::uint8_t>(len);
+  return Status::ok();
+}
+
+std::size_t format_can_log_line(const CanLogRecord& rec, char* out, std::size_t cap) noexcept {
+  if (out == nullptr || cap == 0) return 0;
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  char buf[kMaxCanLogLine];
+  std::size_t k = 0;
+  if (rec.has_time) {
+    const int w = std::snprintf(buf, sizeof buf, "(%lld.%06lld) %s ", static_cast<long long>(rec.time_us / 1000000),
+                                static_cast<long long>(rec.time_us % 1000000), rec.interface[0] ? rec.interface : "can0");
+    if (w < 0) return 0;
+    k = static_cast<std::size_t>(w);
+  }
+  const CanFrame& f = rec.frame;
+  const bool eight = f.extended || f.error;
+  const std::uint32_t id = f.error ? (f.id | kCanErrFlag) : f.id;
+  for (int d = eight ? 7 : 2; d >= 0; --d) buf[k++] = kHex[(id >> (4 * d)) & 0xF];
+  buf[k++] = '#';
+  if (f.rtr) {
+    buf[k++] = 'R';
+  } else {
+    if (f.fd) {
+      buf[k++] = '#';
+      buf[k++] = kHex[(f.brs ? 1 : 0) | (f.esi ? 2 : 0)];
+    }
+    const std::size_t len = f.len > kCanMaxDataFd ? kCanMaxDataFd : f.len;
+    for (std::size_t j = 0; j < len; ++j) {
+      buf[k++] = kHex[f.data[j] >> 4];
+      buf[k++] = kHex[f.data[j] & 0xF];
+    }
+  }
+  if (k + 1 > cap) return 0;
+  std::memcpy(out, buf, k);
+  out[k] = '\0';
+  return k;
+}
+
+}  // namespace qnav::hal

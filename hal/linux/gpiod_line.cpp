@@ -1,0 +1,101 @@
+#include "hal/linux/gpiod_line.hpp"
+
+#include <gpiod.h>
+
+#include "hal/linux/monotonic_clock.hpp"
+
+namespace qnav::hal {
+
+namespace {
+gpiod_chip* open_chip(const char* name) noexcept {
+  if (name == nullptr) return nullptr;
+  return name[0] == '/' ? gpiod_chip_open(name) : gpiod_chip_open_by_name(name);
+}
+int flags_of(const GpioLineConfig& c) noexcept { return c.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0; }
+}  // namespace
+
+GpiodOutputLine::~GpiodOutputLine() { close(); }
+void GpiodOutputLine::close() noexcept {
+  if (line_ != nullptr) gpiod_line_release(line_);
+  if (chip_ != nullptr) gpiod_chip_close(chip_);
+  line_ = nullptr;
+  chip_ = nullptr;
+}
+Status GpiodOutputLine::open(const GpioLineConfig& c, bool initial) noexcept {
+  close();
+  chip_ = open_chip(c.chip);
+  if (chip_ == nullptr) return Status(StatusCode::kNotFound, "GPIO chip not found");
+  line_ = gpiod_chip_get_line(chip_, c.offset);
+  if (line_ == nullptr) {
+    close();
+    return Status(StatusCode::kNotFound, "GPIO line offset not on this chip");
+  }
+  if (gpiod_line_request_output_flags(line_, c.consumer, flags_of(c), initial ? 1 : 0) < 0) {
+    line_ = nullptr;
+    close();
+    return Status(StatusCode::kIoError, "GPIO output request failed (line busy?)");
+  }
+  return Status::ok();
+}
+Status GpiodOutputLine::set(bool value) noexcept {
+  if (line_ == nullptr) return Status(StatusCode::kNotReady, "GPIO line not open");
+  if (gpiod_line_set_value(line_, value ? 1 : 0) < 0) return Status(StatusCode::kIoError, "GPIO set failed");
+  return Status::ok();
+}
+
+GpiodInputLine::~GpiodInputLine() { close(); }
+void GpiodInputLine::close() noexcept {
+  if (line_ != nullptr) gpiod_line_release(line_);
+  if (chip_ != nullptr) gpiod_chip_close(chip_);
+  line_ = nullptr;
+  chip_ = nullptr;
+}
+int GpiodInputLine::fd() const noexcept { return line_ != nullptr ? gpiod_line_event_get_fd(line_) : -1; }
+Status GpiodInputLine::open(const GpioLineConfig& c, GpioEdge edges) noexcept {
+  close();
+  chip_ = open_chip(c.chip);
+  if (chip_ == nullptr) return Status(StatusCode::kNotFound, "GPIO chip not found");
+  line_ = gpiod_chip_get_line(chip_, c.offset);
+  if (line_ == nullptr) {
+    close();
+    return Status(StatusCode::kNotFound, "GPIO line offset not on this chip");
+  }
+  int r;
+  switch (edges) {
+    case GpioEdge::kRising: r = gpiod_line_request_rising_edge_events_flags(line_, c.consumer, flags_of(c)); break;
+    case GpioEdge::kFalling: r = gpiod_line_request_falling_edge_events_flags(line_, c.consumer, flags_of(c)); break;
+    default: r = gpiod_line_request_both_edges_events_flags(line_, c.consumer, flags_of(c)); break;
+  }
+  if (r < 0) {
+    line_ = nullptr;
+    close();
+    return Status(StatusCode::kIoError, "GPIO event request failed (line busy?)");
+  }
+  return Status::ok();
+}
+Result<GpioEvent> GpiodInputLine::wait_event(int timeout_ms) noexcept {
+  if (line_ == nullptr) return Status(StatusCode::kNotReady, "GPIO line not open");
+  const int ms = timeout_ms < 0 ? 0 : timeout_ms;
+  timespec to{ms / 1000, static_cast<long>(ms % 1000) * 1000000L};
+  const int w = gpiod_line_event_wait(line_, &to);
+  if (w == 0) return Status(StatusCode::kTimeout, "no GPIO event");
+  if (w < 0) return Status(StatusCode::kIoError, "GPIO event wait failed");
+  gpiod_line_event ev{};
+  if (gpiod_line_event_read(line_, &ev) < 0) return Status(StatusCode::kIoError, "GPIO event read failed");
+  GpioEvent e;
+  e.stamp.arrival_ns = monotonic_now_ns();
+  e.rising = ev.event_type == GPIOD_LINE_EVENT_RISING_EDGE;
+  const std::int64_t t = static_cast<std::int64_t>(ev.ts.tv_sec) * 1000000000LL + ev.ts.tv_nsec;
+  constexpr std::int64_t kHour = 3600LL * 1000000000LL;
+  const std::int64_t d = t - e.stamp.arrival_ns;
+  e.stamp.sample_ns = (d > kHour || d < -kHour) ? realtime_to_monotonic_ns(t) : t;
+  return e;
+}
+Result<bool> GpiodInputLine::get() noexcept {
+  if (line_ == nullptr) return Status(StatusCode::kNotReady, "GPIO line not open");
+  const int v = gpiod_line_get_value(line_);
+  if (v < 0) return Status(StatusCode::kIoError, "GPIO get failed");
+  return v != 0;
+}
+
+}  // namespace qnav::hal

@@ -1,0 +1,34 @@
+// TermiosSerialPort: SerialPort over a tty (UART, USB-serial, or a pseudo-terminal in tests).
+// open(): O_RDWR|O_NOCTTY|O_NONBLOCK, raw mode (cfmakeraw), baud/size/parity/stop/flow from the
+// config, CLOCAL|CREAD, VMIN=0 VTIME=0 (timing is done with poll()), input queue flushed.
+// read(): poll() up to timeout_ms, then one read(); 0 bytes = timeout; arrival stamped after read().
+// write(): one non-blocking write(); partial writes are reported (tx_short), EAGAIN = 0 bytes.
+// No heap after open().
+#pragma once
+
+#include "hal/core/serial.hpp"
+
+namespace qnav::hal {
+
+class TermiosSerialPort final : public SerialPort {
+ public:
+  TermiosSerialPort() noexcept = default;
+  ~TermiosSerialPort() override;
+  TermiosSerialPort(const TermiosSerialPort&) = delete;
+  TermiosSerialPort& operator=(const TermiosSerialPort&) = delete;
+
+  Status open(const char* path, const SerialConfig& config) noexcept;
+  void close() noexcept;
+  bool is_open() const noexcept { return fd_ >= 0; }
+  int fd() const noexcept { return fd_; }
+
+  Result<SerialRead> read(Span<std::uint8_t> buf, int timeout_ms) noexcept override;
+  Result<std::size_t> write(Span<const std::uint8_t> data) noexcept override;
+  SerialStats stats() const noexcept override { return stats_; }
+
+ private:
+  int fd_ = -1;
+  SerialStats stats_;
+};
+
+}  // namespace qnav::hal
