@@ -1,0 +1,236 @@
+#include "nav/sonar/scanline_corrector.hpp"
+
+#include <cmath>
+
+namespace qnav::sonar {
+
+namespace {
+constexpr std::size_t kAlign = 16;
+std::size_t padded(std::size_t bytes) noexcept { return bytes + kAlign; }
+bool finite_positive(float v) noexcept { return std::isfinite(v) && v > 0.0f; }
+}  // namespace
+
+std::size_t ScanlineCorrector::arena_bytes(const ScanlineCorrectorConfig& c) noexcept {
+  const std::size_t n = c.max_samples_per_side > 0 ? static_cast<std::size_t>(c.max_samples_per_side) : 0;
+  const std::size_t b = c.ground_bins_per_side > 0 ? static_cast<std::size_t>(c.ground_bins_per_side) : 0;
+  return padded(n * sizeof(float)) + padded((n + 1) * sizeof(double)) + padded(n * sizeof(float)) +
+         4 * padded(b * sizeof(float)) + 2 * padded(b);
+}
+
+Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) noexcept {
+  ready_ = false;
+  if (c.max_samples_per_side < 8 || c.max_samples_per_side > 65536)
+    return Status(StatusCode::kInvalidArgument, "max_samples_per_side outside [8, 65536]");
+  if (c.ground_bins_per_side < 1 || c.ground_bins_per_side > 65536)
+    return Status(StatusCode::kInvalidArgument, "ground_bins_per_side outside [1, 65536]");
+  if (!finite_positive(c.ground_bin_m)) return Status(StatusCode::kInvalidArgument, "ground_bin_m must be > 0");
+  if (!std::isfinite(c.nadir_gap_m) || c.nadir_gap_m < 0.0f) return Status(StatusCode::kInvalidArgument, "nadir_gap_m < 0");
+  if (!std::isfinite(c.spreading_db) || !std::isfinite(c.absorption_db_per_m) || c.absorption_db_per_m < 0.0f)
+    return Status(StatusCode::kInvalidArgument, "bad TVG parameters");
+  if (!(c.egn_alpha > 0.0f && c.egn_alpha <= 1.0f)) return Status(StatusCode::kInvalidArgument, "egn_alpha outside (0, 1]");
+  if (!(c.bottom_threshold_fraction > 0.0f && c.bottom_threshold_fraction < 1.0f))
+    return Status(StatusCode::kInvalidArgument, "bottom_threshold_fraction outside (0, 1)");
+  if (c.bottom_smooth_samples < 1 || c.bottom_smooth_samples > 256 || c.bottom_noise_samples < 1 ||
+      c.bottom_noise_samples > c.max_samples_per_side / 2)
+    return Status(StatusCode::kInvalidArgument, "bad bottom detection window");
+  if (!(c.bottom_search_fraction > 0.0f && c.bottom_search_fraction <= 1.0f))
+    return Status(StatusCode::kInvalidArgument, "bottom_search_fraction outside (0, 1]");
+  if (!std::isfinite(c.min_altitude_m) || c.min_altitude_m < 0.0f) return Status(StatusCode::kInvalidArgument, "min_altitude_m < 0");
+  const std::size_t n = static_cast<std::size_t>(c.max_samples_per_side);
+  const std::size_t b = static_cast<std::size_t>(c.ground_bins_per_side);
+  tvg_ = arena.allocate<float>(n);
+  prefix_ = arena.allocate<double>(n + 1);
+  smooth_ = arena.allocate<float>(n);
+  egn_port_ = arena.allocate<float>(b);
+  egn_stbd_ = arena.allocate<float>(b);
+  out_port_ = arena.allocate<float>(b);
+  out_stbd_ = arena.allocate<float>(b);
+  valid_port_ = arena.allocate<std::uint8_t>(b);
+  valid_stbd_ = arena.allocate<std::uint8_t>(b);
+  if (tvg_.empty() || prefix_.empty() || smooth_.empty() || egn_port_.empty() || egn_stbd_.empty() || out_port_.empty() ||
+      out_stbd_.empty() || valid_port_.empty() || valid_stbd_.empty())
+    return Status(StatusCode::kCapacityExceeded, "arena too small for ScanlineCorrector");
+  cfg_ = c;
+  tvg_range_m_ = -1.0f;
+  tvg_n_ = -1;
+  reset_normalisation();
+  ready_ = true;
+  return Status::ok();
+}
+
+void ScanlineCorrector::reset_normalisation() noexcept {
+  for (float& v : egn_port_) v = 0.0f;
+  for (float& v : egn_stbd_) v = 0.0f;
+}
+
+Status ScanlineCorrector::check_ping(const SonarPing& ping) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "ScanlineCorrector not initialised");
+  const std::size_t n = ping.port.size();
+  if (n < 8 || n != ping.stbd.size() || n > static_cast<std::size_t>(cfg_.max_samples_per_side) ||
+      ping.port.data() == nullptr || ping.stbd.data() == nullptr) {
+    counters_.increment(CorrectorCounter::kBadSampleCount);
+    return Status(StatusCode::kInvalidArgument, "ping sample count: sides differ, < 8 or above max_samples_per_side");
+  }
+  if (!finite_positive(ping.slant_range_m) || ping.slant_range_m > 100000.0f) {
+    counters_.increment(CorrectorCounter::kBadRange);
+    return Status(StatusCode::kInvalidArgument, "ping slant range not finite or <= 0");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const float a = ping.port[i], b = ping.stbd[i];
+    if (!(std::isfinite(a) && std::isfinite(b) && a >= 0.0f && b >= 0.0f)) {
+      counters_.increment(CorrectorCounter::kNonFiniteSample);
+      return Status(StatusCode::kInvalidArgument, "ping sample NaN, infinite or negative");
+    }
+  }
+  return Status::ok();
+}
+
+Result<float> ScanlineCorrector::detect_bottom_m(const SonarPing& ping) noexcept {
+  QNAV_RETURN_IF_ERROR(check_ping(ping));
+  return detect_bottom_checked(ping);
+}
+
+Result<float> ScanlineCorrector::detect_bottom_checked(const SonarPing& ping) noexcept {
+  const int n = static_cast<int>(ping.port.size());
+  const int w = cfg_.bottom_smooth_samples;
+  // Box-smoothed sum of both sides (running window, O(n)).
+  double acc = 0.0;
+  for (int i = 0; i < n; ++i) {
+    acc += static_cast<double>(ping.port[i]) + static_cast<double>(ping.stbd[i]);
+    if (i >= w) acc -= static_cast<double>(ping.port[i - w]) + static_cast<double>(ping.stbd[i - w]);
+    const int cnt = i + 1 < w ? i + 1 : w;
+    smooth_[static_cast<std::size_t>(i)] = static_cast<float>(acc / cnt);
+  }
+  int search = static_cast<int>(static_cast<float>(n) * cfg_.bottom_search_fraction);
+  if (search > n) search = n;
+  const int noise_n = cfg_.bottom_noise_samples;
+  if (search <= noise_n + w) {
+    counters_.increment(CorrectorCounter::kNoBottom);
+    return Status(StatusCode::kNotFound, "bottom search window too short");
+  }
+  double noise = 0.0;
+  for (int i = 0; i < noise_n; ++i) noise += static_cast<double>(smooth_[static_cast<std::size_t>(i)]);
+  noise /= noise_n;
+  float peak = 0.0f;
+  for (int i = noise_n; i < search; ++i) peak = smooth_[static_cast<std::size_t>(i)] > peak ? smooth_[static_cast<std::size_t>(i)] : peak;
+  const double thr = noise + static_cast<double>(cfg_.bottom_threshold_fraction) * (static_cast<double>(peak) - noise);
+  if (!(static_cast<double>(peak) > 2.0 * noise + 1e-12)) {
+    counters_.increment(CorrectorCounter::kNoBottom);
+    return Status(StatusCode::kNotFound, "no first return above the water-column level");
+  }
+  for (int i = noise_n; i < search; ++i) {
+    if (static_cast<double>(smooth_[static_cast<std::size_t>(i)]) > thr) {
+      // The smoothed value rises (w-1)/2 samples early on average for a step: compensate half window.
+      const float idx = static_cast<float>(i) - 0.5f * static_cast<float>(w - 1);
+      const float dr = ping.slant_range_m / static_cast<float>(n);
+      const float h = (idx > 0.0f ? idx : 0.0f) * dr;
+      if (h < cfg_.min_altitude_m) break;
+      return h;
+    }
+  }
+  counters_.increment(CorrectorCounter::kNoBottom);
+  return Status(StatusCode::kNotFound, "no first return found");
+}
+
+void ScanlineCorrector::update_tvg(float slant_range_m, int n) noexcept {
+  if (slant_range_m == tvg_range_m_ && n == tvg_n_) return;
+  const double dr = static_cast<double>(slant_range_m) / n;
+  const double k = static_cast<double>(cfg_.spreading_db) / 10.0;
+  const double a = 2.0 * static_cast<double>(cfg_.absorption_db_per_m) / 10.0;
+  for (int i = 0; i < n; ++i) {
+    const double r = (i + 0.5) * dr;
+    tvg_[static_cast<std::size_t>(i)] = cfg_.tvg_enabled ? static_cast<float>(std::pow(r, k) * std::pow(10.0, a * r)) : 1.0f;
+  }
+  tvg_range_m_ = slant_range_m;
+  tvg_n_ = n;
+}
+
+void ScanlineCorrector::correct_side(Span<const float> s, float dr_m, float altitude_m, float* egn, float* out,
+                                     std::uint8_t* valid) noexcept {
+  const int n = static_cast<int>(s.size());
+  prefix_[0] = 0.0;
+  for (int i = 0; i < n; ++i)
+    prefix_[static_cast<std::size_t>(i) + 1] =
+        prefix_[static_cast<std::size_t>(i)] + static_cast<double>(s[static_cast<std::size_t>(i)] * tvg_[static_cast<std::size_t>(i)]);
+  const double h2 = static_cast<double>(altitude_m) * static_cast<double>(altitude_m);
+  const double g_bin = static_cast<double>(cfg_.ground_bin_m);
+  const double inv_dr = 1.0 / static_cast<double>(dr_m);
+  const double r_max = static_cast<double>(dr_m) * n;
+  const float alpha = cfg_.egn_alpha;
+  const int bins = cfg_.ground_bins_per_side;
+  for (int b = 0; b < bins; ++b) {
+    const double g0 = b * g_bin, g1 = (b + 1) * g_bin;
+    const double r1 = std::sqrt(g1 * g1 + h2);
+    if (g0 < static_cast<double>(cfg_.nadir_gap_m) || r1 > r_max) {
+      out[b] = 0.0f;
+      valid[b] = 0;
+      continue;
+    }
+    const double r0 = std::sqrt(g0 * g0 + h2);
+    const double s0 = r0 * inv_dr, s1 = r1 * inv_dr;  // sample coordinates (sample i spans [i, i+1))
+    double level;
+    if (s1 - s0 >= 1.0) {
+      // Average of the samples covered (fractional ends by linear prefix interpolation).
+      const auto prefix_at = [&](double x) {
+        int i = static_cast<int>(x);
+        if (i >= n) return prefix_[static_cast<std::size_t>(n)];
+        const double f = x - i;
+        return prefix_[static_cast<std::size_t>(i)] + f * (prefix_[static_cast<std::size_t>(i) + 1] - prefix_[static_cast<std::size_t>(i)]);
+      };
+      level = (prefix_at(s1) - prefix_at(s0)) / (s1 - s0);
+    } else {
+      // Linear interpolation between sample centres at the bin centre.
+      const double gc = 0.5 * (g0 + g1);
+      const double x = std::sqrt(gc * gc + h2) * inv_dr - 0.5;
+      int i = static_cast<int>(x);
+      if (x < 0.0) i = 0;
+      if (i > n - 2) i = n - 2;
+      double f = x - i;
+      if (f < 0.0) f = 0.0;
+      if (f > 1.0) f = 1.0;
+      const double v0 = prefix_[static_cast<std::size_t>(i) + 1] - prefix_[static_cast<std::size_t>(i)];
+      const double v1 = prefix_[static_cast<std::size_t>(i) + 2] - prefix_[static_cast<std::size_t>(i) + 1];
+      level = v0 + f * (v1 - v0);
+    }
+    float v = static_cast<float>(level);
+    if (cfg_.egn_enabled) {
+      float& m = egn[b];
+      m = (m <= 0.0f) ? v : m + alpha * (v - m);
+      v = m > 1e-20f ? v / m : 0.0f;
+    }
+    out[b] = v;
+    valid[b] = 1;
+  }
+}
+
+Status ScanlineCorrector::correct(const SonarPing& ping, CorrectedScanline& out) noexcept {
+  QNAV_RETURN_IF_ERROR(check_ping(ping));
+  float h = ping.altitude_m;
+  bool detected = false;
+  if (!(std::isfinite(h) && h > 0.0f)) {
+    const Result<float> b = detect_bottom_checked(ping);
+    if (!b) return b.status();
+    h = b.value();
+    detected = true;
+  } else if (h < cfg_.min_altitude_m || h >= ping.slant_range_m) {
+    counters_.increment(CorrectorCounter::kBadAltitude);
+    return Status(StatusCode::kInvalidArgument, "altitude below min_altitude_m or beyond the slant range");
+  }
+  const int n = static_cast<int>(ping.port.size());
+  update_tvg(ping.slant_range_m, n);
+  const float dr = ping.slant_range_m / static_cast<float>(n);
+  correct_side(ping.port, dr, h, egn_port_.data(), out_port_.data(), valid_port_.data());
+  correct_side(ping.stbd, dr, h, egn_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
+  out.stamp_ns = ping.stamp_ns;
+  out.ping_number = ping.ping_number;
+  out.bin_m = cfg_.ground_bin_m;
+  out.altitude_m = h;
+  out.altitude_detected = detected;
+  out.port = Span<const float>(out_port_.data(), out_port_.size());
+  out.stbd = Span<const float>(out_stbd_.data(), out_stbd_.size());
+  out.port_valid = Span<const std::uint8_t>(valid_port_.data(), valid_port_.size());
+  out.stbd_valid = Span<const std::uint8_t>(valid_stbd_.data(), valid_stbd_.size());
+  return Status::ok();
+}
+
+}  // namespace qnav::sonar

@@ -1,0 +1,111 @@
+// ScanlineCorrector: raw side-scan ping (slant range) -> corrected ground-range scanline.
+// Steps, per ping:
+//  1. Bottom (first return) detection when the ping has no altimeter value (altitude_m <= 0 or NaN):
+//     both sides are summed, box-smoothed (bottom_smooth_samples), and the first sample whose level
+//     exceeds noise + bottom_threshold_fraction * (peak - noise) is the seabed; noise = mean of the
+//     first bottom_noise_samples samples, peak = max over the first bottom_search_fraction of the ping.
+//  2. TVG model on slant samples: gain(r) = r^(spreading_db/10) * 10^(2 * absorption_db_per_m * r / 10)
+//     (amplitude**2 convention: spreading_db = 20 means two-way 1/r^2 in intensity). The gain table
+//     is rebuilt only when slant range or sample count change (O(n) with a log/exp per sample).
+//  3. Slant -> ground range for a flat seabed: ground bin centre g -> slant r = sqrt(g^2 + h^2).
+//     Speckle-aware resampling: when a ground bin spans one or more slant samples the samples inside
+//     it are AVERAGED (prefix sums, O(1) per bin); otherwise linear interpolation at the bin centre.
+//  4. Nadir gap: ground bins with g < nadir_gap_m, with slant r below the detected seabed, or beyond the
+//     last sample are marked invalid (value 0, valid 0); the tile builder interpolates small holes.
+//  5. Empirical gain normalisation (EGN): per side and per ground bin an exponential running mean
+//     (egn_alpha) of the TVG-corrected level; the output is level / running mean, so a flat uniform
+//     seabed comes out at 1.0 whatever the range, beam pattern or gain. Bins never seen keep mean 0
+//     and are initialised by their first valid value.
+// Memory: all buffers come from the Arena given to init() (sizes from the config); correct() makes
+// no allocation. Cost of correct(): O(samples_per_side + ground_bins) per side, one sqrt per bin;
+// bounded by max_samples_per_side and ground_bins_per_side.
+// Bad input (NaN/inf/negative samples, wrong sizes, NaN range, no detectable bottom) -> error
+// Status + a named counter; the output is then untouched.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/counters.hpp"
+#include "nav/core/span.hpp"
+#include "nav/core/status.hpp"
+#include "nav/sonar/sonar_types.hpp"
+
+namespace qnav::sonar {
+
+struct ScanlineCorrectorConfig {
+  int max_samples_per_side = 4096;   // largest raw ping accepted
+  int ground_bins_per_side = 512;    // output bins per side
+  float ground_bin_m = 0.1f;         // output bin size (ground range per side = bins * bin_m)
+  float nadir_gap_m = 0.0f;          // ground bins nearer than this are invalid
+  // TVG model
+  bool tvg_enabled = true;
+  float spreading_db = 30.0f;        // 10*k*log10(r): 20 spherical two-way amplitude, 30-40 common in practice
+  float absorption_db_per_m = 0.0f;  // one-way absorption (two-way applied)
+  // EGN running normalisation
+  bool egn_enabled = true;
+  float egn_alpha = 0.02f;           // weight of the newest ping in the per-bin running mean
+  // Bottom detection
+  float bottom_threshold_fraction = 0.3f;
+  int bottom_smooth_samples = 5;
+  int bottom_noise_samples = 8;
+  float bottom_search_fraction = 0.5f;
+  float min_altitude_m = 0.5f;       // detected/altimeter values below are rejected
+};
+
+enum class CorrectorCounter : std::uint8_t {
+  kBadSampleCount,
+  kBadRange,
+  kNonFiniteSample,
+  kNoBottom,
+  kBadAltitude,
+  kCount
+};
+inline constexpr const char* kCorrectorCounterNames[] = {"bad_sample_count", "bad_range", "non_finite_sample",
+                                                         "no_bottom", "bad_altitude"};
+
+class ScanlineCorrector {
+ public:
+  ScanlineCorrector() noexcept = default;
+  ScanlineCorrector(const ScanlineCorrector&) = delete;
+  ScanlineCorrector& operator=(const ScanlineCorrector&) = delete;
+
+  // Bytes init() takes from the arena for this configuration (for sizing the arena).
+  static std::size_t arena_bytes(const ScanlineCorrectorConfig& config) noexcept;
+  // Validates the config and carves every buffer from the arena. Call once at start-up.
+  Status init(const ScanlineCorrectorConfig& config, Arena& arena) noexcept;
+
+  // Corrects one ping. out's spans point into this object's buffers and stay valid until the next call.
+  Status correct(const SonarPing& ping, CorrectedScanline& out) noexcept;
+
+  // Bottom detection alone (exposed for tests): slant range of the first return, metres.
+  Result<float> detect_bottom_m(const SonarPing& ping) noexcept;
+
+  // Forget the EGN running means (new survey line).
+  void reset_normalisation() noexcept;
+
+  const CounterSet<CorrectorCounter>& counters() const noexcept { return counters_; }
+  const ScanlineCorrectorConfig& config() const noexcept { return cfg_; }
+
+ private:
+  Status check_ping(const SonarPing& ping) noexcept;
+  Result<float> detect_bottom_checked(const SonarPing& ping) noexcept;
+  void update_tvg(float slant_range_m, int n) noexcept;
+  void correct_side(Span<const float> samples, float dr_m, float altitude_m, float* egn_mean, float* out,
+                    std::uint8_t* valid) noexcept;
+
+  ScanlineCorrectorConfig cfg_{};
+  bool ready_ = false;
+  Span<float> tvg_;        // per slant sample gain
+  Span<double> prefix_;    // prefix sums of TVG-corrected samples (n + 1)
+  Span<float> smooth_;     // bottom detection work buffer
+  Span<float> egn_port_, egn_stbd_;
+  Span<float> out_port_, out_stbd_;
+  Span<std::uint8_t> valid_port_, valid_stbd_;
+  float tvg_range_m_ = -1.0f;
+  int tvg_n_ = -1;
+  CounterSet<CorrectorCounter> counters_{kCorrectorCounterNames};
+};
+
+}  // namespace qnav::sonar

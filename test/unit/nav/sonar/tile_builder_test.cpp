@@ -1,0 +1,223 @@
+// TileBuilder: georeferencing of scanlines into the north-up raster, emission cadence, hole filling,
+// bad input, no allocation while building.
+#include "nav/sonar/tile_builder.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "test/support/alloc_guard.hpp"
+
+namespace qnav::sonar {
+namespace {
+
+// A smooth seabed pattern in world coordinates.
+float pattern(double n, double e) {
+  return static_cast<float>(1.0 + 0.5 * std::sin(2.0 * kPi * n / 7.0) * std::cos(2.0 * kPi * e / 5.0));
+}
+
+struct LineSource {
+  int bins = 200;
+  float bin_m = 0.1f;
+  std::vector<float> port, stbd;
+  std::vector<std::uint8_t> pv, sv;
+  CorrectedScanline make(const Pose2& pose, std::uint32_t ping) {
+    port.assign(static_cast<std::size_t>(bins), 0.0f);
+    stbd.assign(static_cast<std::size_t>(bins), 0.0f);
+    pv.assign(static_cast<std::size_t>(bins), 1);
+    sv.assign(static_cast<std::size_t>(bins), 1);
+    const Vec2d sb = starboard_unit(pose.heading_rad);
+    for (int b = 0; b < bins; ++b) {
+      const double g = (b + 0.5) * static_cast<double>(bin_m);
+      const Vec2d ps = pose.translation() + g * sb, pp = pose.translation() - g * sb;
+      stbd[static_cast<std::size_t>(b)] = pattern(ps.x(), ps.y());
+      port[static_cast<std::size_t>(b)] = pattern(pp.x(), pp.y());
+    }
+    pv[0] = sv[0] = 0;  // a nadir bin without data
+    CorrectedScanline l;
+    l.ping_number = ping;
+    l.stamp_ns = ping * 100000000ull;
+    l.bin_m = bin_m;
+    l.port = Span<const float>(port.data(), port.size());
+    l.stbd = Span<const float>(stbd.data(), stbd.size());
+    l.port_valid = Span<const std::uint8_t>(pv.data(), pv.size());
+    l.stbd_valid = Span<const std::uint8_t>(sv.data(), sv.size());
+    return l;
+  }
+};
+
+TileBuilderConfig small_config() {
+  TileBuilderConfig c;
+  c.resolution_m = 0.1;
+  c.tile_width_px = 512;
+  c.tile_height_px = 512;
+  c.scanlines_per_tile = 100;
+  c.scanline_stride = 100;
+  c.max_bins_per_side = 256;
+  return c;
+}
+
+TEST(TileBuilder, PlacesScanlinesAtTheirWorldPosition) {
+  const TileBuilderConfig cfg = small_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  const double heading = deg_to_rad(30.0), step = 0.15;
+  bool built = false;
+  for (int k = 0; k < 100; ++k) {
+    const Pose2 pose{100.0 + k * step * std::cos(heading), -40.0 + k * step * std::sin(heading), heading};
+    const Result<bool> r = tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose);
+    ASSERT_TRUE(r.is_ok());
+    built = r.value();
+  }
+  ASSERT_TRUE(built);
+  const SonarTile& t = tb.tile();
+  EXPECT_EQ(t.index, 0u);
+  EXPECT_EQ(t.scanlines, 100u);
+  EXPECT_EQ(t.first_ping, 0u);
+  EXPECT_EQ(t.last_ping, 99u);
+  EXPECT_NEAR(t.pose.x_m, 100.0 + 50 * step * std::cos(heading), 1e-9);
+  // Grid snapped to the resolution.
+  EXPECT_NEAR(std::remainder(t.origin_north_m, 0.1), 0.0, 1e-9);
+  EXPECT_NEAR(std::remainder(t.origin_east_m, 0.1), 0.0, 1e-9);
+  // Every measured pixel holds the pattern value at its own centre (bilinear interpolation of a
+  // smooth field: error well below the pattern's 0.5 amplitude).
+  double err = 0.0;
+  int measured = 0;
+  for (int r = 0; r < t.coverage.height(); ++r)
+    for (int c = 0; c < t.coverage.width(); ++c) {
+      if (t.coverage(c, r) != 1) continue;
+      const Vec2d ne = t.pixel_to_ne(c + 0.5, r + 0.5);
+      err += std::fabs(static_cast<double>(t.intensity(c, r) - pattern(ne.x(), ne.y())));
+      ++measured;
+    }
+  ASSERT_GT(measured, 20000);
+  EXPECT_LT(err / measured, 0.02) << "mean abs error over " << measured << " pixels";
+  // The swath (2 x 20 m wide, 15 m long) covers about 40 * 15 / 0.01 = 60000 pixels of 262144.
+  EXPECT_NEAR(t.coverage_fraction, 60000.0 / 262144.0, 0.03);
+  EXPECT_EQ(t.clipped_splats, 0u);
+  // Footprint corners: first port end is 20 m to port of the first pose.
+  EXPECT_NEAR((t.footprint_ne[0] - Vec2d(100.0, -40.0)).norm(), 20.0, 1e-5);
+}
+
+TEST(TileBuilder, EmitsEveryStrideAndFlushesTheRest) {
+  TileBuilderConfig cfg = small_config();
+  cfg.scanline_stride = 50;
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  int tiles = 0;
+  std::vector<std::uint32_t> first_pings;
+  for (int k = 0; k < 230; ++k) {
+    const Pose2 pose{k * 0.15, 0.0, 0.0};
+    const Result<bool> r = tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose);
+    ASSERT_TRUE(r.is_ok());
+    if (r.value()) {
+      ++tiles;
+      first_pings.push_back(tb.tile().first_ping);
+    }
+  }
+  // Tiles after 100, 150, 200 scanlines, overlapping by 50.
+  ASSERT_EQ(tiles, 3);
+  EXPECT_EQ(first_pings[0], 0u);
+  EXPECT_EQ(first_pings[1], 50u);
+  EXPECT_EQ(first_pings[2], 100u);
+  const Result<bool> f = tb.flush();
+  ASSERT_TRUE(f.is_ok());
+  EXPECT_TRUE(f.value());
+  EXPECT_EQ(tb.tile().last_ping, 229u);
+  EXPECT_EQ(tb.tile().first_ping, 150u);
+  EXPECT_EQ(tb.tiles_built(), 4u);
+}
+
+TEST(TileBuilder, InterpolatesBetweenSparseScanlinesAndFillsSmallHoles) {
+  TileBuilderConfig cfg = small_config();
+  cfg.max_substeps = 1;  // no along-track interpolation: 0.3 m gaps leave holes
+  cfg.hole_fill_radius_px = 2;
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  for (int k = 0; k < 100; ++k) {
+    const Pose2 pose{k * 0.3, 0.0, 0.0};
+    ASSERT_TRUE(tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose).is_ok());
+  }
+  const SonarTile& t = tb.tile();
+  int filled = 0, measured = 0;
+  double err = 0.0;
+  for (int r = 0; r < t.coverage.height(); ++r)
+    for (int c = 0; c < t.coverage.width(); ++c) {
+      if (t.coverage(c, r) == 2) {
+        ++filled;
+        const Vec2d ne = t.pixel_to_ne(c + 0.5, r + 0.5);
+        err += std::fabs(static_cast<double>(t.intensity(c, r) - pattern(ne.x(), ne.y())));
+      }
+      if (t.coverage(c, r) == 1) ++measured;
+    }
+  EXPECT_GT(filled, measured / 4) << "holes between 0.3 m scanlines must be filled";
+  EXPECT_LT(err / filled, 0.08);
+}
+
+TEST(TileBuilder, RejectsBadPosesAndScanlines) {
+  const TileBuilderConfig cfg = small_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  const Pose2 bad{std::nan(""), 0.0, 0.0};
+  EXPECT_EQ(tb.push(src.make(Pose2{}, 0), bad).status(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(tb.counters().get(TileCounter::kBadPose), 1u);
+  src.bins = 300;  // above max_bins_per_side
+  EXPECT_EQ(tb.push(src.make(Pose2{}, 0), Pose2{}).status(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(tb.counters().get(TileCounter::kBadScanline), 1u);
+  src.bins = 200;
+  CorrectedScanline l = src.make(Pose2{}, 0);
+  src.stbd[5] = std::nanf("");
+  EXPECT_EQ(tb.push(l, Pose2{}).status(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(tb.counters().get(TileCounter::kBadScanline), 2u);
+  EXPECT_EQ(tb.buffered(), 0);
+  TileBuilderConfig c2 = cfg;
+  c2.scanline_stride = 0;
+  TileBuilder tb2;
+  EXPECT_EQ(tb2.init(c2, arena), StatusCode::kInvalidArgument);
+}
+
+TEST(TileBuilder, NavJumpIsNotInterpolatedAcross) {
+  const TileBuilderConfig cfg = small_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  for (int k = 0; k < 100; ++k) {
+    const Pose2 pose{k * 0.15 + (k >= 50 ? 8.0 : 0.0), 0.0, 0.0};
+    ASSERT_TRUE(tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose).is_ok());
+  }
+  EXPECT_EQ(tb.counters().get(TileCounter::kNavJump), 1u);
+  // The 8 m gap between the halves stays empty on the track line.
+  const SonarTile& t = tb.tile();
+  const Vec2d mid = t.ne_to_pixel(49 * 0.15 + 4.0, 5.0);
+  EXPECT_EQ(t.coverage(static_cast<int>(mid.x()), static_cast<int>(mid.y())), 0);
+}
+
+TEST(TileBuilder, PushAndBuildMakeNoHeapAllocation) {
+  const TileBuilderConfig cfg = small_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  std::vector<CorrectedScanline> lines;
+  std::vector<LineSource> srcs(100);
+  for (int k = 0; k < 100; ++k) lines.push_back(srcs[static_cast<std::size_t>(k)].make(Pose2{k * 0.15, 0.0, 0.0}, static_cast<std::uint32_t>(k)));
+  int built = 0;
+  QNAV_EXPECT_NO_ALLOC(for (int k = 0; k < 100; ++k) {
+    const Result<bool> r = tb.push(lines[static_cast<std::size_t>(k)], Pose2{k * 0.15, 0.0, 0.0});
+    if (r.is_ok() && r.value()) ++built;
+  });
+  EXPECT_EQ(built, 1);
+}
+
+}  // namespace
+}  // namespace qnav::sonar
