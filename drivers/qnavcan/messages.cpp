@@ -1,0 +1,235 @@
+#include "drivers/qnavcan/messages.hpp"
+
+#include <cmath>
+#include <cstring>
+
+namespace qnav::drivers::qnavcan {
+
+namespace {
+// Tables mirror docs/qnav.dbc line by line (name, start, length, big-endian, signed, factor, offset,
+// min, max, unit). test/unit/drivers/qnavcan/dbc_layout_test.cpp checks them against the file.
+constexpr SignalDef kAttitude[] = {
+    {"Roll", 0, 16, false, true, 0.0001, 0, -3.1416, 3.1416, "rad"},
+    {"Pitch", 16, 16, false, true, 0.0001, 0, -1.5708, 1.5708, "rad"},
+    {"Heading", 32, 16, false, false, 0.0001, 0, 0, 6.2832, "rad"},
+    {"Counter", 48, 8, false, false, 1, 0, 0, 255, ""},
+    {"Valid", 56, 1, false, false, 1, 0, 0, 1, ""},
+};
+constexpr SignalDef kRates[] = {
+    {"RollRate", 0, 16, false, true, 0.0005, 0, -16, 16, "rad/s"},
+    {"PitchRate", 16, 16, false, true, 0.0005, 0, -16, 16, "rad/s"},
+    {"YawRate", 32, 16, false, true, 0.0005, 0, -16, 16, "rad/s"},
+    {"Counter", 48, 8, false, false, 1, 0, 0, 255, ""},
+};
+constexpr SignalDef kDepth[] = {
+    {"Depth", 7, 24, true, false, 0.001, 0, 0, 11000, "m"},
+    {"Altitude", 31, 16, true, false, 0.01, 0, 0, 655.35, "m"},
+    {"Counter", 47, 8, true, false, 1, 0, 0, 255, ""},
+    {"DepthValid", 55, 1, true, false, 1, 0, 0, 1, ""},
+    {"AltitudeValid", 54, 1, true, false, 1, 0, 0, 1, ""},
+};
+constexpr SignalDef kModeCmd[] = {
+    {"Mode", 0, 4, false, false, 1, 0, 0, 4, ""},
+    {"ResetNav", 4, 1, false, false, 1, 0, 0, 1, ""},
+    {"RouteId", 8, 16, false, false, 1, 0, 0, 65535, ""},
+    {"Counter", 24, 8, false, false, 1, 0, 0, 255, ""},
+};
+constexpr SignalDef kNavStatus[] = {
+    {"State", 0, 4, false, false, 1, 0, 0, 4, ""},
+    {"Localised", 4, 1, false, false, 1, 0, 0, 1, ""},
+    {"Confidence", 8, 8, false, false, 0.5, 0, 0, 100, "%"},
+    {"NodeIndex", 16, 16, false, false, 1, 0, 0, 65535, ""},
+    {"FaultFlags", 32, 16, false, false, 1, 0, 0, 65535, ""},
+    {"Counter", 48, 8, false, false, 1, 0, 0, 255, ""},
+};
+constexpr SignalDef kGuidance[] = {
+    {"CrossTrack", 0, 16, false, true, 0.01, 0, -327, 327, "m"},
+    {"HeadingError", 16, 16, false, true, 0.0001, 0, -3.1416, 3.1416, "rad"},
+    {"DistToNext", 32, 16, false, false, 0.1, 0, 0, 6553.5, "m"},
+    {"TargetNode", 48, 16, false, false, 1, 0, 0, 65535, ""},
+};
+constexpr SignalDef kVoStep[] = {
+    {"Dx", 0, 16, false, true, 0.001, 0, -32, 32, "m"},
+    {"Dy", 16, 16, false, true, 0.001, 0, -32, 32, "m"},
+    {"Dyaw", 32, 16, false, true, 0.0001, 0, -3.1416, 3.1416, "rad"},
+    {"Inliers", 48, 8, false, false, 1, 0, 0, 255, ""},
+    {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
+};
+constexpr SignalDef kHealth[] = {
+    {"FaultFlags", 0, 16, false, false, 1, 0, 0, 65535, ""},
+    {"RejectedInputs", 16, 16, false, false, 1, 0, 0, 65535, ""},
+    {"DeadlineMisses", 32, 16, false, false, 1, 0, 0, 65535, ""},
+    {"CpuLoad", 48, 8, false, false, 0.5, 0, 0, 100, "%"},
+    {"Leak", 56, 1, false, false, 1, 0, 0, 1, ""},
+    {"BusOff", 57, 1, false, false, 1, 0, 0, 1, ""},
+};
+constexpr SignalDef kHeartbeat[] = {
+    {"Uptime", 0, 32, false, false, 1, 0, 0, 4294967295.0, "s"},
+    {"State", 32, 4, false, false, 1, 0, 0, 4, ""},
+    {"SwMajor", 40, 8, false, false, 1, 0, 0, 255, ""},
+    {"SwMinor", 48, 8, false, false, 1, 0, 0, 255, ""},
+    {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
+};
+
+template <std::size_t N>
+constexpr Span<const SignalDef> sp(const SignalDef (&a)[N]) {
+  return Span<const SignalDef>(a, N);
+}
+
+const MessageDef kMessages[] = {
+    {"QNAV_ATTITUDE_IN", kIdAttitudeIn, 8, "AHRS", sp(kAttitude), 20},
+    {"QNAV_RATES_IN", kIdRatesIn, 8, "AHRS", sp(kRates), 20},
+    {"QNAV_DEPTH_IN", kIdDepthIn, 8, "DEPTH", sp(kDepth), 100},
+    {"QNAV_MODE_CMD", kIdModeCmd, 4, "VEHICLE", sp(kModeCmd), 0},
+    {"QNAV_NAV_STATUS", kIdNavStatus, 8, "QNAV", sp(kNavStatus), 100},
+    {"QNAV_ROUTE_GUIDANCE", kIdRouteGuidance, 8, "QNAV", sp(kGuidance), 100},
+    {"QNAV_VO_STEP", kIdVoStep, 8, "QNAV", sp(kVoStep), 100},
+    {"QNAV_HEALTH", kIdHealth, 8, "QNAV", sp(kHealth), 1000},
+    {"QNAV_HEARTBEAT", kIdHeartbeat, 8, "QNAV", sp(kHeartbeat), 1000},
+};
+
+constexpr std::size_t kMaxSignals = 8;
+
+// Decodes every signal of `id` into v[]; the first range failure is reported after all are decoded.
+Status decode_all(const hal::CanFrame& f, std::uint32_t id, double* v) noexcept {
+  if (f.id != id) return Status(StatusCode::kNotFound, "frame has another id");
+  if (f.extended || f.fd || f.rtr || f.error) return Status(StatusCode::kUnsupported, "qnav messages are classic 11-bit data frames");
+  const MessageDef* m = find_message(id);
+  if (m == nullptr) return Status(StatusCode::kNotFound, "unknown message");
+  if (f.len < m->dlc) return Status(StatusCode::kTruncated, "frame shorter than the DBC length");
+  Status first = Status::ok();
+  for (std::size_t i = 0; i < m->signals.size() && i < kMaxSignals; ++i) {
+    const Status s = decode_signal(f.data, m->signals[i], v[i]);
+    if (!s.is_ok() && first.is_ok()) first = s;
+  }
+  return first;
+}
+
+Status encode_all(hal::CanFrame& f, std::uint32_t id, const double* v) noexcept {
+  const MessageDef* m = find_message(id);
+  if (m == nullptr) return Status(StatusCode::kNotFound, "unknown message");
+  hal::CanFrame out;
+  out.id = id;
+  out.len = m->dlc;
+  for (std::size_t i = 0; i < m->signals.size() && i < kMaxSignals; ++i)
+    QNAV_RETURN_IF_ERROR(encode_signal(out.data, m->signals[i], v[i]));
+  f = out;
+  return Status::ok();
+}
+
+std::uint8_t u8(double v) noexcept { return static_cast<std::uint8_t>(std::lround(v)); }
+std::uint16_t u16(double v) noexcept { return static_cast<std::uint16_t>(std::lround(v)); }
+Mode mode_of(double v) noexcept { return static_cast<Mode>(u8(v)); }
+}  // namespace
+
+Span<const MessageDef> all_messages() noexcept { return Span<const MessageDef>(kMessages, sizeof kMessages / sizeof kMessages[0]); }
+
+const MessageDef* find_message(std::uint32_t id) noexcept {
+  for (const MessageDef& m : kMessages)
+    if (m.id == id) return &m;
+  return nullptr;
+}
+
+Status decode_generic(const hal::CanFrame& f, const MessageDef*& def, double* values, std::size_t capacity) noexcept {
+  def = find_message(f.id);
+  if (def == nullptr || f.extended) return Status(StatusCode::kNotFound, "not a qnav message id");
+  if (capacity < def->signals.size()) return Status(StatusCode::kCapacityExceeded, "values array too small");
+  return decode_all(f, f.id, values);
+}
+
+Status decode(const hal::CanFrame& f, AttitudeIn& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdAttitudeIn, v));
+  o = AttitudeIn{v[0], v[1], v[2], u8(v[3]), v[4] > 0.5};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, RatesIn& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdRatesIn, v));
+  o = RatesIn{v[0], v[1], v[2], u8(v[3])};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, DepthIn& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdDepthIn, v));
+  o = DepthIn{v[0], v[1], u8(v[2]), v[3] > 0.5, v[4] > 0.5};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, ModeCmd& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdModeCmd, v));
+  o = ModeCmd{mode_of(v[0]), v[1] > 0.5, u16(v[2]), u8(v[3])};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, NavStatus& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdNavStatus, v));
+  o = NavStatus{mode_of(v[0]), v[1] > 0.5, v[2], u16(v[3]), u16(v[4]), u8(v[5])};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, RouteGuidance& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdRouteGuidance, v));
+  o = RouteGuidance{v[0], v[1], v[2], u16(v[3])};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, VoStep& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdVoStep, v));
+  o = VoStep{v[0], v[1], v[2], u8(v[3]), u8(v[4])};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, Health& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdHealth, v));
+  o = Health{u16(v[0]), u16(v[1]), u16(v[2]), v[3], v[4] > 0.5, v[5] > 0.5};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, Heartbeat& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdHeartbeat, v));
+  o = Heartbeat{static_cast<std::uint32_t>(std::llround(v[0])), mode_of(v[1]), u8(v[2]), u8(v[3]), u8(v[4])};
+  return Status::ok();
+}
+
+Status encode(const AttitudeIn& m, hal::CanFrame& f) noexcept {
+  const double v[] = {m.roll_rad, m.pitch_rad, m.heading_rad, double(m.counter), m.valid ? 1.0 : 0.0};
+  return encode_all(f, kIdAttitudeIn, v);
+}
+Status encode(const RatesIn& m, hal::CanFrame& f) noexcept {
+  const double v[] = {m.roll_rate_radps, m.pitch_rate_radps, m.yaw_rate_radps, double(m.counter)};
+  return encode_all(f, kIdRatesIn, v);
+}
+Status encode(const DepthIn& m, hal::CanFrame& f) noexcept {
+  const double v[] = {m.depth_m, m.altitude_m, double(m.counter), m.depth_valid ? 1.0 : 0.0, m.altitude_valid ? 1.0 : 0.0};
+  return encode_all(f, kIdDepthIn, v);
+}
+Status encode(const ModeCmd& m, hal::CanFrame& f) noexcept {
+  const double v[] = {double(static_cast<std::uint8_t>(m.mode)), m.reset_nav ? 1.0 : 0.0, double(m.route_id), double(m.counter)};
+  return encode_all(f, kIdModeCmd, v);
+}
+Status encode(const NavStatus& m, hal::CanFrame& f) noexcept {
+  const double v[] = {double(static_cast<std::uint8_t>(m.state)), m.localised ? 1.0 : 0.0, m.confidence_pct,
+                      double(m.node_index), double(m.fault_flags), double(m.counter)};
+  return encode_all(f, kIdNavStatus, v);
+}
+Status encode(const RouteGuidance& m, hal::CanFrame& f) noexcept {
+  const double v[] = {m.cross_track_m, m.heading_error_rad, m.dist_to_next_m, double(m.target_node)};
+  return encode_all(f, kIdRouteGuidance, v);
+}
+Status encode(const VoStep& m, hal::CanFrame& f) noexcept {
+  const double v[] = {m.dx_m, m.dy_m, m.dyaw_rad, double(m.inliers), double(m.counter)};
+  return encode_all(f, kIdVoStep, v);
+}
+Status encode(const Health& m, hal::CanFrame& f) noexcept {
+  const double v[] = {double(m.fault_flags), double(m.rejected_inputs), double(m.deadline_misses), m.cpu_load_pct,
+                      m.leak ? 1.0 : 0.0, m.bus_off ? 1.0 : 0.0};
+  return encode_all(f, kIdHealth, v);
+}
+Status encode(const Heartbeat& m, hal::CanFrame& f) noexcept {
+  const double v[] = {double(m.uptime_s), double(static_cast<std::uint8_t>(m.state)), double(m.sw_major), double(m.sw_minor),
+                      double(m.counter)};
+  return encode_all(f, kIdHeartbeat, v);
+}
+
+}  // namespace qnav::drivers::qnavcan
