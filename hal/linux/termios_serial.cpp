@@ -36,24 +36,8 @@ speed_t to_speed(std::uint32_t baud) noexcept {
 }
 }  // namespace
 
-TermiosSerialPort::~TermiosSerialPort() { close(); }
-
-void TermiosSerialPort::close() noexcept {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
-}
-
-Status TermiosSerialPort::open(const char* path, const SerialConfig& c) noexcept {
-  close();
-  if (path == nullptr) return Status(StatusCode::kInvalidArgument, "serial path missing");
+Status build_termios(const SerialConfig& c, termios& t) noexcept {
   QNAV_RETURN_IF_ERROR(validate_serial_config(c));
-  const int fd = ::open(path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) return Status(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError, "cannot open serial device");
-  termios t{};
-  if (::tcgetattr(fd, &t) < 0) {
-    ::close(fd);
-    return Status(StatusCode::kIoError, "not a tty (tcgetattr failed)");
-  }
   ::cfmakeraw(&t);
   t.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | PARODD | CSTOPB | CRTSCTS);
   switch (c.data_bits) {
@@ -73,7 +57,29 @@ Status TermiosSerialPort::open(const char* path, const SerialConfig& c) noexcept
   t.c_cc[VMIN] = 0;
   t.c_cc[VTIME] = 0;
   const speed_t sp = to_speed(c.baud);
-  if (::cfsetispeed(&t, sp) < 0 || ::cfsetospeed(&t, sp) < 0 || ::tcsetattr(fd, TCSANOW, &t) < 0) {
+  if (sp == B0 || ::cfsetispeed(&t, sp) < 0 || ::cfsetospeed(&t, sp) < 0) return Status(StatusCode::kUnsupported, "baud rate");
+  return Status::ok();
+}
+
+TermiosSerialPort::~TermiosSerialPort() { close(); }
+
+void TermiosSerialPort::close() noexcept {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+Status TermiosSerialPort::open(const char* path, const SerialConfig& c) noexcept {
+  close();
+  if (path == nullptr) return Status(StatusCode::kInvalidArgument, "serial path missing");
+  QNAV_RETURN_IF_ERROR(validate_serial_config(c));
+  const int fd = ::open(path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return Status(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError, "cannot open serial device");
+  termios t{};
+  if (::tcgetattr(fd, &t) < 0) {
+    ::close(fd);
+    return Status(StatusCode::kIoError, "not a tty (tcgetattr failed)");
+  }
+  if (!build_termios(c, t).is_ok() || ::tcsetattr(fd, TCSANOW, &t) < 0) {
     ::close(fd);
     return Status(StatusCode::kIoError, "tcsetattr failed");
   }

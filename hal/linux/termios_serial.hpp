@@ -6,9 +6,15 @@
 // No heap after open().
 #pragma once
 
+#include <termios.h>
+
 #include "hal/core/serial.hpp"
 
 namespace qnav::hal {
+
+// The termios settings open() applies (raw, size, parity, stop bits, flow control, speed), from a
+// zeroed or current termios. Separate so the bits can be checked where a pty ignores them.
+Status build_termios(const SerialConfig& config, termios& t) noexcept;
 
 class TermiosSerialPort final : public SerialPort {
  public:
