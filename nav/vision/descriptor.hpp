@@ -1,0 +1,64 @@
+// Appearance descriptors for the matchers.
+//
+// PatchDescriptor (ZNCC): a kPatchSide x kPatchSide patch sampled bilinearly around a point, on a
+// grid rotated by a known angle (e.g. the heading change from the attitude sensor) and scaled by
+// `scale` pixels per sample, made zero-mean and unit-norm so ZNCC = dot product (in [-1, 1]).
+// Use when rotation is known (Mars paper stereo VO, sonar tiles with heading).
+//
+// OrientedDescriptor (SIFT-like gradient histogram): dominant gradient orientation from a 36-bin
+// histogram of Gaussian-weighted gradients; then a 4 x 4 grid of 8-bin orientation histograms over a
+// square of side 4 * kOrientedCellScale * scale pixels rotated to the dominant orientation, with
+// trilinear binning, L2 normalisation, clipping at 0.2, renormalisation (Lowe 2004). Survives
+// rotation, and +/-30 % scale when computed on the pyramid level closest to the corner's scale; for
+// the underwater paper's ratio-test matching (distance = L2).
+//
+// Both: no allocation; out-of-image support or a flat patch returns an error and marks the output
+// invalid. Cost: PatchDescriptor O(kPatchSide^2); OrientedDescriptor O((support radius)^2).
+#pragma once
+
+#include <cstdint>
+
+#include "nav/core/image.hpp"
+#include "nav/core/span.hpp"
+#include "nav/core/status.hpp"
+#include "nav/vision/corner.hpp"
+
+namespace qnav::vision {
+
+constexpr int kPatchSide = 11;
+constexpr int kPatchSize = kPatchSide * kPatchSide;
+
+struct PatchDescriptor {
+  float v[kPatchSize] = {};  // zero mean, unit L2 norm
+  bool valid = false;
+};
+
+// Samples the patch centred at (x, y) in image pixels, grid rotated by rotation_rad (counter-
+// clockwise in image coordinates x right / y down means: sample offset (dx, dy) maps to
+// (c dx - s dy, s dx + c dy)), spacing scale px. Errors: kOutOfRange (support leaves the image),
+// kDegenerate (patch stddev below min_stddev grey levels / intensity units), kInvalidArgument (NaN).
+Status compute_patch_descriptor(ConstImageViewU8 image, float x, float y, float rotation_rad, float scale,
+                                PatchDescriptor& out, float min_stddev = 1.0f) noexcept;
+Status compute_patch_descriptor(ConstImageViewF32 image, float x, float y, float rotation_rad, float scale,
+                                PatchDescriptor& out, float min_stddev = 1e-3f) noexcept;
+// ZNCC of two valid descriptors (dot product), -2 if either is invalid.
+float zncc(const PatchDescriptor& a, const PatchDescriptor& b) noexcept;
+
+constexpr int kOrientedDims = 128;
+constexpr float kOrientedCellScale = 3.0f;  // cell side in units of `scale`
+
+struct OrientedDescriptor {
+  float v[kOrientedDims] = {};  // L2-normalised
+  float orientation_rad = 0.0f; // dominant gradient orientation, image frame
+  float x = 0.0f, y = 0.0f;     // level-0 position
+  float scale = 1.0f;           // level-0 pixels per level pixel (2^level) times the detection scale
+  bool valid = false;
+};
+
+// Computes the descriptor at (x, y) of `image` (a pyramid level) with sample scale `scale` (level
+// pixels). Fills orientation_rad; x/y/scale are left for the caller (see describe_corners).
+Status compute_oriented_descriptor(ConstImageViewU8 image, float x, float y, float scale, OrientedDescriptor& out) noexcept;
+// Squared L2 distance of two descriptors (large value if either is invalid).
+float descriptor_distance_sq(const OrientedDescriptor& a, const OrientedDescriptor& b) noexcept;
+
+}  // namespace qnav::vision

@@ -1,0 +1,353 @@
+#include "nav/vision/harris.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace qnav::vision {
+
+namespace {
+
+constexpr int kMinSide = 8;
+
+Status bad_config(const char* msg) noexcept { return Status(StatusCode::kInvalidArgument, msg); }
+
+Status check_config(const HarrisConfig& c) noexcept {
+  if (c.max_width < kMinSide || c.max_height < kMinSide || c.max_width > kMaxImageSide || c.max_height > kMaxImageSide)
+    return bad_config("harris: max image size out of range");
+  if (c.max_corners < 1 || c.max_corners > 1000000) return bad_config("harris: max_corners out of range");
+  if (c.block_radius < 1 || c.block_radius > 7) return bad_config("harris: block_radius must be 1..7");
+  if (!(c.k > 0.0f && c.k < 0.25f)) return bad_config("harris: k must be in (0, 0.25)");
+  if (c.nms_radius < 1 || c.nms_radius > 15) return bad_config("harris: nms_radius must be 1..15");
+  if (c.border_px < c.block_radius + 1 || c.border_px > 256) return bad_config("harris: border_px must be >= block_radius + 1");
+  if (!(c.min_response >= 0.0f) || !std::isfinite(c.min_response)) return bad_config("harris: min_response must be finite >= 0");
+  if (!(c.quality_level >= 0.0f && c.quality_level < 1.0f)) return bad_config("harris: quality_level must be in [0, 1)");
+  if (c.norm_cell_px < 4 || c.norm_cell_px > 512) return bad_config("harris: norm_cell_px must be 4..512");
+  if (c.norm_cells < 0 || c.norm_cells > 8) return bad_config("harris: norm_cells must be 0..8");
+  if (!(c.norm_floor >= 0.0f) || !std::isfinite(c.norm_floor)) return bad_config("harris: norm_floor must be finite >= 0");
+  return Status::ok();
+}
+
+struct Sizes {
+  std::size_t response, ring, colsum, grad, cells;
+};
+
+Sizes sizes_for(const HarrisConfig& c) noexcept {
+  const std::size_t w = static_cast<std::size_t>(c.max_width), h = static_cast<std::size_t>(c.max_height);
+  const std::size_t rows = static_cast<std::size_t>(2 * c.block_radius + 1);
+  const std::size_t cw = (w + static_cast<std::size_t>(c.norm_cell_px) - 1) / static_cast<std::size_t>(c.norm_cell_px);
+  const std::size_t ch = (h + static_cast<std::size_t>(c.norm_cell_px) - 1) / static_cast<std::size_t>(c.norm_cell_px);
+  // cells: sum, count, neighbourhood mean.
+  return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch};
+}
+
+// Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x.
+inline bool better(const Corner& a, const Corner& b) noexcept {
+  if (a.score != b.score) return a.score > b.score;
+  if (a.y != b.y) return a.y < b.y;
+  return a.x < b.x;
+}
+
+// Sobel gradients of row y over columns [x0, x1) (1 <= x0, x1 <= W-1, 1 <= y <= H-2), scaled by 1/8
+// (exact in float), so a unit step gives a gradient of 0.5 per pixel on both sides.
+inline void sobel_row(ImageView<const std::uint8_t> img, int y, int x0, int x1, float* __restrict gx,
+                      float* __restrict gy) noexcept {
+  const std::uint8_t* __restrict a = img.row(y - 1);
+  const std::uint8_t* __restrict b = img.row(y);
+  const std::uint8_t* __restrict c = img.row(y + 1);
+  for (int x = x0; x < x1; ++x) {
+    const int dx = (a[x + 1] - a[x - 1]) + 2 * (b[x + 1] - b[x - 1]) + (c[x + 1] - c[x - 1]);
+    const int dy = (c[x - 1] + 2 * c[x] + c[x + 1]) - (a[x - 1] + 2 * a[x] + a[x + 1]);
+    gx[x] = static_cast<float>(dx) * 0.125f;
+    gy[x] = static_cast<float>(dy) * 0.125f;
+  }
+}
+
+inline void sobel_row(ImageView<const float> img, int y, int x0, int x1, float* __restrict gx,
+                      float* __restrict gy) noexcept {
+  const float* __restrict a = img.row(y - 1);
+  const float* __restrict b = img.row(y);
+  const float* __restrict c = img.row(y + 1);
+  for (int x = x0; x < x1; ++x) {
+    const float dx = (a[x + 1] - a[x - 1]) + 2.0f * (b[x + 1] - b[x - 1]) + (c[x + 1] - c[x - 1]);
+    const float dy = (c[x - 1] + 2.0f * c[x] + c[x + 1]) - (a[x - 1] + 2.0f * a[x] + a[x + 1]);
+    gx[x] = dx * 0.125f;
+    gy[x] = dy * 0.125f;
+  }
+}
+
+}  // namespace
+
+std::size_t HarrisDetector::arena_bytes(const HarrisConfig& config) noexcept {
+  const Sizes s = sizes_for(config);
+  return (s.response + s.ring + s.colsum + s.grad + s.cells) * sizeof(float) + 5 * alignof(float) +
+         static_cast<std::size_t>(config.max_corners) * sizeof(Corner) + alignof(Corner);
+}
+
+Status HarrisDetector::init(const HarrisConfig& config, Arena& arena) noexcept {
+  ready_ = false;
+  const Status s = check_config(config);
+  if (!s) {
+    counters_.increment(VisionCounter::kBadConfig);
+    return s;
+  }
+  const Sizes z = sizes_for(config);
+  response_ = arena.allocate<float>(z.response);
+  ring_ = arena.allocate<float>(z.ring);
+  colsum_ = arena.allocate<float>(z.colsum);
+  grad_ = arena.allocate<float>(z.grad);
+  cells_ = arena.allocate<float>(z.cells);
+  heap_ = arena.allocate<Corner>(static_cast<std::size_t>(config.max_corners));
+  if (response_.empty() || ring_.empty() || colsum_.empty() || grad_.empty() || cells_.empty() || heap_.empty()) {
+    counters_.increment(VisionCounter::kBadConfig);
+    return Status(StatusCode::kCapacityExceeded, "harris: arena too small");
+  }
+  config_ = config;
+  ready_ = true;
+  return Status::ok();
+}
+
+Status HarrisDetector::detect(ConstImageViewU8 image, BoundedVector<Corner>& out) noexcept {
+  return detect_impl<std::uint8_t>(image, RectI{0, 0, image.width(), image.height()}, out);
+}
+Status HarrisDetector::detect(ConstImageViewF32 image, BoundedVector<Corner>& out) noexcept {
+  return detect_impl<float>(image, RectI{0, 0, image.width(), image.height()}, out);
+}
+Status HarrisDetector::detect(ConstImageViewU8 image, RectI roi, BoundedVector<Corner>& out) noexcept {
+  return detect_impl<std::uint8_t>(image, roi, out);
+}
+Status HarrisDetector::detect(ConstImageViewF32 image, RectI roi, BoundedVector<Corner>& out) noexcept {
+  return detect_impl<float>(image, roi, out);
+}
+
+template <typename Pixel>
+Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, BoundedVector<Corner>& out) noexcept {
+  out.clear();
+  last_response_ = ConstImageViewF32();
+  if (!ready_) return Status(StatusCode::kNotReady, "harris: detect before init");
+  if (image.empty() || image.width() <= 0 || image.height() <= 0) {
+    counters_.increment(VisionCounter::kBadImage);
+    return Status(StatusCode::kInvalidArgument, "harris: empty image");
+  }
+  if (image.width() > config_.max_width || image.height() > config_.max_height) {
+    counters_.increment(VisionCounter::kBadImage);
+    return Status(StatusCode::kInvalidArgument, "harris: image larger than configured");
+  }
+  if (out.capacity() == 0) return Status(StatusCode::kCapacityExceeded, "harris: output has no capacity");
+  const int W = image.width(), H = image.height();
+  const int r = config_.block_radius;
+  const int nms = config_.nms_radius;
+  const int b = config_.border_px;
+
+  // Detection area: ROI clipped to the image minus the border.
+  const RectI det = roi.intersect(RectI{b, b, W - 2 * b, H - 2 * b});
+  if (roi.empty() || det.empty()) {
+    if (roi.empty() || roi.intersect(RectI{0, 0, W, H}).empty()) {
+      counters_.increment(VisionCounter::kBadRoi);
+      return Status(StatusCode::kOutOfRange, "harris: region of interest empty or outside the image");
+    }
+    return Status::ok();  // ROI only covers the border: no corners, not an error
+  }
+  // Response area: detection area grown by the NMS radius (+1 for sub-pixel), clipped to where the
+  // response is defined (gradient needs 1 px, the box r px).
+  const int v0 = r + 1;
+  const RectI valid{v0, v0, W - 2 * v0, H - 2 * v0};
+  const RectI grown{det.x - nms - 1, det.y - nms - 1, det.width + 2 * nms + 2, det.height + 2 * nms + 2};
+  const RectI g = grown.intersect(valid);
+  const RectI gz = grown.intersect(RectI{0, 0, W, H});
+
+  ImageViewF32 resp = ImageViewF32::unchecked(response_.data(), W, H, W);
+  // Zero the part of the grown area where the response is not defined (NMS reads it).
+  for (int y = gz.y; y < gz.y + gz.height; ++y) {
+    float* row = resp.row(y);
+    if (y < g.y || y >= g.y + g.height) {
+      for (int x = gz.x; x < gz.x + gz.width; ++x) row[x] = 0.0f;
+    } else {
+      for (int x = gz.x; x < g.x; ++x) row[x] = 0.0f;
+      for (int x = g.x + g.width; x < gz.x + gz.width; ++x) row[x] = 0.0f;
+    }
+  }
+
+  // Streaming structure tensor: a ring of 2r+1 product rows, then vertical + horizontal box sums.
+  const int nrows = 2 * r + 1;
+  const std::size_t wz = static_cast<std::size_t>(config_.max_width);
+  float* gxr = grad_.data();
+  float* gyr = grad_.data() + wz;
+  float* csxx = colsum_.data();
+  float* csyy = colsum_.data() + wz;
+  float* csxy = colsum_.data() + 2 * wz;
+  const int px0 = g.x - r, px1 = g.x + g.width + r;  // product columns needed
+  const float k = config_.k;
+  for (int py = g.y - r; py < g.y + g.height + r; ++py) {
+    const int slot = (py - (g.y - r)) % nrows;
+    float* __restrict pxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
+    float* __restrict pyy = pxx + wz;
+    float* __restrict pxy = pyy + wz;
+    sobel_row(image, py, px0, px1, gxr, gyr);
+    for (int x = px0; x < px1; ++x) {
+      const float a = gxr[x], c = gyr[x];
+      pxx[x] = a * a;
+      pyy[x] = c * c;
+      pxy[x] = a * c;
+    }
+    if (py < g.y + r) continue;  // window not full yet
+    const int y = py - r;
+    // Vertical sums over the ring (all 2r+1 slots hold rows y-r..y+r).
+    {
+      const float* s0 = ring_.data();
+      for (int x = px0; x < px1; ++x) {
+        csxx[x] = s0[x];
+        csyy[x] = s0[wz + x];
+        csxy[x] = s0[2 * wz + x];
+      }
+      for (int j = 1; j < nrows; ++j) {
+        const float* __restrict sj = ring_.data() + static_cast<std::size_t>(3 * j) * wz;
+        for (int x = px0; x < px1; ++x) {
+          csxx[x] += sj[x];
+          csyy[x] += sj[wz + x];
+          csxy[x] += sj[2 * wz + x];
+        }
+      }
+    }
+    float* __restrict out_row = resp.row(y);
+    if (r == 1) {
+      for (int x = g.x; x < g.x + g.width; ++x) {
+        const float sxx = csxx[x - 1] + csxx[x] + csxx[x + 1];
+        const float syy = csyy[x - 1] + csyy[x] + csyy[x + 1];
+        const float sxy = csxy[x - 1] + csxy[x] + csxy[x + 1];
+        const float tr = sxx + syy;
+        out_row[x] = sxx * syy - sxy * sxy - k * tr * tr;
+      }
+    } else {
+      for (int x = g.x; x < g.x + g.width; ++x) {
+        float sxx = 0.0f, syy = 0.0f, sxy = 0.0f;
+        for (int dx = -r; dx <= r; ++dx) {
+          sxx += csxx[x + dx];
+          syy += csyy[x + dx];
+          sxy += csxy[x + dx];
+        }
+        const float tr = sxx + syy;
+        out_row[x] = sxx * syy - sxy * sxy - k * tr * tr;
+      }
+    }
+  }
+  last_response_ = ConstImageViewF32(resp);
+
+  // Statistics over the detection area: max (threshold), positive sum (normalisation floor) and
+  // the normalisation cell sums.
+  const int cell = config_.norm_cell_px;
+  const int cw = (W + cell - 1) / cell, ch = (H + cell - 1) / cell;
+  float* csum = cells_.data();
+  float* ccount = cells_.data() + static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch);
+  float* cmean = ccount + static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch);
+  const int ncell = cw * ch;
+  for (int i = 0; i < ncell; ++i) csum[i] = ccount[i] = 0.0f;
+  float rmax = 0.0f;
+  double pos_sum = 0.0;
+  for (int y = det.y; y < det.y + det.height; ++y) {
+    const float* row = resp.row(y);
+    float* crow_sum = csum + (y / cell) * cw;
+    float* crow_cnt = ccount + (y / cell) * cw;
+    for (int x0 = det.x; x0 < det.x + det.width;) {
+      const int cx = x0 / cell;
+      const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
+      float s = 0.0f;
+      for (int x = x0; x < x1; ++x) {
+        const float v = row[x];
+        rmax = v > rmax ? v : rmax;
+        s += v > 0.0f ? v : 0.0f;
+      }
+      crow_sum[cx] += s;
+      crow_cnt[cx] += static_cast<float>(x1 - x0);
+      pos_sum += static_cast<double>(s);
+      x0 = x1;
+    }
+  }
+  const double area = static_cast<double>(det.width) * static_cast<double>(det.height);
+  const float global_mean = static_cast<float>(pos_sum / area);
+  const float floor_v = config_.norm_floor * global_mean;
+  if (config_.normalise) {
+    const int n = config_.norm_cells;
+    for (int cy = 0; cy < ch; ++cy)
+      for (int cx = 0; cx < cw; ++cx) {
+        float s = 0.0f, c = 0.0f;
+        for (int j = std::max(0, cy - n); j <= std::min(ch - 1, cy + n); ++j)
+          for (int i = std::max(0, cx - n); i <= std::min(cw - 1, cx + n); ++i) {
+            s += csum[j * cw + i];
+            c += ccount[j * cw + i];
+          }
+        cmean[cy * cw + cx] = (c > 0.0f ? s / c : 0.0f) + floor_v;
+      }
+  }
+
+  const float thresh = std::max(config_.min_response, config_.quality_level * rmax);
+  const std::size_t cap = std::min(static_cast<std::size_t>(config_.max_corners), out.capacity());
+  Corner* heap = heap_.data();
+  std::size_t hn = 0;
+  bool dropped = false;
+  for (int y = det.y; y < det.y + det.height; ++y) {
+    const float* row = resp.row(y);
+    for (int x = det.x; x < det.x + det.width; ++x) {
+      const float v = row[x];
+      if (!(v > thresh)) continue;
+      // Quick 3x3 rejection, then the full window. Ties: the earlier pixel in raster order wins.
+      bool is_max = true;
+      for (int dy = -nms; dy <= nms && is_max; ++dy) {
+        const float* nr = resp.row(y + dy);
+        for (int dx = -nms; dx <= nms; ++dx) {
+          if (dx == 0 && dy == 0) continue;
+          const float nv = nr[x + dx];
+          if (nv > v || (nv == v && (dy < 0 || (dy == 0 && dx < 0)))) {
+            is_max = false;
+            break;
+          }
+        }
+      }
+      if (!is_max) continue;
+      Corner c;
+      c.x = static_cast<float>(x);
+      c.y = static_cast<float>(y);
+      c.response = v;
+      c.level = 0;
+      if (config_.normalise) {
+        const float d = cmean[(y / cell) * cw + (x / cell)];
+        c.score = d > 0.0f ? v / d : v;
+      } else {
+        c.score = v;
+      }
+      if (hn < cap) {
+        heap[hn++] = c;
+        std::push_heap(heap, heap + hn, better);
+      } else {
+        dropped = true;
+        if (better(c, heap[0])) {
+          std::pop_heap(heap, heap + hn, better);
+          heap[hn - 1] = c;
+          std::push_heap(heap, heap + hn, better);
+        }
+      }
+    }
+  }
+  if (dropped) counters_.increment(VisionCounter::kCornerCapReached);
+  std::sort(heap, heap + hn, better);
+  if (config_.subpixel) {
+    for (std::size_t i = 0; i < hn; ++i) {
+      const int x = static_cast<int>(heap[i].x), y = static_cast<int>(heap[i].y);
+      const float c0 = resp(x, y);
+      const float l = resp(x - 1, y), rr = resp(x + 1, y), u = resp(x, y - 1), d = resp(x, y + 1);
+      const float denx = l - 2.0f * c0 + rr, deny = u - 2.0f * c0 + d;
+      float ox = denx < 0.0f ? 0.5f * (l - rr) / denx : 0.0f;
+      float oy = deny < 0.0f ? 0.5f * (u - d) / deny : 0.0f;
+      ox = std::min(0.5f, std::max(-0.5f, ox));
+      oy = std::min(0.5f, std::max(-0.5f, oy));
+      heap[i].x += ox;
+      heap[i].y += oy;
+    }
+  }
+  for (std::size_t i = 0; i < hn; ++i) out.push_back(heap[i]).ignore();  // hn <= out.capacity()
+  return Status::ok();
+}
+
+template Status HarrisDetector::detect_impl<std::uint8_t>(ImageView<const std::uint8_t>, RectI, BoundedVector<Corner>&) noexcept;
+template Status HarrisDetector::detect_impl<float>(ImageView<const float>, RectI, BoundedVector<Corner>&) noexcept;
+
+}  // namespace qnav::vision

@@ -1,0 +1,99 @@
+// HarrisDetector: Harris corners with the Mars paper's neighbourhood-normalised scores.
+//
+// Pipeline per frame: Sobel 3x3 gradients -> structure tensor summed over a (2*block_radius+1)^2 box
+// -> response R = det(M) - k * trace(M)^2 -> threshold -> non-maximum suppression over a
+// (2*nms_radius+1)^2 window -> optional neighbourhood normalisation of the score -> keep the best
+// max_corners (min-heap) -> optional sub-pixel refinement (parabola through the 3x3 response) ->
+// output sorted by decreasing score (ties: smaller y, then smaller x, so the order is deterministic).
+//
+// Neighbourhood normalisation (Mars paper, section 3: "Harris' scores are normalized in their close
+// neighborhood"): score = R / (mean of max(R,0) over the (2*norm_cells+1)^2 cells of norm_cell_px
+// pixels around the corner + norm_floor * mean of max(R,0) over the whole image). A corner in a
+// low-contrast area then competes with corners in a high-contrast area, which spreads the kept corners
+// over the image; the floor keeps flat, noisy areas from being boosted.
+//
+// Threshold: R > max(min_response, quality_level * max R in the ROI).
+// Input: 8-bit grey or float images (float tiles from the sonar/route stages). Only pixels inside the
+// region of interest (clipped to the image minus the border) are reported; the response is computed
+// on the ROI grown by the filter support so the result equals the full-image result restricted to the ROI.
+//
+// Memory (from the Arena in init()): one float response plane max_width*max_height, a ring of
+// 3*(2*block_radius+1) float rows plus 3 column-sum rows, the normalisation cell grid, max_corners Corner (top-K heap). No heap, no
+// allocation in detect(). Worst case time: O(W*H*(block + nms^2)) for the ROI + O(K log K) for K kept
+// corners; every loop is bounded by the configured image size and caps.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/fixed_vector.hpp"
+#include "nav/core/geometry.hpp"
+#include "nav/core/image.hpp"
+#include "nav/core/span.hpp"
+#include "nav/core/status.hpp"
+#include "nav/vision/corner.hpp"
+#include "nav/vision/counters.hpp"
+
+namespace qnav::vision {
+
+struct HarrisConfig {
+  int max_width = 1280;       // largest image detect() accepts (buffers are sized from this)
+  int max_height = 1024;
+  int max_corners = 500;      // cap on output corners (also bounded by out.capacity())
+  int block_radius = 1;       // structure tensor window (2r+1)^2; 1 -> 3x3 (OpenCV blockSize 3)
+  float k = 0.04f;            // Harris constant
+  int nms_radius = 2;         // non-maximum suppression window (2r+1)^2
+  int border_px = 4;          // no corner closer than this to the image edge (>= block_radius + 1)
+  float min_response = 0.0f;  // absolute floor on R (units of the input intensity^4)
+  float quality_level = 1e-5f;  // relative floor: R > quality_level * max R (low: normalisation spreads)
+  bool normalise = true;      // Mars paper neighbourhood normalisation of the score
+  int norm_cell_px = 16;      // normalisation cell side
+  int norm_cells = 1;         // neighbourhood = (2*norm_cells+1)^2 cells around the corner's cell
+  float norm_floor = 1e-3f;   // floor as a fraction of the global mean positive response
+  bool subpixel = true;       // parabola refinement of x, y (|offset| <= 0.5 px)
+};
+
+class HarrisDetector {
+ public:
+  HarrisDetector() noexcept : counters_(kVisionCounterNames) {}
+
+  // Validates the configuration and carves every buffer from the arena (start-up only).
+  // Errors: kInvalidArgument for an invalid configuration, kCapacityExceeded when the arena is short.
+  Status init(const HarrisConfig& config, Arena& arena) noexcept;
+  // Bytes init() takes from an arena for this configuration (for sizing the arena), alignment included.
+  static std::size_t arena_bytes(const HarrisConfig& config) noexcept;
+
+  // Detects corners in the whole image (minus the border). out is cleared first; at most
+  // min(max_corners, out.capacity()) corners are written, best first.
+  // Errors: kNotReady before init(), kInvalidArgument for an empty image or one larger than configured.
+  Status detect(ConstImageViewU8 image, BoundedVector<Corner>& out) noexcept;
+  Status detect(ConstImageViewF32 image, BoundedVector<Corner>& out) noexcept;
+  // Same, only corners whose integer position is inside roi (e.g. the predicted overlap of two
+  // frames). An empty roi is an error (kOutOfRange, counted as bad_roi): it is a prediction failure.
+  Status detect(ConstImageViewU8 image, RectI roi, BoundedVector<Corner>& out) noexcept;
+  Status detect(ConstImageViewF32 image, RectI roi, BoundedVector<Corner>& out) noexcept;
+
+  // Response plane of the last detect() (valid inside the last ROI grown by nms_radius; 0 elsewhere
+  // where not computed). For tests and debug images.
+  ConstImageViewF32 response() const noexcept { return last_response_; }
+  const HarrisConfig& config() const noexcept { return config_; }
+  const VisionCounters& counters() const noexcept { return counters_; }
+
+ private:
+  template <typename Pixel>
+  Status detect_impl(ImageView<const Pixel> image, RectI roi, BoundedVector<Corner>& out) noexcept;
+
+  HarrisConfig config_{};
+  bool ready_ = false;
+  Span<float> response_;   // max_width * max_height
+  Span<float> ring_;       // 3 * (2r+1) rows of max_width products (xx, yy, xy)
+  Span<float> colsum_;     // 3 rows of max_width
+  Span<float> grad_;       // 2 rows of max_width (gx, gy of one row)
+  Span<float> cells_;      // normalisation cells: sums, pixel counts, neighbourhood means
+  Span<Corner> heap_;      // max_corners: top-K heap
+  ConstImageViewF32 last_response_;
+  VisionCounters counters_;
+};
+
+}  // namespace qnav::vision
