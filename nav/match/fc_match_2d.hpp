@@ -1,0 +1,93 @@
+// fc-matching in 2D (Mars VO paper's geometric fc-matching, brought down to the plane for the route
+// registration): matches two keypoint sets A (sensed tile) and B (reference node) whose relative
+// rotation dtheta (B frame from A frame, known from the heading sensor) is known and whose
+// translation is not.
+//   1. candidates: each a keeps its best max_candidates_per_point b by appearance (ZNCC of the int8
+//      patch descriptors) with ZNCC >= min_appearance.
+//   2. continuous score of candidate c = (a, b): S(c) = sum over the other keypoints a' of the best
+//      compatibility with one of their candidates (a', b'), b' != b:
+//        f = exp(-0.5 (dd / sigma_dist_m)^2) * exp(-0.5 (dphi / sigma_phi)^2)
+//      dd = | |a' - a| - |b' - b| |  (distances preserved),
+//      dphi = angle between R(dtheta)(a' - a) and (b' - b)  (directions preserved),
+//      sigma_phi = sigma_dir_rad + sigma_dist_m / |a' - a| (short baselines give loose directions);
+//      then the appearance term: S *= (1 - w) + w * max(0, zncc(a, b)).
+//   3. greedy one-to-one selection by decreasing S while S >= min_support.
+// The output are putative matches for RANSAC / LMedS (nav/match/ransac.hpp).
+// Bounds: points beyond max_points are ignored (counted); candidates <= max_points *
+// max_candidates_per_point; cost O(nA nB D) appearance + O(C^2) scoring, C candidates.
+// Memory: init() takes all buffers from an Arena; match() never allocates.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/counters.hpp"
+#include "nav/core/fixed_vector.hpp"
+#include "nav/core/geometry.hpp"
+#include "nav/core/span.hpp"
+#include "nav/core/status.hpp"
+
+namespace qnav::match {
+
+// Zero-mean normalised cross-correlation of two int8 descriptors of n bytes; 0 when either is flat.
+float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcept;
+
+// A 2D keypoint set: positions (metres, the set's own frame) and descriptors (desc_bytes each,
+// concatenated, same order).
+struct KeypointSet2d {
+  Span<const Vec2d> position_m;
+  Span<const std::int8_t> descriptors;
+  std::size_t desc_bytes = 0;
+};
+
+struct Match2d {
+  std::uint16_t a = 0;  // index in A
+  std::uint16_t b = 0;  // index in B
+  float score = 0.0f;
+  float appearance = 0.0f;  // ZNCC
+};
+
+struct FcMatch2dConfig {
+  std::size_t max_points = 128;           // per set
+  std::size_t max_candidates_per_point = 4;
+  float min_appearance = 0.25f;           // ZNCC floor for a candidate
+  double sigma_dist_m = 1.0;              // keypoint position noise (both sets), metres
+  double sigma_dir_rad = 0.05;            // heading noise between the two sets
+  float appearance_weight = 0.5f;         // w in [0, 1]
+  float min_support = 1.5f;               // score floor for a match
+};
+
+enum class FcMatchCounter : std::uint8_t { kPointsIgnored, kBadInput, kCount };
+inline constexpr const char* kFcMatchCounterNames[] = {"points_ignored", "bad_input"};
+
+class FcMatcher2d {
+ public:
+  FcMatcher2d() noexcept : counters_(kFcMatchCounterNames) {}
+  Status init(const FcMatch2dConfig& config, Arena& arena) noexcept;
+  static std::size_t arena_bytes(const FcMatch2dConfig& config) noexcept;
+
+  // Matches A against B given dtheta_rad (B frame = R(dtheta) * A frame + t). out is cleared first.
+  Status match(const KeypointSet2d& a, const KeypointSet2d& b, double dtheta_rad, BoundedVector<Match2d>& out) noexcept;
+
+  const FcMatch2dConfig& config() const noexcept { return config_; }
+  const CounterSet<FcMatchCounter>& counters() const noexcept { return counters_; }
+
+ private:
+  struct Candidate {
+    std::uint16_t a = 0;
+    std::uint16_t b = 0;
+    float appearance = 0.0f;
+    float score = 0.0f;
+  };
+  FcMatch2dConfig config_{};
+  bool ready_ = false;
+  Span<Candidate> cand_;
+  Span<std::uint32_t> first_;   // per a: first candidate index (cand_ is grouped by a)
+  Span<std::uint32_t> order_;   // candidate order for the greedy pass
+  Span<std::uint8_t> used_a_;
+  Span<std::uint8_t> used_b_;
+  CounterSet<FcMatchCounter> counters_;
+};
+
+}  // namespace qnav::match

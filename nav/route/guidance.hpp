@@ -1,0 +1,63 @@
+// Guidance: from the estimated node and the registration to it, what the autopilot needs.
+//  - the vehicle's position in the node's tile frame is T.apply(0) (T: sensed tile -> node tile,
+//    the sensed tile's origin is the vehicle's position at the tile centre): along-track offset and
+//    cross-track offset, signed in the direction of travel (reverse passes flip both);
+//  - side: which side of the route the vehicle lies on (starboard / port of the route's direction
+//    of travel, on_route inside the dead band) -- the paper's Fig. 10 determination;
+//  - heading error: vehicle heading minus the route's heading in the direction of travel;
+//  - steering: a look-ahead waypoint lookahead_nodes ahead on the route (the paper's future-work
+//    control strategy) expressed as a bearing relative to the vehicle heading and a commanded
+//    compass heading.
+// When the filter is not confident or the registration to the estimated node failed, the paper's
+// default strategy: hold course (commanded heading = last good command, or the current heading),
+// status kHoldCourse. Pure function of its inputs + the held command; O(1), no heap.
+#pragma once
+
+#include <cstdint>
+
+#include "nav/core/geometry.hpp"
+#include "nav/core/status.hpp"
+#include "nav/route/registration.hpp"
+#include "nav/route/route_filter.hpp"
+#include "nav/route/route_types.hpp"
+
+namespace qnav::route {
+
+enum class GuidanceStatus : std::uint8_t { kTracking, kHoldCourse };
+enum class RouteSide : std::int8_t { kPort = -1, kOnRoute = 0, kStarboard = 1 };
+const char* to_string(GuidanceStatus s) noexcept;
+const char* to_string(RouteSide s) noexcept;
+
+struct GuidanceConfig {
+  double lookahead_nodes = 2.0;
+  double side_deadband_m = 0.5;
+};
+
+struct GuidanceOutput {
+  GuidanceStatus status = GuidanceStatus::kHoldCourse;
+  std::uint32_t node = 0;
+  double along_track_m = 0.0;      // + ahead of the node in the direction of travel
+  double cross_track_m = 0.0;      // + vehicle to starboard of the route
+  RouteSide side = RouteSide::kOnRoute;
+  double heading_error_rad = 0.0;  // vehicle heading - route heading (direction of travel)
+  Vec2d waypoint_ne = Vec2d::Zero();  // look-ahead waypoint, route frame (north, east)
+  double waypoint_bearing_rad = 0.0;  // relative to the vehicle heading, + to starboard
+  double commanded_heading_rad = 0.0; // compass
+};
+
+class Guidance {
+ public:
+  explicit Guidance(const GuidanceConfig& c = GuidanceConfig{}) noexcept : config_(c) {}
+  // node/ahead: the estimated node and the look-ahead node's metadata (route frame poses);
+  // vehicle_heading_rad: compass heading now. reg: registration of the sensed tile to `node`.
+  GuidanceOutput compute(bool confident, RouteDirection direction, const NodeMeta& node, const NodeMeta& ahead,
+                         const RegistrationResult& reg, double vehicle_heading_rad) noexcept;
+  void reset() noexcept { have_command_ = false; }
+
+ private:
+  GuidanceConfig config_;
+  bool have_command_ = false;
+  double last_command_rad_ = 0.0;
+};
+
+}  // namespace qnav::route

@@ -1,0 +1,194 @@
+#include "nav/route/route_filter.hpp"
+
+#include <cmath>
+
+namespace qnav::route {
+
+Status RouteFilter::init(const RouteFilterConfig& c, Arena& arena) noexcept {
+  if (c.max_nodes < 2 || c.max_advance_nodes < 1 || c.max_advance_nodes > 64 || !(c.sigma_w2 > 0.0) ||
+      !(c.odometry_sigma_frac >= 0.0) || !(c.odometry_sigma_min_nodes > 0.0) || !(c.kidnap_floor >= 0.0 && c.kidnap_floor < 1.0) ||
+      !(c.inlier_floor > 0.0f) || !(c.chance_inliers >= 0.0f) || c.belief_registrations == 0 ||
+      c.wide_search_period == 0 || !(c.confident_mass > 0.0 && c.confident_mass <= 1.0))
+    return Status(StatusCode::kInvalidArgument, "route filter: bad configuration");
+  bel_ = arena.allocate<float>(c.max_nodes);
+  tmp_ = arena.allocate<float>(c.max_nodes);
+  mark_ = arena.allocate<std::uint8_t>(c.max_nodes);
+  if (bel_.empty() || tmp_.empty() || mark_.empty()) return Status(StatusCode::kCapacityExceeded, "route filter: arena too small");
+  config_ = c;
+  ready_ = true;
+  return Status::ok();
+}
+
+Status RouteFilter::reset(std::uint32_t node_count, double node_spacing_m) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "route filter not initialised");
+  if (node_count < 2) return Status(StatusCode::kInvalidArgument, "route filter: a route needs at least 2 nodes");
+  if (node_count > config_.max_nodes) return Status(StatusCode::kCapacityExceeded, "route filter: route longer than max_nodes");
+  if (!(node_spacing_m > 0.0) || !std::isfinite(node_spacing_m)) return Status(StatusCode::kInvalidArgument, "route filter: bad node spacing");
+  n_ = node_count;
+  spacing_m_ = node_spacing_m;
+  const float u = 1.0f / static_cast<float>(n_);
+  for (std::uint32_t i = 0; i < n_; ++i) bel_[i] = u;
+  updates_ = 0;
+  selects_ = 0;
+  wide_phase_ = 0;
+  last_m_.clear();
+  summarise();
+  return Status::ok();
+}
+
+Status RouteFilter::normalise(Span<float> v) noexcept {
+  double sum = 0.0;
+  for (std::uint32_t i = 0; i < n_; ++i) sum += static_cast<double>(v[i]);
+  if (!(sum > 1e-30) || !std::isfinite(sum)) {
+    counters_.increment(FilterCounter::kDegenerateBelief);
+    const float u = 1.0f / static_cast<float>(n_);
+    for (std::uint32_t i = 0; i < n_; ++i) v[i] = u;
+    return Status(StatusCode::kDegenerate, "route filter: belief vanished, reset to uniform");
+  }
+  const float inv = static_cast<float>(1.0 / sum);
+  for (std::uint32_t i = 0; i < n_; ++i) v[i] *= inv;
+  return Status::ok();
+}
+
+Status RouteFilter::predict(double distance_m) noexcept {
+  if (n_ == 0) return Status(StatusCode::kNotReady, "route filter: reset() first");
+  if (!std::isfinite(distance_m) || distance_m < 0.0) {
+    counters_.increment(FilterCounter::kBadDistance);
+    return Status(StatusCode::kInvalidArgument, "route filter: distance must be finite and >= 0");
+  }
+  // Kernel over signed advances n in [lo, hi] (in the configured direction).
+  constexpr int kMaxTaps = 129;
+  float w[kMaxTaps];
+  int lo = 0, hi = config_.max_advance_nodes;
+  if (config_.motion == MotionModel::kPaperEq5) {
+    for (int k = lo; k <= hi; ++k) w[k - lo] = static_cast<float>(std::exp(-static_cast<double>(k) / config_.sigma_w2));
+  } else {
+    const double a = distance_m / spacing_m_;
+    double s = config_.odometry_sigma_frac * a;
+    if (s < config_.odometry_sigma_min_nodes) s = config_.odometry_sigma_min_nodes;
+    const int m = config_.max_advance_nodes;
+    double flo = std::floor(a - 3.0 * s), fhi = std::ceil(a + 3.0 * s);
+    if (flo < -m) flo = -m;
+    if (fhi > m) fhi = m;  // a longer jump than the kernel bound is clamped (counted)
+    if (a > m) counters_.increment(FilterCounter::kBadDistance);
+    lo = static_cast<int>(flo);
+    hi = static_cast<int>(fhi);
+    if (hi < lo) hi = lo;
+    const double ac = a > m ? m : a;
+    for (int k = lo; k <= hi; ++k) {
+      const double d = (k - ac) / s;
+      w[k - lo] = static_cast<float>(std::exp(-0.5 * d * d));
+    }
+  }
+  const int dir = config_.direction == RouteDirection::kForward ? 1 : -1;
+  const std::int64_t n = n_;
+  for (std::int64_t j = 0; j < n; ++j) {
+    float acc = 0.0f;
+    for (int k = lo; k <= hi; ++k) {
+      const std::int64_t src = j - dir * k;
+      if (src >= 0 && src < n) acc += w[k - lo] * bel_[static_cast<std::size_t>(src)];
+    }
+    tmp_[static_cast<std::size_t>(j)] = acc;
+  }
+  Status s = normalise(tmp_);
+  const float floor_each = static_cast<float>(config_.kidnap_floor / static_cast<double>(n_));
+  const float keep = static_cast<float>(1.0 - config_.kidnap_floor);
+  for (std::uint32_t i = 0; i < n_; ++i) bel_[i] = keep * tmp_[i] + floor_each;
+  summarise();
+  return s;
+}
+
+Status RouteFilter::update(Span<const NodeMeasurement> m) noexcept {
+  if (n_ == 0) return Status(StatusCode::kNotReady, "route filter: reset() first");
+  last_m_.clear();
+  const float fl = config_.inlier_floor;
+  // bel *= L / floor (unmeasured nodes keep their prediction: L / floor = 1).
+  for (const NodeMeasurement& x : m) {
+    if (x.node >= n_ || !std::isfinite(x.inliers) || x.inliers < 0.0f) {
+      counters_.increment(FilterCounter::kBadMeasurement);
+      continue;
+    }
+    if (mark_[x.node] == 1) continue;  // duplicate
+    mark_[x.node] = 1;
+    const float excess = x.inliers > config_.chance_inliers ? x.inliers - config_.chance_inliers : 0.0f;
+    bel_[x.node] *= (fl + excess) / fl;
+    last_m_.push_back(x).ignore();
+  }
+  for (const NodeMeasurement& x : m)
+    if (x.node < n_) mark_[x.node] = 0;
+  Status s = normalise(bel_);
+  ++updates_;
+  summarise();
+  return s;
+}
+
+Status RouteFilter::measurement_probability(Span<float> out) const noexcept {
+  if (out.size() < n_) return Status(StatusCode::kCapacityExceeded, "measurement_probability: buffer too small");
+  double sum = static_cast<double>(config_.inlier_floor) * n_;
+  for (std::uint32_t i = 0; i < n_; ++i) out[i] = config_.inlier_floor;
+  for (const NodeMeasurement& x : last_m_) {
+    const float excess = x.inliers > config_.chance_inliers ? x.inliers - config_.chance_inliers : 0.0f;
+    out[x.node] += excess;
+    sum += static_cast<double>(excess);
+  }
+  const float inv = static_cast<float>(1.0 / sum);
+  for (std::uint32_t i = 0; i < n_; ++i) out[i] *= inv;
+  return Status::ok();
+}
+
+std::size_t RouteFilter::select_nodes(Span<std::uint32_t> out) noexcept {
+  if (n_ == 0 || out.empty()) return 0;
+  std::size_t count = 0;
+  // Top-B by belief (insertion into a short sorted list held at the front of out).
+  const std::size_t b = config_.belief_registrations < out.size() ? config_.belief_registrations : out.size();
+  const std::size_t want = b < n_ ? b : n_;
+  for (std::uint32_t i = 0; i < n_; ++i) {
+    const float p = bel_[i];
+    if (count == want && p <= bel_[out[count - 1]]) continue;
+    std::size_t pos = count < want ? count++ : want - 1;
+    while (pos > 0 && bel_[out[pos - 1]] < p) {
+      out[pos] = out[pos - 1];
+      --pos;
+    }
+    out[pos] = i;
+  }
+  for (std::size_t i = 0; i < count; ++i) mark_[out[i]] = 1;
+  const bool wide = !confident() || (selects_++ % config_.wide_search_period) == 0;
+  if (wide && config_.wide_search_registrations > 0) {
+    const std::uint32_t k = config_.wide_search_registrations;
+    const double stride = static_cast<double>(n_) / k;
+    const double g = 0.6180339887498949 * static_cast<double>(wide_phase_);  // golden-ratio phases cover the gaps evenly
+    const double phase = stride * (g - std::floor(g));
+    ++wide_phase_;
+    for (std::uint32_t i = 0; i < k && count < out.size(); ++i) {
+      const std::uint32_t node = static_cast<std::uint32_t>(phase + i * stride) % n_;
+      if (mark_[node]) continue;
+      mark_[node] = 1;
+      out[count++] = node;
+    }
+  }
+  for (std::size_t i = 0; i < count; ++i) mark_[out[i]] = 0;
+  return count;
+}
+
+void RouteFilter::summarise() noexcept {
+  std::uint32_t best = 0;
+  for (std::uint32_t i = 0; i < n_; ++i)
+    if (bel_[i] > bel_[best]) best = i;
+  argmax_ = best;
+  double m = static_cast<double>(bel_[best]);
+  if (best > 0) m += static_cast<double>(bel_[best - 1]);
+  if (best + 1 < n_) m += static_cast<double>(bel_[best + 1]);
+  mass_pm1_ = m;
+}
+
+double RouteFilter::entropy() const noexcept {
+  double h = 0.0;
+  for (std::uint32_t i = 0; i < n_; ++i) {
+    const double p = static_cast<double>(bel_[i]);
+    if (p > 0.0) h -= p * std::log(p);
+  }
+  return h;
+}
+
+}  // namespace qnav::route

@@ -1,0 +1,107 @@
+#include "nav/route/route_localiser.hpp"
+
+#include <cmath>
+
+namespace qnav::route {
+
+namespace {
+std::size_t max_selected(const LocaliserConfig& c) noexcept {
+  return c.filter.belief_registrations + c.filter.wide_search_registrations + 1;
+}
+}  // namespace
+
+std::size_t RouteLocaliser::arena_bytes(const LocaliserConfig& c) noexcept {
+  const std::size_t k = max_selected(c);
+  return RouteFilter::arena_bytes(c.filter) + Registrar::arena_bytes(c.registration) + NodeWindow::arena_bytes(c.window_slots) +
+         k * (sizeof(std::uint32_t) + sizeof(NodeMeasurement) + sizeof(RegistrationResult)) + 512;
+}
+
+Status RouteLocaliser::init(const LocaliserConfig& c, Arena& arena) noexcept {
+  if (c.window_slots < max_selected(c))
+    return Status(StatusCode::kInvalidArgument, "localiser: window_slots must hold every node registered in one update");
+  QNAV_RETURN_IF_ERROR(filter_.init(c.filter, arena));
+  QNAV_RETURN_IF_ERROR(registrar_.init(c.registration, arena));
+  QNAV_RETURN_IF_ERROR(window_.init(c.window_slots, arena));
+  const std::size_t k = max_selected(c);
+  selected_ = arena.allocate<std::uint32_t>(k);
+  measurements_ = arena.allocate<NodeMeasurement>(k);
+  results_ = arena.allocate<RegistrationResult>(k);
+  if (selected_.empty() || measurements_.empty() || results_.empty()) return Status(StatusCode::kCapacityExceeded, "localiser: arena too small");
+  config_ = c;
+  guidance_ = Guidance(c.guidance);
+  ready_ = true;
+  return Status::ok();
+}
+
+Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> meta, NodeSource& source) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "localiser: not initialised");
+  started_ = false;
+  if (params.sensor != config_.sensor) {
+    counters_.increment(LocaliserCounter::kSensorMismatch);
+    return Status(StatusCode::kInvalidArgument, "localiser: route sensor kind differs from the configured sensor");
+  }
+  if (meta.size() < 2) return Status(StatusCode::kInvalidArgument, "localiser: a route needs at least 2 nodes");
+  if (source.node_count() != meta.size()) return Status(StatusCode::kInvalidArgument, "localiser: node source and metadata disagree");
+  QNAV_RETURN_IF_ERROR(filter_.reset(static_cast<std::uint32_t>(meta.size()), params.node_spacing_m));
+  QNAV_RETURN_IF_ERROR(window_.bind(source));
+  meta_ = meta;
+  guidance_.reset();
+  started_ = true;
+  return Status::ok();
+}
+
+Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, LocaliserStep& out) noexcept {
+  out = LocaliserStep{};
+  if (!started_) return Status(StatusCode::kNotReady, "localiser: start() first");
+  if (sensed.keypoints.empty()) counters_.increment(LocaliserCounter::kEmptySensedTile);
+  QNAV_RETURN_IF_ERROR(filter_.predict(distance_m));
+  const std::size_t k = filter_.select_nodes(Span<std::uint32_t>(selected_.data(), selected_.size() - 1));
+  std::size_t nm = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::uint32_t node = selected_[i];
+    RegistrationResult& r = results_[i];
+    r = RegistrationResult{};
+    Status ls;
+    const RouteNode* ref = window_.get(node, &ls);
+    if (ref == nullptr) {
+      counters_.increment(LocaliserCounter::kLoadError);
+      ++out.load_errors;
+    } else if (!sensed.keypoints.empty()) {
+      QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, r));
+    }
+    measurements_[nm++] = NodeMeasurement{node, static_cast<float>(r.inliers)};
+  }
+  out.registrations = static_cast<std::uint32_t>(k);
+  Status us = filter_.update(Span<const NodeMeasurement>(measurements_.data(), nm));
+  us.ignore();  // a degenerate belief was reset to uniform and counted by the filter
+  out.estimate = filter_.argmax();
+  out.probability = filter_.probability(out.estimate);
+  out.mass_pm1 = filter_.mass_near_argmax();
+  out.entropy = filter_.entropy();
+  out.confident = filter_.confident();
+  // Registration to the estimate (reuse this step's, else one more registration).
+  bool found = false;
+  for (std::size_t i = 0; i < k; ++i)
+    if (selected_[i] == out.estimate) {
+      out.registration = results_[i];
+      found = true;
+      break;
+    }
+  if (!found && !sensed.keypoints.empty()) {
+    const RouteNode* ref = window_.get(out.estimate);
+    if (ref != nullptr) {
+      QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, out.registration));
+      ++out.registrations;
+    }
+  }
+  out.best_inliers = out.registration.inliers;
+  const std::int64_t dir = config_.filter.direction == RouteDirection::kForward ? 1 : -1;
+  std::int64_t ahead = static_cast<std::int64_t>(out.estimate) + dir * static_cast<std::int64_t>(std::lround(config_.guidance.lookahead_nodes));
+  if (ahead < 0) ahead = 0;
+  if (ahead >= static_cast<std::int64_t>(meta_.size())) ahead = static_cast<std::int64_t>(meta_.size()) - 1;
+  out.guidance = guidance_.compute(out.confident, config_.filter.direction, meta_[out.estimate], meta_[static_cast<std::size_t>(ahead)],
+                                   out.registration, sensed.meta.pose.heading_rad);
+  return Status::ok();
+}
+
+}  // namespace qnav::route

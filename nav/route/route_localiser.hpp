@@ -1,0 +1,81 @@
+// RouteLocaliser: one repeat-mode update per sensed tile, in fixed memory and bounded time:
+//   predict (motion model, distance travelled) -> select the nodes carrying belief (+ the periodic
+//   wide search) -> fetch them through the NodeWindow -> register the sensed tile against each ->
+//   update (eq. 9 from the inlier counts) -> guidance from the registration to the argmax node.
+// Owns the filter, registrar, window and guidance; the NodeSource (route file / memory) and the route
+// metadata index (per-node pose and along-track distance, for guidance) are the caller's.
+// Bounds: registrations per update <= belief_registrations + wide_search_registrations (+1 when the
+// argmax was not registered); memory: sum of the parts' arena_bytes(). No heap after init().
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/span.hpp"
+#include "nav/core/status.hpp"
+#include "nav/route/guidance.hpp"
+#include "nav/route/node_window.hpp"
+#include "nav/route/registration.hpp"
+#include "nav/route/route_filter.hpp"
+#include "nav/route/route_types.hpp"
+
+namespace qnav::route {
+
+struct LocaliserConfig {
+  RouteFilterConfig filter;
+  RegistrationConfig registration;
+  GuidanceConfig guidance;
+  std::size_t window_slots = 32;
+  SensorKind sensor = SensorKind::kSideScan;  // must match the route's
+};
+
+struct LocaliserStep {
+  std::uint32_t estimate = 0;       // argmax node
+  float probability = 0.0f;         // belief at the estimate
+  double mass_pm1 = 0.0;
+  double entropy = 0.0;
+  bool confident = false;
+  std::uint32_t registrations = 0;
+  std::uint32_t best_inliers = 0;   // at the estimate
+  RegistrationResult registration;  // to the estimate
+  GuidanceOutput guidance;
+  std::uint32_t load_errors = 0;    // damaged records met this step (treated as no similarity)
+};
+
+enum class LocaliserCounter : std::uint8_t { kSensorMismatch, kEmptySensedTile, kLoadError, kCount };
+inline constexpr const char* kLocaliserCounterNames[] = {"sensor_mismatch", "empty_sensed_tile", "load_error"};
+
+class RouteLocaliser {
+ public:
+  RouteLocaliser() noexcept : counters_(kLocaliserCounterNames) {}
+  static std::size_t arena_bytes(const LocaliserConfig& c) noexcept;
+  Status init(const LocaliserConfig& config, Arena& arena) noexcept;
+  // Starts on a route: params from its header, meta = every node's metadata (index order),
+  // source = where node records are loaded from. Rejects a sensor-kind mismatch and routes of < 2 nodes.
+  Status start(const RouteParams& params, Span<const NodeMeta> meta, NodeSource& source) noexcept;
+  // One update. sensed: keypoints of the new tile (meta.pose.heading_rad = compass heading);
+  // distance_m: distance travelled since the previous tile (DVL/INS).
+  Status step(const RouteNode& sensed, double distance_m, LocaliserStep& out) noexcept;
+
+  const RouteFilter& filter() const noexcept { return filter_; }
+  const NodeWindow& window() const noexcept { return window_; }
+  const Registrar& registrar() const noexcept { return registrar_; }
+  const CounterSet<LocaliserCounter>& counters() const noexcept { return counters_; }
+
+ private:
+  LocaliserConfig config_{};
+  bool ready_ = false;
+  bool started_ = false;
+  RouteFilter filter_;
+  Registrar registrar_;
+  NodeWindow window_;
+  Guidance guidance_;
+  Span<const NodeMeta> meta_;
+  Span<std::uint32_t> selected_;
+  Span<NodeMeasurement> measurements_;
+  Span<RegistrationResult> results_;
+  CounterSet<LocaliserCounter> counters_;
+};
+
+}  // namespace qnav::route

@@ -1,0 +1,72 @@
+// TileFeatureExtractor: what a route node keeps of a tile. Finds Harris corners (nav/vision, with
+// the Mars paper's neighbourhood-normalised scores) on a lightly smoothed copy of a north-up tile in
+// which pixels without coverage are replaced by the mean covered intensity (so the swath edge does
+// not produce corners), keeps the max_keypoints strongest corners whose descriptor footprint lies
+// fully inside covered pixels, and stores for each: its position in the tile frame (metres; x along
+// the tile heading, y to starboard; origin at the tile pose) and an 8x8 int8 descriptor sampled on
+// the north-up grid (descriptor_step_px apart), so descriptors of the same seabed spot compare
+// directly whatever the vehicle heading (forward or reverse passes).
+// Raster convention (same as nav/sonar's SonarTile): row 0 is the north edge, columns grow east;
+// pixel (c, r) centre is north = origin_north_m - (r + 0.5) res, east = origin_east_m + (c + 0.5) res.
+// Pose2 of a tile: x_m north, y_m east, heading_rad compass (clockwise from north).
+// Memory: two float planes max_width*max_height + the Harris buffers, all from the Arena in init().
+// Cost: O(W H) copy/blur + Harris (see nav/vision/harris.hpp) + O(K) descriptors. No heap.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/counters.hpp"
+#include "nav/core/geometry.hpp"
+#include "nav/core/image.hpp"
+#include "nav/core/status.hpp"
+#include "nav/route/route_types.hpp"
+#include "nav/vision/harris.hpp"
+
+namespace qnav::route {
+
+struct TileFeatureConfig {
+  int max_width = 1024;
+  int max_height = 1024;
+  std::size_t max_keypoints = 64;     // <= kMaxKeypointsPerNode
+  int descriptor_step_px = 2;         // spacing of the 8x8 descriptor samples
+  int blur_radius_px = 1;             // box blur before Harris (speckle); 0 = none
+  int harris_block_radius = 2;
+  int harris_nms_radius = 6;
+  int harris_norm_cell_px = 32;
+};
+
+struct TileGeometry {
+  double resolution_m = 0.1;
+  double origin_north_m = 0.0;
+  double origin_east_m = 0.0;
+  Pose2 pose;  // tile frame in the route frame (north, east, compass heading)
+};
+
+enum class FeatureCounter : std::uint8_t { kBadTile, kEmptyTile, kFootprintUncovered, kCount };
+inline constexpr const char* kFeatureCounterNames[] = {"bad_tile", "empty_tile", "footprint_uncovered"};
+
+class TileFeatureExtractor {
+ public:
+  TileFeatureExtractor() noexcept : counters_(kFeatureCounterNames) {}
+  static std::size_t arena_bytes(const TileFeatureConfig& c) noexcept;
+  Status init(const TileFeatureConfig& config, Arena& arena) noexcept;
+  // Fills out.keypoints (cleared first) and out.meta.pose. coverage may be empty (all covered);
+  // otherwise same size as intensity, 0 = no data. A tile with no covered pixel is kEmpty.
+  Status extract(ConstImageViewF32 intensity, ConstImageViewU8 coverage, const TileGeometry& geometry,
+                 RouteNode& out) noexcept;
+  const CounterSet<FeatureCounter>& counters() const noexcept { return counters_; }
+  const vision::HarrisDetector& harris() const noexcept { return harris_; }
+
+ private:
+  TileFeatureConfig config_{};
+  bool ready_ = false;
+  vision::HarrisDetector harris_;
+  Span<float> work_;
+  Span<float> tmp_;
+  Span<vision::Corner> corners_;
+  CounterSet<FeatureCounter> counters_;
+};
+
+}  // namespace qnav::route

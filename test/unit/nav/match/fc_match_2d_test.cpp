@@ -1,0 +1,137 @@
+#include "nav/match/fc_match_2d.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "nav/core/arena.hpp"
+#include "nav/match/ransac.hpp"
+#include "test/support/alloc_guard.hpp"
+
+namespace qnav::match {
+namespace {
+
+constexpr std::size_t kD = 64;
+
+struct Sets {
+  std::vector<Vec2d> pa, pb;
+  std::vector<std::int8_t> da, db;
+  std::vector<int> truth;  // truth[i] = index in B of A's point i, or -1
+};
+
+// A: n points; B: the same seabed seen from pose `rel` (b = rel.apply(a)), shuffled, plus clutter.
+Sets make(int n, const Pose2& rel, double noise_m, int clutter, bool scramble_desc, std::uint64_t seed) {
+  DeterministicRng rng(seed);
+  Sets s;
+  std::vector<std::int8_t> base(static_cast<std::size_t>(n) * kD);
+  for (auto& v : base) v = static_cast<std::int8_t>(static_cast<int>(rng.below(200)) - 100);
+  for (int i = 0; i < n; ++i) s.pa.push_back(Vec2d((rng.uniform() - 0.5) * 60, (rng.uniform() - 0.5) * 40));
+  s.da = base;
+  const int nb = n + clutter;
+  std::vector<int> perm(static_cast<std::size_t>(nb));
+  for (int i = 0; i < nb; ++i) perm[static_cast<std::size_t>(i)] = i;
+  for (int i = nb - 1; i > 0; --i) std::swap(perm[static_cast<std::size_t>(i)], perm[rng.below(static_cast<std::uint32_t>(i + 1))]);
+  s.pb.resize(static_cast<std::size_t>(nb));
+  s.db.resize(static_cast<std::size_t>(nb) * kD);
+  s.truth.assign(static_cast<std::size_t>(n), -1);
+  for (int j = 0; j < nb; ++j) {
+    const int src = perm[static_cast<std::size_t>(j)];
+    if (src < n) {
+      s.pb[static_cast<std::size_t>(j)] = rel.apply(s.pa[static_cast<std::size_t>(src)]) + Vec2d((rng.uniform() - 0.5) * noise_m, (rng.uniform() - 0.5) * noise_m);
+      for (std::size_t k = 0; k < kD; ++k) {
+        int v = scramble_desc ? static_cast<int>(rng.below(200)) - 100 : base[static_cast<std::size_t>(src) * kD + k] + static_cast<int>(rng.below(21)) - 10;
+        s.db[static_cast<std::size_t>(j) * kD + k] = static_cast<std::int8_t>(v);
+      }
+      s.truth[static_cast<std::size_t>(src)] = j;
+    } else {
+      s.pb[static_cast<std::size_t>(j)] = Vec2d((rng.uniform() - 0.5) * 60, (rng.uniform() - 0.5) * 40);
+      for (std::size_t k = 0; k < kD; ++k) s.db[static_cast<std::size_t>(j) * kD + k] = static_cast<std::int8_t>(static_cast<int>(rng.below(200)) - 100);
+    }
+  }
+  return s;
+}
+
+TEST(Zncc, IdenticalIsOneNegatedIsMinusOneFlatIsZero) {
+  std::int8_t a[kD], b[kD], f[kD];
+  for (std::size_t i = 0; i < kD; ++i) {
+    a[i] = static_cast<std::int8_t>((i * 37) % 101 - 50);
+    b[i] = static_cast<std::int8_t>(-a[i]);
+    f[i] = 5;
+  }
+  EXPECT_NEAR(zncc_i8(a, a, kD), 1.0f, 1e-6f);
+  EXPECT_NEAR(zncc_i8(a, b, kD), -1.0f, 1e-6f);
+  EXPECT_EQ(zncc_i8(a, f, kD), 0.0f);
+}
+
+struct Fixture {
+  ArenaStorage arena{FcMatcher2d::arena_bytes(FcMatch2dConfig{})};
+  FcMatcher2d m;
+  std::vector<Match2d> store = std::vector<Match2d>(128);
+  Fixture() { EXPECT_TRUE(m.init(FcMatch2dConfig{}, arena).is_ok()); }
+  BoundedVector<Match2d> run(const Sets& s, double dtheta) {
+    BoundedVector<Match2d> out(Span<Match2d>(store.data(), store.size()));
+    KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(s.da.data(), s.da.size()), kD};
+    KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
+    EXPECT_TRUE(m.match(a, b, dtheta, out).is_ok());
+    return out;
+  }
+};
+
+TEST(FcMatch2d, MatchesARotatedTranslatedSetWithClutter) {
+  const Pose2 rel{8.0, -3.0, 0.4};
+  Sets s = make(40, rel, 0.5, 30, false, 5);
+  Fixture f;
+  BoundedVector<Match2d> out = f.run(s, 0.4);
+  int correct = 0;
+  for (const Match2d& m : out) correct += s.truth[m.a] == m.b;
+  EXPECT_GE(correct, 34);
+  EXPECT_LE(static_cast<int>(out.size()) - correct, 3);
+}
+
+TEST(FcMatch2d, ReversePassHalfTurnMatches) {
+  const Pose2 rel{-20.0, 5.0, 3.1};
+  Sets s = make(40, rel, 0.5, 10, false, 6);
+  Fixture f;
+  BoundedVector<Match2d> out = f.run(s, 3.1);
+  int correct = 0;
+  for (const Match2d& m : out) correct += s.truth[m.a] == m.b;
+  EXPECT_GE(correct, 34);
+}
+
+TEST(FcMatch2d, GeometryRejectsAWrongHeadingAndUnrelatedDescriptorsGiveFewMatches) {
+  const Pose2 rel{8.0, -3.0, 0.4};
+  Sets s = make(40, rel, 0.5, 10, false, 8);
+  Fixture f;
+  BoundedVector<Match2d> wrong = f.run(s, 0.4 + 1.2);  // directions not preserved under this rotation
+  int correct = 0;
+  for (const Match2d& m : wrong) correct += s.truth[m.a] == m.b;
+  EXPECT_LT(correct, 10);
+  Sets u = make(40, rel, 0.5, 10, true, 9);
+  BoundedVector<Match2d> none = f.run(u, 0.4);
+  EXPECT_LT(none.size(), 8u);
+}
+
+TEST(FcMatch2d, NoHeapInMatch) {
+  Sets s = make(40, Pose2{1, 1, 0.1}, 0.5, 10, false, 10);
+  Fixture f;
+  BoundedVector<Match2d> out(Span<Match2d>(f.store.data(), f.store.size()));
+  KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(s.da.data(), s.da.size()), kD};
+  KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
+  QNAV_EXPECT_NO_ALLOC(EXPECT_TRUE(f.m.match(a, b, 0.1, out).is_ok()));
+  EXPECT_GT(out.size(), 20u);
+}
+
+TEST(FcMatch2d, InconsistentInputIsAnErrorAndCounted) {
+  Sets s = make(10, Pose2{}, 0.1, 0, false, 1);
+  Fixture f;
+  BoundedVector<Match2d> out(Span<Match2d>(f.store.data(), f.store.size()));
+  KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(s.da.data(), 10), kD};
+  KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
+  EXPECT_EQ(f.m.match(a, b, 0.0, out), StatusCode::kInvalidArgument);
+  EXPECT_EQ(f.m.match(b, b, std::nan(""), out), StatusCode::kInvalidArgument);
+  EXPECT_EQ(f.m.counters().get(FcMatchCounter::kBadInput), 2u);
+}
+
+}  // namespace
+}  // namespace qnav::match

@@ -1,0 +1,187 @@
+#include "nav/route/route_filter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "nav/core/arena.hpp"
+#include "test/support/alloc_guard.hpp"
+
+namespace qnav::route {
+namespace {
+
+struct F {
+  RouteFilterConfig cfg;
+  ArenaStorage arena;
+  RouteFilter f;
+  explicit F(RouteFilterConfig c) : cfg(c), arena(RouteFilter::arena_bytes(c)) { EXPECT_TRUE(f.init(cfg, arena).is_ok()); }
+};
+
+RouteFilterConfig small(MotionModel m, RouteDirection d = RouteDirection::kForward) {
+  RouteFilterConfig c;
+  c.max_nodes = 200;
+  c.motion = m;
+  c.direction = d;
+  c.kidnap_floor = 0.0;
+  return c;
+}
+
+double sum(Span<const float> b) {
+  double s = 0;
+  for (float v : b) s += static_cast<double>(v);
+  return s;
+}
+
+TEST(RouteFilter, StartsUniformWithMaximumEntropy) {
+  F t(small(MotionModel::kOdometry));
+  ASSERT_TRUE(t.f.reset(15, 50.0).is_ok());
+  EXPECT_NEAR(t.f.entropy(), std::log(15.0), 1e-5);
+  EXPECT_NEAR(t.f.probability(3), 1.0 / 15.0, 1e-6);
+  EXPECT_FALSE(t.f.confident());
+}
+
+TEST(RouteFilter, PaperEq5KernelMatchesTheFormula) {
+  RouteFilterConfig c = small(MotionModel::kPaperEq5);
+  c.sigma_w2 = 1.0;
+  c.max_advance_nodes = 3;
+  F t(c);
+  ASSERT_TRUE(t.f.reset(20, 50.0).is_ok());
+  NodeMeasurement m[1] = {{5, 1e6f}};  // pin the belief on node 5
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  ASSERT_GT(t.f.probability(5), 0.999f);
+  ASSERT_TRUE(t.f.predict(0.0).is_ok());
+  // p(n) ~ exp(-n / sigma^2), n = 0..3 transitions forward; none backward.
+  const double beta = 1 + std::exp(-1.0) + std::exp(-2.0) + std::exp(-3.0);
+  EXPECT_NEAR(t.f.probability(5), 1 / beta, 2e-3);
+  EXPECT_NEAR(t.f.probability(6), std::exp(-1.0) / beta, 2e-3);
+  EXPECT_NEAR(t.f.probability(8), std::exp(-3.0) / beta, 2e-3);
+  EXPECT_LT(t.f.probability(4), 1e-3f);
+  EXPECT_LT(t.f.probability(9), 1e-3f);
+}
+
+TEST(RouteFilter, OdometryModelMovesTheBeliefByDistanceOverSpacingInEitherDirection) {
+  for (RouteDirection d : {RouteDirection::kForward, RouteDirection::kReverse}) {
+    F t(small(MotionModel::kOdometry, d));
+    ASSERT_TRUE(t.f.reset(50, 40.0).is_ok());
+    NodeMeasurement m[1] = {{20, 1e6f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+    ASSERT_TRUE(t.f.predict(120.0).is_ok());  // 3 node spacings
+    EXPECT_EQ(t.f.argmax(), d == RouteDirection::kForward ? 23u : 17u);
+    EXPECT_NEAR(sum(t.f.belief()), 1.0, 1e-5);
+  }
+}
+
+TEST(RouteFilter, InlierCountsLocaliseAndOneBadTileDoesNotZeroTheTruth) {
+  F t(small(MotionModel::kOdometry));
+  ASSERT_TRUE(t.f.reset(30, 40.0).is_ok());
+  // Five tiles along the route: strong similarity at the true node, chance counts elsewhere.
+  for (std::uint32_t k = 0; k < 5; ++k) {
+    ASSERT_TRUE(t.f.predict(k == 0 ? 0.0 : 40.0).is_ok());
+    NodeMeasurement m[3] = {{10 + k, 25.0f}, {2, 3.0f}, {25, 4.0f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  }
+  EXPECT_EQ(t.f.argmax(), 14u);
+  EXPECT_TRUE(t.f.confident());
+  const double h_good = t.f.entropy();
+  // A bad tile: a wrong node gets a spurious count, the truth gets nothing.
+  ASSERT_TRUE(t.f.predict(40.0).is_ok());
+  NodeMeasurement bad[2] = {{3, 12.0f}, {15, 0.0f}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(bad)).is_ok());
+  EXPECT_EQ(t.f.argmax(), 15u);
+  EXPECT_GT(t.f.probability(15), 0.2f);
+  EXPECT_GT(t.f.entropy(), h_good - 1.0);
+}
+
+TEST(RouteFilter, MeasurementProbabilityIsEq9Normalised) {
+  F t(small(MotionModel::kOdometry));
+  ASSERT_TRUE(t.f.reset(10, 40.0).is_ok());
+  NodeMeasurement m[2] = {{4, 23.0f}, {5, 13.0f}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  std::vector<float> p(10);
+  ASSERT_TRUE(t.f.measurement_probability(Span<float>(p.data(), p.size())).is_ok());
+  // L = floor + max(0, S - chance): 21, 11, and 1 for the other 8 nodes; sum 40.
+  EXPECT_NEAR(p[4], 21.0 / 40.0, 1e-6);
+  EXPECT_NEAR(p[5], 11.0 / 40.0, 1e-6);
+  EXPECT_NEAR(p[0], 1.0 / 40.0, 1e-6);
+}
+
+TEST(RouteFilter, SelectsBeliefNodesPlusAWideSearchWithoutDuplicates) {
+  RouteFilterConfig c = small(MotionModel::kOdometry);
+  c.belief_registrations = 3;
+  c.wide_search_registrations = 10;
+  F t(c);
+  ASSERT_TRUE(t.f.reset(100, 40.0).is_ok());
+  NodeMeasurement m[1] = {{50, 1e4f}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  std::uint32_t sel[13];
+  const std::size_t n = t.f.select_nodes(Span<std::uint32_t>(sel));
+  ASSERT_GE(n, 3u);
+  EXPECT_EQ(sel[0], 50u);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) EXPECT_NE(sel[i], sel[j]);
+  // Repeated wide searches visit the whole route.
+  std::vector<int> seen(100, 0);
+  for (int k = 0; k < 40; ++k) {
+    const std::size_t nn = t.f.select_nodes(Span<std::uint32_t>(sel));
+    for (std::size_t i = 0; i < nn; ++i) seen[sel[i]] = 1;
+  }
+  int covered = 0;
+  for (int v : seen) covered += v;
+  EXPECT_GT(covered, 90);
+}
+
+TEST(RouteFilter, KidnapFloorLetsAStrongMeasurementElsewhereWin) {
+  RouteFilterConfig c = small(MotionModel::kOdometry);
+  c.kidnap_floor = 1e-3;
+  F t(c);
+  ASSERT_TRUE(t.f.reset(60, 40.0).is_ok());
+  for (int k = 0; k < 6; ++k) {
+    ASSERT_TRUE(t.f.predict(40.0).is_ok());
+    NodeMeasurement m[1] = {{static_cast<std::uint32_t>(10 + k), 30.0f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  }
+  ASSERT_EQ(t.f.argmax(), 15u);
+  int steps = 0;
+  for (int k = 0; k < 10 && t.f.argmax() != static_cast<std::uint32_t>(40 + k - 1); ++k, ++steps) {
+    ASSERT_TRUE(t.f.predict(40.0).is_ok());
+    NodeMeasurement m[1] = {{static_cast<std::uint32_t>(40 + k), 30.0f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  }
+  EXPECT_LE(steps, 4);
+}
+
+TEST(RouteFilter, BadInputIsRejectedAndCounted) {
+  F t(small(MotionModel::kOdometry));
+  EXPECT_EQ(t.f.predict(1.0), StatusCode::kNotReady);
+  EXPECT_EQ(t.f.reset(1, 40.0), StatusCode::kInvalidArgument);  // a route of one node
+  EXPECT_EQ(t.f.reset(201, 40.0), StatusCode::kCapacityExceeded);
+  ASSERT_TRUE(t.f.reset(10, 40.0).is_ok());
+  EXPECT_EQ(t.f.predict(std::nan("")), StatusCode::kInvalidArgument);
+  EXPECT_EQ(t.f.predict(-1.0), StatusCode::kInvalidArgument);
+  NodeMeasurement m[2] = {{99, 10.0f}, {3, std::nanf("")}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  EXPECT_EQ(t.f.counters().get(FilterCounter::kBadDistance), 2u);
+  EXPECT_EQ(t.f.counters().get(FilterCounter::kBadMeasurement), 2u);
+  EXPECT_NEAR(t.f.probability(3), 0.1f, 1e-6f);
+  for (float v : t.f.belief()) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(RouteFilter, PredictAndUpdateDoNotAllocate) {
+  RouteFilterConfig c = small(MotionModel::kOdometry);
+  c.max_nodes = 10000;
+  F t(c);
+  ASSERT_TRUE(t.f.reset(10000, 40.0).is_ok());
+  NodeMeasurement m[2] = {{500, 20.0f}, {501, 10.0f}};
+  std::uint32_t sel[16];
+  QNAV_EXPECT_NO_ALLOC({
+    for (int k = 0; k < 3; ++k) {
+      t.f.predict(40.0).ignore();
+      t.f.update(Span<const NodeMeasurement>(m)).ignore();
+      static_cast<void>(t.f.select_nodes(Span<std::uint32_t>(sel)));
+    }
+  });
+}
+
+}  // namespace
+}  // namespace qnav::route
