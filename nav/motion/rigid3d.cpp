@@ -143,8 +143,8 @@ namespace {
 
 template <typename Solve>
 Result<RigidEstimate> irls(Span<const Vec3d> prev, Span<const Vec3d> cur, const RigidEstimate& initial,
-                           const IrlsConfig& config, Span<double> w, Solve solve) noexcept {
-  if (w.size() != prev.size() || prev.size() != cur.size())
+                           const IrlsConfig& config, Span<double> w, Span<const double> base, Solve solve) noexcept {
+  if (w.size() != prev.size() || prev.size() != cur.size() || (!base.empty() && base.size() != prev.size()))
     return Status(StatusCode::kInvalidArgument, "IRLS scratch size differs from points");
   if (!(config.huber_m > 0.0) || !(config.inlier_m > 0.0) || config.iterations > 100)
     return Status(StatusCode::kInvalidArgument, "IRLS config out of range");
@@ -153,6 +153,7 @@ Result<RigidEstimate> irls(Span<const Vec3d> prev, Span<const Vec3d> cur, const 
     for (std::size_t i = 0; i < prev.size(); ++i) {
       const double r = (prev[i] - e.pose.apply(cur[i])).norm();
       w[i] = std::isfinite(r) ? (r <= config.huber_m ? 1.0 : config.huber_m / r) : 0.0;
+      if (!base.empty()) w[i] *= base[i];
     }
     Result<RigidEstimate> next = solve(Span<const double>(w.data(), w.size()));
     if (!next) return next.status();
@@ -168,15 +169,17 @@ Result<RigidEstimate> irls(Span<const Vec3d> prev, Span<const Vec3d> cur, const 
 }  // namespace
 
 Result<RigidEstimate> refine_irls_6d(Span<const Vec3d> prev, Span<const Vec3d> cur, const RigidEstimate& initial,
-                                     const IrlsConfig& config, Span<double> weights_scratch) noexcept {
-  return irls(prev, cur, initial, config, weights_scratch,
+                                     const IrlsConfig& config, Span<double> weights_scratch,
+                                     Span<const double> base_weights) noexcept {
+  return irls(prev, cur, initial, config, weights_scratch, base_weights,
               [&](Span<const double> w) { return estimate_rigid_6d(prev, cur, w); });
 }
 
 Result<RigidEstimate> refine_irls_3d(Span<const Vec3d> prev, Span<const Vec3d> cur, const RigidEstimate& initial,
-                                     const IrlsConfig& config, Span<double> weights_scratch) noexcept {
+                                     const IrlsConfig& config, Span<double> weights_scratch,
+                                     Span<const double> base_weights) noexcept {
   const Mat3d R = initial.pose.R;
-  return irls(prev, cur, initial, config, weights_scratch,
+  return irls(prev, cur, initial, config, weights_scratch, base_weights,
               [&](Span<const double> w) { return estimate_translation_3d(prev, cur, R, w); });
 }
 

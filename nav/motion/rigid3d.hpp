@@ -42,11 +42,14 @@ Result<RigidEstimate> estimate_rigid_6d(Span<const Vec3d> prev, Span<const Vec3d
 Result<RigidEstimate> estimate_translation_3d(Span<const Vec3d> prev, Span<const Vec3d> cur, const Mat3d& R,
                                               Span<const double> weights, double sigma_floor_m = 0.001) noexcept;
 
-// IRLS refinement. weights_scratch must have prev.size() elements (caller-owned, overwritten).
+// IRLS refinement. weights_scratch must have prev.size() elements (caller-owned, overwritten). The
+// Huber weight of each point multiplies base_weights (empty = all 1), e.g. 1 / sigma^2.
 Result<RigidEstimate> refine_irls_6d(Span<const Vec3d> prev, Span<const Vec3d> cur, const RigidEstimate& initial,
-                                     const IrlsConfig& config, Span<double> weights_scratch) noexcept;
+                                     const IrlsConfig& config, Span<double> weights_scratch,
+                                     Span<const double> base_weights = {}) noexcept;
 Result<RigidEstimate> refine_irls_3d(Span<const Vec3d> prev, Span<const Vec3d> cur, const RigidEstimate& initial,
-                                     const IrlsConfig& config, Span<double> weights_scratch) noexcept;
+                                     const IrlsConfig& config, Span<double> weights_scratch,
+                                     Span<const double> base_weights = {}) noexcept;
 
 // Rotation vector (axis * angle) of R, and R from it. Small-angle safe.
 Vec3d rotation_log(const Mat3d& R) noexcept;
