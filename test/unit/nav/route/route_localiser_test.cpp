@@ -1,0 +1,167 @@
+#include "nav/route/route_localiser.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <vector>
+
+#include "synthetic_route.hpp"
+#include "test/support/alloc_guard.hpp"
+
+namespace qnav::route {
+namespace {
+
+class MemorySource final : public NodeSource {
+ public:
+  std::vector<RouteNode> nodes;
+  std::uint32_t corrupt = 0xFFFFFFFFu;  // this index fails to load
+  std::uint32_t node_count() const noexcept override { return static_cast<std::uint32_t>(nodes.size()); }
+  Status load(std::uint32_t i, RouteNode& out) noexcept override {
+    if (i >= nodes.size()) return Status(StatusCode::kOutOfRange, "no such node");
+    if (i == corrupt) return Status(StatusCode::kCorrupt, "route record CRC mismatch");
+    out = nodes[i];
+    return Status::ok();
+  }
+};
+
+constexpr double kSpacing = 50.0;
+constexpr double kHalfLen = 25.0;
+constexpr double kHalfWidth = 50.0;
+
+struct Scenario {
+  testing::SyntheticWorld world{2200.0, 260.0, 0.012, 42};
+  MemorySource source;
+  std::vector<NodeMeta> meta;
+  RouteParams params;
+  Scenario() {
+    params.sensor = SensorKind::kSideScan;
+    params.node_spacing_m = static_cast<float>(kSpacing);
+    params.tile_length_m = 50.0f;
+    params.tile_width_m = 100.0f;
+    params.pixel_m = 0.2f;
+    for (std::uint32_t i = 0; i < 40; ++i) {
+      RouteNode n = world.observe(Pose2{50.0 + kSpacing * i, 0.0, 0.0}, kHalfLen, kHalfWidth, 0.2, 0.85, 64, 1000 + i, 8);
+      n.meta.index = i;
+      n.meta.along_m = kSpacing * i;
+      source.nodes.push_back(n);
+      meta.push_back(n.meta);
+    }
+  }
+};
+
+LocaliserConfig config(RouteDirection d) {
+  LocaliserConfig c;
+  c.filter.max_nodes = 64;
+  c.filter.direction = d;
+  c.registration.robust.inlier_threshold_m = 1.0;
+  return c;
+}
+
+struct RunStats {
+  int within1 = 0, tiles = 0, side_ok = 0, side_n = 0;
+};
+
+RunStats repeat(Scenario& s, RouteDirection d, double lateral_m, int first_node, int tiles) {
+  LocaliserConfig c = config(d);
+  ArenaStorage arena(RouteLocaliser::arena_bytes(c));
+  auto loc = std::make_unique<RouteLocaliser>();
+  EXPECT_TRUE(loc->init(c, arena).is_ok());
+  EXPECT_TRUE(loc->start(s.params, Span<const NodeMeta>(s.meta.data(), s.meta.size()), s.source).is_ok());
+  RunStats r;
+  const int dir = d == RouteDirection::kForward ? 1 : -1;
+  const double heading = d == RouteDirection::kForward ? 0.0 : kPi;
+  for (int k = 0; k < tiles; ++k) {
+    // Tile centres fall between nodes (offset 0.3 spacing), as in the paper's Fig. 4.
+    const double along = kSpacing * (first_node + dir * k) + 0.3 * kSpacing * dir;
+    RouteNode sensed = s.world.observe(Pose2{50.0 + along, lateral_m, heading}, kHalfLen, kHalfWidth, 0.2, 0.85, 64, 5000 + static_cast<std::uint64_t>(k), 8);
+    LocaliserStep st;
+    EXPECT_TRUE(loc->step(sensed, k == 0 ? 0.0 : kSpacing, st).is_ok());
+    const double truth = along / kSpacing;
+    if (k >= 3) {
+      ++r.tiles;
+      r.within1 += std::abs(static_cast<double>(st.estimate) - truth) <= 1.0;
+      if (st.guidance.status == GuidanceStatus::kTracking && std::abs(lateral_m) > 5.0) {
+        ++r.side_n;
+        // Vehicle to the east of a north-going route is to starboard; reversed for a south-going pass.
+        const RouteSide want = (lateral_m > 0) == (d == RouteDirection::kForward) ? RouteSide::kStarboard : RouteSide::kPort;
+        r.side_ok += st.guidance.side == want;
+        EXPECT_NEAR(std::abs(st.guidance.cross_track_m), std::abs(lateral_m), 1.5);
+      }
+    }
+  }
+  return r;
+}
+
+TEST(RouteLocaliser, ForwardRepeatAtLateralOffsetTracksNodeAndSide) {
+  Scenario s;
+  RunStats r = repeat(s, RouteDirection::kForward, 20.0, 5, 25);
+  EXPECT_GE(r.within1, r.tiles - 1) << r.within1 << "/" << r.tiles;
+  EXPECT_GE(r.side_n, r.tiles - 2);
+  EXPECT_EQ(r.side_ok, r.side_n);
+}
+
+TEST(RouteLocaliser, ReverseRepeatForEmergencyReturn) {
+  Scenario s;
+  RunStats r = repeat(s, RouteDirection::kReverse, -15.0, 34, 25);
+  EXPECT_GE(r.within1, r.tiles - 1) << r.within1 << "/" << r.tiles;
+  EXPECT_EQ(r.side_ok, r.side_n);
+  EXPECT_GE(r.side_n, r.tiles - 2);
+}
+
+TEST(RouteLocaliser, SensorMismatchOneNodeRouteAndDamagedRecordAreClearErrors) {
+  Scenario s;
+  LocaliserConfig c = config(RouteDirection::kForward);
+  ArenaStorage arena(RouteLocaliser::arena_bytes(c));
+  auto loc = std::make_unique<RouteLocaliser>();
+  ASSERT_TRUE(loc->init(c, arena).is_ok());
+  RouteParams cam = s.params;
+  cam.sensor = SensorKind::kCamera;
+  EXPECT_EQ(loc->start(cam, Span<const NodeMeta>(s.meta.data(), s.meta.size()), s.source), StatusCode::kInvalidArgument);
+  EXPECT_EQ(loc->counters().get(LocaliserCounter::kSensorMismatch), 1u);
+  MemorySource one;
+  one.nodes.push_back(s.source.nodes[0]);
+  EXPECT_EQ(loc->start(s.params, Span<const NodeMeta>(s.meta.data(), 1), one), StatusCode::kInvalidArgument);
+  LocaliserStep st;
+  EXPECT_EQ(loc->step(s.source.nodes[0], 0.0, st), StatusCode::kNotReady);
+  // A damaged record is reported per step and treated as "no similarity"; the run goes on.
+  s.source.corrupt = 12;
+  ASSERT_TRUE(loc->start(s.params, Span<const NodeMeta>(s.meta.data(), s.meta.size()), s.source).is_ok());
+  int errors = 0;
+  for (int k = 0; k < 12; ++k) {
+    RouteNode sensed = s.world.observe(Pose2{50.0 + kSpacing * (4 + k), 5.0, 0.0}, kHalfLen, kHalfWidth, 0.2, 0.85, 64, 77 + static_cast<std::uint64_t>(k), 8);
+    ASSERT_TRUE(loc->step(sensed, k == 0 ? 0.0 : kSpacing, st).is_ok());
+    errors += static_cast<int>(st.load_errors);
+    EXPECT_TRUE(std::isfinite(st.entropy));
+  }
+  EXPECT_GT(errors, 0);
+  EXPECT_EQ(loc->counters().get(LocaliserCounter::kLoadError), static_cast<std::uint32_t>(errors));
+  EXPECT_NEAR(static_cast<double>(st.estimate), 15.0, 1.0);
+  // An empty sensed tile: counted, no registration, hold course.
+  RouteNode empty;
+  empty.meta.pose = Pose2{0, 0, 0.0};
+  ASSERT_TRUE(loc->step(empty, kSpacing, st).is_ok());
+  EXPECT_EQ(st.guidance.status, GuidanceStatus::kHoldCourse);
+  EXPECT_EQ(loc->counters().get(LocaliserCounter::kEmptySensedTile), 1u);
+}
+
+TEST(RouteLocaliser, StepDoesNotAllocateAfterInit) {
+  Scenario s;
+  LocaliserConfig c = config(RouteDirection::kForward);
+  ArenaStorage arena(RouteLocaliser::arena_bytes(c));
+  auto loc = std::make_unique<RouteLocaliser>();
+  ASSERT_TRUE(loc->init(c, arena).is_ok());
+  ASSERT_TRUE(loc->start(s.params, Span<const NodeMeta>(s.meta.data(), s.meta.size()), s.source).is_ok());
+  std::vector<RouteNode> tiles;
+  for (int k = 0; k < 4; ++k)
+    tiles.push_back(s.world.observe(Pose2{50.0 + kSpacing * (10 + k), 10.0, 0.0}, kHalfLen, kHalfWidth, 0.2, 0.85, 64, 300 + static_cast<std::uint64_t>(k), 8));
+  LocaliserStep st;
+  QNAV_EXPECT_NO_ALLOC({
+    for (const RouteNode& t : tiles) loc->step(t, kSpacing, st).ignore();
+  });
+  EXPECT_GT(st.best_inliers, 10u);
+}
+
+}  // namespace
+}  // namespace qnav::route
