@@ -83,7 +83,8 @@ void SideScanSimulator::render_side(const Pose2& pose, float altitude_m, int sid
     const double tan_dep = up / g;
     const bool lit = tan_dep <= min_tan + 1e-12 && up > 0.0;
     if (tan_dep < min_tan) min_tan = tan_dep;
-    const double slope = k == 0 ? 0.0 : (h - h_prev) / dg;
+    const double dh = k == 0 ? 0.0 : h - h_prev;
+    const double slope = dh / dg;
     h_prev = h;
     if (!lit) continue;
     const double r = std::sqrt(g * g + up * up);
@@ -91,7 +92,8 @@ void SideScanSimulator::render_side(const Pose2& pose, float altitude_m, int sid
     if (cos_inc <= 0.0) continue;
     const double dep = std::atan2(up, g);
     const double t = (dep - dep0) * inv_bw;
-    const double e = static_cast<double>(s.reflectivity) * cos_inc * cos_inc * std::exp(-t * t) * dg;
+    const double e = static_cast<double>(s.reflectivity) * cos_inc * cos_inc * std::exp(-t * t) *
+                     std::sqrt(dg * dg + dh * dh);  // surface length: a vertical face returns energy by its height
     const double x = r / dr - 0.5;
     if (x < 0.0 || x >= n - 1) {
       if (x >= n - 1 && x < n) energy_[n - 1] += static_cast<float>(e);

@@ -6,6 +6,7 @@
 //  - shadows: a point is lit only if its depression angle is not shallower than that of any nearer
 //    point (running horizon), so anything standing up casts an acoustic shadow behind it;
 //  - backscatter = reflectivity * cos^2(incidence) (Lambert, with the local slope along the ray) *
+//    surface length of the step (a face standing up returns energy in proportion to its height) *
 //    vertical beam pattern (Gaussian around depression_rad, width beam_width_rad), which also makes
 //    the weak nadir gap;
 //  - each lit point adds its energy to the slant-range sample r = sqrt(g^2 + (a-h)^2) (linear split
