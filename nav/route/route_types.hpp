@@ -23,7 +23,14 @@ constexpr std::size_t kDescriptorBytes = kDescriptorSide * kDescriptorSide;
 constexpr std::size_t kMaxKeypointsPerNode = 128;
 
 enum class SensorKind : std::uint8_t { kUnknown = 0, kSideScan = 1, kCamera = 2 };
-const char* to_string(SensorKind k) noexcept;
+inline const char* to_string(SensorKind k) noexcept {
+  switch (k) {
+    case SensorKind::kSideScan: return "sidescan";
+    case SensorKind::kCamera: return "camera";
+    case SensorKind::kUnknown: break;
+  }
+  return "unknown";
+}
 
 struct RouteKeypoint {
   float x_m = 0.0f;  // tile frame, along-track
