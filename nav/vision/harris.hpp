@@ -73,6 +73,16 @@ class HarrisDetector {
   // frames). An empty roi is an error (kOutOfRange, counted as bad_roi): it is a prediction failure.
   Status detect(ConstImageViewU8 image, RectI roi, BoundedVector<Corner>& out) noexcept;
   Status detect(ConstImageViewF32 image, RectI roi, BoundedVector<Corner>& out) noexcept;
+  // Mutable views (exact matches: ImageView<T>'s const conversion is a template, so without these a
+  // mutable view would be ambiguous between the u8 and float overloads).
+  Status detect(ImageViewU8 image, BoundedVector<Corner>& out) noexcept { return detect(ConstImageViewU8(image), out); }
+  Status detect(ImageViewF32 image, BoundedVector<Corner>& out) noexcept { return detect(ConstImageViewF32(image), out); }
+  Status detect(ImageViewU8 image, RectI roi, BoundedVector<Corner>& out) noexcept {
+    return detect(ConstImageViewU8(image), roi, out);
+  }
+  Status detect(ImageViewF32 image, RectI roi, BoundedVector<Corner>& out) noexcept {
+    return detect(ConstImageViewF32(image), roi, out);
+  }
 
   // Response plane of the last detect() (valid inside the last ROI grown by nms_radius; 0 elsewhere
   // where not computed). For tests and debug images.
