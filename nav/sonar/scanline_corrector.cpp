@@ -103,26 +103,28 @@ Result<float> ScanlineCorrector::detect_bottom_checked(const SonarPing& ping) no
   }
   int search = static_cast<int>(static_cast<float>(n) * cfg_.bottom_search_fraction);
   if (search > n) search = n;
+  // Blanking: samples nearer than min_altitude_m (transmit pulse, ringing) are not looked at.
+  const float dr = ping.slant_range_m / static_cast<float>(n);
+  int start = static_cast<int>(std::ceil(cfg_.min_altitude_m / dr)) + w;
   const int noise_n = cfg_.bottom_noise_samples;
-  if (search <= noise_n + w) {
+  if (search <= start + noise_n + w) {
     counters_.increment(CorrectorCounter::kNoBottom);
     return Status(StatusCode::kNotFound, "bottom search window too short");
   }
   double noise = 0.0;
-  for (int i = 0; i < noise_n; ++i) noise += static_cast<double>(smooth_[static_cast<std::size_t>(i)]);
+  for (int i = start; i < start + noise_n; ++i) noise += static_cast<double>(smooth_[static_cast<std::size_t>(i)]);
   noise /= noise_n;
   float peak = 0.0f;
-  for (int i = noise_n; i < search; ++i) peak = smooth_[static_cast<std::size_t>(i)] > peak ? smooth_[static_cast<std::size_t>(i)] : peak;
+  for (int i = start; i < search; ++i) peak = smooth_[static_cast<std::size_t>(i)] > peak ? smooth_[static_cast<std::size_t>(i)] : peak;
   const double thr = noise + static_cast<double>(cfg_.bottom_threshold_fraction) * (static_cast<double>(peak) - noise);
   if (!(static_cast<double>(peak) > 2.0 * noise + 1e-12)) {
     counters_.increment(CorrectorCounter::kNoBottom);
     return Status(StatusCode::kNotFound, "no first return above the water-column level");
   }
-  for (int i = noise_n; i < search; ++i) {
+  for (int i = start; i < search; ++i) {
     if (static_cast<double>(smooth_[static_cast<std::size_t>(i)]) > thr) {
-      // The smoothed value rises (w-1)/2 samples early on average for a step: compensate half window.
+      // The box-smoothed value crosses a step about (w-1)/2 samples early: compensate half a window.
       const float idx = static_cast<float>(i) - 0.5f * static_cast<float>(w - 1);
-      const float dr = ping.slant_range_m / static_cast<float>(n);
       const float h = (idx > 0.0f ? idx : 0.0f) * dr;
       if (h < cfg_.min_altitude_m) break;
       return h;

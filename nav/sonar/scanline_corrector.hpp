@@ -2,8 +2,9 @@
 // Steps, per ping:
 //  1. Bottom (first return) detection when the ping has no altimeter value (altitude_m <= 0 or NaN):
 //     both sides are summed, box-smoothed (bottom_smooth_samples), and the first sample whose level
-//     exceeds noise + bottom_threshold_fraction * (peak - noise) is the seabed; noise = mean of the
-//     first bottom_noise_samples samples, peak = max over the first bottom_search_fraction of the ping.
+//     exceeds noise + bottom_threshold_fraction * (peak - noise) is the seabed; samples nearer than
+//     min_altitude_m are blanked (transmit pulse); noise = mean of the first bottom_noise_samples
+//     samples after the blanking, peak = max up to bottom_search_fraction of the ping.
 //  2. TVG model on slant samples: gain(r) = r^(spreading_db/10) * 10^(2 * absorption_db_per_m * r / 10)
 //     (amplitude**2 convention: spreading_db = 20 means two-way 1/r^2 in intensity). The gain table
 //     is rebuilt only when slant range or sample count change (O(n) with a log/exp per sample).

@@ -1,0 +1,481 @@
+// qnav sonar: side-scan tools over XTF files.
+//   qnav sonar waterfall FILE --out PNG [--corrected]
+//       port (far..near) | starboard (near..far), one row per ping, first ping at the top.
+//       --corrected shows ScanlineCorrector output (ground range from the detected first return,
+//       TVG + EGN) instead of raw samples.
+//   qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024]
+//       [--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file]
+//       north-up tiles (tile_NNN.png, tile_NNN_coverage.png) and tiles.csv with each tile's pose.
+//       Altitude: the first return detected in the ping by default; `file` uses the altimeter field
+//       (on the Iver2 file it reads 15-20 % short of the first return, leaving water column in the tile).
+//   qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]
+//       [--samples 1024] [--range-m 40] [--truth PNG]
+//       flies the simulator along a straight route (metric nav) and writes an XTF file; --truth
+//       writes the ground-truth reflectivity under the swath at 0.1 m.
+#include <algorithm>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "drivers/sidescan/sim_seabed.hpp"
+#include "drivers/sidescan/sim_sidescan.hpp"
+#include "drivers/sidescan/sim_trajectory.hpp"
+#include "drivers/sidescan/xtf_reader.hpp"
+#include "drivers/sidescan/xtf_writer.hpp"
+#include "firmware/qnav/args.hpp"
+#include "firmware/qnav/command.hpp"
+#include "firmware/tools/png_writer.hpp"
+#include "nav/sonar/scanline_corrector.hpp"
+#include "nav/sonar/tile_builder.hpp"
+
+namespace {
+
+using namespace qnav;
+using namespace qnav::sidescan;
+
+constexpr std::size_t kMaxSamples = 16384;
+
+// Every ping of a file, with its samples (tool-side memory; the nav stages below stay fixed-size).
+struct PingRec {
+  XtfPing ping;
+  std::vector<float> port, stbd;
+};
+
+struct FileData {
+  XtfFileHeader header;
+  std::vector<PingRec> pings;
+  std::string counters;
+};
+
+int load_xtf(const char* path, FileData& out) {
+  FileSource src;
+  if (!src.open(path)) {
+    std::fprintf(stderr, "qnav sonar: cannot open %s\n", path);
+    return 1;
+  }
+  XtfReader reader;
+  if (!reader.init(XtfReaderConfig{})) return 1;
+  const Status o = reader.open(src);
+  if (!o) {
+    std::fprintf(stderr, "qnav sonar: %s: %s\n", path, o.message());
+    return 1;
+  }
+  out.header = reader.header();
+  std::vector<float> port(kMaxSamples), stbd(kMaxSamples);
+  XtfRecord rec;
+  for (;;) {
+    const Result<bool> r = reader.next(rec, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
+    if (!r) {
+      std::fprintf(stderr, "qnav sonar: %s: %s (continuing with the pings read so far)\n", path, r.status().message());
+      continue;
+    }
+    if (!r.value()) break;
+    if (rec.kind != XtfRecordKind::kPing) continue;
+    PingRec p;
+    p.ping = rec.ping;
+    p.port.assign(port.begin(), port.begin() + rec.ping.samples_per_side);
+    p.stbd.assign(stbd.begin(), stbd.begin() + rec.ping.samples_per_side);
+    out.pings.push_back(std::move(p));
+  }
+  char buf[512];
+  int n = 0;
+  for (std::size_t i = 0; i < reader.counters().size(); ++i)
+    if (reader.counters().count_at(i) != 0 && n < 400)
+      n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), " %s=%u", reader.counters().name_at(i),
+                         reader.counters().count_at(i));
+  buf[n] = '\0';
+  out.counters = n > 0 ? buf : " none";
+  if (out.pings.empty()) {
+    std::fprintf(stderr, "qnav sonar: %s: no side-scan pings\n", path);
+    return 1;
+  }
+  return 0;
+}
+
+sonar::SonarPing as_ping(const PingRec& r, bool use_altimeter) {
+  sonar::SonarPing p;
+  p.stamp_ns = r.ping.stamp_ns;
+  p.ping_number = r.ping.ping_number;
+  p.port = Span<const float>(r.port.data(), r.port.size());
+  p.stbd = Span<const float>(r.stbd.data(), r.stbd.size());
+  p.slant_range_m = r.ping.slant_range_m;
+  p.altitude_m = use_altimeter ? r.ping.altitude_m : -1.0f;
+  return p;
+}
+
+// Percentile of the finite values (copy; tool side).
+float percentile(std::vector<float> v, double q) {
+  if (v.empty()) return 1.0f;
+  const std::size_t k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+int waterfall(int argc, char** argv) {
+  static const char* const valued[] = {"--out", nullptr};
+  const char* file = cli::positional(argc, argv, 2, 0, valued);
+  const char* out = cli::option(argc, argv, "--out");
+  if (file == nullptr || out == nullptr) {
+    std::fprintf(stderr, "usage: qnav sonar waterfall FILE --out PNG [--corrected]\n");
+    return 2;
+  }
+  FileData fd;
+  if (load_xtf(file, fd) != 0) return 1;
+  const bool corrected = cli::flag(argc, argv, "--corrected");
+  const int rows = static_cast<int>(fd.pings.size());
+  int side = static_cast<int>(fd.pings[0].port.size());
+  std::vector<float> img;
+  int failed = 0;
+  if (!corrected) {
+    img.assign(static_cast<std::size_t>(rows) * 2 * static_cast<std::size_t>(side), 0.0f);
+    for (int r = 0; r < rows; ++r) {
+      const PingRec& p = fd.pings[static_cast<std::size_t>(r)];
+      const int n = static_cast<int>(p.port.size()) < side ? static_cast<int>(p.port.size()) : side;
+      float* row = img.data() + static_cast<std::size_t>(r) * 2 * static_cast<std::size_t>(side);
+      for (int i = 0; i < n; ++i) {
+        row[side - 1 - i] = p.port[static_cast<std::size_t>(i)];
+        row[side + i] = p.stbd[static_cast<std::size_t>(i)];
+      }
+    }
+  } else {
+    sonar::ScanlineCorrectorConfig cc;
+    cc.max_samples_per_side = static_cast<int>(kMaxSamples);
+    const float range = fd.pings[0].ping.slant_range_m;
+    cc.ground_bin_m = range / static_cast<float>(side);
+    cc.ground_bins_per_side = side;
+    ArenaStorage arena(sonar::ScanlineCorrector::arena_bytes(cc));
+    sonar::ScanlineCorrector corr;
+    const Status s = corr.init(cc, arena);
+    if (!s) {
+      std::fprintf(stderr, "qnav sonar: corrector: %s\n", s.message());
+      return 1;
+    }
+    img.assign(static_cast<std::size_t>(rows) * 2 * static_cast<std::size_t>(side), 0.0f);
+    for (int r = 0; r < rows; ++r) {
+      sonar::CorrectedScanline line;
+      if (!corr.correct(as_ping(fd.pings[static_cast<std::size_t>(r)], false), line)) {
+        ++failed;
+        continue;
+      }
+      float* row = img.data() + static_cast<std::size_t>(r) * 2 * static_cast<std::size_t>(side);
+      for (int i = 0; i < side; ++i) {
+        row[side - 1 - i] = line.port[static_cast<std::size_t>(i)];
+        row[side + i] = line.stbd[static_cast<std::size_t>(i)];
+      }
+    }
+  }
+  const float hi = corrected ? 2.5f : percentile(img, 0.95);
+  const Result<ConstImageViewF32> v = ConstImageViewF32::make(img.data(), 2 * side, rows);
+  if (!v) return 1;
+  const Status w = tools::write_png_float(out, v.value(), 0.0f, hi);
+  if (!w) {
+    std::fprintf(stderr, "qnav sonar: %s: %s\n", out, w.message());
+    return 1;
+  }
+  std::printf("waterfall %s: %d pings x (%d port | %d starboard) samples, %s, white = %.1f%s; reader counters:%s\n", out,
+              rows, side, side, corrected ? "corrected ground range (TVG + EGN)" : "raw slant range",
+              static_cast<double>(hi), failed ? " (some pings failed correction)" : "", fd.counters.c_str());
+  if (failed) std::printf("pings not corrected: %d\n", failed);
+  return 0;
+}
+
+// Local north/east of every ping from the file's fixes (interpolated between fix changes) or by
+// dead reckoning (speed + heading). Pings before the first valid fix take the first fix.
+struct NavTrack {
+  std::vector<Pose2> pose;
+  std::vector<bool> ok;
+  double lat0 = 0.0, lon0 = 0.0;
+};
+
+NavTrack build_track(const FileData& fd, bool dead_reckon, double heading_offset_rad) {
+  NavTrack t;
+  const std::size_t n = fd.pings.size();
+  t.pose.assign(n, Pose2{});
+  t.ok.assign(n, false);
+  const bool latlon = fd.header.nav_units == 3;
+  std::size_t first = n;
+  for (std::size_t i = 0; i < n; ++i)
+    if (fd.pings[i].ping.nav_valid) {
+      first = i;
+      break;
+    }
+  if (first == n) return t;
+  t.lat0 = fd.pings[first].ping.sensor_y;
+  t.lon0 = fd.pings[first].ping.sensor_x;
+  const double m_per_deg_lat = 111320.0, m_per_deg_lon = 111320.0 * std::cos(deg_to_rad(t.lat0));
+  auto ne_of = [&](const XtfPing& p) {
+    if (latlon) return Vec2d((p.sensor_y - t.lat0) * m_per_deg_lat, (p.sensor_x - t.lon0) * m_per_deg_lon);
+    return Vec2d(p.sensor_y - t.lat0, p.sensor_x - t.lon0);
+  };
+  std::vector<Vec2d> ne(n, Vec2d::Zero());
+  if (!dead_reckon) {
+    // Fix change points: the fix is valid when it changes; interpolate in time between changes.
+    std::vector<std::size_t> knots;
+    Vec2d last(1e300, 1e300);
+    for (std::size_t i = first; i < n; ++i) {
+      if (!fd.pings[i].ping.nav_valid) continue;
+      const Vec2d p = ne_of(fd.pings[i].ping);
+      if ((p - last).norm() > 1e-6) {
+        knots.push_back(i);
+        last = p;
+      }
+    }
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      while (k + 1 < knots.size() && knots[k + 1] <= i) ++k;
+      const std::size_t a = knots[k];
+      if (i <= a || k + 1 >= knots.size()) {
+        ne[i] = ne_of(fd.pings[a].ping);
+      } else {
+        const std::size_t b = knots[k + 1];
+        const double ta = static_cast<double>(fd.pings[a].ping.stamp_ns), tb = static_cast<double>(fd.pings[b].ping.stamp_ns);
+        const double ti = static_cast<double>(fd.pings[i].ping.stamp_ns);
+        const double f = tb > ta ? (ti - ta) / (tb - ta) : 0.0;
+        ne[i] = ne_of(fd.pings[a].ping) + f * (ne_of(fd.pings[b].ping) - ne_of(fd.pings[a].ping));
+      }
+    }
+  } else {
+    ne[first] = Vec2d::Zero();
+    for (std::size_t i = first + 1; i < n; ++i) {
+      const XtfPing& p = fd.pings[i].ping;
+      const double dt = static_cast<double>(p.stamp_ns - fd.pings[i - 1].ping.stamp_ns) * 1e-9;
+      const double v = static_cast<double>(p.sensor_speed_knots) * 0.514444;
+      const double h = deg_to_rad(static_cast<double>(p.heading_deg)) + heading_offset_rad;
+      ne[i] = ne[i - 1] + (std::isfinite(v) && dt > 0.0 && dt < 10.0 ? v * dt : 0.0) * sonar::forward_unit(h);
+    }
+    for (std::size_t i = 0; i < first; ++i) ne[i] = Vec2d::Zero();
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const double h = deg_to_rad(static_cast<double>(fd.pings[i].ping.heading_deg)) + heading_offset_rad;
+    t.pose[i] = Pose2{ne[i].x(), ne[i].y(), wrap_angle_rad(h)};
+    t.ok[i] = t.pose[i].is_finite() && i >= first;
+  }
+  return t;
+}
+
+int tiles(int argc, char** argv) {
+  static const char* const valued[] = {"--out", "--res", "--lines", "--stride", "--size", "--nav", "--heading-offset-deg", "--altitude", nullptr};
+  const char* file = cli::positional(argc, argv, 2, 0, valued);
+  const char* out = cli::option(argc, argv, "--out");
+  double res = 0.1, heading_off_deg = 0.0;
+  long lines = 500, stride = -1, size = 1024;
+  if (file == nullptr || out == nullptr || !cli::option_double(argc, argv, "--res", res) ||
+      !cli::option_long(argc, argv, "--lines", lines) || !cli::option_long(argc, argv, "--stride", stride) ||
+      !cli::option_long(argc, argv, "--size", size) || !cli::option_double(argc, argv, "--heading-offset-deg", heading_off_deg)) {
+    std::fprintf(stderr,
+                 "usage: qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] "
+                 "[--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file]\n");
+    return 2;
+  }
+  const std::string nav = cli::option(argc, argv, "--nav", "fix");
+  const std::string alt = cli::option(argc, argv, "--altitude", "detect");
+  FileData fd;
+  if (load_xtf(file, fd) != 0) return 1;
+  const NavTrack track = build_track(fd, nav == "dr", deg_to_rad(heading_off_deg));
+  const float range = fd.pings[0].ping.slant_range_m;
+
+  sonar::ScanlineCorrectorConfig cc;
+  cc.max_samples_per_side = static_cast<int>(kMaxSamples);
+  cc.ground_bin_m = static_cast<float>(res) * 0.5f;
+  cc.ground_bins_per_side = static_cast<int>(std::ceil(static_cast<double>(range) / static_cast<double>(cc.ground_bin_m)));
+  sonar::TileBuilderConfig tc;
+  tc.resolution_m = res;
+  tc.tile_width_px = static_cast<int>(size);
+  tc.tile_height_px = static_cast<int>(size);
+  tc.scanlines_per_tile = static_cast<int>(lines);
+  tc.scanline_stride = static_cast<int>(stride > 0 ? stride : lines);
+  tc.max_bins_per_side = cc.ground_bins_per_side;
+  ArenaStorage arena(sonar::ScanlineCorrector::arena_bytes(cc) + sonar::TileBuilder::arena_bytes(tc));
+  sonar::ScanlineCorrector corr;
+  sonar::TileBuilder tb;
+  Status s = corr.init(cc, arena);
+  if (s) s = tb.init(tc, arena);
+  if (!s) {
+    std::fprintf(stderr, "qnav sonar tiles: configuration: %s\n", s.message());
+    return 2;
+  }
+  const std::string dir = out;
+  const std::string csv_path = dir + "/tiles.csv";
+  std::FILE* csv = std::fopen(csv_path.c_str(), "w");
+  if (csv == nullptr) {
+    std::fprintf(stderr, "qnav sonar tiles: cannot write %s (does the directory exist?)\n", csv_path.c_str());
+    return 1;
+  }
+  std::fprintf(csv,
+               "tile,first_ping,last_ping,scanlines,pose_north_m,pose_east_m,heading_deg,origin_north_m,origin_east_m,"
+               "resolution_m,width_px,height_px,coverage,origin_lat_deg,origin_lon_deg\n");
+  int written = 0, skipped_nav = 0, failed = 0;
+  const double m_per_deg_lon = 111320.0 * std::cos(deg_to_rad(track.lat0));
+  auto emit = [&]() {
+    const sonar::SonarTile& t = tb.tile();
+    char name[64];
+    std::snprintf(name, sizeof name, "/tile_%03u.png", t.index);
+    const Status w1 = tools::write_png_gray8((dir + name).c_str(), t.intensity_u8);
+    std::vector<std::uint8_t> cov(t.coverage.pixel_count());
+    for (int r = 0; r < t.coverage.height(); ++r)
+      for (int c = 0; c < t.coverage.width(); ++c)
+        cov[static_cast<std::size_t>(r * t.coverage.width() + c)] = static_cast<std::uint8_t>(t.coverage(c, r) * 127);
+    std::snprintf(name, sizeof name, "/tile_%03u_coverage.png", t.index);
+    const Status w2 = tools::write_png_gray8((dir + name).c_str(),
+                                             ConstImageViewU8::unchecked(cov.data(), t.coverage.width(), t.coverage.height(), t.coverage.width()));
+    if (!w1 || !w2) std::fprintf(stderr, "qnav sonar tiles: cannot write tile %u\n", t.index);
+    const bool latlon = fd.header.nav_units == 3;
+    std::fprintf(csv, "%u,%u,%u,%u,%.3f,%.3f,%.2f,%.3f,%.3f,%.3f,%d,%d,%.4f,%.8f,%.8f\n", t.index, t.first_ping, t.last_ping,
+                 t.scanlines, t.pose.x_m, t.pose.y_m, rad_to_deg(t.pose.heading_rad), t.origin_north_m, t.origin_east_m,
+                 t.resolution_m, t.intensity.width(), t.intensity.height(), static_cast<double>(t.coverage_fraction),
+                 latlon ? track.lat0 + t.origin_north_m / 111320.0 : t.origin_north_m + track.lat0,
+                 latlon ? track.lon0 + t.origin_east_m / m_per_deg_lon : t.origin_east_m + track.lon0);
+    std::printf("tile %u: pings %u..%u (%u scanlines), pose N %.2f E %.2f hdg %.1f deg, coverage %.1f %%, clipped %u\n",
+                t.index, t.first_ping, t.last_ping, t.scanlines, t.pose.x_m, t.pose.y_m, rad_to_deg(t.pose.heading_rad),
+                100.0 * static_cast<double>(t.coverage_fraction), t.clipped_splats);
+    ++written;
+  };
+  for (std::size_t i = 0; i < fd.pings.size(); ++i) {
+    if (!track.ok[i]) {
+      ++skipped_nav;
+      continue;
+    }
+    sonar::CorrectedScanline line;
+    if (!corr.correct(as_ping(fd.pings[i], alt != "detect"), line)) {
+      ++failed;
+      continue;
+    }
+    const Result<bool> r = tb.push(line, track.pose[i]);
+    if (!r) {
+      ++failed;
+      continue;
+    }
+    if (r.value()) emit();
+  }
+  const Result<bool> f = tb.flush(2);
+  if (f.is_ok() && f.value()) emit();
+  std::fclose(csv);
+  std::printf("%d tiles of %ldx%ld px at %.3f m in %s (tiles.csv); %zu pings, %d without nav, %d rejected; nav=%s, "
+              "altitude=%s; reader counters:%s\n",
+              written, size, size, res, out, fd.pings.size(), skipped_nav, failed, nav.c_str(), alt.c_str(), fd.counters.c_str());
+  std::printf("corrector counters:");
+  for (std::size_t i = 0; i < corr.counters().size(); ++i) std::printf(" %s=%u", corr.counters().name_at(i), corr.counters().count_at(i));
+  std::printf("\n");
+  return written > 0 ? 0 : 1;
+}
+
+int simulate(int argc, char** argv) {
+  static const char* const valued[] = {"--out", "--length-m", "--offset-m", "--seed", "--samples", "--range-m", "--truth", nullptr};
+  const char* out = cli::option(argc, argv, "--out");
+  double length = 200.0, offset = 0.0, range = 40.0;
+  long seed = 1, samples = 1024;
+  if (out == nullptr || !cli::option_double(argc, argv, "--length-m", length) || !cli::option_double(argc, argv, "--offset-m", offset) ||
+      !cli::option_long(argc, argv, "--seed", seed) || !cli::option_long(argc, argv, "--samples", samples) ||
+      !cli::option_double(argc, argv, "--range-m", range) || !(length > 1.0) || samples < 16 || samples > 16384) {
+    std::fprintf(stderr,
+                 "usage: qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1] "
+                 "[--samples 1024] [--range-m 40] [--truth PNG]\n");
+    return 2;
+  }
+  (void)valued;
+  SeabedConfig bc;
+  bc.seed = static_cast<std::uint64_t>(seed);
+  SeabedObject wreck;
+  wreck.north_m = length * 0.5;
+  wreck.east_m = 12.0;
+  wreck.length_m = 14.0f;
+  wreck.width_m = 4.0f;
+  wreck.height_m = 2.5f;
+  wreck.heading_rad = 0.5f;
+  (void)bc.objects.push_back(wreck);
+  Seabed bed;
+  SideScanSimConfig sc;
+  sc.samples_per_side = static_cast<int>(samples);
+  sc.slant_range_m = static_cast<float>(range);
+  sc.seed = static_cast<std::uint64_t>(seed) * 7919u;
+  SideScanSimulator sim;
+  TrajectoryConfig trc;
+  (void)trc.waypoints_ne.push_back(Vec2d(0.0, 0.0));
+  (void)trc.waypoints_ne.push_back(Vec2d(length, 0.0));
+  trc.lateral_offset_m = offset;
+  trc.reverse = cli::flag(argc, argv, "--reverse");
+  trc.seed = static_cast<std::uint64_t>(seed);
+  Trajectory traj;
+  Status s = bed.init(bc);
+  if (s) s = sim.init(sc, &bed);
+  if (s) s = traj.init(trc);
+  if (!s) {
+    std::fprintf(stderr, "qnav sonar simulate: %s\n", s.message());
+    return 2;
+  }
+  std::FILE* f = std::fopen(out, "wb");
+  if (f == nullptr) {
+    std::fprintf(stderr, "qnav sonar simulate: cannot write %s\n", out);
+    return 1;
+  }
+  std::vector<std::uint8_t> buf(xtf_ping_bytes(static_cast<std::size_t>(samples)) + kXtfFileHeaderBytes);
+  (void)encode_xtf_file_header(Span<std::uint8_t>(buf.data(), buf.size()), 0, "QNAV-SIM");
+  std::fwrite(buf.data(), 1, kXtfFileHeaderBytes, f);
+  TrajectorySample ts;
+  std::uint32_t n = 0;
+  float peak = 0.0f;
+  std::vector<float> port(static_cast<std::size_t>(samples)), stbd(static_cast<std::size_t>(samples));
+  std::vector<std::vector<float>> first_pings;
+  while (traj.next(ts)) {
+    (void)sim.ping(ts.truth, ts.altitude_m, ts.index, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
+    for (float v : port) peak = v > peak ? v : peak;
+    XtfWritePing w;
+    w.stamp_ns = 1700000000000000000ull + ts.stamp_ns;
+    w.ping_number = ts.index;
+    w.sensor_y = ts.nav.x_m;
+    w.sensor_x = ts.nav.y_m;
+    w.heading_deg = static_cast<float>(rad_to_deg(ts.nav.heading_rad < 0 ? ts.nav.heading_rad + 2 * kPi : ts.nav.heading_rad));
+    w.speed_knots = static_cast<float>(trc.speed_mps / 0.514444);
+    w.altitude_m = ts.altitude_m;
+    w.slant_range_m = sc.slant_range_m;
+    w.port = Span<const float>(port.data(), port.size());
+    w.stbd = Span<const float>(stbd.data(), stbd.size());
+    w.sample_scale = 4.0f;  // simulator amplitude ~ 0..16000 -> 16-bit
+    const Result<std::size_t> b = encode_xtf_ping(Span<std::uint8_t>(buf.data(), buf.size()), w);
+    if (!b || std::fwrite(buf.data(), 1, b.value(), f) != b.value()) {
+      std::fclose(f);
+      std::fprintf(stderr, "qnav sonar simulate: write failed\n");
+      return 1;
+    }
+    ++n;
+  }
+  std::fclose(f);
+  std::printf("simulated %u pings (%.0f m at %.1f m/s, %.0f Hz, %ld samples/side, %.0f m range, offset %.1f m%s) -> %s; "
+              "wreck 14 x 4 x 2.5 m at N %.1f E %.1f (metric nav, nav_units 0)\n",
+              n, length, trc.speed_mps, trc.ping_rate_hz, samples, range, offset, trc.reverse ? ", reverse" : "", out,
+              wreck.north_m, wreck.east_m);
+  if (const char* truth = cli::option(argc, argv, "--truth")) {
+    const double res = 0.1;
+    const int W = static_cast<int>(2.0 * range / res), H = static_cast<int>(length / res);
+    std::vector<float> img(static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
+    for (int r = 0; r < H; ++r)
+      for (int c = 0; c < W; ++c)
+        img[static_cast<std::size_t>(r) * static_cast<std::size_t>(W) + static_cast<std::size_t>(c)] =
+            bed.reflectivity(length - (r + 0.5) * res, -range + (c + 0.5) * res);
+    const Result<ConstImageViewF32> v = ConstImageViewF32::make(img.data(), W, H);
+    if (v && tools::write_png_float(truth, v.value(), 0.0f, 1.0f))
+      std::printf("ground truth reflectivity %s: %dx%d px at %.1f m, north up, east %.0f..%.0f m, north 0..%.0f m\n", truth, W, H,
+                  res, -range, range, length);
+  }
+  return 0;
+}
+
+int run_sonar(int argc, char** argv) {
+  if (argc >= 2 && std::strcmp(argv[1], "waterfall") == 0) return waterfall(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "tiles") == 0) return tiles(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
+  std::fprintf(stderr,
+               "usage: qnav sonar waterfall FILE --out PNG [--corrected]\n"
+               "       qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] [--nav fix|dr]\n"
+               "                        [--heading-offset-deg 0] [--altitude detect|file]\n"
+               "       qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]\n"
+               "                        [--samples 1024] [--range-m 40] [--truth PNG]\n");
+  return 2;
+}
+
+}  // namespace
+
+QNAV_COMMAND("sonar", "sonar waterfall|tiles|simulate: side-scan waterfall, north-up tiles, simulated XTF", run_sonar);
