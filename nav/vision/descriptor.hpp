@@ -41,6 +41,15 @@ Status compute_patch_descriptor(ConstImageViewU8 image, float x, float y, float 
                                 PatchDescriptor& out, float min_stddev = 1.0f) noexcept;
 Status compute_patch_descriptor(ConstImageViewF32 image, float x, float y, float rotation_rad, float scale,
                                 PatchDescriptor& out, float min_stddev = 1e-3f) noexcept;
+// Mutable views: exact matches (ImageView's const conversion is a template, see harris.hpp).
+inline Status compute_patch_descriptor(ImageViewU8 image, float x, float y, float rotation_rad, float scale,
+                                       PatchDescriptor& out, float min_stddev = 1.0f) noexcept {
+  return compute_patch_descriptor(ConstImageViewU8(image), x, y, rotation_rad, scale, out, min_stddev);
+}
+inline Status compute_patch_descriptor(ImageViewF32 image, float x, float y, float rotation_rad, float scale,
+                                       PatchDescriptor& out, float min_stddev = 1e-3f) noexcept {
+  return compute_patch_descriptor(ConstImageViewF32(image), x, y, rotation_rad, scale, out, min_stddev);
+}
 // ZNCC of two valid descriptors (dot product), -2 if either is invalid.
 float zncc(const PatchDescriptor& a, const PatchDescriptor& b) noexcept;
 
@@ -56,7 +65,9 @@ struct OrientedDescriptor {
 };
 
 // Computes the descriptor at (x, y) of `image` (a pyramid level) with sample scale `scale` (level
-// pixels). Fills orientation_rad; x/y/scale are left for the caller (see describe_corners).
+// pixels, 0.25..16): orientation window sigma 4.5 * scale, descriptor window 4 cells of 3 * scale px.
+// Fills v, orientation_rad, valid; x/y/scale are left for the caller (level-0 bookkeeping).
+// Errors: kOutOfRange (support leaves the image), kDegenerate (no gradient), kInvalidArgument.
 Status compute_oriented_descriptor(ConstImageViewU8 image, float x, float y, float scale, OrientedDescriptor& out) noexcept;
 // Squared L2 distance of two descriptors (large value if either is invalid).
 float descriptor_distance_sq(const OrientedDescriptor& a, const OrientedDescriptor& b) noexcept;

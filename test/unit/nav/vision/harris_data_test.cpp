@@ -17,30 +17,6 @@ namespace {
 
 const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
 
-// dst(p) = src(A^-1 (p - c) + c): rotation by angle and scale about the image centre, bilinear,
-// plus Gaussian noise (sigma grey levels, fixed seed).
-void warp(ConstImageViewU8 src, double angle_rad, double scale, double noise, ImageViewU8 dst) {
-  const double cx = 0.5 * (src.width() - 1), cy = 0.5 * (src.height() - 1);
-  const double c = std::cos(angle_rad) / scale, s = std::sin(angle_rad) / scale;
-  testing::Rng rng(77);
-  for (int y = 0; y < dst.height(); ++y)
-    for (int x = 0; x < dst.width(); ++x) {
-      const double dx = x - cx, dy = y - cy;
-      const double sx = c * dx + s * dy + cx, sy = -s * dx + c * dy + cy;
-      double v = 0;
-      if (sx >= 0 && sy >= 0 && sx < src.width() - 1 && sy < src.height() - 1) {
-        const int x0 = static_cast<int>(sx), y0 = static_cast<int>(sy);
-        const double fx = sx - x0, fy = sy - y0;
-        v = (1 - fy) * ((1 - fx) * src(x0, y0) + fx * src(x0 + 1, y0)) + fy * ((1 - fx) * src(x0, y0 + 1) + fx * src(x0 + 1, y0 + 1));
-      }
-      if (noise > 0) {
-        const double u1 = std::max(rng.uniform(), 1e-12), u2 = rng.uniform();
-        v += noise * std::sqrt(-2 * std::log(u1)) * std::cos(6.283185307179586 * u2);
-      }
-      dst(x, y) = static_cast<std::uint8_t>(std::lround(std::min(255.0, std::max(0.0, v))));
-    }
-}
-
 // Fraction of corners of `a` that, mapped by the same transform, have a corner of `b` within tol px.
 double repeatability(ConstImageViewU8 img, double angle, double scale, double noise, int cap, double tol) {
   HarrisConfig hc;
@@ -53,15 +29,13 @@ double repeatability(ConstImageViewU8 img, double angle, double scale, double no
   std::vector<Corner> sa(static_cast<std::size_t>(cap)), sb(static_cast<std::size_t>(cap));
   BoundedVector<Corner> a(Span<Corner>(sa.data(), sa.size())), b(Span<Corner>(sb.data(), sb.size()));
   Result<ImageU8> w = ImageU8::allocate(img.width(), img.height());
-  warp(img, angle, scale, noise, w->view());
+  testing::warp_similarity(img, angle, scale, noise, w->view());
   EXPECT_TRUE(det.detect(img, a).is_ok());
   EXPECT_TRUE(det.detect(w->view(), b).is_ok());
-  const double cx = 0.5 * (img.width() - 1), cy = 0.5 * (img.height() - 1);
-  const double c = std::cos(angle) * scale, s = std::sin(angle) * scale;
   int n = 0, hit = 0;
   for (const Corner& k : a) {
-    const double dx = static_cast<double>(k.x) - cx, dy = static_cast<double>(k.y) - cy;
-    const double x = c * dx - s * dy + cx, y = s * dx + c * dy + cy;
+    double x = 0, y = 0;
+    testing::warp_point(img.width(), img.height(), angle, scale, k.x, k.y, x, y);
     if (x < 12 || y < 12 || x > img.width() - 13 || y > img.height() - 13) continue;
     ++n;
     for (const Corner& q : b)

@@ -1,6 +1,7 @@
 // Synthetic test images for the vision tests (deterministic, no files).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -52,6 +53,38 @@ inline void texture(ImageViewU8 img, std::uint64_t seed) {
       if (v > 235) v = 235;
       img(x, y) = static_cast<std::uint8_t>(v);
     }
+}
+
+// dst(p) = src(A^-1 (p - c) + c): rotation by angle_rad and scaling about the image centre c,
+// bilinear, plus Gaussian noise of sigma grey levels (fixed seed). Outside the source: 0.
+// The forward map of a source point q is p = c + scale * Rot(angle) (q - c).
+inline void warp_similarity(ImageView<const std::uint8_t> src, double angle_rad, double scale, double noise, ImageViewU8 dst) {
+  const double cx = 0.5 * (src.width() - 1), cy = 0.5 * (src.height() - 1);
+  const double c = std::cos(angle_rad) / scale, s = std::sin(angle_rad) / scale;
+  Rng rng(77);
+  for (int y = 0; y < dst.height(); ++y)
+    for (int x = 0; x < dst.width(); ++x) {
+      const double dx = x - cx, dy = y - cy;
+      const double sx = c * dx + s * dy + cx, sy = -s * dx + c * dy + cy;
+      double v = 0;
+      if (sx >= 0 && sy >= 0 && sx < src.width() - 1 && sy < src.height() - 1) {
+        const int x0 = static_cast<int>(sx), y0 = static_cast<int>(sy);
+        const double fx = sx - x0, fy = sy - y0;
+        v = (1 - fy) * ((1 - fx) * src(x0, y0) + fx * src(x0 + 1, y0)) + fy * ((1 - fx) * src(x0, y0 + 1) + fx * src(x0 + 1, y0 + 1));
+      }
+      if (noise > 0) {
+        const double u1 = std::max(rng.uniform(), 1e-12), u2 = rng.uniform();
+        v += noise * std::sqrt(-2 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+      }
+      dst(x, y) = static_cast<std::uint8_t>(std::lround(std::min(255.0, std::max(0.0, v))));
+    }
+}
+
+inline void warp_point(int w, int h, double angle_rad, double scale, double qx, double qy, double& px, double& py) {
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1);
+  const double c = std::cos(angle_rad) * scale, s = std::sin(angle_rad) * scale;
+  px = c * (qx - cx) - s * (qy - cy) + cx;
+  py = s * (qx - cx) + c * (qy - cy) + cy;
 }
 
 }  // namespace qnav::vision::testing
