@@ -1,0 +1,208 @@
+// qnav can: qnav's CAN interface from the command line.
+//   qnav can decode LOG [--node N]   decode a candump log (candump -l): qnav messages (docs/qnav.dbc)
+//                                    and DroneCAN AHRS Solution/RawIMU; prints counters at the end
+//   qnav can dbc FILE                read a DBC file and check every signal against qnav's codec
+//   qnav can simulate OUT [--seconds S] [--faults]
+//                                    write a candump log of an AHRS (qnav ATTITUDE_IN + DroneCAN
+//                                    Solution at 20 Hz, node 42); --faults adds corrupted frames
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/dronecan/ahrs_receiver.hpp"
+#include "drivers/qnavcan/dbc.hpp"
+#include "drivers/qnavcan/messages.hpp"
+#include "drivers/qnavcan/receiver.hpp"
+#include "firmware/qnav/args.hpp"
+#include "firmware/qnav/command.hpp"
+#include "hal/core/candump.hpp"
+#include "hal/sim/can_log_replay.hpp"
+
+namespace {
+using namespace qnav;
+namespace qc = qnav::drivers::qnavcan;
+namespace dc = qnav::drivers::dronecan;
+
+bool read_file(const char* path, std::string& out) {
+  FILE* f = std::fopen(path, "rb");
+  if (!f) return false;
+  char buf[65536];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+  std::fclose(f);
+  return true;
+}
+
+template <typename C>
+void print_counters(const char* what, const C& c) {
+  std::printf("%s:", what);
+  for (std::size_t i = 0; i < c.size(); ++i) std::printf(" %s=%u", c.name_at(i), c.count_at(i));
+  std::printf("\n");
+}
+
+int decode(int argc, char** argv) {
+  static const char* const kValued[] = {"--node", nullptr};
+  const char* path = cli::positional(argc, argv, 2, 0, kValued);
+  long node = 0;
+  if (path == nullptr || !cli::option_long(argc, argv, "--node", node) || node < 0 || node > 127) {
+    std::fprintf(stderr, "usage: qnav can decode LOG [--node N]\n");
+    return 2;
+  }
+  std::string text;
+  if (!read_file(path, text)) {
+    std::fprintf(stderr, "qnav can: cannot read %s\n", path);
+    return 1;
+  }
+  hal::CanLogReplay replay(text.data(), text.size(), 0);
+  qc::QnavCanReceiver qrx;
+  dc::DroneCanAhrsReceiver drx(static_cast<std::uint8_t>(node));
+  hal::CanRxFrame f;
+  unsigned frames = 0, printed = 0, solutions = 0;
+  double values[8];
+  while (replay.receive(f, 0).is_ok()) {
+    ++frames;
+    const double t_s = static_cast<double>(f.stamp.sample_ns) * 1e-9;
+    if (f.frame.extended) {
+      if (drx.on_frame(f) == dc::AhrsUpdate::kSolution) {
+        ++solutions;
+        const dc::AhrsSolution& s = drx.solution().value;
+        const double x = s.orientation_xyzw[0], y = s.orientation_xyzw[1], z = s.orientation_xyzw[2], w = s.orientation_xyzw[3];
+        const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y));
+        const double pitch = std::asin(std::fmax(-1.0, std::fmin(1.0, 2 * (w * y - z * x))));
+        const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
+        if (printed++ < 20)
+          std::printf("%10.6f dronecan node %u Solution roll %.4f pitch %.4f yaw %.4f rad, gz %.3f rad/s\n", t_s,
+                      drx.solution().source_node, roll, pitch, yaw, static_cast<double>(s.angular_velocity_radps[2]));
+      }
+      continue;
+    }
+    const Status s = qrx.on_frame(f);
+    const qc::MessageDef* def = nullptr;
+    if (printed < 20 && qc::decode_generic(f.frame, def, values, 8).is_ok() && def != nullptr) {
+      ++printed;
+      std::printf("%10.6f %s", t_s, def->name);
+      for (std::size_t i = 0; i < def->signals.size(); ++i) std::printf(" %s=%g%s", def->signals[i].name, values[i], def->signals[i].unit);
+      std::printf("%s\n", s.is_ok() ? "" : (std::string("  [rejected: ") + s.message() + "]").c_str());
+    }
+  }
+  if (printed >= 20) std::printf("... (first 20 decoded lines shown)\n");
+  std::printf("frames %u, bad log lines %u, qnav inputs accepted %u, DroneCAN solutions %u, raw IMU %u\n", frames,
+              replay.bad_lines(), qrx.accepted(), solutions, drx.raw_imus());
+  print_counters("qnav rx counters", qrx.counters());
+  print_counters("dronecan transport counters", drx.reassembler().counters());
+  print_counters("dronecan ahrs counters", drx.counters());
+  return 0;
+}
+
+int dbc(int argc, char** argv) {
+  const char* path = cli::positional(argc, argv, 2, 0, nullptr);
+  if (path == nullptr) {
+    std::fprintf(stderr, "usage: qnav can dbc FILE\n");
+    return 2;
+  }
+  std::string text;
+  if (!read_file(path, text)) {
+    std::fprintf(stderr, "qnav can: cannot read %s\n", path);
+    return 1;
+  }
+  auto file = std::make_unique<qc::DbcFile>();
+  const Status s = qc::parse_dbc(text.data(), text.size(), *file);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "qnav can: %s: line %zu: %s\n", path, file->error_line, s.message());
+    return 1;
+  }
+  int mismatches = 0, signals = 0;
+  for (const qc::DbcMessage& m : file->messages) {
+    const qc::MessageDef* c = qc::find_message(m.id);
+    std::printf("0x%03X %-20s dlc %u  %2zu signals  every %u ms  from %s%s\n", m.id, m.name, m.dlc, m.signals.size(),
+                m.cycle_ms, m.transmitter, c ? "" : "   [not in codec]");
+    if (c == nullptr || c->signals.size() != m.signals.size() || c->dlc != m.dlc) {
+      ++mismatches;
+      continue;
+    }
+    for (std::size_t i = 0; i < m.signals.size(); ++i) {
+      const qc::DbcSignal& d = m.signals[i];
+      const qc::SignalDef& k = c->signals[i];
+      ++signals;
+      if (std::strcmp(d.name, k.name) != 0 || d.start_bit != k.start_bit || d.length != k.length || d.big_endian != k.big_endian ||
+          d.is_signed != k.is_signed || d.factor != k.factor || d.offset != k.offset || d.min != k.min || d.max != k.max) {
+        std::printf("   signal %s differs from the codec\n", d.name);
+        ++mismatches;
+      }
+    }
+  }
+  std::printf("%zu messages, %d signals, %d mismatches with the codec\n", file->messages.size(), signals, mismatches);
+  return mismatches == 0 ? 0 : 1;
+}
+
+int simulate(int argc, char** argv) {
+  static const char* const kValued[] = {"--seconds", nullptr};
+  const char* out = cli::positional(argc, argv, 2, 0, kValued);
+  double seconds = 2.0;
+  if (out == nullptr || !cli::option_double(argc, argv, "--seconds", seconds) || seconds <= 0 || seconds > 3600) {
+    std::fprintf(stderr, "usage: qnav can simulate OUT [--seconds S] [--faults]\n");
+    return 2;
+  }
+  const bool faults = cli::flag(argc, argv, "--faults");
+  FILE* f = std::fopen(out, "w");
+  if (!f) {
+    std::fprintf(stderr, "qnav can: cannot write %s\n", out);
+    return 1;
+  }
+  const std::int64_t t0_us = 1700000000000000LL;
+  const int steps = static_cast<int>(seconds * 20);
+  char line[hal::kMaxCanLogLine];
+  unsigned written = 0;
+  auto emit = [&](const hal::CanFrame& fr, std::int64_t t_us) {
+    hal::CanLogRecord r;
+    r.frame = fr;
+    r.has_time = true;
+    r.time_us = t_us;
+    std::strcpy(r.interface, "can0");
+    if (hal::format_can_log_line(r, line, sizeof line) > 0) {
+      std::fprintf(f, "%s\n", line);
+      ++written;
+    }
+  };
+  for (int i = 0; i < steps; ++i) {
+    const std::int64_t t_us = t0_us + i * 50000;
+    const double yaw = 0.3 * (static_cast<double>(i) * 0.05);  // 0.3 rad/s turn
+    qc::AttitudeIn a{0.02 * std::sin(i * 0.1), -0.01, std::fmod(yaw, 6.2831), static_cast<std::uint8_t>(i), true};
+    hal::CanFrame fr;
+    if (qc::encode(a, fr).is_ok()) emit(fr, t_us);
+    dc::AhrsSolution s;
+    s.timestamp_us = static_cast<std::uint64_t>(i) * 50000 + 1;
+    s.orientation_xyzw[2] = static_cast<float>(std::sin(yaw / 2));
+    s.orientation_xyzw[3] = static_cast<float>(std::cos(yaw / 2));
+    s.angular_velocity_radps[2] = 0.3f;
+    s.linear_accel_mps2[2] = -9.81f;
+    std::uint8_t payload[dc::kSolutionMaxBytes];
+    const std::size_t n = dc::encode_solution(s, true, payload, sizeof payload);
+    hal::CanFrame frames[16];
+    const std::size_t k = dc::split_transfer(dc::kSolutionSignature, dc::make_message_id(16, dc::kSolutionId, 42),
+                                             static_cast<std::uint8_t>(i), payload, n, frames, 16);
+    for (std::size_t j = 0; j < k; ++j) {
+      if (faults && i % 10 == 5 && j == 2) frames[j].data[0] ^= 0x40;  // corrupted payload -> CRC error
+      if (faults && i % 10 == 7 && j == 3) continue;                   // lost frame -> toggle error
+      emit(frames[j], t_us + 200 + static_cast<std::int64_t>(j) * 150);
+    }
+    if (faults && i % 10 == 9) emit(fr, t_us + 2000);  // attitude repeated -> stale
+  }
+  std::fclose(f);
+  std::printf("wrote %u frames (%d steps at 20 Hz%s) to %s\n", written, steps, faults ? ", with faults" : "", out);
+  return 0;
+}
+
+int run_can(int argc, char** argv) {
+  if (argc >= 2 && std::strcmp(argv[1], "decode") == 0) return decode(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "dbc") == 0) return dbc(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
+  std::fprintf(stderr, "usage: qnav can decode LOG [--node N] | dbc FILE | simulate OUT [--seconds S] [--faults]\n");
+  return 2;
+}
+}  // namespace
+
+QNAV_COMMAND("can", "CAN interface: decode candump logs, check a DBC, simulate an AHRS", run_can);

@@ -1,0 +1,136 @@
+// qnav dvl: DVL serial protocols from the command line.
+//   qnav dvl parse FILE [--pd6]      parse a capture of DVL output (Water Linked serial protocol, or
+//                                    RDI PD6 with --pd6 / when the first line starts with ':'); prints
+//                                    the velocities and the rejection counters
+//   qnav dvl simulate OUT [--seconds S] [--faults]
+//                                    write Water Linked sentences (wrz + wru at 8 Hz) with valid
+//                                    checksums; --faults adds bad checksums, lock losses and stale lines
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "drivers/dvl/line_assembler.hpp"
+#include "drivers/dvl/pd6_parser.hpp"
+#include "drivers/dvl/wl_parser.hpp"
+#include "firmware/qnav/args.hpp"
+#include "firmware/qnav/command.hpp"
+
+namespace {
+using namespace qnav;
+using namespace qnav::drivers::dvl;
+
+template <typename C>
+void print_counters(const C& c) {
+  std::printf("rejected:");
+  for (std::size_t i = 0; i < c.size(); ++i) std::printf(" %s=%u", c.name_at(i), c.count_at(i));
+  std::printf("\n");
+}
+
+int parse(int argc, char** argv) {
+  const char* path = cli::positional(argc, argv, 2, 0, nullptr);
+  if (path == nullptr) {
+    std::fprintf(stderr, "usage: qnav dvl parse FILE [--pd6]\n");
+    return 2;
+  }
+  FILE* f = std::fopen(path, "rb");
+  if (!f) {
+    std::fprintf(stderr, "qnav dvl: cannot read %s\n", path);
+    return 1;
+  }
+  bool pd6 = cli::flag(argc, argv, "--pd6");
+  const int first = std::fgetc(f);
+  if (first == ':') pd6 = true;
+  if (first != EOF) std::ungetc(first, f);
+  LineAssembler lines;
+  WlParser wl;
+  Pd6Parser pd;
+  WlMessage msg;
+  Pd6Ensemble ens;
+  unsigned n_lines = 0, n_vel = 0, n_lock = 0, shown = 0;
+  double sum_speed = 0;
+  std::int64_t t_ns = 0;  // line index as time (a file has no arrival times): 1 ms per line
+  int c;
+  while ((c = std::fgetc(f)) != EOF) {
+    if (!lines.push(static_cast<std::uint8_t>(c))) continue;
+    ++n_lines;
+    t_ns += 1000000;
+    const DvlVelocity* v = nullptr;
+    if (pd6) {
+      auto r = pd.parse_line(lines.line(), lines.size(), t_ns, ens);
+      if (r.is_ok() && r.value() == Pd6Result::kEnsemble) v = &ens.velocity;
+    } else if (wl.parse_line(lines.line(), lines.size(), t_ns, msg).is_ok() && msg.kind == WlKind::kVelocity) {
+      v = &msg.velocity;
+    }
+    if (v == nullptr) continue;
+    ++n_vel;
+    if (v->bottom_lock) {
+      ++n_lock;
+      sum_speed += std::sqrt(v->vx_mps * v->vx_mps + v->vy_mps * v->vy_mps + v->vz_mps * v->vz_mps);
+    }
+    if (shown++ < 10)
+      std::printf("v = (%+.3f, %+.3f, %+.3f) m/s  lock %s  altitude %.2f m  fom %.3f\n", v->vx_mps, v->vy_mps, v->vz_mps,
+                  v->bottom_lock ? "yes" : "no ", v->altitude_m, v->fom_mps);
+  }
+  std::fclose(f);
+  if (shown > 10) std::printf("... (first 10 of %u velocity samples shown)\n", n_vel);
+  std::printf("%s: %u lines, %u velocity samples, %u with bottom lock, mean speed %.3f m/s, over-long lines %u\n",
+              pd6 ? "PD6" : "Water Linked", n_lines, n_vel, n_lock, n_lock ? sum_speed / n_lock : 0.0, lines.overlong());
+  if (pd6) print_counters(pd.counters());
+  else print_counters(wl.counters());
+  return 0;
+}
+
+int simulate(int argc, char** argv) {
+  static const char* const kValued[] = {"--seconds", nullptr};
+  const char* out = cli::positional(argc, argv, 2, 0, kValued);
+  double seconds = 5.0;
+  if (out == nullptr || !cli::option_double(argc, argv, "--seconds", seconds) || seconds <= 0 || seconds > 3600) {
+    std::fprintf(stderr, "usage: qnav dvl simulate OUT [--seconds S] [--faults]\n");
+    return 2;
+  }
+  const bool faults = cli::flag(argc, argv, "--faults");
+  FILE* f = std::fopen(out, "w");
+  if (!f) {
+    std::fprintf(stderr, "qnav dvl: cannot write %s\n", out);
+    return 1;
+  }
+  const int steps = static_cast<int>(seconds * 8);
+  const long long t0_us = 1700000000000000LL;
+  char body[256], line[300];
+  for (int i = 0; i < steps; ++i) {
+    const long long tov = t0_us + i * 125000LL;
+    const double vx = 0.5 + 0.1 * std::sin(i * 0.2), vy = 0.05 * std::cos(i * 0.2), vz = 0.01;
+    const bool lock = !(faults && i % 16 == 8);
+    std::snprintf(body, sizeof body, "wrz,%.3f,%.3f,%.3f,%c,%.2f,%.3f,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0",
+                  lock ? vx : 0.0, lock ? vy : 0.0, lock ? vz : 0.0, lock ? 'y' : 'n', lock ? 3.2 + 0.1 * std::sin(i * 0.05) : -1.0,
+                  lock ? 0.002 : 2.707, tov, tov + 15000);
+    wl_with_checksum(body, line, sizeof line);
+    if (faults && i % 16 == 3) line[6] = line[6] == '1' ? '2' : '1';  // corrupted in transit -> checksum
+    std::fputs(line, f);
+    for (int k = 0; k < 4; ++k) {
+      std::snprintf(body, sizeof body, "wru,%d,%.3f,%.2f,-45,-98", k, lock ? vx * 0.5 : 0.0, lock ? 3.7 : -1.0);
+      wl_with_checksum(body, line, sizeof line);
+      std::fputs(line, f);
+    }
+    if (faults && i % 16 == 12) {  // the previous velocity line sent again -> stale
+      std::snprintf(body, sizeof body, "wrz,%.3f,%.3f,%.3f,y,3.20,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", vx, vy,
+                    vz, tov, tov + 15000);
+      wl_with_checksum(body, line, sizeof line);
+      std::fputs(line, f);
+    }
+  }
+  std::fclose(f);
+  std::printf("wrote %d velocity reports (8 Hz, %.1f s%s) to %s\n", steps, seconds, faults ? ", with faults" : "", out);
+  return 0;
+}
+
+int run_dvl(int argc, char** argv) {
+  if (argc >= 2 && std::strcmp(argv[1], "parse") == 0) return parse(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
+  std::fprintf(stderr, "usage: qnav dvl parse FILE [--pd6] | simulate OUT [--seconds S] [--faults]\n");
+  return 2;
+}
+}  // namespace
+
+QNAV_COMMAND("dvl", "DVL serial protocols: parse a capture (Water Linked / PD6), simulate one", run_dvl);

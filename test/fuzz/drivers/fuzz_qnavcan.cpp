@@ -1,0 +1,33 @@
+// Arbitrary classic frames into the qnav receiver and every decoder; and DBC text into the reader.
+#include <cmath>
+#include <cstring>
+
+#include "drivers/qnavcan/dbc.hpp"
+#include "drivers/qnavcan/receiver.hpp"
+#include "fuzz_entry.hpp"
+
+int qnav_fuzz_qnavcan(const std::uint8_t* data, std::size_t size) {
+  using namespace qnav;
+  if (size < 3) return 0;
+  if (data[0] & 0x80) {  // DBC reader
+    static drivers::qnavcan::DbcFile dbc;
+    drivers::qnavcan::parse_dbc(reinterpret_cast<const char*>(data + 1), size - 1, dbc).ignore();
+    return 0;
+  }
+  static drivers::qnavcan::QnavCanReceiver rx;
+  hal::CanRxFrame f;
+  const std::uint32_t ids[] = {0x100, 0x101, 0x102, 0x110, 0x200, 0x201, 0x202, 0x210, 0x2FF, 0x123};
+  f.frame.id = ids[data[1] % 10];
+  f.frame.len = static_cast<std::uint8_t>(data[2] % 9);
+  const std::size_t n = size - 3 < f.frame.len ? size - 3 : f.frame.len;
+  std::memcpy(f.frame.data, data + 3, n);
+  f.stamp.sample_ns = static_cast<std::int64_t>(data[0]) * 1000;
+  rx.on_frame(f).ignore();
+  const drivers::qnavcan::MessageDef* def = nullptr;
+  double v[8];
+  if (drivers::qnavcan::decode_generic(f.frame, def, v, 8).is_ok())
+    for (std::size_t i = 0; i < def->signals.size(); ++i)
+      if (std::isnan(v[i])) __builtin_trap();
+  return 0;
+}
+QNAV_FUZZ_ENTRY(qnavcan)
