@@ -1,7 +1,7 @@
 // Underwater degradation filters (underwater paper, Table 1, after Arredondo & Lebart 2005) as a
-// deterministic, seeded image transform for robustness tests. Same seed + same input = same output
-// on every platform (own PRNG and Box-Muller, no <random> distributions, no libm differences that
-// matter at 8-bit output).
+// deterministic, seeded image transform for robustness tests. Same seed + same input = bit-identical
+// output on every platform: own integer PRNG (xorshift64*), Gaussian noise as the Irwin-Hall sum of
+// 12 uniforms (integer sum, no libm), and only IEEE-exact double operations (+ - * / sqrt).
 //
 // Model applied per pixel, in this order:
 //  1. non-uniform lighting from a point light at light_distance_m in front of the image centre over a
