@@ -1,0 +1,205 @@
+// JSF: message decoding, the live-stream framer fed in arbitrary chunks (including 1 byte at a
+// time), garbage and corrupt headers between messages, oversize and truncated messages, and the
+// port/starboard ping assembler.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "drivers/sidescan/jsf_framer.hpp"
+#include "drivers/sidescan/jsf_parser.hpp"
+#include "nav/core/byte_order.hpp"
+#include "test/support/alloc_guard.hpp"
+
+namespace qnav::sidescan {
+namespace {
+
+void append_message(std::vector<std::uint8_t>& s, std::uint32_t ping, std::uint8_t channel, int n, std::uint8_t subsystem = 20) {
+  std::vector<float> v(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] = static_cast<float>(100 * channel + ping + i);
+  JsfWriteSonar w;
+  w.subsystem = subsystem;
+  w.channel = channel;
+  w.ping_number = ping;
+  w.stamp_ns = 1700000000000000000ull + ping * 100000000ull;
+  w.altitude_m = 7.5f;
+  w.heading_deg = 123.45f;
+  w.lat_deg = 48.5;
+  w.lon_deg = -68.75;
+  w.samples = Span<const float>(v.data(), v.size());
+  w.weighting_factor = 2;
+  const std::size_t at = s.size();
+  s.resize(at + jsf_sonar_message_bytes(static_cast<std::size_t>(n)));
+  ASSERT_TRUE(encode_jsf_sonar_message(Span<std::uint8_t>(s.data() + at, s.size() - at), w).is_ok());
+}
+
+std::vector<std::uint8_t> stream(int pings, int n) {
+  std::vector<std::uint8_t> s;
+  for (int p = 0; p < pings; ++p) {
+    append_message(s, static_cast<std::uint32_t>(p), 0, n);
+    append_message(s, static_cast<std::uint32_t>(p), 1, n);
+  }
+  return s;
+}
+
+struct Feed {
+  JsfFramer framer;
+  JsfPingAssembler pings;
+  std::vector<std::uint32_t> ping_numbers;
+  int messages = 0;
+  explicit Feed(std::size_t cap = 65536) {
+    EXPECT_TRUE(framer.init(cap).is_ok());
+    EXPECT_TRUE(pings.init(4096).is_ok());
+  }
+  void push(Span<const std::uint8_t> chunk) {
+    while (!chunk.empty()) {
+      const std::size_t used = framer.feed(chunk);
+      chunk = chunk.subspan(used, chunk.size() - used);
+      JsfMessageView m;
+      while (framer.next(m)) {
+        ++messages;
+        if (pings.add(m)) ping_numbers.push_back(pings.ping().ping_number);
+      }
+    }
+  }
+};
+
+TEST(Jsf, DecodesASonarDataMessage) {
+  std::vector<std::uint8_t> s;
+  append_message(s, 7, 1, 500);
+  const Result<JsfMessageHeader> h = parse_jsf_message_header(Span<const std::uint8_t>(s.data(), s.size()));
+  ASSERT_TRUE(h.is_ok());
+  EXPECT_EQ(h->message_type, 80);
+  EXPECT_EQ(h->channel, 1);
+  EXPECT_EQ(h->subsystem, 20);
+  EXPECT_EQ(static_cast<std::size_t>(h->body_bytes), 240u + 1000u);
+  std::vector<float> samples(1000);
+  JsfSonarData d;
+  ASSERT_TRUE(parse_jsf_sonar_data(h.value(), Span<const std::uint8_t>(s.data() + 16, s.size() - 16), d,
+                                   Span<float>(samples.data(), samples.size()))
+                  .is_ok());
+  EXPECT_EQ(d.ping_number, 7u);
+  EXPECT_EQ(d.samples, 500u);
+  EXPECT_FLOAT_EQ(samples[0], 107.0f);  // weighting 2: stored x4, read back / 4
+  EXPECT_FLOAT_EQ(samples[499], 606.0f);
+  EXPECT_NEAR(d.slant_range_m, 500 * 20e-6 * 1500.0 / 2.0, 1e-3);
+  EXPECT_NEAR(d.altitude_m, 7.5f, 1e-3f);
+  EXPECT_NEAR(d.heading_deg, 123.45f, 0.006f);
+  EXPECT_TRUE(d.position_valid);
+  EXPECT_NEAR(d.y, 48.5, 1e-6);
+  EXPECT_NEAR(d.x, -68.75, 1e-6);
+  EXPECT_EQ(d.stamp_ns, 1700000000700000000ull);
+}
+
+TEST(Jsf, RejectsBadSyncSizesAndFormats) {
+  std::vector<std::uint8_t> s;
+  append_message(s, 1, 0, 64);
+  std::vector<float> out(64);
+  JsfSonarData d;
+  std::vector<std::uint8_t> bad = s;
+  bad[0] = 0x02;
+  EXPECT_EQ(parse_jsf_message_header(Span<const std::uint8_t>(bad.data(), bad.size())).status(), StatusCode::kCorrupt);
+  bad = s;
+  store_le_u32(bad.data() + 12, 0x80000000u);
+  EXPECT_EQ(parse_jsf_message_header(Span<const std::uint8_t>(bad.data(), bad.size())).status(), StatusCode::kCorrupt);
+  const JsfMessageHeader h = parse_jsf_message_header(Span<const std::uint8_t>(s.data(), s.size())).value();
+  // Absurd sample count (20 bits) against a short body.
+  bad = s;
+  store_le_u16(bad.data() + 16 + 114, 0xFFFF);
+  EXPECT_EQ(parse_jsf_sonar_data(h, Span<const std::uint8_t>(bad.data() + 16, bad.size() - 16), d, Span<float>(out.data(), 64)),
+            StatusCode::kCorrupt);
+  // Unknown sample format.
+  bad = s;
+  store_le_u16(bad.data() + 16 + 34, 300);
+  EXPECT_EQ(parse_jsf_sonar_data(h, Span<const std::uint8_t>(bad.data() + 16, bad.size() - 16), d, Span<float>(out.data(), 64)),
+            StatusCode::kUnsupported);
+  // Body shorter than the size field says.
+  EXPECT_EQ(parse_jsf_sonar_data(h, Span<const std::uint8_t>(s.data() + 16, 100), d, Span<float>(out.data(), 64)), StatusCode::kTruncated);
+  // Buffer too small.
+  EXPECT_EQ(parse_jsf_sonar_data(h, Span<const std::uint8_t>(s.data() + 16, s.size() - 16), d, Span<float>(out.data(), 10)),
+            StatusCode::kCapacityExceeded);
+}
+
+TEST(JsfFramer, AnyChunkingGivesTheSameMessages) {
+  const std::vector<std::uint8_t> s = stream(6, 300);
+  for (std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{16}, std::size_t{17}, std::size_t{255}, s.size()}) {
+    Feed f;
+    for (std::size_t at = 0; at < s.size(); at += chunk)
+      f.push(Span<const std::uint8_t>(s.data() + at, std::min(chunk, s.size() - at)));
+    EXPECT_EQ(f.messages, 12) << "chunk " << chunk;
+    ASSERT_EQ(f.ping_numbers.size(), 6u) << "chunk " << chunk;
+    for (std::uint32_t k = 0; k < 6; ++k) EXPECT_EQ(f.ping_numbers[k], k);
+    EXPECT_EQ(f.framer.counters().get(JsfCounter::kResyncBytes), 0u);
+    EXPECT_EQ(f.framer.pending_bytes(), 0u);
+  }
+}
+
+TEST(JsfFramer, ResynchronisesAfterGarbageAndCorruptHeaders) {
+  std::vector<std::uint8_t> s;
+  const std::uint8_t junk[] = {0x00, 0x01, 0x01, 0x16, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x42};
+  s.insert(s.end(), junk, junk + sizeof junk);  // includes a fake sync with a negative size
+  append_message(s, 0, 0, 100);
+  append_message(s, 0, 1, 100);
+  s.insert(s.end(), junk, junk + 5);
+  append_message(s, 1, 0, 100);
+  append_message(s, 1, 1, 100);
+  Feed f;
+  for (std::size_t at = 0; at < s.size(); at += 3) f.push(Span<const std::uint8_t>(s.data() + at, std::min<std::size_t>(3, s.size() - at)));
+  ASSERT_EQ(f.ping_numbers.size(), 2u);
+  EXPECT_EQ(f.messages, 4);
+  EXPECT_GE(f.framer.counters().get(JsfCounter::kBadHeader), 1u);
+  EXPECT_GE(f.framer.counters().get(JsfCounter::kResyncBytes), 5u);
+}
+
+TEST(JsfFramer, OversizeMessagesAreSkippedAndTruncationIsVisible) {
+  std::vector<std::uint8_t> s;
+  append_message(s, 0, 0, 2000);  // 4256 bytes: above a 1024-byte framer
+  append_message(s, 1, 0, 100);
+  append_message(s, 1, 1, 100);
+  append_message(s, 2, 0, 100);
+  s.resize(s.size() - 50);  // the stream stops inside the last message
+  Feed f(1024);
+  f.push(Span<const std::uint8_t>(s.data(), s.size()));
+  EXPECT_EQ(f.framer.counters().get(JsfCounter::kOversize), 1u);
+  EXPECT_EQ(f.messages, 2);
+  ASSERT_EQ(f.ping_numbers.size(), 1u);
+  EXPECT_EQ(f.ping_numbers[0], 1u);
+  EXPECT_GT(f.framer.pending_bytes(), 0u);
+}
+
+TEST(JsfPingAssembler, PairsSidesCountsOrphansAndOtherMessages) {
+  std::vector<std::uint8_t> s;
+  append_message(s, 0, 0, 64);
+  append_message(s, 1, 0, 64);  // ping 0 starboard never came
+  append_message(s, 1, 1, 64);
+  append_message(s, 1, 0, 64, 0);  // sub-bottom subsystem: not side-scan
+  std::vector<std::uint8_t> other(16 + 8, 0);
+  store_le_u16(other.data(), kJsfSync);
+  store_le_u16(other.data() + 4, 182);
+  store_le_u32(other.data() + 12, 8);
+  s.insert(s.end(), other.begin(), other.end());
+  Feed f;
+  f.push(Span<const std::uint8_t>(s.data(), s.size()));
+  ASSERT_EQ(f.ping_numbers.size(), 1u);
+  EXPECT_EQ(f.ping_numbers[0], 1u);
+  EXPECT_EQ(f.pings.counters().get(JsfPingCounter::kUnpairedChannel), 1u);
+  EXPECT_EQ(f.pings.counters().get(JsfPingCounter::kOtherChannels), 1u);
+  EXPECT_EQ(f.pings.counters().get(JsfPingCounter::kOtherMessages), 1u);
+  const sonar::SonarPing& p = f.pings.ping();
+  EXPECT_EQ(p.port.size(), 64u);
+  EXPECT_FLOAT_EQ(p.port[0], 1.0f);
+  EXPECT_FLOAT_EQ(p.stbd[0], 101.0f);
+  EXPECT_NEAR(p.altitude_m, 7.5f, 1e-3f);
+}
+
+TEST(JsfFramer, FramingAndAssemblyMakeNoHeapAllocation) {
+  const std::vector<std::uint8_t> s = stream(10, 512);
+  Feed f;
+  f.ping_numbers.reserve(64);  // the test's own record of pings must not count
+  QNAV_EXPECT_NO_ALLOC(for (std::size_t at = 0; at < s.size(); at += 1000)
+                           f.push(Span<const std::uint8_t>(s.data() + at, std::min<std::size_t>(1000, s.size() - at))));
+  EXPECT_EQ(f.ping_numbers.size(), 10u);
+}
+
+}  // namespace
+}  // namespace qnav::sidescan
