@@ -117,8 +117,11 @@ int dbc(int argc, char** argv) {
   int mismatches = 0, signals = 0;
   for (const qc::DbcMessage& m : file->messages) {
     const qc::MessageDef* c = qc::find_message(m.id);
-    std::printf("0x%03X %-20s dlc %u  %2zu signals  every %u ms  from %s%s\n", m.id, m.name, m.dlc, m.signals.size(),
-                m.cycle_ms, m.transmitter, c ? "" : "   [not in codec]");
+    char period[24];
+    if (m.cycle_ms > 0) std::snprintf(period, sizeof period, "every %u ms", m.cycle_ms);
+    else std::snprintf(period, sizeof period, "on event");
+    std::printf("0x%03X %-20s dlc %u  %2zu signals  %-13s from %s%s\n", m.id, m.name, m.dlc, m.signals.size(), period,
+                m.transmitter, c ? "" : "   [not in codec]");
     if (c == nullptr || c->signals.size() != m.signals.size() || c->dlc != m.dlc) {
       ++mismatches;
       continue;
