@@ -1,0 +1,90 @@
+#include "hal/linux/tcp_client_port.hpp"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "hal/linux/monotonic_clock.hpp"
+
+namespace qnav::hal {
+
+TcpClientPort::~TcpClientPort() { close(); }
+
+void TcpClientPort::close() noexcept {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+Status TcpClientPort::open(const char* ipv4, std::uint16_t port, int connect_timeout_ms) noexcept {
+  close();
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(port);
+  if (ipv4 == nullptr || ::inet_pton(AF_INET, ipv4, &addr.sin_addr) != 1)
+    return Status(StatusCode::kInvalidArgument, "not a numeric IPv4 address");
+  const int s = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (s < 0) return Status(StatusCode::kIoError, "socket() failed");
+  const int one = 1;
+  (void)::setsockopt(s, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  if (::connect(s, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0) {
+    if (errno != EINPROGRESS) {
+      ::close(s);
+      return Status(StatusCode::kIoError, "connect() failed");
+    }
+    pollfd p{s, POLLOUT, 0};
+    const int pr = ::poll(&p, 1, connect_timeout_ms < 0 ? 0 : connect_timeout_ms);
+    int err = 0;
+    socklen_t len = sizeof err;
+    if (pr <= 0 || ::getsockopt(s, SOL_SOCKET, SO_ERROR, &err, &len) < 0 || err != 0) {
+      ::close(s);
+      return Status(pr == 0 ? StatusCode::kTimeout : StatusCode::kIoError, "TCP connect failed or timed out");
+    }
+  }
+  fd_ = s;
+  stats_ = SerialStats{};
+  return Status::ok();
+}
+
+Result<SerialRead> TcpClientPort::read(Span<std::uint8_t> buf, int timeout_ms) noexcept {
+  if (fd_ < 0) return Status(StatusCode::kNotReady, "TCP port not open");
+  SerialRead r;
+  if (buf.empty()) return r;
+  pollfd p{fd_, POLLIN, 0};
+  const int pr = ::poll(&p, 1, timeout_ms < 0 ? 0 : timeout_ms);
+  if (pr < 0) return errno == EINTR ? Result<SerialRead>(r) : Result<SerialRead>(Status(StatusCode::kIoError, "poll failed"));
+  if (pr == 0) return r;
+  const ssize_t n = ::recv(fd_, buf.data(), buf.size(), MSG_DONTWAIT);
+  r.arrival_ns = monotonic_now_ns();
+  if (n < 0) {
+    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return SerialRead{};
+    ++stats_.rx_errors;
+    return Status(StatusCode::kIoError, "TCP recv failed");
+  }
+  if (n == 0) return Status(StatusCode::kIoError, "TCP peer closed the connection");
+  r.bytes = static_cast<std::size_t>(n);
+  stats_.rx_bytes += static_cast<std::uint32_t>(n);
+  return r;
+}
+
+Result<std::size_t> TcpClientPort::write(Span<const std::uint8_t> data) noexcept {
+  if (fd_ < 0) return Status(StatusCode::kNotReady, "TCP port not open");
+  if (data.empty()) return std::size_t{0};
+  const ssize_t n = ::send(fd_, data.data(), data.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+  if (n < 0) {
+    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) {
+      ++stats_.tx_short;
+      return std::size_t{0};
+    }
+    return Status(StatusCode::kIoError, "TCP send failed");
+  }
+  if (static_cast<std::size_t>(n) < data.size()) ++stats_.tx_short;
+  stats_.tx_bytes += static_cast<std::uint32_t>(n);
+  return static_cast<std::size_t>(n);
+}
+
+}  // namespace qnav::hal
