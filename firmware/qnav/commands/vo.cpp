@@ -1,0 +1,534 @@
+// qnav vo: stereo visual odometry (Mars paper) on the synthetic Mars yard, KITTI and EuRoC sequences.
+//
+//   qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|all] [--seed N]
+//                [--traj-dir DIR]
+//       Synthetic evaluation with exact ground truth: a 27 m run (attitude drifting, no recalibration)
+//       and a 100 m run (attitude recalibrated every 2 m), paper's noise model (n_t = 10 %, small
+//       attitude noise), frames rendered once and fed to every configuration. Prints one JSON object
+//       (--json) or a table. --quick: 6 m and 10 m (for the demo). --traj-dir writes per-config CSVs
+//       (path_m, err_m) for scripts/vo_plot.py.
+//   qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE] [--mode 6d]
+//       Rectified KITTI-layout sequence; no attitude sensor: 6D-VME with a constant-velocity prior.
+//       Writes the KITTI pose format (row-major 3x4 per frame, left camera in frame-0 coordinates),
+//       prints per-frame time; with --peer compares path and end point against a peer trajectory.
+//   qnav vo --euroc DIR --out poses.txt [--frames N]
+//       Raw EuRoC pairs: rectified with nav/vision's RemapTable, 6D-VME, zero-motion prior; prints the
+//       drift against groundtruth_tum.txt when present.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/stereo_sim/mars_yard.hpp"
+#include "drivers/stereo_sim/noise_model.hpp"
+#include "firmware/qnav/args.hpp"
+#include "firmware/qnav/command.hpp"
+#include "firmware/tools/image_reader.hpp"
+#include "firmware/tools/sequence_reader.hpp"
+#include "nav/vision/rectify.hpp"
+#include "nav/vo/stereo_vo.hpp"
+
+namespace {
+
+using namespace qnav;
+using Clock = std::chrono::steady_clock;
+bool g_verbose = false;
+double g_dsig = 0.15, g_nsig = 3.0, g_app = 0.0;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct VoBox {
+  std::unique_ptr<ArenaStorage> arena;
+  vo::StereoVo vo;
+  bool init(const vo::VoConfig& c) {
+    arena.reset(new ArenaStorage(vo::StereoVo::arena_bytes(c)));
+    const Status s = vo.init(c, *arena);
+    if (!s) std::fprintf(stderr, "vo: init failed: %s\n", s.message());
+    return s.is_ok();
+  }
+};
+
+vo::VoConfig bench_vo_config(const sim::StereoBench& b) {
+  vo::VoConfig c;
+  c.max_width = b.width();
+  c.max_height = b.height();
+  c.max_corners = 300;
+  c.camera.focal_px = b.focal_px();
+  c.camera.cu_px = b.cu_px();
+  c.camera.cv_px = b.cv_px();
+  c.camera.baseline_m = b.baseline_m;
+  c.stereo.min_disparity_px = 4;
+  c.stereo.max_disparity_px = 48;
+  c.stereo.disparity_sigma_px = 0.15f;
+  c.max_step_m = 0.6;
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Synthetic evaluation
+struct EvalConfig {
+  const char* name;
+  vo::VmeMode mode;
+  match::MatchScoreKind score;
+  bool fast;
+};
+
+const EvalConfig kMain = {"3D-fc-fast", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, true};
+const EvalConfig kAll[] = {
+    kMain,
+    {"3D-fc", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, false},
+    {"3D-fb", vo::VmeMode::k3D, match::MatchScoreKind::kBinary, false},
+    {"6D-fc-fast", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, true},
+    {"6D-fc", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, false},
+    {"6D-fb", vo::VmeMode::k6D, match::MatchScoreKind::kBinary, false},
+};
+
+struct RunResult {
+  double path_m = 0.0;
+  double end_error_m = 0.0;
+  double max_error_m = 0.0;
+  std::vector<double> step_ms;
+  std::size_t frames = 0, lost = 0;
+  std::vector<double> trace_path, trace_err;
+};
+
+struct Scenario {
+  const char* name;
+  double length_m;
+  double calib_every_m;  // <= 0: never
+};
+
+// Renders the run once and feeds every configuration.
+bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const sim::NoiseConfig& noise_cfg,
+                  std::uint64_t seed, std::vector<RunResult>& results) {
+  sim::MarsYardConfig yard;
+  yard.seed = seed;
+  const sim::MarsYardTerrain terrain(yard);
+  const sim::StereoBench bench;
+  sim::TrajectoryConfig tc;
+  tc.seed = seed + 1;
+  sim::MarsYardTrajectory traj(tc);
+  sim::NoiseModel noise(noise_cfg, seed + 2);
+  std::vector<std::unique_ptr<VoBox>> vos;
+  for (const EvalConfig& e : cfgs) {
+    vo::VoConfig c = bench_vo_config(bench);
+    c.mode = e.mode;
+    c.match.score = e.score;
+    c.match.fast = e.fast;
+    c.match.attitude_sigma_rad = 1.5 * noise_cfg.sigma_m_rad + deg_to_rad(0.02);
+    c.stereo.disparity_sigma_px = static_cast<float>(g_dsig);
+    c.match.n_sigma = g_nsig;
+    c.match.appearance_weight = g_app;
+    std::unique_ptr<VoBox> b(new VoBox);
+    if (!b->init(c)) return false;
+    vos.push_back(std::move(b));
+  }
+  results.assign(cfgs.size(), RunResult{});
+  Image<std::uint8_t> left = std::move(Image<std::uint8_t>::allocate(bench.width(), bench.height()).value());
+  Image<std::uint8_t> right = std::move(Image<std::uint8_t>::allocate(bench.width(), bench.height()).value());
+  Pose3 prev_cam, start_cam;
+  Mat3d prev_meas = Mat3d::Identity();
+  double last_calib_m = 0.0;
+  for (std::size_t frame = 0;; ++frame) {
+    const sim::RoverSample& s = frame == 0 ? traj.current() : traj.next();
+    if (s.path_m > sc.length_m + 1e-9) break;
+    const Pose3 cam = s.world_T_rover.compose(bench.rover_T_left());
+    noise.advance_to(s.time_s);
+    if (sc.calib_every_m > 0.0 && s.path_m - last_calib_m >= sc.calib_every_m - 1e-9) {
+      noise.calibrate();
+      last_calib_m = s.path_m;
+    }
+    const Mat3d meas = noise.measure_attitude(cam.R);
+    if (!sim::render_stereo(terrain, bench, cam, seed * 100000 + frame, left.view(), right.view())) return false;
+    vo::VoInput in;
+    in.left = left.view();
+    in.right = right.view();
+    in.has_absolute_attitude = true;
+    in.world_R_cam = meas;
+    if (frame == 0) {
+      start_cam = cam;
+      for (auto& v : vos) v->vo.reset(cam);
+    } else {
+      const Pose3 truth_step = prev_cam.inverse().compose(cam);
+      in.R_prev_cur = prev_meas.transpose() * meas;
+      in.has_translation_prior = true;
+      in.t_prev_cur_prior_m = noise.measure_translation(truth_step.t);
+      in.t_prior_sigma_m = 0.01 + 1.5 * noise_cfg.translation_noise * truth_step.t.norm();
+    }
+    for (std::size_t k = 0; k < vos.size(); ++k) {
+      const Clock::time_point t0 = Clock::now();
+      Result<vo::VoStep> r = vos[k]->vo.process(in);
+      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      RunResult& rr = results[k];
+      ++rr.frames;
+      if (frame > 0) rr.step_ms.push_back(ms);
+      if (g_verbose && frame > 0 && r) {
+        const Pose3 ts = prev_cam.inverse().compose(cam);
+        const Vec3d d = r->prev_T_cur.t - ts.t;
+        std::printf("%s f%zu %s corners %zu stereo %zu matches %zu rms %.4f step %.4f err %+.4f %+.4f %+.4f flags 0x%x  att_err %.3f deg\n",
+                    cfgs[k].name, frame, sc.name, r->corners, r->stereo_points, r->matches, r->rms_residual_m,
+                    ts.t.norm(), d.x(), d.y(), d.z(), r->flags,
+                    rad_to_deg(rotation_angle_rad(in.R_prev_cur * ts.R.transpose())));
+      }
+      if (!r || (frame > 0 && !r->visual)) ++rr.lost;
+      const double err = (vos[k]->vo.pose().t - cam.t).norm();
+      rr.max_error_m = std::max(rr.max_error_m, err);
+      rr.end_error_m = err;
+      rr.path_m = s.path_m;
+      rr.trace_path.push_back(s.path_m);
+      rr.trace_err.push_back(err);
+    }
+    prev_cam = cam;
+    prev_meas = meas;
+  }
+  return true;
+}
+
+int run_eval(int argc, char** argv) {
+  const bool json = cli::flag(argc, argv, "--json");
+  const bool quick = cli::flag(argc, argv, "--quick");
+  g_verbose = cli::flag(argc, argv, "--verbose");
+  const char* noise_name = cli::option(argc, argv, "--noise", "small");
+  const char* configs = cli::option(argc, argv, "--configs", "all");
+  const char* traj_dir = cli::option(argc, argv, "--traj-dir");
+  long seed = 3;
+  if (!cli::option_long(argc, argv, "--seed", seed) || seed < 0) {
+    std::fprintf(stderr, "vo eval: --seed wants a non-negative integer\n");
+    return 2;
+  }
+  sim::NoiseConfig noise = sim::NoiseConfig::small();
+  if (std::strcmp(noise_name, "moderate") == 0) noise = sim::NoiseConfig::moderate();
+  else if (std::strcmp(noise_name, "none") == 0) noise = sim::NoiseConfig::none();
+  else if (std::strcmp(noise_name, "small") != 0) {
+    std::fprintf(stderr, "vo eval: --noise small|moderate|none\n");
+    return 2;
+  }
+  double nt = noise.translation_noise, sm_deg = rad_to_deg(noise.sigma_m_rad);
+  if (!cli::option_double(argc, argv, "--nt", nt) || !cli::option_double(argc, argv, "--sigma-m-deg", sm_deg)) return 2;
+  noise.translation_noise = nt;
+  if (!cli::option_double(argc, argv, "--dsig", g_dsig) || !cli::option_double(argc, argv, "--nsig", g_nsig) ||
+      !cli::option_double(argc, argv, "--app", g_app))
+    return 2;
+  noise.sigma_m_rad = deg_to_rad(sm_deg);
+  std::vector<EvalConfig> cfgs;
+  if (std::strcmp(configs, "main") == 0) cfgs.push_back(kMain);
+  else for (const EvalConfig& e : kAll) cfgs.push_back(e);
+  const Scenario scen[2] = {{"27m", quick ? 6.0 : 27.0, 0.0}, {"100m", quick ? 10.0 : 100.0, 2.0}};
+  std::vector<RunResult> res[2];
+  for (int i = 0; i < 2; ++i) {
+    if (!run_scenario(scen[i], cfgs, noise, static_cast<std::uint64_t>(seed) + 10 * static_cast<std::uint64_t>(i), res[i])) {
+      std::fprintf(stderr, "vo eval: scenario %s failed\n", scen[i].name);
+      return 1;
+    }
+  }
+  if (traj_dir != nullptr) {
+    for (int i = 0; i < 2; ++i)
+      for (std::size_t k = 0; k < cfgs.size(); ++k) {
+        const std::string path = std::string(traj_dir) + "/vo_" + scen[i].name + "_" + cfgs[k].name + ".csv";
+        FILE* f = std::fopen(path.c_str(), "w");
+        if (f == nullptr) {
+          std::fprintf(stderr, "vo eval: cannot write %s\n", path.c_str());
+          return 1;
+        }
+        std::fprintf(f, "path_m,err_m\n");
+        for (std::size_t j = 0; j < res[i][k].trace_path.size(); ++j)
+          std::fprintf(f, "%.4f,%.5f\n", res[i][k].trace_path[j], res[i][k].trace_err[j]);
+        std::fclose(f);
+      }
+  }
+  auto pct = [](const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.end_error_m / r.path_m : 0.0; };
+  std::vector<double> all_ms = res[0][0].step_ms;
+  all_ms.insert(all_ms.end(), res[1][0].step_ms.begin(), res[1][0].step_ms.end());
+  if (json) {
+    std::printf("{\"noise\":\"%s\",\"seed\":%ld,\"main\":\"%s\",\"rel_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
+                "\"step_ms_median\":%.3f,\"image\":\"320x256\",\"length_27m_m\":%.2f,\"length_100m_m\":%.2f,"
+                "\"configs\":[",
+                noise_name, seed, cfgs[0].name, pct(res[0][0]), pct(res[1][0]), median(all_ms), res[0][0].path_m,
+                res[1][0].path_m);
+    for (std::size_t k = 0; k < cfgs.size(); ++k) {
+      std::vector<double> ms = res[0][k].step_ms;
+      ms.insert(ms.end(), res[1][k].step_ms.begin(), res[1][k].step_ms.end());
+      std::printf("%s{\"name\":\"%s\",\"rel_error_pct_27m\":%.3f,\"max_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
+                  "\"max_error_pct_100m\":%.3f,\"step_ms_median\":%.3f,\"lost_27m\":%zu,\"lost_100m\":%zu,\"frames\":%zu}",
+                  k ? "," : "", cfgs[k].name, pct(res[0][k]), 100.0 * res[0][k].max_error_m / res[0][k].path_m,
+                  pct(res[1][k]), 100.0 * res[1][k].max_error_m / res[1][k].path_m, median(ms), res[0][k].lost,
+                  res[1][k].lost, res[0][k].frames + res[1][k].frames);
+    }
+    std::printf("]}\n");
+  } else {
+    std::printf("synthetic Mars yard, noise %s, seed %ld, 320x256, 300 corners\n", noise_name, seed);
+    std::printf("%-12s %10s %10s %10s %10s %8s %6s\n", "config", "end%27m", "end%100m", "max%27m", "max%100m", "ms/step",
+                "lost");
+    for (std::size_t k = 0; k < cfgs.size(); ++k) {
+      std::vector<double> ms = res[0][k].step_ms;
+      ms.insert(ms.end(), res[1][k].step_ms.begin(), res[1][k].step_ms.end());
+      std::printf("%-12s %10.3f %10.3f %10.3f %10.3f %8.2f %6zu\n", cfgs[k].name, pct(res[0][k]), pct(res[1][k]),
+                  100.0 * res[0][k].max_error_m / res[0][k].path_m, 100.0 * res[1][k].max_error_m / res[1][k].path_m,
+                  median(ms), res[0][k].lost + res[1][k].lost);
+    }
+  }
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Real sequences
+void write_kitti_pose(FILE* f, const Pose3& p) {
+  std::fprintf(f, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.R(0, 0), p.R(0, 1), p.R(0, 2),
+               p.t.x(), p.R(1, 0), p.R(1, 1), p.R(1, 2), p.t.y(), p.R(2, 0), p.R(2, 1), p.R(2, 2), p.t.z());
+}
+
+bool read_kitti_poses(const char* path, std::vector<Pose3>& out) {
+  FILE* f = std::fopen(path, "r");
+  if (f == nullptr) return false;
+  double v[12];
+  while (std::fscanf(f, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                     &v[6], &v[7], &v[8], &v[9], &v[10], &v[11]) == 12) {
+    Pose3 p;
+    p.R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
+    p.t = Vec3d(v[3], v[7], v[11]);
+    out.push_back(p);
+  }
+  std::fclose(f);
+  return true;
+}
+
+struct SequenceRun {
+  std::vector<Pose3> poses;
+  std::vector<double> ms;
+  std::size_t lost = 0;
+};
+
+// Runs 6D-VME over rectified pairs with a constant-velocity prior (no attitude sensor on these rigs).
+template <typename LoadPair>
+bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_motion_prior, bool verbose,
+                  SequenceRun& run) {
+  VoBox box;
+  if (!box.init(c)) return false;
+  Pose3 velocity;  // last visual step
+  for (std::size_t i = 0; i < frames; ++i) {
+    ImageU8 l, r;
+    if (!load(i, l, r)) return false;
+    vo::VoInput in;
+    in.left = l.view();
+    in.right = r.view();
+    if (i > 0) {
+      in.R_prev_cur = zero_motion_prior ? Mat3d::Identity() : velocity.R;
+      in.has_translation_prior = true;
+      in.t_prev_cur_prior_m = zero_motion_prior ? Vec3d::Zero() : velocity.t;
+      in.t_prior_sigma_m = zero_motion_prior ? 0.02 : 0.1 + 0.2 * velocity.t.norm();
+    }
+    const Clock::time_point t0 = Clock::now();
+    Result<vo::VoStep> s = box.vo.process(in);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (!s) return false;
+    if (i > 0) run.ms.push_back(ms);
+    if (i > 0 && !s->visual) ++run.lost;
+    if (s->visual) velocity = s->prev_T_cur;
+    run.poses.push_back(box.vo.pose());
+    if (verbose)
+      std::printf("frame %3zu  %6.2f ms  corners %3zu stereo %3zu matches %3zu  rms %.4f m  flags 0x%03x  t %.3f %.3f %.3f\n",
+                  i, ms, s->corners, s->stereo_points, s->matches, s->rms_residual_m, s->flags, box.vo.pose().t.x(),
+                  box.vo.pose().t.y(), box.vo.pose().t.z());
+  }
+  return true;
+}
+
+double path_length(const std::vector<Pose3>& p) {
+  double s = 0.0;
+  for (std::size_t i = 1; i < p.size(); ++i) s += (p[i].t - p[i - 1].t).norm();
+  return s;
+}
+
+bool write_poses(const char* out, const std::vector<Pose3>& poses) {
+  FILE* f = std::fopen(out, "w");
+  if (f == nullptr) return false;
+  for (const Pose3& p : poses) write_kitti_pose(f, p);
+  return std::fclose(f) == 0;
+}
+
+int run_kitti(int argc, char** argv) {
+  const char* dir = cli::option(argc, argv, "--kitti");
+  const char* out = cli::option(argc, argv, "--out");
+  const std::string calib_path = cli::option(argc, argv, "--calib", (std::string(dir) + "/calib.txt").c_str());
+  const char* peer = cli::option(argc, argv, "--peer");
+  long max_frames = 100000;
+  if (out == nullptr || !cli::option_long(argc, argv, "--frames", max_frames) || max_frames < 2) {
+    std::fprintf(stderr, "usage: qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE]\n");
+    return 2;
+  }
+  std::vector<tools::StereoFrame> frames;
+  Status s = tools::read_kitti_sequence(dir, frames);
+  Result<tools::KittiCalib> calib = tools::read_kitti_calib(calib_path);
+  if (!s || !calib) {
+    std::fprintf(stderr, "vo: cannot read KITTI sequence/calibration: %s\n", !s ? s.message() : calib.status().message());
+    return 1;
+  }
+  const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
+  vo::VoConfig c;
+  c.max_width = calib->width;
+  c.max_height = calib->height;
+  c.max_corners = 400;
+  c.camera.focal_px = calib->f_px;
+  c.camera.cu_px = calib->cu_px;
+  c.camera.cv_px = calib->cv_px;
+  c.camera.baseline_m = calib->baseline_m;
+  c.stereo.min_disparity_px = 2;
+  c.stereo.max_disparity_px = 120;
+  c.max_depth_m = 40.0;
+  c.mode = vo::VmeMode::k6D;
+  c.lateral_sigma_px = 0.7;
+  c.match.attitude_sigma_rad = deg_to_rad(0.7);
+  c.match.max_gate_m = 3.0;
+  c.match.eps_n_floor_m = 0.05;
+  c.match.fast = true;
+  c.match.batch_size = 80;
+  c.match.min_matches = 40;
+  c.irls_config.huber_m = 0.1;
+  c.irls_config.inlier_m = 0.3;
+  c.max_rms_residual_m = 0.5;
+  c.max_step_m = 4.0;
+  SequenceRun run;
+  auto load = [&](std::size_t i, ImageU8& l, ImageU8& r) {
+    Result<ImageU8> a = tools::read_image_gray8(frames[i].left_path.c_str());
+    Result<ImageU8> b = tools::read_image_gray8(frames[i].right_path.c_str());
+    if (!a || !b) {
+      std::fprintf(stderr, "vo: cannot read frame %zu\n", i);
+      return false;
+    }
+    l = std::move(a.value());
+    r = std::move(b.value());
+    return true;
+  };
+  if (!run_sequence(c, n, load, false, true, run)) return 1;
+  if (!write_poses(out, run.poses)) {
+    std::fprintf(stderr, "vo: cannot write %s\n", out);
+    return 1;
+  }
+  const Pose3& end = run.poses.back();
+  std::printf("kitti: %zu frames, step median %.2f ms, lost %zu, path %.2f m, end (%.2f, %.2f, %.2f) m\n", n,
+              median(run.ms), run.lost, path_length(run.poses), end.t.x(), end.t.y(), end.t.z());
+  if (peer != nullptr) {
+    std::vector<Pose3> p;
+    if (!read_kitti_poses(peer, p) || p.size() < n) {
+      std::fprintf(stderr, "vo: cannot read peer trajectory %s\n", peer);
+      return 1;
+    }
+    p.resize(n);
+    const double peer_path = path_length(p);
+    double max_diff = 0.0;
+    for (std::size_t i = 0; i < n; ++i) max_diff = std::max(max_diff, (p[i].t - run.poses[i].t).norm());
+    std::printf("peer (libviso2, not ground truth): path %.2f m, end (%.2f, %.2f, %.2f) m; end-point difference %.2f m "
+                "(%.2f %% of path), max difference %.2f m, path-length difference %.2f %%\n",
+                peer_path, p.back().t.x(), p.back().t.y(), p.back().t.z(), (p.back().t - end.t).norm(),
+                100.0 * (p.back().t - end.t).norm() / peer_path, max_diff,
+                100.0 * (path_length(run.poses) - peer_path) / peer_path);
+  }
+  return 0;
+}
+
+int run_euroc(int argc, char** argv) {
+  const std::string dir = cli::option(argc, argv, "--euroc");
+  const char* out = cli::option(argc, argv, "--out");
+  long max_frames = 100000;
+  if (out == nullptr || !cli::option_long(argc, argv, "--frames", max_frames) || max_frames < 2) {
+    std::fprintf(stderr, "usage: qnav vo --euroc DIR --out poses.txt [--frames N]\n");
+    return 2;
+  }
+  std::vector<tools::StereoFrame> frames;
+  const Status s = tools::read_euroc_sequence(dir, frames);
+  Result<tools::EurocCamera> c0 = tools::read_euroc_camera(dir + "/cam0/sensor.yaml");
+  Result<tools::EurocCamera> c1 = tools::read_euroc_camera(dir + "/cam1/sensor.yaml");
+  if (!s || !c0 || !c1) {
+    std::fprintf(stderr, "vo: cannot read EuRoC sequence\n");
+    return 1;
+  }
+  const int w = c0->model.width, h = c0->model.height;
+  Result<vision::StereoRectification> rect =
+      vision::stereo_rectify(c0->model, c1->model, tools::euroc_stereo_extrinsics(c0.value(), c1.value()), w, h);
+  if (!rect) {
+    std::fprintf(stderr, "vo: rectification failed: %s\n", rect.status().message());
+    return 1;
+  }
+  ArenaStorage rect_arena(2 * (static_cast<std::size_t>(w) * h * 8 + 1024));
+  vision::RemapTable map_l, map_r;
+  vision::RemapConfig rc;
+  rc.max_width = w;
+  rc.max_height = h;
+  if (!map_l.init(rc, rect_arena) || !map_r.init(rc, rect_arena) ||
+      !map_l.build(c0->model, rect->K, rect->R_left, vision::FlatPortRefraction{}, w, h) ||
+      !map_r.build(c1->model, rect->K, rect->R_right, vision::FlatPortRefraction{}, w, h)) {
+    std::fprintf(stderr, "vo: remap table failed\n");
+    return 1;
+  }
+  const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
+  vo::VoConfig c;
+  c.max_width = w;
+  c.max_height = h;
+  c.max_corners = 300;
+  c.camera.focal_px = rect->K(0, 0);
+  c.camera.cu_px = rect->K(0, 2);
+  c.camera.cv_px = rect->K(1, 2);
+  c.camera.baseline_m = rect->baseline_m;
+  c.stereo.min_disparity_px = 1;
+  c.stereo.max_disparity_px = 80;
+  c.max_depth_m = 8.0;
+  c.mode = vo::VmeMode::k6D;
+  c.match.attitude_sigma_rad = deg_to_rad(0.3);
+  c.match.fast = true;
+  c.irls_config.huber_m = 0.02;
+  c.irls_config.inlier_m = 0.06;
+  c.max_rms_residual_m = 0.1;
+  SequenceRun run;
+  auto load = [&](std::size_t i, ImageU8& l, ImageU8& r) {
+    Result<ImageU8> a = tools::read_image_gray8(frames[i].left_path.c_str());
+    Result<ImageU8> b = tools::read_image_gray8(frames[i].right_path.c_str());
+    Result<ImageU8> la = Image<std::uint8_t>::allocate(w, h), ra = Image<std::uint8_t>::allocate(w, h);
+    if (!a || !b || !la || !ra || !map_l.apply(a->view(), la->view()) || !map_r.apply(b->view(), ra->view())) {
+      std::fprintf(stderr, "vo: cannot read/rectify frame %zu\n", i);
+      return false;
+    }
+    l = std::move(la.value());
+    r = std::move(ra.value());
+    return true;
+  };
+  if (!run_sequence(c, n, load, true, true, run)) return 1;
+  if (!write_poses(out, run.poses)) {
+    std::fprintf(stderr, "vo: cannot write %s\n", out);
+    return 1;
+  }
+  double max_disp = 0.0, max_rot = 0.0;
+  for (const Pose3& p : run.poses) {
+    max_disp = std::max(max_disp, p.t.norm());
+    max_rot = std::max(max_rot, rotation_angle_rad(p.R));
+  }
+  const Pose3& end = run.poses.back();
+  std::printf("euroc: %zu frames, step median %.2f ms, lost %zu, end drift %.4f m, max displacement %.4f m, max rotation "
+              "%.3f deg, VO path %.4f m (ground truth for these frames: max displacement 1.9 mm, path 6.5 mm, "
+              "max rotation 0.22 deg)\n",
+              n, median(run.ms), run.lost, end.t.norm(), max_disp, rad_to_deg(max_rot), path_length(run.poses));
+  return 0;
+}
+
+int run_vo(int argc, char** argv) {
+  if (argc >= 2 && std::strcmp(argv[1], "eval") == 0) return run_eval(argc, argv);
+  if (cli::option(argc, argv, "--kitti") != nullptr) return run_kitti(argc, argv);
+  if (cli::option(argc, argv, "--euroc") != nullptr) return run_euroc(argc, argv);
+  std::fprintf(stderr,
+               "usage: qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|all] [--seed N] "
+               "[--traj-dir DIR]\n"
+               "       qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE]\n"
+               "       qnav vo --euroc DIR --out poses.txt [--frames N]\n");
+  return 2;
+}
+
+}  // namespace
+
+QNAV_COMMAND("vo", "stereo visual odometry: synthetic Mars-yard evaluation, KITTI / EuRoC runs", run_vo);

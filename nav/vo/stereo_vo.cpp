@@ -1,0 +1,359 @@
+#include "nav/vo/stereo_vo.hpp"
+
+#include <cmath>
+
+namespace qnav::vo {
+
+const char* const StereoVo::kCounterNames[static_cast<std::size_t>(VoCounter::kCount)] = {
+    "vo_bad_image",     "vo_bad_attitude", "vo_bad_prior",        "vo_few_corners",      "vo_few_stereo",
+    "vo_few_matches",   "vo_high_residual", "vo_degenerate",      "vo_implausible_step", "vo_lost_frames"};
+
+namespace {
+
+constexpr std::size_t kSlack = 64;
+
+template <typename T>
+std::size_t bytes_for(std::size_t n) noexcept {
+  return n * sizeof(T) + alignof(T) + kSlack;
+}
+
+bool is_rotation(const Mat3d& R) noexcept {
+  return R.allFinite() && (R.transpose() * R - Mat3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 && R.determinant() > 0.0;
+}
+
+vision::HarrisConfig harris_config(const VoConfig& c) noexcept {
+  vision::HarrisConfig h = c.harris;
+  h.max_width = c.max_width;
+  h.max_height = c.max_height;
+  h.max_corners = c.max_corners;
+  return h;
+}
+
+}  // namespace
+
+std::size_t StereoVo::arena_bytes(const VoConfig& c) noexcept {
+  if (c.max_corners <= 0) return 0;
+  const std::size_t n = static_cast<std::size_t>(c.max_corners);
+  return vision::HarrisDetector::arena_bytes(harris_config(c)) + bytes_for<vision::Corner>(n) +
+         bytes_for<vision::StereoPoint>(n) + 2 * bytes_for<match::Landmark3>(n) + 2 * bytes_for<Vec3d>(n) +
+         2 * bytes_for<double>(n) + 2 * bytes_for<std::int32_t>(n);
+}
+
+Status StereoVo::init(const VoConfig& config, Arena& arena) noexcept {
+  ready_ = false;
+  if (config.max_width <= 0 || config.max_height <= 0 || config.max_corners < 3 || config.max_corners > 4096 ||
+      config.min_matches < 3 || !(config.max_rms_residual_m > 0.0) || !(config.max_step_m > 0.0) ||
+      !(config.max_normalized_residual > 0.0) || config.icp_iterations < 0 || config.icp_iterations > 10 || !(config.lateral_sigma_px >= 0.0) || !(config.default_translation_sigma_m > 0.0) || !(config.max_depth_m > 0.0))
+    return Status(StatusCode::kInvalidArgument, "VO config out of range");
+  config_ = config;
+  QNAV_RETURN_IF_ERROR(harris_.init(harris_config(config), arena));
+  QNAV_RETURN_IF_ERROR(stereo_.init(config.stereo, config.camera));
+  match::GeometricMatchConfig mc = config.match;
+  mc.max_landmarks = static_cast<std::size_t>(config.max_corners);
+  if (mc.max_matches > mc.max_landmarks) mc.max_matches = mc.max_landmarks;
+  Result<match::GeometricMatcher> m = match::GeometricMatcher::create(mc);
+  if (!m) return m.status();
+  matcher_ = std::move(m.value());
+  const std::size_t n = static_cast<std::size_t>(config.max_corners);
+  Span<vision::Corner> cs = arena.allocate<vision::Corner>(n);
+  Span<vision::StereoPoint> ps = arena.allocate<vision::StereoPoint>(n);
+  Span<match::Landmark3> l0 = arena.allocate<match::Landmark3>(n);
+  Span<match::Landmark3> l1 = arena.allocate<match::Landmark3>(n);
+  mp_ = arena.allocate<Vec3d>(n);
+  mc_ = arena.allocate<Vec3d>(n);
+  w_ = arena.allocate<double>(n);
+  scratch_ = arena.allocate<double>(n);
+  nn_prev_ = arena.allocate<std::int32_t>(n);
+  nn_cur_ = arena.allocate<std::int32_t>(n);
+  if (nn_prev_.empty() || nn_cur_.empty() || cs.empty() || ps.empty() || l0.empty() || l1.empty() || mp_.empty() || mc_.empty() || w_.empty() || scratch_.empty())
+    return Status(StatusCode::kCapacityExceeded, "arena too small for VO buffers");
+  corners_ = BoundedVector<vision::Corner>(cs);
+  points_ = BoundedVector<vision::StereoPoint>(ps);
+  landmarks_[0] = BoundedVector<match::Landmark3>(l0);
+  landmarks_[1] = BoundedVector<match::Landmark3>(l1);
+  ready_ = true;
+  reset();
+  return Status::ok();
+}
+
+void StereoVo::reset(const Pose3& world_T_start) noexcept {
+  integrator_.reset(world_T_start);
+  have_prev_ = false;
+  cur_ = 0;
+  landmarks_[0].clear();
+  landmarks_[1].clear();
+  chain_R_ = Mat3d::Identity();
+  chain_t_ = Vec3d::Zero();
+  chain_sigma2_ = 0.0;
+  chain_has_t_ = true;
+}
+
+void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
+  out.clear();
+  const double f = config_.camera.focal_px;
+  for (const vision::StereoPoint& p : points_) {
+    const Vec3d pos = p.p_m.cast<double>();
+    if (!pos.allFinite() || !(pos.z() > 0.0) || pos.z() > config_.max_depth_m || !std::isfinite(p.sigma_z_m)) continue;
+    match::Landmark3* l = out.emplace_back();
+    if (l == nullptr) break;
+    const double sz = static_cast<double>(p.sigma_z_m);
+    const double sxy = pos.z() / f * config_.lateral_sigma_px;
+    l->position_m = pos;
+    l->sigma_m = std::sqrt(sz * sz + sxy * sxy);
+    const std::uint32_t ci = p.corner_index;
+    l->score = ci < corners_.size() ? static_cast<double>(corners_[ci].score) : 0.0;
+    l->u_px = p.x_px;
+    l->v_px = p.y_px;
+  }
+}
+
+void StereoVo::finish_lost(VoStep& step, const VoInput& in, std::uint32_t why) noexcept {
+  step.flags |= why | kVoLost;
+  counters_.increment(VoCounter::kLostFrames);
+  step.visual = false;
+  if (chain_has_t_ && is_rotation(chain_R_) && chain_t_.allFinite()) {
+    const Pose3 dr{chain_R_, chain_t_};
+    const Mat3d cov = Mat3d::Identity() * (chain_sigma2_ > 0.0 ? chain_sigma2_ : 0.0);
+    const Mat3d* att = (config_.mode == VmeMode::k3D && in.has_absolute_attitude && is_rotation(in.world_R_cam))
+                           ? &in.world_R_cam
+                           : nullptr;
+    if (integrator_.add_step(dr, cov, att).is_ok()) {
+      step.flags |= kVoDeadReckoned;
+      step.prev_T_cur = dr;
+    }
+  }
+}
+
+std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
+                                    const BoundedVector<match::Landmark3>& cur, const Pose3& est) noexcept {
+  const double ns = config_.match.n_sigma;
+  for (std::size_t j = 0; j < cur.size(); ++j) nn_cur_[j] = -1;
+  // Nearest cur for each prev (O(n_p n_c)), and nearest prev for each cur, both within the gate.
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    nn_prev_[i] = -1;
+    double best = 0.0;
+    for (std::size_t j = 0; j < cur.size(); ++j) {
+      const double d2 = (ref[i].position_m - est.apply(cur[j].position_m)).squaredNorm();
+      const double g2 = ns * ns * (ref[i].sigma_m * ref[i].sigma_m + cur[j].sigma_m * cur[j].sigma_m);
+      if (d2 >= g2 || (nn_prev_[i] >= 0 && d2 >= best)) continue;
+      nn_prev_[i] = static_cast<std::int32_t>(j);
+      best = d2;
+    }
+  }
+  for (std::size_t j = 0; j < cur.size(); ++j) {
+    double best = 0.0;
+    for (std::size_t i = 0; i < ref.size(); ++i) {
+      if (nn_prev_[i] != static_cast<std::int32_t>(j)) continue;
+      const double d2 = (ref[i].position_m - est.apply(cur[j].position_m)).squaredNorm();
+      if (nn_cur_[j] >= 0 && d2 >= best) continue;
+      nn_cur_[j] = static_cast<std::int32_t>(i);
+      best = d2;
+    }
+  }
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < cur.size() && n < mp_.size(); ++j) {
+    if (nn_cur_[j] < 0) continue;
+    const match::Landmark3& a = ref[static_cast<std::size_t>(nn_cur_[j])];
+    const match::Landmark3& b = cur[j];
+    mp_[n] = a.position_m;
+    mc_[n] = b.position_m;
+    const double s2 = a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m;
+    w_[n] = config_.weighted ? (s2 > 1e-12 ? 1e-4 / s2 : 1e8) : 1.0;
+    ++n;
+  }
+  return n;
+}
+
+Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "StereoVo::process before init");
+  VoStep step;
+  // --- input checks ----------------------------------------------------------------------------
+  const bool image_ok = !in.left.empty() && !in.right.empty() && in.left.width() == in.right.width() &&
+                        in.left.height() == in.right.height() && in.left.width() <= config_.max_width &&
+                        in.left.height() <= config_.max_height;
+  const bool attitude_ok = is_rotation(in.R_prev_cur) && (!in.has_absolute_attitude || is_rotation(in.world_R_cam));
+  const bool prior_ok = !in.has_translation_prior ||
+                        (in.t_prev_cur_prior_m.allFinite() && std::isfinite(in.t_prior_sigma_m) && in.t_prior_sigma_m >= 0.0);
+  if (!image_ok) counters_.increment(VoCounter::kBadImage);
+  if (!attitude_ok) counters_.increment(VoCounter::kBadAttitude);
+  if (!prior_ok) counters_.increment(VoCounter::kBadPrior);
+  // Chain the prior since the reference frame.
+  if (attitude_ok) {
+    if (in.has_translation_prior && prior_ok) {
+      chain_t_ = chain_R_ * in.t_prev_cur_prior_m + chain_t_;
+      chain_sigma2_ += in.t_prior_sigma_m * in.t_prior_sigma_m;
+    } else {
+      chain_has_t_ = false;
+    }
+    chain_R_ = chain_R_ * in.R_prev_cur;
+  }
+  if (!image_ok || !attitude_ok) {
+    step.flags |= kVoBadInput | kVoLost;
+    counters_.increment(VoCounter::kLostFrames);
+    if (!attitude_ok) {
+      // Without a rotation the chain is broken: the next good frame restarts from scratch.
+      have_prev_ = false;
+      chain_R_ = Mat3d::Identity();
+      chain_t_ = Vec3d::Zero();
+      chain_sigma2_ = 0.0;
+      chain_has_t_ = true;
+    }
+    // With a good attitude the reference is kept and the chained prior carries this frame's motion.
+    step.world_T_cur = integrator_.pose();
+    return step;
+  }
+  // --- front end ----------------------------------------------------------------------------------
+  const int next = 1 - cur_;
+  BoundedVector<match::Landmark3>& lms = landmarks_[next];
+  lms.clear();
+  points_.clear();
+  const Status hs = harris_.detect(in.left, corners_);
+  step.corners = hs.is_ok() ? corners_.size() : 0;
+  if (hs.is_ok()) {
+    const Status ss = stereo_.match(in.left, in.right, Span<const vision::Corner>(corners_.data(), corners_.size()), points_);
+    if (ss.is_ok() || ss.code() == StatusCode::kCapacityExceeded) build_landmarks(lms);
+  }
+  step.stereo_points = points_.size();
+  step.landmarks = lms.size();
+  const bool frame_ok = lms.size() >= config_.min_stereo_points;
+  if (!frame_ok) {
+    counters_.increment(step.corners < config_.min_stereo_points ? VoCounter::kFewCorners : VoCounter::kFewStereo);
+    const std::uint32_t why = step.corners < config_.min_stereo_points ? kVoFewCorners : kVoFewStereo;
+    if (have_prev_) {
+      // Keep the old reference; the chained prior carries the motion to the next frame.
+      step.flags |= why | kVoLost;
+      counters_.increment(VoCounter::kLostFrames);
+    } else {
+      step.flags |= why | kVoLost | kVoFirstFrame;
+      counters_.increment(VoCounter::kLostFrames);
+    }
+    step.world_T_cur = integrator_.pose();
+    return step;
+  }
+  if (!have_prev_) {
+    step.flags |= kVoFirstFrame;
+    if (in.has_absolute_attitude && config_.mode == VmeMode::k3D && integrator_.steps() == 0) {
+      Pose3 p = integrator_.pose();
+      p.R = in.world_R_cam;
+      integrator_.reset(p);
+    }
+    cur_ = next;
+    have_prev_ = true;
+    chain_R_ = Mat3d::Identity();
+    chain_t_ = Vec3d::Zero();
+    chain_sigma2_ = 0.0;
+    chain_has_t_ = true;
+    step.world_T_cur = integrator_.pose();
+    return step;
+  }
+  // --- matching -------------------------------------------------------------------------------------
+  match::MotionPrior prior;
+  prior.R_prev_cur = chain_R_;
+  if (chain_has_t_) {
+    prior.t_prev_cur_m = chain_t_;
+    prior.translation_sigma_m = std::sqrt(chain_sigma2_);
+  } else {
+    prior.t_prev_cur_m = Vec3d::Zero();
+    prior.translation_sigma_m = config_.default_translation_sigma_m;
+  }
+  const BoundedVector<match::Landmark3>& ref = landmarks_[cur_];
+  Result<Span<const match::Match>> mr =
+      matcher_.match(Span<const match::Landmark3>(ref.data(), ref.size()), Span<const match::Landmark3>(lms.data(), lms.size()), prior);
+  step.match_stats = matcher_.stats();
+  std::uint32_t why = 0;
+  motion::RigidEstimate est;
+  if (!mr) {
+    why = kVoDegenerate;
+    counters_.increment(VoCounter::kDegenerate);
+  } else {
+    const Span<const match::Match> matches = mr.value();
+    step.matches = matches.size();
+    if (matches.size() < config_.min_matches) {
+      why = kVoFewMatches;
+      counters_.increment(VoCounter::kFewMatches);
+    } else {
+      const std::size_t n = matches.size();
+      for (std::size_t k = 0; k < n; ++k) {
+        const match::Landmark3& a = ref[matches[k].prev];
+        const match::Landmark3& b = lms[matches[k].cur];
+        mp_[k] = a.position_m;
+        mc_[k] = b.position_m;
+        const double s2 = a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m;
+        w_[k] = config_.weighted ? (s2 > 1e-12 ? 1e-4 / s2 : 1e8) : 1.0;  // scaled to ~1 for 1 cm sigmas
+      }
+      const Span<const Vec3d> P(mp_.data(), n), C(mc_.data(), n);
+      const Span<const double> W(w_.data(), n);
+      std::size_t n_final = n;
+      Result<motion::RigidEstimate> r = config_.mode == VmeMode::k6D ? motion::estimate_rigid_6d(P, C, W)
+                                                                    : motion::estimate_translation_3d(P, C, chain_R_, W);
+      if (r && config_.irls) {
+        r = config_.mode == VmeMode::k6D
+                ? motion::refine_irls_6d(P, C, r.value(), config_.irls_config, Span<double>(scratch_.data(), n), W)
+                : motion::refine_irls_3d(P, C, r.value(), config_.irls_config, Span<double>(scratch_.data(), n), W);
+      }
+      for (int it = 0; r && it < config_.icp_iterations; ++it) {
+        const std::size_t m = icp_associate(ref, lms, r->pose);
+        if (m < config_.min_matches) break;
+        const Span<const Vec3d> P2(mp_.data(), m), C2(mc_.data(), m);
+        const Span<const double> W2(w_.data(), m);
+        Result<motion::RigidEstimate> r2 = config_.mode == VmeMode::k6D
+                                               ? motion::estimate_rigid_6d(P2, C2, W2)
+                                               : motion::estimate_translation_3d(P2, C2, chain_R_, W2);
+        if (r2 && config_.irls) {
+          r2 = config_.mode == VmeMode::k6D
+                   ? motion::refine_irls_6d(P2, C2, r2.value(), config_.irls_config, Span<double>(scratch_.data(), m), W2)
+                   : motion::refine_irls_3d(P2, C2, r2.value(), config_.irls_config, Span<double>(scratch_.data(), m), W2);
+        }
+        if (!r2) break;
+        r = r2;
+        step.matches = m;
+        n_final = m;
+      }
+      if (!r) {
+        why = kVoDegenerate;
+        counters_.increment(VoCounter::kDegenerate);
+      } else {
+        est = r.value();
+        step.inliers = est.inliers;
+        step.rms_residual_m = est.rms_residual_m;
+        // w = 1e-4 / s2 (weighted) -> predicted rms sigma from the weights' harmonic mean.
+        double sum_s2 = 0.0;
+        for (std::size_t k = 0; k < n_final; ++k) sum_s2 += config_.weighted ? 1e-4 / w_[k] : 0.0;
+        const double pred = config_.weighted && n_final > 0 ? std::sqrt(sum_s2 / static_cast<double>(n_final)) : 0.0;
+        step.normalized_residual = pred > 0.0 ? est.rms_residual_m / pred : 0.0;
+        if (!(est.rms_residual_m <= config_.max_rms_residual_m) ||
+            !(step.normalized_residual <= config_.max_normalized_residual)) {
+          why = kVoHighResidual;
+          counters_.increment(VoCounter::kHighResidual);
+        } else if (!(est.pose.t.norm() <= config_.max_step_m) ||
+                   !(rotation_angle_rad(est.pose.R) <= config_.max_step_rotation_rad) || !est.pose.is_finite()) {
+          why = kVoImplausible;
+          counters_.increment(VoCounter::kImplausibleStep);
+        }
+      }
+    }
+  }
+  if (why != 0) {
+    finish_lost(step, in, why);
+  } else {
+    const Mat3d cov_t = est.covariance.bottomRightCorner<3, 3>();
+    const Mat3d* att = (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+    if (integrator_.add_step(est.pose, cov_t, att).is_ok()) {
+      step.visual = true;
+      step.prev_T_cur = est.pose;
+      step.covariance = est.covariance;
+    } else {
+      finish_lost(step, in, kVoDegenerate);
+    }
+  }
+  // This frame becomes the reference (it has enough landmarks), so the next good frame recovers.
+  cur_ = next;
+  chain_R_ = Mat3d::Identity();
+  chain_t_ = Vec3d::Zero();
+  chain_sigma2_ = 0.0;
+  chain_has_t_ = true;
+  step.world_T_cur = integrator_.pose();
+  return step;
+}
+
+}  // namespace qnav::vo

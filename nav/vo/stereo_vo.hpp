@@ -1,0 +1,186 @@
+// StereoVo: stereo visual odometry with external attitude (Souvannavong et al., Mars paper), one call per
+// rectified stereo pair: (left, right, attitude R, odometry prior) -> step + pose + quality flags.
+//
+// Per frame: Harris corners on the left image (neighbourhood-normalised scores, best max_corners, in
+// decreasing score) -> stereo correlation at the corners -> 3D landmarks with depth uncertainty ->
+// geometric matching against the previous frame's landmarks with the prior (fb / fc / fast) ->
+// 6D-VME (Arun) or 3D-VME (eq. 9, R from the sensor), weighted by 1/sigma^2, optional IRLS ->
+// quality checks -> pose integration (3D mode: orientation from the absolute attitude when given).
+//
+// Honest failure: a step that fails a check (too few corners / stereo points / matches, residual too
+// high, implausible step, degenerate geometry, bad input) is flagged kLost and NOT integrated as a
+// visual step; if a finite odometry prior exists, the pose is propagated with it and flagged
+// kDeadReckoned. The frame's landmarks (when valid) become the reference, so the next good frame
+// recovers. A frame with bad input (empty image, NaN attitude) keeps the previous reference and the
+// priors are chained across it. The pose is never NaN.
+//
+// Capacities (declared in VoConfig, allocated from the Arena in init(); arena_bytes() tells how much):
+// image size, corners, stereo points (= corners), landmarks per frame (2 sets), matcher buffers.
+// process() makes no allocation. Worst case per frame: Harris O(W H) + stereo O(corners * disparity
+// range * patch) + matching (see nav/match/geometric_match.hpp) + O(matches * irls iterations).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/counters.hpp"
+#include "nav/core/fixed_vector.hpp"
+#include "nav/core/geometry.hpp"
+#include "nav/core/image.hpp"
+#include "nav/core/status.hpp"
+#include "nav/match/geometric_match.hpp"
+#include "nav/motion/pose_integrator.hpp"
+#include "nav/motion/rigid3d.hpp"
+#include "nav/vision/harris.hpp"
+#include "nav/vision/stereo.hpp"
+
+namespace qnav::vo {
+
+enum class VmeMode : std::uint8_t { k6D, k3D };
+
+struct VoConfig {
+  int max_width = 320;
+  int max_height = 256;
+  int max_corners = 300;
+  vision::StereoCamera camera;  // rectified pair: focal_px, cu, cv, baseline_m
+  vision::HarrisConfig harris;  // max_width/max_height/max_corners are overwritten from the above
+  vision::StereoConfig stereo;
+  match::GeometricMatchConfig match;  // max_landmarks is overwritten with max_corners
+  VmeMode mode = VmeMode::k3D;
+  bool weighted = true;  // weights 1 / (sigma_p^2 + sigma_c^2); false = eq. 8 / 9 as printed
+  bool irls = true;
+  motion::IrlsConfig irls_config;
+  // ICP-like refinement (paper sec. 3.3): re-associate every landmark with its mutual nearest
+  // neighbour under the estimated motion (gate n_sigma * sqrt(sigma_p^2 + sigma_c^2)) and re-estimate;
+  // removes the pull of the odometry prior on the geometric matches. 0 = off.
+  int icp_iterations = 2;
+  double lateral_sigma_px = 0.5;  // image-plane uncertainty added to the stereo depth sigma
+  double max_depth_m = 1e9;       // stereo points farther than this are not used
+  std::size_t min_stereo_points = 12;
+  std::size_t min_matches = 8;
+  double max_rms_residual_m = 0.03;
+  // rms residual / rms predicted sigma (sqrt(mean(sigma_p^2 + sigma_c^2))) of the final pairs; a wrong
+  // motion still finds near neighbours in a dense cloud, but their residuals fill the whole gate.
+  double max_normalized_residual = 1.2;
+  double max_step_m = 5.0;
+  double max_step_rotation_rad = 0.5;
+  double default_translation_sigma_m = 0.5;  // gate when no odometry prior is given
+};
+
+// Input of one frame. Rotations and translations are in the left camera frame (x right, y down, z fwd).
+struct VoInput {
+  ConstImageViewU8 left;
+  ConstImageViewU8 right;
+  std::uint64_t stamp_ns = 0;
+  Mat3d R_prev_cur = Mat3d::Identity();  // relative attitude since the previous call (sensor)
+  bool has_translation_prior = false;
+  Vec3d t_prev_cur_prior_m = Vec3d::Zero();  // odometry, previous camera frame
+  double t_prior_sigma_m = 0.05;
+  bool has_absolute_attitude = false;  // world_R_cam from the sensor (3D-VME integration)
+  Mat3d world_R_cam = Mat3d::Identity();
+};
+
+enum VoFlag : std::uint32_t {
+  kVoFirstFrame = 1u << 0,
+  kVoLost = 1u << 1,
+  kVoDeadReckoned = 1u << 2,
+  kVoBadInput = 1u << 3,
+  kVoFewCorners = 1u << 4,
+  kVoFewStereo = 1u << 5,
+  kVoFewMatches = 1u << 6,
+  kVoHighResidual = 1u << 7,
+  kVoDegenerate = 1u << 8,
+  kVoImplausible = 1u << 9,
+};
+
+struct VoStep {
+  std::uint32_t flags = 0;
+  bool visual = false;                   // true when prev_T_cur is a visual estimate
+  Pose3 prev_T_cur;                      // the step that was integrated (identity if none)
+  Mat6d covariance = Mat6d::Zero();      // [rotvec, t] of the visual step
+  Pose3 world_T_cur;                     // integrated pose of the left camera
+  std::size_t corners = 0;
+  std::size_t stereo_points = 0;
+  std::size_t landmarks = 0;
+  std::size_t matches = 0;
+  std::size_t inliers = 0;
+  double rms_residual_m = 0.0;
+  double normalized_residual = 0.0;
+  match::MatchStats match_stats;
+};
+
+enum class VoCounter : std::uint8_t {
+  kBadImage,
+  kBadAttitude,
+  kBadPrior,
+  kFewCorners,
+  kFewStereo,
+  kFewMatches,
+  kHighResidual,
+  kDegenerate,
+  kImplausibleStep,
+  kLostFrames,
+  kCount
+};
+
+class StereoVo {
+ public:
+  StereoVo() noexcept = default;
+  static std::size_t arena_bytes(const VoConfig& config) noexcept;
+  // Validates the configuration and carves every buffer from the arena (plus the matcher's own
+  // one-time allocation). Errors: kInvalidArgument, kCapacityExceeded.
+  Status init(const VoConfig& config, Arena& arena) noexcept;
+  void reset(const Pose3& world_T_start = Pose3{}) noexcept;
+  // Processes one frame. Returns an error only before init(); every input problem is a flagged step.
+  Result<VoStep> process(const VoInput& in) noexcept;
+
+  const VoConfig& config() const noexcept { return config_; }
+  const Pose3& pose() const noexcept { return integrator_.pose(); }
+  const motion::PoseIntegrator& integrator() const noexcept { return integrator_; }
+  const CounterSet<VoCounter>& counters() const noexcept { return counters_; }
+  const vision::HarrisDetector& harris() const noexcept { return harris_; }
+  const vision::StereoMatcher& stereo() const noexcept { return stereo_; }
+  const match::GeometricMatcher& matcher() const noexcept { return matcher_; }
+  std::size_t matcher_bytes() const noexcept { return matcher_.working_set_bytes(); }
+  // Landmarks of the last processed frame (in decreasing Harris score).
+  Span<const match::Landmark3> current_landmarks() const noexcept {
+    return Span<const match::Landmark3>(landmarks_[cur_].data(), landmarks_[cur_].size());
+  }
+
+  static const char* const kCounterNames[static_cast<std::size_t>(VoCounter::kCount)];
+
+ private:
+  void build_landmarks(BoundedVector<match::Landmark3>& out) noexcept;
+  void finish_lost(VoStep& step, const VoInput& in, std::uint32_t why) noexcept;
+  // Re-associates ref and cur under est (mutual nearest within the gate); returns the pair count written
+  // to mp_/mc_/w_.
+  std::size_t icp_associate(const BoundedVector<match::Landmark3>& ref, const BoundedVector<match::Landmark3>& cur,
+                            const Pose3& est) noexcept;
+
+  VoConfig config_;
+  bool ready_ = false;
+  vision::HarrisDetector harris_;
+  vision::StereoMatcher stereo_;
+  match::GeometricMatcher matcher_;
+  motion::PoseIntegrator integrator_;
+  BoundedVector<vision::Corner> corners_;
+  BoundedVector<vision::StereoPoint> points_;
+  BoundedVector<match::Landmark3> landmarks_[2];
+  Span<Vec3d> mp_;
+  Span<Vec3d> mc_;
+  Span<double> w_;
+  Span<double> scratch_;
+  Span<std::int32_t> nn_prev_;  // nearest cur of each prev landmark (ICP)
+  Span<std::int32_t> nn_cur_;   // nearest prev of each cur landmark (ICP)
+  int cur_ = 0;
+  bool have_prev_ = false;
+  // Prior chained since the reference frame (across bad-input frames).
+  Mat3d chain_R_ = Mat3d::Identity();
+  Vec3d chain_t_ = Vec3d::Zero();
+  double chain_sigma2_ = 0.0;
+  bool chain_has_t_ = false;
+  CounterSet<VoCounter> counters_{kCounterNames};
+};
+
+}  // namespace qnav::vo
