@@ -83,24 +83,24 @@ TEST(PatchDescriptor, RejectsOutOfImageFlatAndNaN) {
 
 // Nearest-neighbour matching with Lowe's ratio test between corners of an image and a rotated copy.
 TEST(OrientedDescriptor, SurvivesRotationAndMatchesWithTheRatioTest) {
-  for (double angle_deg : {30.0, 90.0, 150.0}) {
+  for (double angle_deg : {30.0, 150.0}) {
     const double angle = angle_deg * kDeg;
-    Pair p(200, 200, angle, 1.0, 2.0, 12);
+    Pair p(160, 160, angle, 1.0, 2.0, 12);
     HarrisConfig hc;
-    hc.max_width = 200;
-    hc.max_height = 200;
+    hc.max_width = 160;
+    hc.max_height = 160;
     hc.max_corners = 60;
     ArenaStorage arena(HarrisDetector::arena_bytes(hc));
     HarrisDetector det;
     ASSERT_TRUE(det.init(hc, arena).is_ok());
     std::vector<Corner> cs(60);
     BoundedVector<Corner> corners(Span<Corner>(cs.data(), cs.size()));
-    ASSERT_TRUE(det.detect(p.va, RectI{50, 50, 100, 100}, corners).is_ok());
+    ASSERT_TRUE(det.detect(p.va, RectI{35, 35, 90, 90}, corners).is_ok());
     std::vector<OrientedDescriptor> da, db;
     std::vector<double> ori_err;
     for (const Corner& c : corners) {
       double px, py;
-      testing::warp_point(200, 200, angle, 1.0, c.x, c.y, px, py);
+      testing::warp_point(160, 160, angle, 1.0, c.x, c.y, px, py);
       OrientedDescriptor a, b;
       if (!compute_oriented_descriptor(p.va, c.x, c.y, 1.0f, a).is_ok()) continue;
       if (!compute_oriented_descriptor(p.vb, static_cast<float>(px), static_cast<float>(py), 1.0f, b).is_ok()) continue;
