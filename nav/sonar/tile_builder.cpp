@@ -16,7 +16,7 @@ std::size_t TileBuilder::arena_bytes(const TileBuilderConfig& c) noexcept {
   const std::size_t n = static_cast<std::size_t>(c.scanlines_per_tile);
   const std::size_t b = static_cast<std::size_t>(c.max_bins_per_side);
   const std::size_t px = static_cast<std::size_t>(c.tile_width_px) * static_cast<std::size_t>(c.tile_height_px);
-  return padded(n * sizeof(Slot)) + padded(n * 2 * b * sizeof(float)) + padded(n * 2 * b) + 3 * padded(px * sizeof(float)) +
+  return padded(n * sizeof(Slot)) + padded(n * 2 * b * sizeof(float)) + padded(n * 2 * b) + padded(px * sizeof(Acc)) + padded(px * sizeof(float)) +
          2 * padded(px);
 }
 
@@ -33,8 +33,8 @@ Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
   if (c.max_bins_per_side < 1 || c.max_bins_per_side > 65536) return Status(StatusCode::kInvalidArgument, "max_bins_per_side outside [1, 65536]");
   if (c.max_substeps < 1 || c.max_substeps > 1024) return Status(StatusCode::kInvalidArgument, "max_substeps outside [1, 1024]");
   if (!(c.max_gap_m > 0.0)) return Status(StatusCode::kInvalidArgument, "max_gap_m must be > 0");
-  if (c.hole_fill_radius_px < 0 || c.hole_fill_radius_px > 8 || c.hole_fill_min_neighbours < 1)
-    return Status(StatusCode::kInvalidArgument, "hole fill radius outside [0, 8] or min neighbours < 1");
+  if (c.hole_fill_radius_px < 0 || c.hole_fill_radius_px > 8 || c.hole_fill_min_neighbours < 1 || c.hole_fill_min_neighbours > 4)
+    return Status(StatusCode::kInvalidArgument, "hole fill radius outside [0, 8] or min neighbours outside [1, 4]");
   if (!(std::isfinite(c.display_max) && c.display_max > 0.0f)) return Status(StatusCode::kInvalidArgument, "display_max must be > 0");
   const std::size_t n = static_cast<std::size_t>(c.scanlines_per_tile);
   const std::size_t b = static_cast<std::size_t>(c.max_bins_per_side);
@@ -42,16 +42,17 @@ Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
   slots_ = arena.allocate<Slot>(n);
   values_ = arena.allocate<float>(n * 2 * b);
   valid_ = arena.allocate<std::uint8_t>(n * 2 * b);
-  sum_ = arena.allocate<float>(px);
-  weight_ = arena.allocate<float>(px);
+  acc_ = arena.allocate<Acc>(px);
   intensity_ = arena.allocate<float>(px);
   coverage_ = arena.allocate<std::uint8_t>(px);
   u8_ = arena.allocate<std::uint8_t>(px);
-  if (slots_.empty() || values_.empty() || valid_.empty() || sum_.empty() || weight_.empty() || intensity_.empty() ||
+  if (slots_.empty() || values_.empty() || valid_.empty() || acc_.empty() || intensity_.empty() ||
       coverage_.empty() || u8_.empty())
     return Status(StatusCode::kCapacityExceeded, "arena too small for TileBuilder");
   cfg_ = c;
   head_ = count_ = since_tile_ = 0;
+  prev_x0_ = prev_y0_ = 0;
+  prev_x1_ = prev_y1_ = -1;
   tiles_built_ = 0;
   tile_ = SonarTile{};
   ready_ = true;
@@ -123,25 +124,39 @@ Result<bool> TileBuilder::flush(int min_scanlines) noexcept {
   return true;
 }
 
-void TileBuilder::splat(double col, double row, float v) noexcept {
-  // Bilinear splat of one sample at continuous pixel coordinates (pixel centres at +0.5).
-  const double x = col - 0.5, y = row - 0.5;
-  const double fx0 = std::floor(x), fy0 = std::floor(y);
+inline void TileBuilder::splat(float col, float row, float v) noexcept {
+  // Bilinear splat of one sample at continuous pixel coordinates (pixel centres at +0.5). The
+  // caller keeps the touched box (bb_*) up to date per line of samples.
+  const float x = col - 0.5f, y = row - 0.5f;
   const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
-  if (!(fx0 >= -1.0 && fy0 >= -1.0 && fx0 < W && fy0 < H)) {
+  if (!(x >= -1.0f && y >= -1.0f && x < static_cast<float>(W) && y < static_cast<float>(H))) {
     ++clipped_;
     return;
   }
-  const int x0 = static_cast<int>(fx0), y0 = static_cast<int>(fy0);
-  const float ax = static_cast<float>(x - fx0), ay = static_cast<float>(y - fy0);
-  const float w[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
+  const int x0 = static_cast<int>(x + 1.0f) - 1, y0 = static_cast<int>(y + 1.0f) - 1;  // floor for x >= -1
+  const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+  const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+  if (x0 >= 0 && y0 >= 0 && x0 + 1 < W && y0 + 1 < H) {
+    Acc* a = acc_.data() + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+    Acc* c = a + W;
+    a[0].sum += w00 * v;
+    a[0].weight += w00;
+    a[1].sum += w10 * v;
+    a[1].weight += w10;
+    c[0].sum += w01 * v;
+    c[0].weight += w01;
+    c[1].sum += w11 * v;
+    c[1].weight += w11;
+    return;
+  }
   const int xs[4] = {x0, x0 + 1, x0, x0 + 1};
   const int ys[4] = {y0, y0, y0 + 1, y0 + 1};
+  const float w[4] = {w00, w10, w01, w11};
   for (int k = 0; k < 4; ++k) {
     if (xs[k] < 0 || ys[k] < 0 || xs[k] >= W || ys[k] >= H) continue;
-    const std::size_t idx = static_cast<std::size_t>(ys[k]) * static_cast<std::size_t>(W) + static_cast<std::size_t>(xs[k]);
-    sum_[idx] += w[k] * v;
-    weight_[idx] += w[k];
+    Acc& a = acc_[static_cast<std::size_t>(ys[k]) * static_cast<std::size_t>(W) + static_cast<std::size_t>(xs[k])];
+    a.sum += w[k] * v;
+    a.weight += w[k];
   }
 }
 
@@ -178,13 +193,26 @@ Status TileBuilder::build(int first, int count) noexcept {
   tile_.origin_north_m = std::round((cn + 0.5 * H * res) / res) * res;
   tile_.origin_east_m = std::round((ce - 0.5 * W * res) / res) * res;
   const std::size_t px = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
-  for (std::size_t k = 0; k < px; ++k) {
-    sum_[k] = 0.0f;
-    weight_[k] = 0.0f;
+  // Every buffer is zero outside the previous tile's touched box (init zeroes them all), so only
+  // that box needs clearing.
+  for (int y = prev_y0_; y <= prev_y1_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+    for (int x = prev_x0_; x <= prev_x1_; ++x) {
+      const std::size_t k = row + static_cast<std::size_t>(x);
+      acc_[k] = Acc{0.0f, 0.0f};
+      intensity_[k] = 0.0f;
+      coverage_[k] = u8_[k] = 0;
+    }
   }
+  bb_x0_ = W;
+  bb_y0_ = H;
+  bb_x1_ = -1;
+  bb_y1_ = -1;
   clipped_ = 0;
   const double inv_res = 1.0 / res;
-  const double half_px = 0.5 * res;
+  // Sub-sample spacing of at most one pixel: the bilinear splat spreads each sample over 2 x 2
+  // pixels, so one-pixel spacing leaves no pixel between samples without weight.
+  const double step_m = res;
   for (int i = first; i < first + count; ++i) {
     const Slot& a = slots_[ring(i)];
     const bool has_next = i + 1 < first + count;
@@ -196,17 +224,17 @@ Status TileBuilder::build(int first, int count) noexcept {
         counters_.increment(TileCounter::kNavJump);
         bslot = nullptr;
       } else {
-        // Steps such that the far-range bins advance at most half a pixel per sub-step.
+        // Steps such that the far-range bins advance at most one pixel per sub-step.
         const double reach = a.bins * static_cast<double>(a.bin_m);
         const double dh = std::fabs(wrap_angle_rad(bslot->pose.heading_rad - a.pose.heading_rad));
         const double move = d + dh * reach;
-        steps = static_cast<int>(std::ceil(move / half_px));
+        steps = static_cast<int>(std::ceil(move / step_m - 1e-3));
         if (steps < 1) steps = 1;
         if (steps > cfg_.max_substeps) steps = cfg_.max_substeps;
       }
     }
     const int bins = a.bins;
-    const int across = static_cast<int>(std::ceil(static_cast<double>(a.bin_m) / half_px));
+    const int across = static_cast<int>(std::ceil(static_cast<double>(a.bin_m) / step_m - 1e-3));  // float bin sizes
     for (int j = 0; j < steps; ++j) {
       const float t = static_cast<float>(j) / static_cast<float>(steps);
       Pose2 p = a.pose;
@@ -227,6 +255,48 @@ Status TileBuilder::build(int first, int count) noexcept {
         // Per metre across track: d(col) = sign*sb.east/res, d(row) = -sign*sb.north/res.
         const double dc = side_sign(side) * sb.y() * inv_res;
         const double dr = -side_sign(side) * sb.x() * inv_res;
+        bool inside;
+        {
+          // Touched box of this line of samples: its two ends (+1 pixel for the bilinear splat).
+          const double reach = bins * static_cast<double>(a.bin_m);
+          const double xa = c0 - 0.5, ya = r0 - 0.5, xb = c0 + reach * dc - 0.5, yb = r0 + reach * dr - 0.5;
+          const int lx = static_cast<int>(std::floor(xa < xb ? xa : xb)), hx = static_cast<int>(std::floor(xa < xb ? xb : xa)) + 1;
+          const int ly = static_cast<int>(std::floor(ya < yb ? ya : yb)), hy = static_cast<int>(std::floor(ya < yb ? yb : ya)) + 1;
+          bb_x0_ = lx < bb_x0_ ? lx : bb_x0_;
+          bb_y0_ = ly < bb_y0_ ? ly : bb_y0_;
+          bb_x1_ = hx > bb_x1_ ? hx : bb_x1_;
+          bb_y1_ = hy > bb_y1_ ? hy : bb_y1_;
+          inside = lx >= 0 && ly >= 0 && hx < W && hy < H;
+        }
+        const float c0f = static_cast<float>(c0), r0f = static_cast<float>(r0);
+        const float dcb = static_cast<float>(dc * static_cast<double>(a.bin_m));  // per bin
+        const float drb = static_cast<float>(dr * static_cast<double>(a.bin_m));
+        if (inside && across <= 1 && vb != nullptr) {
+          // Fast path (the common case): the whole line lies inside the raster, one splat per bin.
+          const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
+          Acc* base = acc_.data();
+          for (int b = 0; b < bins; ++b) {
+            const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
+            if (m == 0) continue;
+            const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
+            if (v < 0.0f) continue;
+            const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+            const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
+            const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+            Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+            Acc* q1 = q0 + W;
+            const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+            q0[0].sum += w00 * v;
+            q0[0].weight += w00;
+            q0[1].sum += w10 * v;
+            q0[1].weight += w10;
+            q1[0].sum += w01 * v;
+            q1[0].weight += w01;
+            q1[1].sum += w11 * v;
+            q1[1].weight += w11;
+          }
+          continue;
+        }
         for (int b = 0; b < bins; ++b) {
           float v;
           if (vb != nullptr && ka[b] && kb[b]) {
@@ -239,39 +309,56 @@ Status TileBuilder::build(int first, int count) noexcept {
             continue;
           }
           if (across <= 1) {
-            const double g = (b + 0.5) * static_cast<double>(a.bin_m);
-            splat(c0 + g * dc, r0 + g * dr, v);
+            const float g = static_cast<float>(b) + 0.5f;  // in bins
+            splat(c0f + g * dcb, r0f + g * drb, v);
           } else {
-            // Bin wider than half a pixel: spread it across in sub-steps (constant value within the bin).
+            // Bin wider than a pixel: spread it across in sub-steps (constant value within the bin).
             for (int q = 0; q < across; ++q) {
-              const double g = (b + (q + 0.5) / across) * static_cast<double>(a.bin_m);
-              splat(c0 + g * dc, r0 + g * dr, v);
+              const float g = static_cast<float>(b) + (static_cast<float>(q) + 0.5f) / static_cast<float>(across);
+              splat(c0f + g * dcb, r0f + g * drb, v);
             }
           }
         }
       }
     }
   }
+  // Touched box, clipped to the raster (every later pass works inside it only).
+  if (bb_x0_ < 0) bb_x0_ = 0;
+  if (bb_y0_ < 0) bb_y0_ = 0;
+  if (bb_x1_ > W - 1) bb_x1_ = W - 1;
+  if (bb_y1_ > H - 1) bb_y1_ = H - 1;
   // Normalise and mark coverage.
   const float eps = 1e-3f;
-  for (std::size_t k = 0; k < px; ++k) {
-    if (weight_[k] > eps) {
-      intensity_[k] = sum_[k] / weight_[k];
-      coverage_[k] = 1;
-    } else {
-      intensity_[k] = 0.0f;
-      coverage_[k] = 0;
+  std::size_t covered = 0;
+  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+      const std::size_t k = row + static_cast<std::size_t>(x);
+      if (acc_[k].weight > eps) {
+        intensity_[k] = acc_[k].sum / acc_[k].weight;
+        coverage_[k] = 1;
+      } else {
+        intensity_[k] = 0.0f;
+        coverage_[k] = 0;
+      }
     }
   }
   if (cfg_.hole_fill_radius_px > 0) fill_holes();
-  std::size_t covered = 0;
   const float scale = 255.0f / cfg_.display_max;
-  for (std::size_t k = 0; k < px; ++k) {
-    if (coverage_[k] != 0) ++covered;
-    float u = intensity_[k] * scale + 0.5f;
-    u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
-    u8_[k] = static_cast<std::uint8_t>(u);
+  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+      const std::size_t k = row + static_cast<std::size_t>(x);
+      if (coverage_[k] != 0) ++covered;
+      float u = intensity_[k] * scale + 0.5f;
+      u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
+      u8_[k] = static_cast<std::uint8_t>(u);
+    }
   }
+  prev_x0_ = bb_x0_;
+  prev_y0_ = bb_y0_;
+  prev_x1_ = bb_x1_;
+  prev_y1_ = bb_y1_;
   counters_.increment(TileCounter::kClippedSplat, clipped_);
   const Slot& f = slots_[ring(first)];
   const Slot& l = slots_[ring(first + count - 1)];
@@ -300,35 +387,38 @@ Status TileBuilder::build(int first, int count) noexcept {
 }
 
 void TileBuilder::fill_holes() noexcept {
-  // Reads measured pixels only (coverage 1), so filling does not cascade: holes wider than
-  // 2 * radius stay empty. Sides = the four quadrants around the pixel; a hole pixel needs
-  // measured neighbours in at least hole_fill_min_neighbours quadrants (so edges are not grown).
-  const int W = cfg_.tile_width_px, H = cfg_.tile_height_px, R = cfg_.hole_fill_radius_px;
-  for (int y = 0; y < H; ++y) {
-    for (int x = 0; x < W; ++x) {
-      const std::size_t idx = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
-      if (coverage_[idx] != 0) continue;
+  // An empty pixel is filled when measured pixels (coverage 1) lie within R on both sides along a
+  // row or along a column: the value is the inverse-distance mean of the nearest measured pixel in
+  // each of the four directions found. Reads measured pixels only, so filling never cascades:
+  // holes wider than 2R - 1 pixels and the swath edges stay empty. Cost <= 4R reads per empty pixel
+  // inside the touched box.
+  const int W = cfg_.tile_width_px, R = cfg_.hole_fill_radius_px;
+  const std::ptrdiff_t steps[4] = {-1, 1, -static_cast<std::ptrdiff_t>(W), static_cast<std::ptrdiff_t>(W)};
+  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+      const std::ptrdiff_t idx = static_cast<std::ptrdiff_t>(y) * W + x;
+      if (coverage_[static_cast<std::size_t>(idx)] != 0) continue;
+      const int room[4] = {x - bb_x0_, bb_x1_ - x, y - bb_y0_, bb_y1_ - y};
       float acc = 0.0f, wsum = 0.0f;
-      unsigned quadrants = 0;
-      for (int dy = -R; dy <= R; ++dy) {
-        const int yy = y + dy;
-        if (yy < 0 || yy >= H) continue;
-        for (int dx = -R; dx <= R; ++dx) {
-          const int xx = x + dx;
-          if (xx < 0 || xx >= W || (dx == 0 && dy == 0)) continue;
-          const std::size_t j = static_cast<std::size_t>(yy) * static_cast<std::size_t>(W) + static_cast<std::size_t>(xx);
-          if (coverage_[j] != 1) continue;
-          const float w = 1.0f / static_cast<float>(dx * dx + dy * dy);
-          acc += w * intensity_[j];
-          wsum += w;
-          quadrants |= (dx < 0 ? 1u : 0u) | (dx > 0 ? 2u : 0u) | (dy < 0 ? 4u : 0u) | (dy > 0 ? 8u : 0u);
+      bool found[4] = {false, false, false, false};
+      int dirs = 0;
+      for (int d = 0; d < 4; ++d) {
+        const int lim = room[d] < R ? room[d] : R;
+        for (int k = 1; k <= lim; ++k) {
+          const std::size_t j = static_cast<std::size_t>(idx + k * steps[d]);
+          if (coverage_[j] == 1) {
+            const float w = 1.0f / static_cast<float>(k);
+            acc += w * intensity_[j];
+            wsum += w;
+            found[d] = true;
+            ++dirs;
+            break;
+          }
         }
       }
-      const int sides = static_cast<int>(((quadrants & 1u) && (quadrants & 2u)) ? 1 : 0) +
-                        static_cast<int>(((quadrants & 4u) && (quadrants & 8u)) ? 1 : 0);
-      if (wsum > 0.0f && sides >= 1 && __builtin_popcount(quadrants) >= cfg_.hole_fill_min_neighbours) {
-        intensity_[idx] = acc / wsum;
-        coverage_[idx] = 2;
+      if (((found[0] && found[1]) || (found[2] && found[3])) && dirs >= cfg_.hole_fill_min_neighbours) {
+        intensity_[static_cast<std::size_t>(idx)] = acc / wsum;
+        coverage_[static_cast<std::size_t>(idx)] = 2;
       }
     }
   }

@@ -7,15 +7,17 @@
 //  - the tile is centred on the bounding box of the buffered swath (valid bins only) and clipped to
 //    the configured raster size (clipped splats are counted);
 //  - between consecutive scanlines, poses and bin values are interpolated in sub-steps of at most
-//    half a pixel (max_substeps cap; no interpolation across a pose jump > max_gap_m), and each
+//    one pixel (max_substeps cap; no interpolation across a pose jump > max_gap_m), and each
 //    (sub-)sample is splatted bilinearly: overlapping writes accumulate as a weighted average;
-//  - pixels with no data but measured pixels within hole_fill_radius_px on at least
-//    hole_fill_min_neighbours sides are filled by inverse-distance interpolation (coverage 2).
+//  - an empty pixel with measured pixels within hole_fill_radius_px on both sides along its row or
+//    its column (and in at least hole_fill_min_neighbours of the 4 directions) is filled by
+//    inverse-distance interpolation of those nearest measured pixels (coverage 2). No cascading.
 // Memory: every buffer is carved from the Arena in init() (see arena_bytes()); push() copies the
 // scanline into a fixed ring (no allocation); building a tile touches the raster only.
-// Cost: push O(bins); tile build O(scanlines * bins * substeps + pixels * (2r+1)^2) -- for 500
-// scanlines x 2 x 512 bins x 3 substeps and a 1024^2 raster, about 10-20 ms on the host
-// (bench_sonar). Poses with NaN/inf or scanlines of the wrong size are rejected and counted.
+// Cost: push O(bins); tile build O(scanlines * bins * substeps + touched pixels * 4r): see
+// BM_TileBuild500 in bench_sonar (docs/sonar.md). Only the box of pixels touched by this tile and
+// the previous one is cleared and normalised. NaN/inf poses or wrong-size scanlines are rejected
+// and counted.
 #pragma once
 
 #include <cstddef>
@@ -40,7 +42,7 @@ struct TileBuilderConfig {
   int max_substeps = 16;            // cap on interpolation sub-steps between two scanlines
   double max_gap_m = 5.0;           // no interpolation between poses farther apart (nav jump, gap)
   int hole_fill_radius_px = 2;      // 0 = no hole filling
-  int hole_fill_min_neighbours = 2; // measured pixels needed around a hole pixel
+  int hole_fill_min_neighbours = 2; // of the 4 axis directions, how many must reach measured data (2..4)
   float display_max = 2.5f;         // intensity mapped to 255 in the u8 raster
 };
 
@@ -122,7 +124,7 @@ class TileBuilder {
   std::uint8_t* valid(int i, int side) noexcept {
     return valid_.data() + (ring(i) * 2 + static_cast<std::size_t>(side)) * static_cast<std::size_t>(cfg_.max_bins_per_side);
   }
-  void splat(double col, double row, float v) noexcept;
+  inline void splat(float col, float row, float v) noexcept;
   void fill_holes() noexcept;
 
   TileBuilderConfig cfg_{};
@@ -130,13 +132,20 @@ class TileBuilder {
   Span<Slot> slots_;
   Span<float> values_;          // ring of N x 2 x max_bins
   Span<std::uint8_t> valid_;    // same layout
-  Span<float> sum_, weight_, intensity_;
+  struct Acc {
+    float sum;
+    float weight;
+  };
+  Span<Acc> acc_;               // weighted sum and weight, interleaved (one cache line per splat row)
+  Span<float> intensity_;
   Span<std::uint8_t> coverage_, u8_;
   int head_ = 0;                // ring index of the oldest buffered scanline
   int count_ = 0;               // buffered scanlines
   int since_tile_ = 0;          // scanlines pushed since the last tile
   std::uint32_t tiles_built_ = 0;
   std::uint32_t clipped_ = 0;
+  int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
+  int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};
   CounterSet<TileCounter> counters_{kTileCounterNames};
 };
