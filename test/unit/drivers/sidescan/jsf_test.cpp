@@ -192,6 +192,29 @@ TEST(JsfPingAssembler, PairsSidesCountsOrphansAndOtherMessages) {
   EXPECT_NEAR(p.altitude_m, 7.5f, 1e-3f);
 }
 
+TEST(JsfFramer, RandomlyCorruptedStreamsNeverCrashOrStall) {
+  const std::vector<std::uint8_t> good = stream(3, 64);
+  std::uint64_t rng = 777;
+  auto next = [&rng]() {
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return rng;
+  };
+  int pings = 0;
+  for (int it = 0; it < 400; ++it) {
+    std::vector<std::uint8_t> s = good;
+    const int edits = 1 + static_cast<int>(next() % 8);
+    for (int e = 0; e < edits; ++e) s[next() % s.size()] = static_cast<std::uint8_t>(next());
+    Feed f(2048);
+    const std::size_t chunk = 1 + next() % 50;
+    for (std::size_t at = 0; at < s.size(); at += chunk) f.push(Span<const std::uint8_t>(s.data() + at, std::min(chunk, s.size() - at)));
+    EXPECT_LE(f.ping_numbers.size(), 3u);
+    pings += static_cast<int>(f.ping_numbers.size());
+  }
+  EXPECT_GT(pings, 0);
+}
+
 TEST(JsfFramer, FramingAndAssemblyMakeNoHeapAllocation) {
   const std::vector<std::uint8_t> s = stream(10, 512);
   Feed f;
