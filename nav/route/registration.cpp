@@ -49,6 +49,7 @@ std::size_t pack(const RouteNode& node, std::size_t cap, Span<Vec2d> pos, Span<s
 
 Status Registrar::register_tile(const RouteNode& sensed, const RouteNode& node, RegistrationResult& out) noexcept {
   out = RegistrationResult{};
+  last_n_ = 0;
   if (!ready_) return Status(StatusCode::kNotReady, "registration: not initialised");
   const double dtheta = wrap_angle_rad(sensed.meta.pose.heading_rad - node.meta.pose.heading_rad);
   bool fa = true, fb = true;
@@ -71,6 +72,7 @@ Status Registrar::register_tile(const RouteNode& sensed, const RouteNode& node, 
     src_[i] = pos_a_[m[i].a];
     dst_[i] = pos_b_[m[i].b];
   }
+  last_n_ = m.size();
   Result<match::RobustRigid2d> r = match::robust_rigid2d(Span<const Vec2d>(src_.data(), m.size()), Span<const Vec2d>(dst_.data(), m.size()),
                                                          config_.robust, mask_, scratch_);
   if (!r) {

@@ -48,6 +48,20 @@ class Registrar {
   static std::size_t arena_bytes(const RegistrationConfig& c) noexcept;
   Status init(const RegistrationConfig& config, Arena& arena) noexcept;
   Status register_tile(const RouteNode& sensed, const RouteNode& node, RegistrationResult& out) noexcept;
+  // Inlier pairs of the last successful registration (sensed frame, node frame), for diagnostics.
+  std::size_t last_inlier_count() const noexcept { return last_n_; }
+  bool last_inlier(std::size_t i, Vec2d& sensed, Vec2d& node) const noexcept {
+    std::size_t seen = 0;
+    for (std::size_t k = 0; k < last_n_; ++k) {
+      if (!mask_[k]) continue;
+      if (seen++ == i) {
+        sensed = src_[k];
+        node = dst_[k];
+        return true;
+      }
+    }
+    return false;
+  }
   const CounterSet<RegistrationCounter>& counters() const noexcept { return counters_; }
   const RegistrationConfig& config() const noexcept { return config_; }
 
@@ -60,6 +74,7 @@ class Registrar {
   Span<match::Match2d> matches_;
   Span<std::uint8_t> mask_;
   Span<double> scratch_;
+  std::size_t last_n_ = 0;  // pairs given to RANSAC by the last call
   CounterSet<RegistrationCounter> counters_;
 };
 

@@ -94,6 +94,21 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
       ++out.registrations;
     }
   }
+  // Registration to the estimate failed: use the best registration to a neighbour (+/- 1 node),
+  // carried into the estimate's frame through the two nodes' route-frame poses.
+  if (!out.registration.ok) {
+    std::size_t best = k;
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::int64_t d = static_cast<std::int64_t>(selected_[i]) - static_cast<std::int64_t>(out.estimate);
+      if (results_[i].ok && (d == 1 || d == -1) && (best == k || results_[i].inliers > results_[best].inliers)) best = i;
+    }
+    if (best < k) {
+      const Pose2 est_from_nb = meta_[out.estimate].pose.inverse().compose(meta_[selected_[best]].pose);
+      out.registration = results_[best];
+      out.registration.sensed_to_node = est_from_nb.compose(results_[best].sensed_to_node);
+      out.via_neighbour = true;
+    }
+  }
   out.best_inliers = out.registration.inliers;
   const std::int64_t dir = config_.filter.direction == RouteDirection::kForward ? 1 : -1;
   std::int64_t ahead = static_cast<std::int64_t>(out.estimate) + dir * static_cast<std::int64_t>(std::lround(config_.guidance.lookahead_nodes));

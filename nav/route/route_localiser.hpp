@@ -1,7 +1,8 @@
 // RouteLocaliser: one repeat-mode update per sensed tile, in fixed memory and bounded time:
 //   predict (motion model, distance travelled) -> select the nodes carrying belief (+ the periodic
 //   wide search) -> fetch them through the NodeWindow -> register the sensed tile against each ->
-//   update (eq. 9 from the inlier counts) -> guidance from the registration to the argmax node.
+//   update (eq. 9 from the inlier counts) -> guidance from the registration to the argmax node (or,
+//   when that one failed, the best registration to a neighbouring node carried through the node poses).
 // Owns the filter, registrar, window and guidance; the NodeSource (route file / memory) and the route
 // metadata index (per-node pose and along-track distance, for guidance) are the caller's.
 // Bounds: registrations per update <= belief_registrations + wide_search_registrations (+1 when the
@@ -39,6 +40,7 @@ struct LocaliserStep {
   std::uint32_t registrations = 0;
   std::uint32_t best_inliers = 0;   // at the estimate
   RegistrationResult registration;  // to the estimate
+  bool via_neighbour = false;       // registration came from node estimate +/- 1 (composed through the node poses)
   GuidanceOutput guidance;
   std::uint32_t load_errors = 0;    // damaged records met this step (treated as no similarity)
 };

@@ -15,27 +15,29 @@ vision::HarrisConfig harris_config(const TileFeatureConfig& c) noexcept {
   h.border_px = 4 * c.descriptor_step_px + 2;
   if (h.border_px < c.harris_block_radius + 1) h.border_px = c.harris_block_radius + 1;
   h.norm_cell_px = c.harris_norm_cell_px;
-  h.quality_level = 1e-3f;
+  h.quality_level = 1e-7f;  // keep weak corners: the normalised score, not the raw response, ranks them
   return h;
 }
 }  // namespace
 
 std::size_t TileFeatureExtractor::arena_bytes(const TileFeatureConfig& c) noexcept {
   const std::size_t px = static_cast<std::size_t>(c.max_width) * static_cast<std::size_t>(c.max_height);
-  return 2 * px * sizeof(float) + c.max_keypoints * 4 * sizeof(vision::Corner) + vision::HarrisDetector::arena_bytes(harris_config(c)) + 256;
+  return 2 * px * sizeof(float) + px + c.max_keypoints * 4 * sizeof(vision::Corner) + vision::HarrisDetector::arena_bytes(harris_config(c)) + 256;
 }
 
 Status TileFeatureExtractor::init(const TileFeatureConfig& c, Arena& arena) noexcept {
   if (c.max_width <= 0 || c.max_height <= 0 || c.max_width > kMaxImageSide || c.max_height > kMaxImageSide ||
       c.max_keypoints == 0 || c.max_keypoints > kMaxKeypointsPerNode || c.descriptor_step_px < 1 || c.blur_radius_px < 0 ||
+      c.downsample < 1 || c.downsample > 16 ||
       c.blur_radius_px > 8)
     return Status(StatusCode::kInvalidArgument, "tile features: bad configuration");
   QNAV_RETURN_IF_ERROR(harris_.init(harris_config(c), arena));
   const std::size_t px = static_cast<std::size_t>(c.max_width) * static_cast<std::size_t>(c.max_height);
   work_ = arena.allocate<float>(px);
   tmp_ = arena.allocate<float>(px);
+  cov_ = arena.allocate<std::uint8_t>(px);
   corners_ = arena.allocate<vision::Corner>(c.max_keypoints * 4);
-  if (work_.empty() || tmp_.empty() || corners_.empty()) return Status(StatusCode::kCapacityExceeded, "tile features: arena too small");
+  if (work_.empty() || tmp_.empty() || cov_.empty() || corners_.empty()) return Status(StatusCode::kCapacityExceeded, "tile features: arena too small");
   config_ = c;
   ready_ = true;
   return Status::ok();
@@ -50,15 +52,34 @@ Status TileFeatureExtractor::extract(ConstImageViewF32 in, ConstImageViewU8 cov,
     counters_.increment(FeatureCounter::kBadTile);
     return Status(StatusCode::kInvalidArgument, "tile features: bad tile or geometry");
   }
-  const int w = in.width(), h = in.height();
-  auto covered = [&](int x, int y) { return cov.empty() || cov(x, y) != 0; };
+  const int f = config_.downsample;
+  const int w = in.width() / f, h = in.height() / f;
+  if (w < 16 || h < 16) {
+    counters_.increment(FeatureCounter::kBadTile);
+    return Status(StatusCode::kInvalidArgument, "tile features: tile too small for the downsample factor");
+  }
+  auto fine_covered = [&](int x, int y) { return (cov.empty() || cov(x, y) != 0) && std::isfinite(in(x, y)); };
+  // Block average over covered pixels; a coarse pixel is covered when >= half its pixels are.
+  ImageViewF32 wk = ImageViewF32::unchecked(work_.data(), w, h, w);
+  ImageViewF32 tp = ImageViewF32::unchecked(tmp_.data(), w, h, w);
+  ImageView<std::uint8_t> cv = ImageView<std::uint8_t>::unchecked(cov_.data(), w, h, w);
   double sum = 0.0;
   std::size_t n = 0;
+  const int need = (f * f + 1) / 2;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const float v = in(x, y);
-      if (covered(x, y) && std::isfinite(v)) {
-        sum += static_cast<double>(v);
+      float s = 0.0f;
+      int k = 0;
+      for (int yy = y * f; yy < (y + 1) * f; ++yy)
+        for (int xx = x * f; xx < (x + 1) * f; ++xx)
+          if (fine_covered(xx, yy)) {
+            s += in(xx, yy);
+            ++k;
+          }
+      cv(x, y) = k >= need ? 1 : 0;
+      wk(x, y) = k > 0 ? s / static_cast<float>(k) : 0.0f;
+      if (k >= need) {
+        sum += static_cast<double>(wk(x, y));
         ++n;
       }
     }
@@ -67,15 +88,11 @@ Status TileFeatureExtractor::extract(ConstImageViewF32 in, ConstImageViewU8 cov,
     return Status(StatusCode::kEmpty, "tile features: tile has no covered pixel");
   }
   const float mean = static_cast<float>(sum / static_cast<double>(n));
-  // Fill + horizontal box blur into tmp_, vertical into work_.
-  const int r = config_.blur_radius_px;
-  ImageViewF32 wk = ImageViewF32::unchecked(work_.data(), w, h, w);
-  ImageViewF32 tp = ImageViewF32::unchecked(tmp_.data(), w, h, w);
+  auto covered = [&](int x, int y) { return cv(x, y) != 0; };
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const float v = in(x, y);
-      wk(x, y) = (covered(x, y) && std::isfinite(v)) ? v : mean;
-    }
+    for (int x = 0; x < w; ++x)
+      if (!covered(x, y)) wk(x, y) = mean;
+  const int r = config_.blur_radius_px;
   if (r > 0) {
     const float inv = 1.0f / static_cast<float>(2 * r + 1);
     for (int y = 0; y < h; ++y)
@@ -140,8 +157,8 @@ Status TileFeatureExtractor::extract(ConstImageViewF32 in, ConstImageViewU8 cov,
       q = q > 127.0 ? 127.0 : (q < -127.0 ? -127.0 : q);
       kp->descriptor[i] = static_cast<std::int8_t>(std::lround(q));
     }
-    const double north = g.origin_north_m - (static_cast<double>(c.y) + 0.5) * g.resolution_m;
-    const double east = g.origin_east_m + (static_cast<double>(c.x) + 0.5) * g.resolution_m;
+    const double north = g.origin_north_m - (static_cast<double>(c.y) + 0.5) * f * g.resolution_m;
+    const double east = g.origin_east_m + (static_cast<double>(c.x) + 0.5) * f * g.resolution_m;
     const Vec2d t = inv_pose.apply(Vec2d(north, east));
     kp->x_m = static_cast<float>(t.x());
     kp->y_m = static_cast<float>(t.y());

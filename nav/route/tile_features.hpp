@@ -1,11 +1,13 @@
 // TileFeatureExtractor: what a route node keeps of a tile. Finds Harris corners (nav/vision, with
-// the Mars paper's neighbourhood-normalised scores) on a lightly smoothed copy of a north-up tile in
-// which pixels without coverage are replaced by the mean covered intensity (so the swath edge does
-// not produce corners), keeps the max_keypoints strongest corners whose descriptor footprint lies
+// the Mars paper's neighbourhood-normalised scores) on a block-averaged (downsample x downsample;
+// a coarse pixel is covered when at least half its pixels are) and box-blurred copy of a north-up
+// tile in which pixels without coverage are replaced by the mean covered intensity (so the swath
+// edge does not produce corners), keeps the max_keypoints strongest corners whose descriptor footprint lies
 // fully inside covered pixels, and stores for each: its position in the tile frame (metres; x along
 // the tile heading, y to starboard; origin at the tile pose) and an 8x8 int8 descriptor sampled on
 // the north-up grid (descriptor_step_px apart), so descriptors of the same seabed spot compare
-// directly whatever the vehicle heading (forward or reverse passes).
+// directly whatever the vehicle heading (forward or reverse passes). Steps and radii below are in
+// coarse pixels.
 // Raster convention (same as nav/sonar's SonarTile): row 0 is the north edge, columns grow east;
 // pixel (c, r) centre is north = origin_north_m - (r + 0.5) res, east = origin_east_m + (c + 0.5) res.
 // Pose2 of a tile: x_m north, y_m east, heading_rad compass (clockwise from north).
@@ -31,7 +33,8 @@ struct TileFeatureConfig {
   int max_height = 1024;
   std::size_t max_keypoints = 64;     // <= kMaxKeypointsPerNode
   int descriptor_step_px = 2;         // spacing of the 8x8 descriptor samples
-  int blur_radius_px = 1;             // box blur before Harris (speckle); 0 = none
+  int downsample = 1;                 // block-average factor before detection (speckle, sand ripples)
+  int blur_radius_px = 1;             // box blur (coarse pixels) before Harris; 0 = none
   int harris_block_radius = 2;
   int harris_nms_radius = 6;
   int harris_norm_cell_px = 32;
@@ -65,6 +68,7 @@ class TileFeatureExtractor {
   vision::HarrisDetector harris_;
   Span<float> work_;
   Span<float> tmp_;
+  Span<std::uint8_t> cov_;
   Span<vision::Corner> corners_;
   CounterSet<FeatureCounter> counters_;
 };
