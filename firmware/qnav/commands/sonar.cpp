@@ -4,7 +4,7 @@
 //       --corrected shows ScanlineCorrector output (ground range from the detected first return,
 //       TVG + EGN) instead of raw samples.
 //   qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024]
-//       [--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file]
+//       [--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]
 //       north-up tiles (tile_NNN.png, tile_NNN_coverage.png) and tiles.csv with each tile's pose.
 //       Altitude: the first return detected in the ping by default; `file` uses the altimeter field
 //       (on the Iver2 file it reads 15-20 % short of the first return, leaving water column in the tile).
@@ -37,6 +37,8 @@ using namespace qnav;
 using namespace qnav::sidescan;
 
 constexpr std::size_t kMaxSamples = 16384;
+constexpr double kFalseNorth_m = 5000000.0;  // simulated files: metric nav around a false origin
+constexpr double kFalseEast_m = 500000.0;
 
 // Every ping of a file, with its samples (tool-side memory; the nav stages below stay fixed-size).
 struct PingRec {
@@ -257,17 +259,19 @@ NavTrack build_track(const FileData& fd, bool dead_reckon, double heading_offset
 }
 
 int tiles(int argc, char** argv) {
-  static const char* const valued[] = {"--out", "--res", "--lines", "--stride", "--size", "--nav", "--heading-offset-deg", "--altitude", nullptr};
+  static const char* const valued[] = {"--out", "--res", "--lines", "--stride", "--size", "--nav", "--heading-offset-deg", "--altitude",
+                                       "--nadir-gap-m", nullptr};
   const char* file = cli::positional(argc, argv, 2, 0, valued);
   const char* out = cli::option(argc, argv, "--out");
-  double res = 0.1, heading_off_deg = 0.0;
+  double res = 0.1, heading_off_deg = 0.0, nadir_gap = 1.0;
   long lines = 500, stride = -1, size = 1024;
   if (file == nullptr || out == nullptr || !cli::option_double(argc, argv, "--res", res) ||
       !cli::option_long(argc, argv, "--lines", lines) || !cli::option_long(argc, argv, "--stride", stride) ||
-      !cli::option_long(argc, argv, "--size", size) || !cli::option_double(argc, argv, "--heading-offset-deg", heading_off_deg)) {
+      !cli::option_long(argc, argv, "--size", size) || !cli::option_double(argc, argv, "--heading-offset-deg", heading_off_deg) ||
+      !cli::option_double(argc, argv, "--nadir-gap-m", nadir_gap)) {
     std::fprintf(stderr,
                  "usage: qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] "
-                 "[--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file]\n");
+                 "[--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]\n");
     return 2;
   }
   const std::string nav = cli::option(argc, argv, "--nav", "fix");
@@ -280,6 +284,7 @@ int tiles(int argc, char** argv) {
   sonar::ScanlineCorrectorConfig cc;
   cc.max_samples_per_side = static_cast<int>(kMaxSamples);
   cc.ground_bin_m = static_cast<float>(res) * 0.5f;
+  cc.nadir_gap_m = static_cast<float>(nadir_gap);
   cc.ground_bins_per_side = static_cast<int>(std::ceil(static_cast<double>(range) / static_cast<double>(cc.ground_bin_m)));
   sonar::TileBuilderConfig tc;
   tc.resolution_m = res;
@@ -306,7 +311,7 @@ int tiles(int argc, char** argv) {
   }
   std::fprintf(csv,
                "tile,first_ping,last_ping,scanlines,pose_north_m,pose_east_m,heading_deg,origin_north_m,origin_east_m,"
-               "resolution_m,width_px,height_px,coverage,origin_lat_deg,origin_lon_deg\n");
+               "resolution_m,width_px,height_px,coverage,origin_file_y,origin_file_x\n");  // file_y/x: lat/lon deg or northing/easting m (file nav units)
   int written = 0, skipped_nav = 0, failed = 0;
   const double m_per_deg_lon = 111320.0 * std::cos(deg_to_rad(track.lat0));
   auto emit = [&]() {
@@ -379,7 +384,7 @@ int simulate(int argc, char** argv) {
   SeabedConfig bc;
   bc.seed = static_cast<std::uint64_t>(seed);
   SeabedObject wreck;
-  wreck.north_m = length * 0.5;
+  wreck.north_m = length * 0.3;
   wreck.east_m = 12.0;
   wreck.length_m = 14.0f;
   wreck.width_m = 4.0f;
@@ -425,8 +430,9 @@ int simulate(int argc, char** argv) {
     XtfWritePing w;
     w.stamp_ns = 1700000000000000000ull + ts.stamp_ns;
     w.ping_number = ts.index;
-    w.sensor_y = ts.nav.x_m;
-    w.sensor_x = ts.nav.y_m;
+    // A UTM-like false origin: (0, 0) is the "no fix" placeholder of XTF files.
+    w.sensor_y = kFalseNorth_m + ts.nav.x_m;
+    w.sensor_x = kFalseEast_m + ts.nav.y_m;
     w.heading_deg = static_cast<float>(rad_to_deg(ts.nav.heading_rad < 0 ? ts.nav.heading_rad + 2 * kPi : ts.nav.heading_rad));
     w.speed_knots = static_cast<float>(trc.speed_mps / 0.514444);
     w.altitude_m = ts.altitude_m;
@@ -444,7 +450,7 @@ int simulate(int argc, char** argv) {
   }
   std::fclose(f);
   std::printf("simulated %u pings (%.0f m at %.1f m/s, %.0f Hz, %ld samples/side, %.0f m range, offset %.1f m%s) -> %s; "
-              "wreck 14 x 4 x 2.5 m at N %.1f E %.1f (metric nav, nav_units 0)\n",
+              "wreck 14 x 4 x 2.5 m at N %.1f E %.1f (metric nav, nav_units 0, false origin N 5000000 E 500000)\n",
               n, length, trc.speed_mps, trc.ping_rate_hz, samples, range, offset, trc.reverse ? ", reverse" : "", out,
               wreck.north_m, wreck.east_m);
   if (const char* truth = cli::option(argc, argv, "--truth")) {
@@ -470,7 +476,7 @@ int run_sonar(int argc, char** argv) {
   std::fprintf(stderr,
                "usage: qnav sonar waterfall FILE --out PNG [--corrected]\n"
                "       qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] [--nav fix|dr]\n"
-               "                        [--heading-offset-deg 0] [--altitude detect|file]\n"
+               "                        [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]\n"
                "       qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]\n"
                "                        [--samples 1024] [--range-m 40] [--truth PNG]\n");
   return 2;
