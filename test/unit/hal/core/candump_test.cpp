@@ -65,7 +65,7 @@ TEST(CandumpLog, RejectsMalformedLines) {
 
 TEST(CandumpLog, FormatRoundTripsWithoutHeap) {
   const char* lines[] = {"(1436509052.249713) vcan0 123#DEADBEEF", "(0.000001) can1 1F334455#1122334455667788",
-                         "(5.500000) can0 123##3" "00112233445566778899AABBCCDDEEFF", "(7.000000) can0 20000004#0004000000000000"};
+                         "(5.500000) can0 123##300112233445566778899AABBCCDDEEFF", "(7.000000) can0 20000004#0004000000000000"};
   for (const char* l : lines) {
     CanLogRecord r;
     char out[kMaxCanLogLine];
