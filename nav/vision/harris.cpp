@@ -28,7 +28,7 @@ Status check_config(const HarrisConfig& c) noexcept {
 }
 
 struct Sizes {
-  std::size_t response, ring, colsum, grad, cells;
+  std::size_t response, ring, colsum, grad, cells, nms;
 };
 
 Sizes sizes_for(const HarrisConfig& c) noexcept {
@@ -37,7 +37,7 @@ Sizes sizes_for(const HarrisConfig& c) noexcept {
   const std::size_t cw = (w + static_cast<std::size_t>(c.norm_cell_px) - 1) / static_cast<std::size_t>(c.norm_cell_px);
   const std::size_t ch = (h + static_cast<std::size_t>(c.norm_cell_px) - 1) / static_cast<std::size_t>(c.norm_cell_px);
   // cells: sum, count, neighbourhood mean.
-  return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch};
+  return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch, (static_cast<std::size_t>(2 * c.nms_radius + 1) + 1) * w};
 }
 
 // Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x.
@@ -75,11 +75,62 @@ inline void sobel_row(ImageView<const float> img, int y, int x0, int x1, float* 
   }
 }
 
+// colsum[c][x] = sum over the ring slots of product c (slot j holds xx, yy, xy rows of width wz).
+void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1, float* __restrict cxx, float* __restrict cyy,
+                   float* __restrict cxy) noexcept {
+  const float* __restrict a = ring;
+  if (nrows == 3) {
+    const float* __restrict b = ring + 3 * wz;
+    const float* __restrict c = ring + 6 * wz;
+    for (int x = x0; x < x1; ++x) {
+      cxx[x] = a[x] + b[x] + c[x];
+      cyy[x] = a[wz + x] + b[wz + x] + c[wz + x];
+      cxy[x] = a[2 * wz + x] + b[2 * wz + x] + c[2 * wz + x];
+    }
+    return;
+  }
+  for (int x = x0; x < x1; ++x) {
+    cxx[x] = a[x];
+    cyy[x] = a[wz + x];
+    cxy[x] = a[2 * wz + x];
+  }
+  for (int j = 1; j < nrows; ++j) {
+    const float* __restrict sj = ring + static_cast<std::size_t>(3 * j) * wz;
+    for (int x = x0; x < x1; ++x) {
+      cxx[x] += sj[x];
+      cyy[x] += sj[wz + x];
+      cxy[x] += sj[2 * wz + x];
+    }
+  }
+}
+
+// Max and sum of the positive values of v[0..n), in 8 independent lanes (vectorisable without
+// -ffast-math; the lane order is fixed, so the result is deterministic).
+inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum) noexcept {
+  float m[8] = {vmax, vmax, vmax, vmax, vmax, vmax, vmax, vmax};
+  float s[8] = {};
+  int i = 0;
+  for (; i + 8 <= n; i += 8)
+    for (int k = 0; k < 8; ++k) {
+      const float x = v[i + k];
+      m[k] = x > m[k] ? x : m[k];
+      s[k] += x > 0.0f ? x : 0.0f;
+    }
+  for (; i < n; ++i) {
+    m[0] = v[i] > m[0] ? v[i] : m[0];
+    s[0] += v[i] > 0.0f ? v[i] : 0.0f;
+  }
+  for (int k = 0; k < 8; ++k) {
+    vmax = m[k] > vmax ? m[k] : vmax;
+    psum += s[k];
+  }
+}
+
 }  // namespace
 
 std::size_t HarrisDetector::arena_bytes(const HarrisConfig& config) noexcept {
   const Sizes s = sizes_for(config);
-  return (s.response + s.ring + s.colsum + s.grad + s.cells) * sizeof(float) + 5 * alignof(float) +
+  return (s.response + s.ring + s.colsum + s.grad + s.cells + s.nms) * sizeof(float) + 6 * alignof(float) +
          static_cast<std::size_t>(config.max_corners) * sizeof(Corner) + alignof(Corner);
 }
 
@@ -97,7 +148,9 @@ Status HarrisDetector::init(const HarrisConfig& config, Arena& arena) noexcept {
   grad_ = arena.allocate<float>(z.grad);
   cells_ = arena.allocate<float>(z.cells);
   heap_ = arena.allocate<Corner>(static_cast<std::size_t>(config.max_corners));
-  if (response_.empty() || ring_.empty() || colsum_.empty() || grad_.empty() || cells_.empty() || heap_.empty()) {
+  nms_ring_ = arena.allocate<float>(z.nms);
+  if (response_.empty() || ring_.empty() || colsum_.empty() || grad_.empty() || cells_.empty() || heap_.empty() ||
+      nms_ring_.empty()) {
     counters_.increment(VisionCounter::kBadConfig);
     return Status(StatusCode::kCapacityExceeded, "harris: arena too small");
   }
@@ -192,22 +245,7 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
     if (py < g.y + r) continue;  // window not full yet
     const int y = py - r;
     // Vertical sums over the ring (all 2r+1 slots hold rows y-r..y+r).
-    {
-      const float* s0 = ring_.data();
-      for (int x = px0; x < px1; ++x) {
-        csxx[x] = s0[x];
-        csyy[x] = s0[wz + x];
-        csxy[x] = s0[2 * wz + x];
-      }
-      for (int j = 1; j < nrows; ++j) {
-        const float* __restrict sj = ring_.data() + static_cast<std::size_t>(3 * j) * wz;
-        for (int x = px0; x < px1; ++x) {
-          csxx[x] += sj[x];
-          csyy[x] += sj[wz + x];
-          csxy[x] += sj[2 * wz + x];
-        }
-      }
-    }
+    vertical_sums(ring_.data(), wz, nrows, px0, px1, csxx, csyy, csxy);
     float* __restrict out_row = resp.row(y);
     if (r == 1) {
       for (int x = g.x; x < g.x + g.width; ++x) {
@@ -251,11 +289,7 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
       const int cx = x0 / cell;
       const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
       float s = 0.0f;
-      for (int x = x0; x < x1; ++x) {
-        const float v = row[x];
-        rmax = v > rmax ? v : rmax;
-        s += v > 0.0f ? v : 0.0f;
-      }
+      max_and_positive_sum(row + x0, x1 - x0, rmax, s);
       crow_sum[cx] += s;
       crow_cnt[cx] += static_cast<float>(x1 - x0);
       pos_sum += static_cast<double>(s);
@@ -284,12 +318,37 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
   Corner* heap = heap_.data();
   std::size_t hn = 0;
   bool dropped = false;
+  // Non-maximum suppression: a separable max filter (row max over 2n+1 columns kept in a ring of
+  // 2n+1 rows, then the max over the ring) finds pixels equal to their window maximum with
+  // vectorisable loops; only those (and above the threshold) get the exact check with the tie rule.
+  const int nwin = 2 * nms + 1;
+  const int dx0 = det.x, dx1 = det.x + det.width;
+  float* __restrict wmax = nms_ring_.data() + static_cast<std::size_t>(nwin) * wz;
+  auto row_max = [&](int yy, float* __restrict dst) {
+    const float* __restrict src = resp.row(yy);
+    for (int x = dx0; x < dx1; ++x) {
+      float m = src[x - nms];
+      for (int j = -nms + 1; j <= nms; ++j) m = src[x + j] > m ? src[x + j] : m;
+      dst[x] = m;
+    }
+  };
+  for (int yy = det.y - nms; yy < det.y + nms; ++yy)
+    row_max(yy, nms_ring_.data() + static_cast<std::size_t>((yy - (det.y - nms)) % nwin) * wz);
   for (int y = det.y; y < det.y + det.height; ++y) {
+    row_max(y + nms, nms_ring_.data() + static_cast<std::size_t>((y + nms - (det.y - nms)) % nwin) * wz);
+    {
+      const float* __restrict r0 = nms_ring_.data();
+      for (int x = dx0; x < dx1; ++x) wmax[x] = r0[x];
+      for (int j = 1; j < nwin; ++j) {
+        const float* __restrict rj = nms_ring_.data() + static_cast<std::size_t>(j) * wz;
+        for (int x = dx0; x < dx1; ++x) wmax[x] = rj[x] > wmax[x] ? rj[x] : wmax[x];
+      }
+    }
     const float* row = resp.row(y);
-    for (int x = det.x; x < det.x + det.width; ++x) {
+    for (int x = dx0; x < dx1; ++x) {
       const float v = row[x];
-      if (!(v > thresh)) continue;
-      // Quick 3x3 rejection, then the full window. Ties: the earlier pixel in raster order wins.
+      if (v < wmax[x] || !(v > thresh)) continue;
+      // Exact check with the tie rule: the earlier pixel in raster order wins.
       bool is_max = true;
       for (int dy = -nms; dy <= nms && is_max; ++dy) {
         const float* nr = resp.row(y + dy);

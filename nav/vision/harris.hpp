@@ -18,7 +18,8 @@
 // on the ROI grown by the filter support so the result equals the full-image result restricted to the ROI.
 //
 // Memory (from the Arena in init()): one float response plane max_width*max_height, a ring of
-// 3*(2*block_radius+1) float rows plus 3 column-sum rows, the normalisation cell grid, max_corners Corner (top-K heap). No heap, no
+// 3*(2*block_radius+1) float rows plus 3 column-sum rows, the normalisation cell grid, max_corners Corner (top-K heap), 2*nms_radius+2
+// rows for the separable NMS max filter. No heap, no
 // allocation in detect(). Worst case time: O(W*H*(block + nms^2)) for the ROI + O(K log K) for K kept
 // corners; every loop is bounded by the configured image size and caps.
 #pragma once
@@ -102,6 +103,7 @@ class HarrisDetector {
   Span<float> grad_;       // 2 rows of max_width (gx, gy of one row)
   Span<float> cells_;      // normalisation cells: sums, pixel counts, neighbourhood means
   Span<Corner> heap_;      // max_corners: top-K heap
+  Span<float> nms_ring_;   // (2 * nms_radius + 2) rows of max_width: row maxima ring + window max
   ConstImageViewF32 last_response_;
   VisionCounters counters_;
 };
