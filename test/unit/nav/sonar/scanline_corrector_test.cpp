@@ -62,6 +62,24 @@ TEST(ScanlineCorrector, DetectsBottomOfFlatSeabed) {
   EXPECT_NEAR(b.value(), h, 0.1f);
 }
 
+TEST(ScanlineCorrector, BottomDetectionIgnoresASaturatedTransmitPulse) {
+  // Real Iver2 pings start with 8 saturated samples (32767): they must not count as the seabed nor
+  // raise the water-column noise estimate.
+  ScanlineCorrectorConfig cfg;
+  Fixture f(cfg);
+  std::vector<float> port, stbd;
+  const float h = 5.8f;
+  flat_ping(port, stbd, 1024, 30.0f, h, 1.0f);
+  for (int i = 0; i < 8; ++i) port[static_cast<std::size_t>(i)] = stbd[static_cast<std::size_t>(i)] = 32767.0f;
+  SonarPing p;
+  p.port = Span<const float>(port.data(), port.size());
+  p.stbd = Span<const float>(stbd.data(), stbd.size());
+  p.slant_range_m = 30.0f;
+  const Result<float> b = f.corr.detect_bottom_m(p);
+  ASSERT_TRUE(b.is_ok()) << b.status().message();
+  EXPECT_NEAR(b.value(), h, 0.1f);
+}
+
 TEST(ScanlineCorrector, GroundRangeGeometryPlacesAStepAtItsGroundRange) {
   // A bright patch at ground range 20..21 m on starboard must land in bins 200..209 (0.1 m bins).
   ScanlineCorrectorConfig cfg;
