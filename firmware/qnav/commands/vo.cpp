@@ -308,11 +308,12 @@ struct SequenceRun {
 
 // Runs 6D-VME over rectified pairs with a constant-velocity prior (no attitude sensor on these rigs).
 template <typename LoadPair>
-bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_motion_prior, bool verbose,
-                  SequenceRun& run) {
+bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_motion_prior, double first_sigma_m,
+                  bool verbose, SequenceRun& run) {
   VoBox box;
   if (!box.init(c)) return false;
   Pose3 velocity;  // last visual step
+  bool have_velocity = false;
   for (std::size_t i = 0; i < frames; ++i) {
     ImageU8 l, r;
     if (!load(i, l, r)) return false;
@@ -323,7 +324,8 @@ bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_m
       in.R_prev_cur = zero_motion_prior ? Mat3d::Identity() : velocity.R;
       in.has_translation_prior = true;
       in.t_prev_cur_prior_m = zero_motion_prior ? Vec3d::Zero() : velocity.t;
-      in.t_prior_sigma_m = zero_motion_prior ? 0.02 : 0.1 + 0.2 * velocity.t.norm();
+      // Constant velocity; before the first visual step the prior is "somewhere within first_sigma_m".
+      in.t_prior_sigma_m = zero_motion_prior ? 0.02 : (have_velocity ? 0.1 + 0.2 * velocity.t.norm() : first_sigma_m);
     }
     const Clock::time_point t0 = Clock::now();
     Result<vo::VoStep> s = box.vo.process(in);
@@ -331,7 +333,10 @@ bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_m
     if (!s) return false;
     if (i > 0) run.ms.push_back(ms);
     if (i > 0 && !s->visual) ++run.lost;
-    if (s->visual) velocity = s->prev_T_cur;
+    if (s->visual) {
+      velocity = s->prev_T_cur;
+      have_velocity = true;
+    }
     run.poses.push_back(box.vo.pose());
     if (verbose)
       std::printf("frame %3zu  %6.2f ms  corners %3zu stereo %3zu matches %3zu  rms %.4f m  flags 0x%03x  t %.3f %.3f %.3f\n",
@@ -387,6 +392,7 @@ int run_kitti(int argc, char** argv) {
   c.lateral_sigma_px = 0.7;
   c.match.attitude_sigma_rad = deg_to_rad(0.7);
   c.match.max_gate_m = 3.0;
+  c.match.max_candidates_per_landmark = 16;
   c.match.eps_n_floor_m = 0.05;
   c.match.fast = true;
   c.match.batch_size = 80;
@@ -407,7 +413,7 @@ int run_kitti(int argc, char** argv) {
     r = std::move(b.value());
     return true;
   };
-  if (!run_sequence(c, n, load, false, true, run)) return 1;
+  if (!run_sequence(c, n, load, false, 1.0, true, run)) return 1;
   if (!write_poses(out, run.poses)) {
     std::fprintf(stderr, "vo: cannot write %s\n", out);
     return 1;
@@ -499,7 +505,7 @@ int run_euroc(int argc, char** argv) {
     r = std::move(ra.value());
     return true;
   };
-  if (!run_sequence(c, n, load, true, true, run)) return 1;
+  if (!run_sequence(c, n, load, true, 0.02, true, run)) return 1;
   if (!write_poses(out, run.poses)) {
     std::fprintf(stderr, "vo: cannot write %s\n", out);
     return 1;

@@ -1,0 +1,76 @@
+#!/usr/bin/python3
+"""Plots for docs/vo.md (Debian's python3-matplotlib: run with /usr/bin/python3).
+
+  vo_plot.py eval TRAJ_DIR OUT.png     error vs distance per configuration (from `qnav vo eval --traj-dir`)
+  vo_plot.py kitti OURS PEER OUT.png   top view (x, z) of two KITTI pose files
+"""
+import csv
+import glob
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def plot_eval(traj_dir, out):
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    for ax, scen, title in ((axes[0], "27m", "27 m, attitude drifting (no recalibration)"),
+                            (axes[1], "100m", "100 m, attitude recalibrated every 2 m")):
+        files = sorted(glob.glob(os.path.join(traj_dir, "vo_%s_*.csv" % scen)))
+        for f in files:
+            name = os.path.basename(f)[len("vo_%s_" % scen):-4]
+            path, err = [], []
+            with open(f) as fh:
+                for row in csv.DictReader(fh):
+                    path.append(float(row["path_m"]))
+                    err.append(100.0 * float(row["err_m"]) / max(float(row["path_m"]), 1e-9) if float(row["path_m"]) > 1.0 else float("nan"))
+            style = "-" if name.startswith("3D") else "--"
+            ax.plot(path, err, style, label=name)
+        ax.set_title(title)
+        ax.set_xlabel("distance travelled [m]")
+        ax.set_ylabel("position error / distance [%]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle("Stereo VO on the synthetic Mars yard (paper's noise model, small), qnav vo eval")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def read_poses(p):
+    xs, zs = [], []
+    with open(p) as fh:
+        for line in fh:
+            v = [float(x) for x in line.split()]
+            if len(v) == 12:
+                xs.append(v[3])
+                zs.append(v[11])
+    return xs, zs
+
+
+def plot_kitti(ours, peer, out):
+    fig, ax = plt.subplots(figsize=(5, 8))
+    x, z = read_poses(ours)
+    px, pz = read_poses(peer)
+    n = len(x)
+    ax.plot(px[:n], pz[:n], "k--", label="libviso2 (peer, not ground truth)")
+    ax.plot(x, z, "r-", label="qnav vo (6D-VME, fc fast)")
+    ax.set_xlabel("x [m] (right)")
+    ax.set_ylabel("z [m] (forward)")
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("KITTI 2011_09_26 city, %d frames" % n)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) == 4 and sys.argv[1] == "eval":
+        plot_eval(sys.argv[2], sys.argv[3])
+    elif len(sys.argv) == 5 and sys.argv[1] == "kitti":
+        plot_kitti(sys.argv[2], sys.argv[3], sys.argv[4])
+    else:
+        sys.exit(__doc__)
