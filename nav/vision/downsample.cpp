@@ -33,17 +33,33 @@ Status downsample(ConstImageViewU8 src, int factor, ImageViewU8 dst) noexcept {
     }
     return Status::ok();
   }
-  // General factor: accumulate factor rows of column sums, then sum groups of factor columns.
-  // Sums fit easily: 16 * 16 * 255 < 2^17.
+  // General factor: per output row, sum the factor source rows into column sums (vectorisable, in
+  // chunks of kChunk source columns on the stack), then sum groups of factor columns.
+  // Sums fit in 16 bits: 16 * 16 * 255 < 65536.
+  constexpr int kChunk = 1024;
+  std::uint16_t col[kChunk];
+  const int per_chunk = (kChunk / factor) * factor;  // whole blocks per chunk
   for (int y = 0; y < oh; ++y) {
-    std::uint8_t* o = dst.row(y);
-    for (int x = 0; x < ow; ++x) {
-      unsigned s = 0;
-      for (int j = 0; j < factor; ++j) {
-        const std::uint8_t* r = src.row(y * factor + j) + x * factor;
-        for (int i = 0; i < factor; ++i) s += r[i];
+    std::uint8_t* __restrict o = dst.row(y);
+    for (int c0 = 0; c0 < ow * factor; c0 += per_chunk) {
+      const int n_src = (ow * factor - c0) < per_chunk ? (ow * factor - c0) : per_chunk;
+      const std::uint8_t* __restrict r0 = src.row(y * factor) + c0;
+      for (int i = 0; i < n_src; ++i) col[i] = r0[i];
+      for (int j = 1; j < factor; ++j) {
+        const std::uint8_t* __restrict rj = src.row(y * factor + j) + c0;
+        for (int i = 0; i < n_src; ++i) col[i] = static_cast<std::uint16_t>(col[i] + rj[i]);
       }
-      o[x] = static_cast<std::uint8_t>((s + half) / n);
+      const int x0 = c0 / factor, nx = n_src / factor;
+      if (factor == 4) {
+        for (int x = 0; x < nx; ++x)
+          o[x0 + x] = static_cast<std::uint8_t>((col[4 * x] + col[4 * x + 1] + col[4 * x + 2] + col[4 * x + 3] + 8u) >> 4);
+      } else {
+        for (int x = 0; x < nx; ++x) {
+          unsigned sum = 0;
+          for (int i = 0; i < factor; ++i) sum += col[x * factor + i];
+          o[x0 + x] = static_cast<std::uint8_t>((sum + half) / n);
+        }
+      }
     }
   }
   return Status::ok();

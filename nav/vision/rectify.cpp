@@ -136,7 +136,7 @@ Status RemapTable::build(const PinholeRadTan& raw, const Mat3d& K_out, const Mat
     Entry* row = table_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(out_width);
     for (int u = 0; u < out_width; ++u) {
       Entry& e = row[u];
-      e = Entry{-1, -1, 0, 0};
+      e = Entry{0, 0, 0, 0, 0};
       const Vec3d ray = M * Vec3d(u, v, 1.0);
       if (!(ray.z() > 1e-12)) continue;
       Vec2d xy(ray.x() / ray.z(), ray.y() / ray.z());
@@ -174,8 +174,7 @@ Status RemapTable::build(const PinholeRadTan& raw, const Mat3d& K_out, const Mat
           fy = 255;
         }
       }
-      e = Entry{static_cast<std::int16_t>(x0), static_cast<std::int16_t>(y0), static_cast<std::uint8_t>(fx),
-                static_cast<std::uint8_t>(fy)};
+      e = Entry{y0 * raw.width + x0, static_cast<std::uint8_t>(fx), static_cast<std::uint8_t>(fy), 1, 0};
       ++valid;
     }
   }
@@ -202,19 +201,40 @@ Status RemapTable::apply(ConstImageViewU8 src, ImageViewU8 dst) const noexcept {
   if (src.empty() || dst.empty()) return Status(StatusCode::kInvalidArgument, "remap: empty image");
   if (src.width() != raw_w_ || src.height() != raw_h_) return Status(StatusCode::kInvalidArgument, "remap: source size differs from the calibration");
   if (dst.width() != out_w_ || dst.height() != out_h_) return Status(StatusCode::kInvalidArgument, "remap: destination size differs from the table");
+  // Locals: uint8_t stores may alias any member, so the loops must not read members.
   const std::uint8_t fill = config_.fill_value;
   const std::ptrdiff_t stride = src.stride();
   const std::uint8_t* base = src.data();
-  for (int v = 0; v < out_h_; ++v) {
-    const Entry* __restrict row = table_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(out_w_);
+  const int ow = out_w_, oh = out_h_, rw = raw_w_;
+  const Entry* const table = table_.data();
+  if (stride == rw) {
+    // Packed source (the usual case): one add per pixel to find the 2x2, no branch.
+    for (int v = 0; v < oh; ++v) {
+      const Entry* __restrict row = table + static_cast<std::size_t>(v) * static_cast<std::size_t>(ow);
+      std::uint8_t* __restrict o = dst.row(v);
+      for (int u = 0; u < ow; ++u) {
+        const Entry e = row[u];
+        const std::uint8_t* p = base + e.offset;
+        const std::uint32_t fx = e.fx, fy = e.fy;
+        const std::uint32_t top = p[0] * (256u - fx) + p[1] * fx;
+        const std::uint32_t bot = p[stride] * (256u - fx) + p[stride + 1] * fx;
+        const std::uint8_t val = static_cast<std::uint8_t>((top * (256u - fy) + bot * fy + 32768u) >> 16);
+        o[u] = e.valid ? val : fill;
+      }
+    }
+    return Status::ok();
+  }
+  for (int v = 0; v < oh; ++v) {
+    const Entry* __restrict row = table + static_cast<std::size_t>(v) * static_cast<std::size_t>(ow);
     std::uint8_t* __restrict o = dst.row(v);
-    for (int u = 0; u < out_w_; ++u) {
+    for (int u = 0; u < ow; ++u) {
       const Entry e = row[u];
-      if (e.x0 < 0) {
+      if (!e.valid) {
         o[u] = fill;
         continue;
       }
-      const std::uint8_t* p = base + static_cast<std::ptrdiff_t>(e.y0) * stride + e.x0;
+      const std::int32_t y0 = e.offset / rw, x0 = e.offset - y0 * rw;
+      const std::uint8_t* p = base + static_cast<std::ptrdiff_t>(y0) * stride + x0;
       const std::uint32_t fx = e.fx, fy = e.fy;
       const std::uint32_t top = p[0] * (256u - fx) + p[1] * fx;
       const std::uint32_t bot = p[stride] * (256u - fx) + p[stride + 1] * fx;
@@ -227,9 +247,10 @@ Status RemapTable::apply(ConstImageViewU8 src, ImageViewU8 dst) const noexcept {
 bool RemapTable::source_of(int x, int y, float& sx, float& sy) const noexcept {
   if (out_w_ == 0 || x < 0 || y < 0 || x >= out_w_ || y >= out_h_) return false;
   const Entry e = table_[static_cast<std::size_t>(y) * static_cast<std::size_t>(out_w_) + static_cast<std::size_t>(x)];
-  if (e.x0 < 0) return false;
-  sx = static_cast<float>(e.x0) + static_cast<float>(e.fx) / 256.0f;
-  sy = static_cast<float>(e.y0) + static_cast<float>(e.fy) / 256.0f;
+  if (!e.valid) return false;
+  const std::int32_t y0 = e.offset / raw_w_, x0 = e.offset - y0 * raw_w_;
+  sx = static_cast<float>(x0) + static_cast<float>(e.fx) / 256.0f;
+  sy = static_cast<float>(y0) + static_cast<float>(e.fy) / 256.0f;
   return true;
 }
 

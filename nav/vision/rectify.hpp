@@ -12,7 +12,7 @@
 // camera when refraction is on). apply() does bilinear sampling with 8-bit fixed-point weights: the
 // table is the only per-frame cost. Output pixels whose source falls outside the raw image get
 // fill_value.
-// Memory (Arena): 6 bytes per output pixel (int16 source x, y + two 8-bit bilinear fractions).
+// Memory (Arena): 8 bytes per output pixel (int32 source offset + two 8-bit bilinear fractions + flag).
 // build(): O(W*H) with trig per pixel (start-up only). apply(): O(W*H), no allocation.
 //
 // stereo_rectify(): Bouguet-style rectification of a calibrated pair: both cameras rotated half the
@@ -88,8 +88,10 @@ class RemapTable {
 
  private:
   struct Entry {
-    std::int16_t x0, y0;  // top-left source pixel of the bilinear 2x2; x0 = -1 when outside
+    std::int32_t offset;  // y0 * raw_width + x0 of the bilinear 2x2's top-left pixel (0 when outside)
     std::uint8_t fx, fy;  // bilinear fractions in 1/256
+    std::uint8_t valid;   // 0: source outside the raw image (fill_value)
+    std::uint8_t pad;
   };
   RemapConfig config_{};
   bool ready_ = false;

@@ -32,6 +32,26 @@ TEST(Downsample, Factor4OfARampAndOddSizesDropTheRemainder) {
     }
 }
 
+TEST(Downsample, EveryFactorMatchesTheBlockMean) {
+  const int W = 1100, H = 37;  // wider than one 1024-column chunk
+  std::vector<std::uint8_t> src(W * H);
+  for (std::size_t i = 0; i < src.size(); ++i) src[i] = static_cast<std::uint8_t>((i * 2654435761u) >> 24);
+  for (int f = 1; f <= 16; ++f) {
+    const int ow = W / f, oh = H / f;
+    if (oh == 0) break;
+    std::vector<std::uint8_t> dst(static_cast<std::size_t>(ow * oh));
+    ASSERT_TRUE(downsample(ConstImageViewU8::make(src.data(), W, H).value(), f, ImageViewU8::make(dst.data(), ow, oh).value()).is_ok());
+    for (int y = 0; y < oh; ++y)
+      for (int x = 0; x < ow; ++x) {
+        unsigned s = 0;
+        for (int j = 0; j < f; ++j)
+          for (int i = 0; i < f; ++i) s += src[static_cast<std::size_t>((y * f + j) * W + x * f + i)];
+        ASSERT_EQ(dst[static_cast<std::size_t>(y * ow + x)], (s + static_cast<unsigned>(f * f / 2)) / static_cast<unsigned>(f * f))
+            << "factor " << f << " at " << x << "," << y;
+      }
+  }
+}
+
 TEST(Downsample, StridedViewsAndFloat) {
   std::vector<float> src(10 * 4, 0.0f);
   for (int y = 0; y < 4; ++y)
