@@ -55,6 +55,10 @@ float zncc(const PatchDescriptor& a, const PatchDescriptor& b) noexcept;
 
 constexpr int kOrientedDims = 128;
 constexpr float kOrientedCellScale = 3.0f;  // cell side in units of `scale`
+constexpr float kOrientedMaxScale = 4.0f;   // larger scales: use a coarser pyramid level
+// Support side at the largest scale: 2 * (ceil(2 * 3 * 4 * sqrt 2) + 1) + 1. The two scratch planes
+// of that side live on the stack: 2 * 71 * 71 * 4 bytes = 40 KB.
+constexpr int kOrientedMaxSide = 71;
 
 struct OrientedDescriptor {
   float v[kOrientedDims] = {};  // L2-normalised
@@ -65,7 +69,8 @@ struct OrientedDescriptor {
 };
 
 // Computes the descriptor at (x, y) of `image` (a pyramid level) with sample scale `scale` (level
-// pixels, 0.25..16): orientation window sigma 4.5 * scale, descriptor window 4 cells of 3 * scale px.
+// pixels, 0.25..4): orientation window sigma 4.5 * scale, descriptor window 4 cells of 3 * scale px.
+// Stack: 41 KB of scratch (gradient magnitude and angle of the support).
 // Fills v, orientation_rad, valid; x/y/scale are left for the caller (level-0 bookkeeping).
 // Errors: kOutOfRange (support leaves the image), kDegenerate (no gradient), kInvalidArgument.
 Status compute_oriented_descriptor(ConstImageViewU8 image, float x, float y, float scale, OrientedDescriptor& out) noexcept;

@@ -148,7 +148,8 @@ TEST(OrientedDescriptor, RejectsBadInputAndDoesNotAllocate) {
   EXPECT_NEAR(ss, 1.0f, 1e-4f);
   EXPECT_EQ(compute_oriented_descriptor(p.va, 5.0f, 40.0f, 1.0f, d), StatusCode::kOutOfRange);
   EXPECT_FALSE(d.valid);
-  EXPECT_EQ(compute_oriented_descriptor(p.va, 40.0f, 40.0f, 5.0f, d), StatusCode::kOutOfRange);  // support radius 44 px
+  EXPECT_EQ(compute_oriented_descriptor(p.va, 30.0f, 40.0f, 4.0f, d), StatusCode::kOutOfRange);  // support radius 35 px
+  EXPECT_EQ(compute_oriented_descriptor(p.va, 40.0f, 40.0f, 5.0f, d), StatusCode::kInvalidArgument);  // > kOrientedMaxScale
   EXPECT_EQ(compute_oriented_descriptor(p.va, 40.0f, 40.0f, 0.0f, d), StatusCode::kInvalidArgument);
   EXPECT_EQ(compute_oriented_descriptor(p.va, std::nanf(""), 40.0f, 1.0f, d), StatusCode::kInvalidArgument);
   std::vector<std::uint8_t> flat(80 * 80, 10);
