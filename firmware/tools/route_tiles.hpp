@@ -40,8 +40,9 @@ struct RouteTileConfig {
   route::TileFeatureConfig features;
 };
 
-// Defaults tuned for the simulator at 5 Hz / 1.5 m/s: 0.2 m raster 640 x 640 (128 m square),
-// 200 scanlines per tile (60 m of track), ground bins 0.2 m x 256 per side.
+// Defaults tuned for the simulator at 5 Hz / 1.5 m/s: 0.2 m raster 704 x 704 (141 m square),
+// 300 scanlines per tile (90 m of track) every 200 scanlines (60 m node spacing), so a sensed tile
+// never overlaps its nearest node by less than two thirds along track; ground bins 0.2 m x 256.
 RouteTileConfig default_route_tile_config();
 sidescan::SideScanSimConfig default_route_sonar_config();
 sidescan::SeabedConfig default_route_seabed_config(std::uint64_t seed);
@@ -90,13 +91,13 @@ inline RouteTileConfig default_route_tile_config() {
   c.corrector.ground_bin_m = 0.2f;
   c.corrector.nadir_gap_m = 2.0f;
   c.tiles.resolution_m = 0.2;
-  c.tiles.tile_width_px = 640;
-  c.tiles.tile_height_px = 640;
-  c.tiles.scanlines_per_tile = 200;
+  c.tiles.tile_width_px = 704;
+  c.tiles.tile_height_px = 704;
+  c.tiles.scanlines_per_tile = 300;  // 90 m of track: tiles overlap their neighbours by half a node
   c.tiles.scanline_stride = 200;
   c.tiles.max_bins_per_side = 256;
-  c.features.max_width = 640;
-  c.features.max_height = 640;
+  c.features.max_width = 704;
+  c.features.max_height = 704;
   c.features.max_keypoints = 96;
   c.features.downsample = 3;          // 0.6 m pixels: sand ripples (0.9 m) and speckle average out
   c.features.descriptor_step_px = 2;  // 1.2 m between descriptor samples: 8.4 m footprint

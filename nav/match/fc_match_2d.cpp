@@ -28,7 +28,7 @@ float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcep
 std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + nc * sizeof(std::uint32_t) +
-         2 * c.max_points + 64;
+         2 * c.max_points + 4 * c.max_points * sizeof(float) + 64;
 }
 
 Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
@@ -42,7 +42,9 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   order_ = arena.allocate<std::uint32_t>(nc);
   used_a_ = arena.allocate<std::uint8_t>(c.max_points);
   used_b_ = arena.allocate<std::uint8_t>(c.max_points);
-  if (cand_.empty() || first_.empty() || order_.empty() || used_a_.empty() || used_b_.empty())
+  stats_a_ = arena.allocate<float>(2 * c.max_points);
+  stats_b_ = arena.allocate<float>(2 * c.max_points);
+  if (cand_.empty() || first_.empty() || order_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -71,15 +73,35 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   const std::size_t k = config_.max_candidates_per_point;
   const std::size_t d = a.desc_bytes;
 
-  // 1. Appearance candidates, grouped by a, best first (insertion into a k-long list).
+  // 1. Appearance candidates, grouped by a, best first (insertion into a k-long list). Each
+  //    descriptor's sum and 1/sqrt(n var) are computed once, so a pair costs one integer dot product.
+  auto stats = [d](const std::int8_t* p, float* st) {
+    std::int32_t s1 = 0, s2 = 0;
+    for (std::size_t q = 0; q < d; ++q) {
+      s1 += p[q];
+      s2 += static_cast<std::int32_t>(p[q]) * p[q];
+    }
+    const double var = static_cast<double>(s2) - static_cast<double>(s1) * s1 / static_cast<double>(d);
+    st[0] = static_cast<float>(s1);
+    st[1] = var > 1e-9 ? static_cast<float>(1.0 / std::sqrt(var)) : 0.0f;
+  };
+  for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
+  for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
+  const float inv_d = 1.0f / static_cast<float>(d);
   std::size_t nc = 0;
   for (std::size_t i = 0; i < na; ++i) {
     first_[i] = static_cast<std::uint32_t>(nc);
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
     const std::int8_t* da = a.descriptors.data() + i * d;
+    const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
     for (std::size_t j = 0; j < nb; ++j) {
-      const float z = zncc_i8(da, b.descriptors.data() + j * d, d);
+      const float ib = stats_b_[2 * j + 1];
+      if (ia == 0.0f || ib == 0.0f) continue;
+      const std::int8_t* db = b.descriptors.data() + j * d;
+      std::int32_t dot = 0;
+      for (std::size_t q = 0; q < d; ++q) dot += static_cast<std::int32_t>(da[q]) * db[q];
+      const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
       if (!(z >= config_.min_appearance)) continue;
       if (have == k && z <= list[k - 1].appearance) continue;
       std::size_t pos = have < k ? have++ : k - 1;
@@ -94,38 +116,52 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   first_[na] = static_cast<std::uint32_t>(nc);
   if (nc == 0) return Status::ok();
 
-  // 2. Continuous geometric score.
+  // 2. Continuous geometric score. Work per keypoint a (its <= k candidates share the vectors to the
+  //    other keypoints a'), so each (a', candidate of a') pair costs one norm, one dot and one exp.
   const Mat2d r = Pose2{0.0, 0.0, dtheta_rad}.rotation();
   const double inv2sd = 1.0 / (2.0 * config_.sigma_dist_m * config_.sigma_dist_m);
   const float w = config_.appearance_weight;
-  for (std::size_t c = 0; c < nc; ++c) {
-    Candidate& cc = cand_[c];
-    const Vec2d pa = a.position_m[cc.a], pb = b.position_m[cc.b];
-    double s = 0.0;
+  constexpr std::size_t kMaxK = 32;
+  double acc[kMaxK];
+  for (std::size_t i = 0; i < na; ++i) {
+    const std::uint32_t c0 = first_[i], c1 = first_[i + 1];
+    if (c0 == c1) continue;
+    const std::size_t nci = c1 - c0;
+    for (std::size_t q = 0; q < nci; ++q) acc[q] = 0.0;
+    const Vec2d pa = a.position_m[i];
     for (std::size_t i2 = 0; i2 < na; ++i2) {
-      if (i2 == cc.a) continue;
+      if (i2 == i || first_[i2] == first_[i2 + 1]) continue;
       const Vec2d va = r * (a.position_m[i2] - pa);
       const double la = va.norm();
       if (la < 1e-9) continue;
       const double sphi = config_.sigma_dir_rad + config_.sigma_dist_m / la;
       const double inv2sp = 1.0 / (2.0 * sphi * sphi);
-      double best = 0.0;
-      for (std::uint32_t c2 = first_[i2]; c2 < first_[i2 + 1]; ++c2) {
-        if (cand_[c2].b == cc.b) continue;
-        const Vec2d vb = b.position_m[cand_[c2].b] - pb;
-        const double lb = vb.norm();
-        const double dd = la - lb;
-        const double ed = dd * dd * inv2sd;
-        if (ed > 4.5 || lb < 1e-9) continue;  // beyond 3 sigma
-        const double cosphi = va.dot(vb) / (la * lb);
-        if (cosphi <= 0.0) continue;  // directions disagree by more than 90 degrees
-        const double phi2 = 2.0 * (1.0 - cosphi);  // ~ phi^2 for small phi
-        const double f = std::exp(-ed - phi2 * inv2sp);
-        if (f > best) best = f;
+      for (std::size_t q = 0; q < nci; ++q) {
+        const Candidate& cc = cand_[c0 + q];
+        const Vec2d pb = b.position_m[cc.b];
+        double best = 0.0;
+        for (std::uint32_t c2 = first_[i2]; c2 < first_[i2 + 1]; ++c2) {
+          if (cand_[c2].b == cc.b) continue;
+          const Vec2d vb = b.position_m[cand_[c2].b] - pb;
+          const double lb = vb.norm();
+          const double dd = la - lb;
+          const double ed = dd * dd * inv2sd;
+          if (ed > 4.5 || lb < 1e-9) continue;  // beyond 3 sigma
+          const double cosphi = va.dot(vb) / (la * lb);
+          if (cosphi <= 0.0) continue;  // directions disagree by more than 90 degrees
+          const double phi2 = 2.0 * (1.0 - cosphi);  // ~ phi^2 for small phi
+          const double e = ed + phi2 * inv2sp;
+          if (e > 6.9) continue;  // f < 1e-3
+          const double f = std::exp(-e);
+          if (f > best) best = f;
+        }
+        acc[q] += best;
       }
-      s += best;
     }
-    cc.score = static_cast<float>(s) * ((1.0f - w) + w * std::max(0.0f, cc.appearance));
+    for (std::size_t q = 0; q < nci; ++q) {
+      Candidate& cc = cand_[c0 + q];
+      cc.score = static_cast<float>(acc[q]) * ((1.0f - w) + w * std::max(0.0f, cc.appearance));
+    }
   }
 
   // 3. Greedy one-to-one selection.

@@ -87,6 +87,7 @@ class FcMatcher2d {
   Span<std::uint32_t> order_;   // candidate order for the greedy pass
   Span<std::uint8_t> used_a_;
   Span<std::uint8_t> used_b_;
+  Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
   CounterSet<FcMatchCounter> counters_;
 };
 

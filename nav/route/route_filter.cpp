@@ -8,7 +8,7 @@ Status RouteFilter::init(const RouteFilterConfig& c, Arena& arena) noexcept {
   if (c.max_nodes < 2 || c.max_advance_nodes < 1 || c.max_advance_nodes > 64 || !(c.sigma_w2 > 0.0) ||
       !(c.odometry_sigma_frac >= 0.0) || !(c.odometry_sigma_min_nodes > 0.0) || !(c.kidnap_floor >= 0.0 && c.kidnap_floor < 1.0) ||
       !(c.inlier_floor > 0.0f) || !(c.chance_inliers >= 0.0f) || c.belief_registrations == 0 ||
-      c.wide_search_period == 0 || !(c.confident_mass > 0.0 && c.confident_mass <= 1.0))
+      c.wide_search_period == 0 || !(c.confident_mass > 0.0 && c.confident_mass <= 1.0) || !(c.lost_reset_mass >= 0.0 && c.lost_reset_mass <= 1.0))
     return Status(StatusCode::kInvalidArgument, "route filter: bad configuration");
   bel_ = arena.allocate<float>(c.max_nodes);
   tmp_ = arena.allocate<float>(c.max_nodes);
@@ -30,6 +30,7 @@ Status RouteFilter::reset(std::uint32_t node_count, double node_spacing_m) noexc
   for (std::uint32_t i = 0; i < n_; ++i) bel_[i] = u;
   updates_ = 0;
   selects_ = 0;
+  misses_ = 0;
   wide_phase_ = 0;
   last_m_.clear();
   summarise();
@@ -82,19 +83,49 @@ Status RouteFilter::predict(double distance_m) noexcept {
   }
   const int dir = config_.direction == RouteDirection::kForward ? 1 : -1;
   const std::int64_t n = n_;
-  for (std::int64_t j = 0; j < n; ++j) {
+  // tmp[j] = sum_k w[k] bel[j - dir k]; the interior runs without bounds checks.
+  const std::int64_t klo = lo, khi = hi;
+  // j - dir*k in [0, n) for every k in [klo, khi]  <=>  j in [jlo, jhi)
+  const std::int64_t jlo = dir > 0 ? (khi > 0 ? khi : 0) : (-klo > 0 ? -klo : 0);
+  const std::int64_t jhi = dir > 0 ? n + (klo < 0 ? klo : 0) : n - (khi > 0 ? khi : 0);
+  auto edge = [&](std::int64_t j) {
     float acc = 0.0f;
-    for (int k = lo; k <= hi; ++k) {
+    for (std::int64_t k = klo; k <= khi; ++k) {
       const std::int64_t src = j - dir * k;
-      if (src >= 0 && src < n) acc += w[k - lo] * bel_[static_cast<std::size_t>(src)];
+      if (src >= 0 && src < n) acc += w[k - klo] * bel_[static_cast<std::size_t>(src)];
     }
     tmp_[static_cast<std::size_t>(j)] = acc;
+  };
+  const std::int64_t a0 = jlo < n ? jlo : n, a1 = jhi > a0 ? jhi : a0;
+  for (std::int64_t j = 0; j < a0; ++j) edge(j);
+  const float* b = bel_.data();
+  float* t = tmp_.data();
+  const int taps = static_cast<int>(khi - klo + 1);
+  for (std::int64_t j = a0; j < a1; ++j) {
+    const float* src = b + (j - dir * klo);  // k = klo
+    float acc = 0.0f;
+    for (int k = 0; k < taps; ++k) acc += w[k] * src[-dir * k];
+    t[j] = acc;
   }
-  Status s = normalise(tmp_);
+  for (std::int64_t j = a1; j < n; ++j) edge(j);
+  double sum = 0.0;
+  for (std::uint32_t i = 0; i < n_; ++i) sum += static_cast<double>(tmp_[i]);
+  Status s;
+  if (!(sum > 1e-30) || !std::isfinite(sum)) {
+    counters_.increment(FilterCounter::kDegenerateBelief);
+    for (std::uint32_t i = 0; i < n_; ++i) tmp_[i] = 1.0f;
+    sum = n_;
+    s = Status(StatusCode::kDegenerate, "route filter: belief vanished, reset to uniform");
+  }
   const float floor_each = static_cast<float>(config_.kidnap_floor / static_cast<double>(n_));
-  const float keep = static_cast<float>(1.0 - config_.kidnap_floor);
-  for (std::uint32_t i = 0; i < n_; ++i) bel_[i] = keep * tmp_[i] + floor_each;
-  summarise();
+  const float keep = static_cast<float>((1.0 - config_.kidnap_floor) / sum);
+  std::uint32_t best = 0;
+  for (std::uint32_t i = 0; i < n_; ++i) {
+    const float v = keep * tmp_[i] + floor_each;
+    bel_[i] = v;
+    if (v > bel_[best]) best = i;
+  }
+  summarise_at(best);
   return s;
 }
 
@@ -102,6 +133,23 @@ Status RouteFilter::update(Span<const NodeMeasurement> m) noexcept {
   if (n_ == 0) return Status(StatusCode::kNotReady, "route filter: reset() first");
   last_m_.clear();
   const float fl = config_.inlier_floor;
+  // Lost: the nodes around the estimate have shown no similarity for lost_after_updates updates
+  // (kidnapped, or drifted off the route): give mass back to the whole route before this update.
+  if (config_.lost_after_updates > 0) {
+    bool support = false;
+    for (const NodeMeasurement& x : m) {
+      const std::int64_t d = static_cast<std::int64_t>(x.node) - static_cast<std::int64_t>(argmax_);
+      if (x.node < n_ && d >= -1 && d <= 1 && std::isfinite(x.inliers) && x.inliers > config_.chance_inliers) support = true;
+    }
+    misses_ = support ? 0 : misses_ + 1;
+    if (misses_ >= config_.lost_after_updates) {
+      misses_ = 0;
+      counters_.increment(FilterCounter::kLostResets);
+      const float keep = static_cast<float>(1.0 - config_.lost_reset_mass);
+      const float add = static_cast<float>(config_.lost_reset_mass / static_cast<double>(n_));
+      for (std::uint32_t i = 0; i < n_; ++i) bel_[i] = keep * bel_[i] + add;
+    }
+  }
   // bel *= L / floor (unmeasured nodes keep their prediction: L / floor = 1).
   for (const NodeMeasurement& x : m) {
     if (x.node >= n_ || !std::isfinite(x.inliers) || x.inliers < 0.0f) {
@@ -175,6 +223,10 @@ void RouteFilter::summarise() noexcept {
   std::uint32_t best = 0;
   for (std::uint32_t i = 0; i < n_; ++i)
     if (bel_[i] > bel_[best]) best = i;
+  summarise_at(best);
+}
+
+void RouteFilter::summarise_at(std::uint32_t best) noexcept {
   argmax_ = best;
   double m = static_cast<double>(bel_[best]);
   if (best > 0) m += static_cast<double>(bel_[best - 1]);

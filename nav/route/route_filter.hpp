@@ -16,6 +16,8 @@
 //  - select_nodes(): which nodes to register: the belief_registrations most probable nodes, plus
 //    every wide_search_period updates (and every update while not confident) wide_search_registrations
 //    nodes spread over the whole route with a rotating phase (recovers a lost or kidnapped vehicle).
+//  - lost: when no node within +/- 1 of the estimate shows similarity (S > chance_inliers) for
+//    lost_after_updates updates, lost_reset_mass of the belief is spread over the route (re-localisation).
 //  - entropy (natural log, as the paper's Table I), argmax, mass within +/- 1 node of the argmax,
 //    confidence flag (that mass >= confident_mass).
 // Memory: 2 * max_nodes floats + max_nodes bytes from the Arena. Cost: predict O(N * taps), taps <=
@@ -51,6 +53,8 @@ struct RouteFilterConfig {
   std::uint32_t wide_search_registrations = 8;
   std::uint32_t wide_search_period = 4;
   double confident_mass = 0.6;
+  std::uint32_t lost_after_updates = 3;  // 0 = never declare lost
+  double lost_reset_mass = 0.5;          // mass spread uniformly when lost
 };
 
 struct NodeMeasurement {
@@ -58,8 +62,8 @@ struct NodeMeasurement {
   float inliers = 0.0f;  // the paper's similarity S (0 when registration failed)
 };
 
-enum class FilterCounter : std::uint8_t { kBadDistance, kBadMeasurement, kDegenerateBelief, kCount };
-inline constexpr const char* kFilterCounterNames[] = {"bad_distance", "bad_measurement", "degenerate_belief"};
+enum class FilterCounter : std::uint8_t { kBadDistance, kBadMeasurement, kDegenerateBelief, kLostResets, kCount };
+inline constexpr const char* kFilterCounterNames[] = {"bad_distance", "bad_measurement", "degenerate_belief", "lost_resets"};
 
 class RouteFilter {
  public:
@@ -91,6 +95,7 @@ class RouteFilter {
 
  private:
   void summarise() noexcept;
+  void summarise_at(std::uint32_t best) noexcept;
   Status normalise(Span<float> v) noexcept;
   RouteFilterConfig config_{};
   bool ready_ = false;
@@ -103,6 +108,7 @@ class RouteFilter {
   std::uint32_t updates_ = 0;
   std::uint32_t wide_phase_ = 0;
   std::uint32_t selects_ = 0;
+  std::uint32_t misses_ = 0;
   std::uint32_t argmax_ = 0;
   double mass_pm1_ = 0.0;
   CounterSet<FilterCounter> counters_;

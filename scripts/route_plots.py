@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+# Plots for docs/route.md from the CSVs written by `qnav route eval --out DIR`.
+# usage: /usr/bin/python3 scripts/route_plots.py DIR OUTDIR
+#   route_offsets.png  node-within-1 and side-correct vs lateral offset, forward and reverse
+#   route_fig5.png     measurement model p(z|w) per sensed tile (paper Fig. 5)
+#   route_fig7.png     belief per sensed tile (paper Fig. 7)
+#   route_fig9.png     true positions, estimated nodes and cross-track side arrows (paper Fig. 9/10)
+import csv
+import sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def matrix(path):
+    with open(path) as f:
+        return [[float(v) for v in line.strip().split(",")] for line in f if line.strip()]
+
+
+def main():
+    src, out = sys.argv[1], sys.argv[2]
+    offs = rows(src + "/route_eval_offsets.csv")
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for d, m in (("forward", "o-"), ("reverse", "s--")):
+        r = [x for x in offs if x["direction"] == d]
+        pct = [int(x["offset_pct"]) for x in r]
+        ax[0].plot(pct, [float(x["within1_pct"]) for x in r], m, label=d)
+        side = [100.0 * int(x["side_correct"]) / int(x["side_n"]) if int(x["side_n"]) else float("nan") for x in r]
+        ax[1].plot(pct, side, m, label=d + " (side correct)")
+        ax[1].plot(pct, [float(x["tracking_pct"]) for x in r], m, alpha=0.4, label=d + " (tracking, side decided)")
+    ax[0].set_xlabel("lateral offset, % of swath")
+    ax[0].set_ylabel("% tiles with estimate within +/-1 node")
+    ax[0].set_ylim(0, 105)
+    ax[0].axhline(95, color="gray", lw=0.5)
+    ax[0].legend()
+    ax[0].set_title("localisation vs offset")
+    ax[1].set_xlabel("lateral offset, % of swath")
+    ax[1].set_ylabel("%")
+    ax[1].set_ylim(0, 105)
+    ax[1].axhline(95, color="gray", lw=0.5)
+    ax[1].legend(fontsize=7)
+    ax[1].set_title("route side (tiles where guidance is tracking)")
+    fig.tight_layout()
+    fig.savefig(out + "/route_offsets.png", dpi=90)
+
+    for name, title in (("fig5", "measurement model p(z|w) (paper Fig. 5)"), ("fig7", "belief bel(w) (paper Fig. 7)")):
+        m = matrix(src + "/route_%s.csv" % name)
+        fig, ax = plt.subplots(figsize=(7, 4))
+        im = ax.imshow(m, aspect="auto", cmap="viridis", origin="upper",
+                       extent=(0.5, len(m[0]) + 0.5, len(m) + 0.5, 0.5))
+        t1 = rows(src + "/route_table1.csv")
+        ax.plot([int(x["truth"]) for x in t1], [int(x["sensed"]) for x in t1], "r+", ms=10, label="true node")
+        ax.set_xlabel("training node")
+        ax.set_ylabel("sensed tile")
+        ax.set_title(title)
+        ax.legend(loc="lower right", fontsize=7)
+        fig.colorbar(im)
+        fig.tight_layout()
+        fig.savefig(out + "/route_%s.png" % name, dpi=90)
+
+    f9 = rows(src + "/route_fig9.csv")
+    fig, ax = plt.subplots(figsize=(7, 5))
+    tn = [float(x["true_north"]) for x in f9]
+    te = [float(x["true_east"]) for x in f9]
+    nn = [float(x["node_north"]) for x in f9]
+    ne = [float(x["node_east"]) for x in f9]
+    ax.plot(ne, nn, "k.-", label="estimated nodes (on the route)")
+    ax.plot(te, tn, "bo", label="true vehicle position")
+    for x in f9:
+        if x["status"] != "tracking":
+            continue
+        # Arrow from the vehicle towards the route: opposite of the side it reports.
+        dn, de = float(x["node_north"]) - float(x["true_north"]), float(x["node_east"]) - float(x["true_east"])
+        ok = x["side"] == x["true_side"]
+        ax.annotate("", xy=(float(x["true_east"]) + 0.5 * de, float(x["true_north"]) + 0.5 * dn),
+                    xytext=(float(x["true_east"]), float(x["true_north"])),
+                    arrowprops=dict(arrowstyle="->", color="g" if ok else "r"))
+    for x in f9:
+        ax.annotate(x["sensed"], (float(x["true_east"]), float(x["true_north"])), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax.set_xlabel("east, m")
+    ax.set_ylabel("north, m")
+    ax.set_aspect("equal")
+    ax.legend(fontsize=7)
+    ax.set_title("sensed tiles, estimated nodes, side arrows (green = correct side)")
+    fig.tight_layout()
+    fig.savefig(out + "/route_fig9.png", dpi=90)
+
+
+if __name__ == "__main__":
+    main()
