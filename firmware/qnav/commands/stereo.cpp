@@ -1,0 +1,337 @@
+// qnav stereo: the vision front end on image files.
+//   qnav stereo disparity LEFT RIGHT [--max-disparity N] [--corners N] [--out PNG]
+//       Harris corners on LEFT, ZNCC stereo at the corners; prints counts and counters; --out writes
+//       the left image with each matched corner coloured by disparity (red = near, blue = far).
+//   qnav stereo aloe [--dir DIR]
+//       Disparity at Harris corners of the Middlebury Aloe pair against its ground truth.
+//   qnav stereo euroc-rectify [DIR] [--out PNG]
+//       Rectifies the first EuRoC pair from the two sensor.yaml; prints the row offset of matched
+//       corners before and after; --out writes the rectified pair side by side with guide rows.
+//   qnav stereo degrade IMAGE [--filter 1..5] [--out PNG]
+//       Applies an underwater degradation of Table 1 and prints Harris repeatability against the
+//       clean image.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "firmware/qnav/args.hpp"
+#include "firmware/qnav/command.hpp"
+#include "firmware/tools/image_reader.hpp"
+#include "firmware/tools/png_writer.hpp"
+#include "firmware/tools/sequence_reader.hpp"
+#include "nav/vision/degrade.hpp"
+#include "nav/vision/harris.hpp"
+#include "nav/vision/rectify.hpp"
+#include "nav/vision/stereo.hpp"
+
+namespace {
+
+using namespace qnav;
+using namespace qnav::vision;
+
+const char* const kValued[] = {"--max-disparity", "--corners", "--out", "--dir", "--filter", nullptr};
+
+struct Detector {
+  Detector(int w, int h, int cap) : storage(static_cast<std::size_t>(cap)) {
+    HarrisConfig c;
+    c.max_width = w;
+    c.max_height = h;
+    c.max_corners = cap;
+    arena = std::make_unique<ArenaStorage>(HarrisDetector::arena_bytes(c));
+    status = det.init(c, *arena);
+    out = BoundedVector<Corner>(Span<Corner>(storage.data(), storage.size()));
+  }
+  std::unique_ptr<ArenaStorage> arena;
+  std::vector<Corner> storage;
+  BoundedVector<Corner> out;
+  HarrisDetector det;
+  Status status;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+void print_counters(const VisionCounters& c) {
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (c.count_at(i) > 0) std::printf("  counter %-26s %u\n", c.name_at(i), c.count_at(i));
+}
+
+bool load(const char* path, ImageU8& img) {
+  Result<ImageU8> r = tools::read_image_gray8(path);
+  if (!r.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: %s: %s\n", path, r.status().message());
+    return false;
+  }
+  img = std::move(r.value());
+  return true;
+}
+
+// Runs Harris + stereo; fills pts. Returns false on a hard error (printed).
+bool run_stereo(const ImageU8& l, const ImageU8& r, int corners, int max_d, Detector& d, std::vector<StereoPoint>& pts,
+                StereoMatcher& m) {
+  if (!d.status.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: harris init: %s\n", d.status.message());
+    return false;
+  }
+  Status s = d.det.detect(l.view(), d.out);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: harris: %s\n", s.message());
+    return false;
+  }
+  StereoConfig sc;
+  sc.max_disparity_px = max_d;
+  s = m.init(sc, StereoCamera{1.0, l.width() / 2.0, l.height() / 2.0, 1.0});
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: stereo init: %s\n", s.message());
+    return false;
+  }
+  pts.assign(static_cast<std::size_t>(corners), StereoPoint{});
+  BoundedVector<StereoPoint> out(Span<StereoPoint>(pts.data(), pts.size()));
+  s = m.match(l.view(), r.view(), d.out.span(), out);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: match: %s\n", s.message());
+    return false;
+  }
+  pts.resize(out.size());
+  return true;
+}
+
+int cmd_disparity(int argc, char** argv) {
+  const char* lp = cli::positional(argc, argv, 2, 0, kValued);
+  const char* rp = cli::positional(argc, argv, 2, 1, kValued);
+  long max_d = 64, corners = 500;
+  if (lp == nullptr || rp == nullptr || !cli::option_long(argc, argv, "--max-disparity", max_d) ||
+      !cli::option_long(argc, argv, "--corners", corners) || max_d < 3 || max_d > 500 || corners < 1 || corners > 100000) {
+    std::fprintf(stderr, "usage: qnav stereo disparity LEFT RIGHT [--max-disparity 3..500] [--corners N] [--out PNG]\n");
+    return 2;
+  }
+  ImageU8 l, r;
+  if (!load(lp, l) || !load(rp, r)) return 1;
+  if (l.width() != r.width() || l.height() != r.height()) {
+    std::fprintf(stderr, "qnav stereo: left and right sizes differ\n");
+    return 1;
+  }
+  Detector d(l.width(), l.height(), static_cast<int>(corners));
+  StereoMatcher m;
+  std::vector<StereoPoint> pts;
+  if (!run_stereo(l, r, static_cast<int>(corners), static_cast<int>(max_d), d, pts, m)) return 1;
+  std::vector<double> ds;
+  for (const StereoPoint& p : pts) ds.push_back(p.disparity_px);
+  std::printf("stereo: %dx%d, %zu corners, %zu matched (%.1f %%), disparity median %.2f px, range %.2f..%.2f px\n", l.width(),
+              l.height(), d.out.size(), pts.size(), d.out.size() ? 100.0 * pts.size() / d.out.size() : 0.0, median(ds),
+              ds.empty() ? 0.0 : *std::min_element(ds.begin(), ds.end()), ds.empty() ? 0.0 : *std::max_element(ds.begin(), ds.end()));
+  print_counters(m.counters());
+  if (const char* outp = cli::option(argc, argv, "--out")) {
+    std::vector<std::uint8_t> rgb(static_cast<std::size_t>(l.width() * l.height() * 3));
+    for (int y = 0; y < l.height(); ++y)
+      for (int x = 0; x < l.width(); ++x)
+        for (int c = 0; c < 3; ++c) rgb[static_cast<std::size_t>((y * l.width() + x) * 3 + c)] = l(x, y) / 2;
+    const double dmax = ds.empty() ? 1.0 : std::max(1.0, *std::max_element(ds.begin(), ds.end()));
+    for (const StereoPoint& p : pts) {
+      const double t = static_cast<double>(p.disparity_px) / dmax;  // 1 = near (red), 0 = far (blue)
+      const std::uint8_t col[3] = {static_cast<std::uint8_t>(255 * t), static_cast<std::uint8_t>(255 * (1 - std::fabs(2 * t - 1))),
+                                   static_cast<std::uint8_t>(255 * (1 - t))};
+      const int cx = static_cast<int>(std::lround(p.x_px)), cy = static_cast<int>(std::lround(p.y_px));
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int x = cx + dx, y = cy + dy;
+          if (x < 0 || y < 0 || x >= l.width() || y >= l.height()) continue;
+          for (int c = 0; c < 3; ++c) rgb[static_cast<std::size_t>((y * l.width() + x) * 3 + c)] = col[c];
+        }
+    }
+    const Status s = tools::write_png_rgb8(outp, rgb.data(), l.width(), l.height(), l.width() * 3);
+    if (!s.is_ok()) {
+      std::fprintf(stderr, "qnav stereo: %s: %s\n", outp, s.message());
+      return 1;
+    }
+    std::printf("wrote %s\n", outp);
+  }
+  return 0;
+}
+
+int cmd_aloe(int argc, char** argv) {
+  const std::string dir = cli::option(argc, argv, "--dir", QNAV_SHARED_DIR "/data/stereo/middlebury_aloe_opencv");
+  ImageU8 l, r, gt;
+  if (!load((dir + "/aloeL.jpg").c_str(), l) || !load((dir + "/aloeR.jpg").c_str(), r) || !load((dir + "/aloeGT.png").c_str(), gt))
+    return 1;
+  Detector d(l.width(), l.height(), 1000);
+  StereoMatcher m;
+  std::vector<StereoPoint> pts;
+  if (!run_stereo(l, r, 1000, 240, d, pts, m)) return 1;
+  std::vector<double> err;
+  for (const StereoPoint& p : pts) {
+    const int g = gt(static_cast<int>(std::lround(p.x_px)), static_cast<int>(std::lround(p.y_px)));
+    if (g > 0) err.push_back(std::fabs(p.disparity_px - g));
+  }
+  const double within1 =
+      err.empty() ? 0.0 : static_cast<double>(std::count_if(err.begin(), err.end(), [](double e) { return e <= 1.0; })) / err.size();
+  const double within3 =
+      err.empty() ? 0.0 : static_cast<double>(std::count_if(err.begin(), err.end(), [](double e) { return e <= 3.0; })) / err.size();
+  std::printf("aloe %dx%d: %zu Harris corners, %zu matched, %zu with GT; |d - gt| median %.3f px, within 1 px %.1f %%, within 3 px %.1f %%\n",
+              l.width(), l.height(), d.out.size(), pts.size(), err.size(), median(err), 100 * within1, 100 * within3);
+  print_counters(m.counters());
+  return 0;
+}
+
+// Row offsets of strong unique 2D ZNCC matches of left Harris corners in the right image.
+std::vector<double> row_offsets(const ImageU8& L, const ImageU8& R) {
+  Detector d(L.width(), L.height(), 300);
+  std::vector<double> dys;
+  if (!d.status.is_ok() || !d.det.detect(L.view(), d.out).is_ok()) return dys;
+  const int rad = 5, W = L.width(), H = L.height();
+  for (const Corner& c : d.out) {
+    const int x = static_cast<int>(std::lround(c.x)), y = static_cast<int>(std::lround(c.y));
+    if (x < rad + 81 || y < rad + 5 || x >= W - rad || y >= H - rad - 5) continue;
+    double best = -2, second = -2, sc[9][81];
+    int bd = 0, by = 0;
+    for (int dy = -4; dy <= 4; ++dy)
+      for (int dd = 1; dd <= 80; ++dd) {
+        double sl = 0, sr = 0, sll = 0, srr = 0, slr = 0;
+        for (int j = -rad; j <= rad; ++j)
+          for (int i = -rad; i <= rad; ++i) {
+            const double a = L(x + i, y + j), b = R(x - dd + i, y + dy + j);
+            sl += a, sr += b, sll += a * a, srr += b * b, slr += a * b;
+          }
+        const double n = (2 * rad + 1) * (2 * rad + 1);
+        const double den = std::sqrt((sll - sl * sl / n) * (srr - sr * sr / n));
+        const double z = den > 1e-9 ? (slr - sl * sr / n) / den : -1;
+        sc[dy + 4][dd] = z;
+        if (z > best) {
+          if (std::abs(dd - bd) > 2) second = best;
+          best = z, bd = dd, by = dy;
+        } else if (z > second && std::abs(dd - bd) > 2) {
+          second = z;
+        }
+      }
+    if (best < 0.9 || second > best - 0.05 || by == -4 || by == 4) continue;
+    const double a = sc[by + 3][bd], b = sc[by + 4][bd], cc = sc[by + 5][bd];
+    const double den = a - 2 * b + cc;
+    dys.push_back(std::fabs(by + (den < 0 ? 0.5 * (a - cc) / den : 0.0)));
+  }
+  return dys;
+}
+
+int cmd_euroc_rectify(int argc, char** argv) {
+  const char* dp = cli::positional(argc, argv, 2, 0, kValued);
+  const std::string dir = dp ? dp : QNAV_SHARED_DIR "/data/stereo/euroc_v1_01_hover40";
+  Result<tools::EurocCamera> c0 = tools::read_euroc_camera(dir + "/cam0/sensor.yaml");
+  Result<tools::EurocCamera> c1 = tools::read_euroc_camera(dir + "/cam1/sensor.yaml");
+  std::vector<tools::StereoFrame> frames;
+  const Status fs = tools::read_euroc_sequence(dir, frames);
+  if (!c0.is_ok() || !c1.is_ok() || !fs.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: %s: %s\n", dir.c_str(),
+                 !c0.is_ok() ? c0.status().message() : (!c1.is_ok() ? c1.status().message() : fs.message()));
+    return 1;
+  }
+  ImageU8 rl, rr;
+  if (!load(frames[0].left_path.c_str(), rl) || !load(frames[0].right_path.c_str(), rr)) return 1;
+  const int W = rl.width(), H = rl.height();
+  const Pose3 T = tools::euroc_stereo_extrinsics(*c0, *c1);
+  Result<StereoRectification> rect = stereo_rectify(c0->model, c1->model, T, W, H);
+  if (!rect.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: rectify: %s\n", rect.status().message());
+    return 1;
+  }
+  RemapConfig rc;
+  rc.max_width = W;
+  rc.max_height = H;
+  ArenaStorage arena(2 * static_cast<std::size_t>(W) * static_cast<std::size_t>(H) * 8 + 64);
+  RemapTable tl, tr;
+  ImageU8 ol = ImageU8::allocate(W, H).value(), orr = ImageU8::allocate(W, H).value();
+  Status s = tl.init(rc, arena);
+  if (s.is_ok()) s = tr.init(rc, arena);
+  if (s.is_ok()) s = tl.build(c0->model, rect->K, rect->R_left, FlatPortRefraction{}, W, H);
+  if (s.is_ok()) s = tr.build(c1->model, rect->K, rect->R_right, FlatPortRefraction{}, W, H);
+  if (s.is_ok()) s = tl.apply(rl.view(), ol.view());
+  if (s.is_ok()) s = tr.apply(rr.view(), orr.view());
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: remap: %s\n", s.message());
+    return 1;
+  }
+  const std::vector<double> after = row_offsets(ol, orr), before = row_offsets(rl, rr);
+  std::printf("euroc %s: baseline %.4f m, rectified f %.2f px, cu %.2f, cv %.2f, valid pixels L %.1f %% R %.1f %%\n",
+              dir.c_str(), rect->baseline_m, rect->K(0, 0), rect->K(0, 2), rect->K(1, 2), 100.0 * tl.valid_pixels() / (W * H),
+              100.0 * tr.valid_pixels() / (W * H));
+  std::printf("row offset of matched corners: raw %zu matches median %.3f px; rectified %zu matches median %.3f px\n", before.size(),
+              median(before), after.size(), median(after));
+  if (const char* outp = cli::option(argc, argv, "--out")) {
+    ImageU8 both = ImageU8::allocate(2 * W, H).value();
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const bool guide = y % 40 == 0;
+        both(x, y) = guide ? 255 : ol(x, y);
+        both(W + x, y) = guide ? 255 : orr(x, y);
+      }
+    s = tools::write_png_gray8(outp, both.view());
+    if (!s.is_ok()) {
+      std::fprintf(stderr, "qnav stereo: %s: %s\n", outp, s.message());
+      return 1;
+    }
+    std::printf("wrote %s\n", outp);
+  }
+  return 0;
+}
+
+int cmd_degrade(int argc, char** argv) {
+  const char* ip = cli::positional(argc, argv, 2, 0, kValued);
+  long filter = 4;
+  if (ip == nullptr || !cli::option_long(argc, argv, "--filter", filter) || filter < 1 || filter > 5) {
+    std::fprintf(stderr, "usage: qnav stereo degrade IMAGE [--filter 1..5] [--out PNG]\n");
+    return 2;
+  }
+  ImageU8 img;
+  if (!load(ip, img)) return 1;
+  ImageU8 deg = ImageU8::allocate(img.width(), img.height()).value();
+  const UnderwaterDegradation p = table1_filter(static_cast<int>(filter));
+  const Status s = degrade_underwater(img.view(), p, deg.view());
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "qnav stereo: degrade: %s\n", s.message());
+    return 1;
+  }
+  Detector a(img.width(), img.height(), 500), b(img.width(), img.height(), 500);
+  if (!a.det.detect(img.view(), a.out).is_ok() || !b.det.detect(deg.view(), b.out).is_ok()) return 1;
+  int hit = 0;
+  for (const Corner& c : a.out)
+    for (const Corner& q : b.out)
+      if (std::hypot(c.x - q.x, c.y - q.y) <= 1.5f) {
+        ++hit;
+        break;
+      }
+  std::printf("degrade filter %ld (light %.2f m, attenuation %.2f, noise %.0f, min grey %d, %d flakes): Harris repeatability %.3f (%d of %zu corners within 1.5 px)\n",
+              filter, p.light_distance_m, p.attenuation, p.noise_sigma, p.min_grey, p.snow_flakes,
+              a.out.size() ? static_cast<double>(hit) / a.out.size() : 0.0, hit, a.out.size());
+  if (const char* outp = cli::option(argc, argv, "--out")) {
+    const Status w = tools::write_png_gray8(outp, deg.view());
+    if (!w.is_ok()) {
+      std::fprintf(stderr, "qnav stereo: %s: %s\n", outp, w.message());
+      return 1;
+    }
+    std::printf("wrote %s\n", outp);
+  }
+  return 0;
+}
+
+int run_stereo_cmd(int argc, char** argv) {
+  const char* sub = argc > 1 ? argv[1] : "";
+  if (std::strcmp(sub, "disparity") == 0) return cmd_disparity(argc, argv);
+  if (std::strcmp(sub, "aloe") == 0) return cmd_aloe(argc, argv);
+  if (std::strcmp(sub, "euroc-rectify") == 0) return cmd_euroc_rectify(argc, argv);
+  if (std::strcmp(sub, "degrade") == 0) return cmd_degrade(argc, argv);
+  std::fprintf(stderr,
+               "usage: qnav stereo disparity LEFT RIGHT [--max-disparity N] [--corners N] [--out PNG]\n"
+               "       qnav stereo aloe [--dir DIR]\n"
+               "       qnav stereo euroc-rectify [DIR] [--out PNG]\n"
+               "       qnav stereo degrade IMAGE [--filter 1..5] [--out PNG]\n");
+  return 2;
+}
+
+}  // namespace
+
+QNAV_COMMAND("stereo", "vision front end on files: disparity, aloe, euroc-rectify, degrade", run_stereo_cmd);
