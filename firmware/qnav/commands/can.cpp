@@ -1,6 +1,8 @@
 // qnav can: qnav's CAN interface from the command line.
 //   qnav can decode LOG [--node N]   decode a candump log (candump -l): qnav messages (docs/qnav.dbc)
 //                                    and DroneCAN AHRS Solution/RawIMU; prints counters at the end
+//   qnav can listen IFACE [--seconds S] [--node N]
+//                                    the same, live from a SocketCAN interface (can0, vcan0)
 //   qnav can dbc FILE                read a DBC file and check every signal against qnav's codec
 //   qnav can simulate OUT [--seconds S] [--faults]
 //                                    write a candump log of an AHRS (qnav ATTITUDE_IN + DroneCAN
@@ -19,6 +21,8 @@
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
 #include "hal/core/candump.hpp"
+#include "hal/linux/monotonic_clock.hpp"
+#include "hal/linux/socketcan_bus.hpp"
 #include "hal/sim/can_log_replay.hpp"
 
 namespace {
@@ -43,6 +47,51 @@ void print_counters(const char* what, const C& c) {
   std::printf("\n");
 }
 
+// Decodes frames from any CanBus (a log replay or a live socket) and prints what it understood.
+struct Decoder {
+  explicit Decoder(std::uint8_t node) : drx(node) {}
+  qc::QnavCanReceiver qrx;
+  dc::DroneCanAhrsReceiver drx;
+  unsigned frames = 0, printed = 0, solutions = 0;
+  unsigned max_print = 20;
+
+  void on_frame(const hal::CanRxFrame& f) {
+    ++frames;
+    const double t_s = static_cast<double>(f.stamp.sample_ns) * 1e-9;
+    if (f.frame.extended) {
+      if (drx.on_frame(f) == dc::AhrsUpdate::kSolution) {
+        ++solutions;
+        const dc::AhrsSolution& s = drx.solution().value;
+        const double x = s.orientation_xyzw[0], y = s.orientation_xyzw[1], z = s.orientation_xyzw[2], w = s.orientation_xyzw[3];
+        const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y));
+        const double pitch = std::asin(std::fmax(-1.0, std::fmin(1.0, 2 * (w * y - z * x))));
+        const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
+        if (printed++ < max_print)
+          std::printf("%10.6f dronecan node %u Solution roll %.4f pitch %.4f yaw %.4f rad, gz %.3f rad/s\n", t_s,
+                      drx.solution().source_node, roll, pitch, yaw, static_cast<double>(s.angular_velocity_radps[2]));
+      }
+      return;
+    }
+    const Status s = qrx.on_frame(f);
+    const qc::MessageDef* def = nullptr;
+    double values[8];
+    if (printed < max_print && qc::decode_generic(f.frame, def, values, 8).is_ok() && def != nullptr) {
+      ++printed;
+      std::printf("%10.6f %s", t_s, def->name);
+      for (std::size_t i = 0; i < def->signals.size(); ++i) std::printf(" %s=%g%s", def->signals[i].name, values[i], def->signals[i].unit);
+      std::printf("%s\n", s.is_ok() ? "" : (std::string("  [rejected: ") + s.message() + "]").c_str());
+    }
+  }
+  void summary(unsigned bad_lines) const {
+    if (printed >= max_print) std::printf("... (first %u decoded lines shown)\n", max_print);
+    std::printf("frames %u, bad log lines %u, qnav inputs accepted %u, DroneCAN solutions %u, raw IMU %u\n", frames, bad_lines,
+                qrx.accepted(), solutions, drx.raw_imus());
+    print_counters("qnav rx counters", qrx.counters());
+    print_counters("dronecan transport counters", drx.reassembler().counters());
+    print_counters("dronecan ahrs counters", drx.counters());
+  }
+};
+
 int decode(int argc, char** argv) {
   static const char* const kValued[] = {"--node", nullptr};
   const char* path = cli::positional(argc, argv, 2, 0, kValued);
@@ -57,43 +106,46 @@ int decode(int argc, char** argv) {
     return 1;
   }
   hal::CanLogReplay replay(text.data(), text.size(), 0);
-  qc::QnavCanReceiver qrx;
-  dc::DroneCanAhrsReceiver drx(static_cast<std::uint8_t>(node));
+  auto d = std::make_unique<Decoder>(static_cast<std::uint8_t>(node));
   hal::CanRxFrame f;
-  unsigned frames = 0, printed = 0, solutions = 0;
-  double values[8];
-  while (replay.receive(f, 0).is_ok()) {
-    ++frames;
-    const double t_s = static_cast<double>(f.stamp.sample_ns) * 1e-9;
-    if (f.frame.extended) {
-      if (drx.on_frame(f) == dc::AhrsUpdate::kSolution) {
-        ++solutions;
-        const dc::AhrsSolution& s = drx.solution().value;
-        const double x = s.orientation_xyzw[0], y = s.orientation_xyzw[1], z = s.orientation_xyzw[2], w = s.orientation_xyzw[3];
-        const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y));
-        const double pitch = std::asin(std::fmax(-1.0, std::fmin(1.0, 2 * (w * y - z * x))));
-        const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
-        if (printed++ < 20)
-          std::printf("%10.6f dronecan node %u Solution roll %.4f pitch %.4f yaw %.4f rad, gz %.3f rad/s\n", t_s,
-                      drx.solution().source_node, roll, pitch, yaw, static_cast<double>(s.angular_velocity_radps[2]));
-      }
-      continue;
-    }
-    const Status s = qrx.on_frame(f);
-    const qc::MessageDef* def = nullptr;
-    if (printed < 20 && qc::decode_generic(f.frame, def, values, 8).is_ok() && def != nullptr) {
-      ++printed;
-      std::printf("%10.6f %s", t_s, def->name);
-      for (std::size_t i = 0; i < def->signals.size(); ++i) std::printf(" %s=%g%s", def->signals[i].name, values[i], def->signals[i].unit);
-      std::printf("%s\n", s.is_ok() ? "" : (std::string("  [rejected: ") + s.message() + "]").c_str());
+  while (replay.receive(f, 0).is_ok()) d->on_frame(f);
+  d->summary(replay.bad_lines());
+  return 0;
+}
+
+// Live: a SocketCAN interface (can0, vcan0) for --seconds, all frames, error frames subscribed.
+int listen_live(int argc, char** argv) {
+  static const char* const kValued[] = {"--node", "--seconds", nullptr};
+  const char* iface = cli::positional(argc, argv, 2, 0, kValued);
+  long node = 0;
+  double seconds = 5;
+  if (iface == nullptr || !cli::option_long(argc, argv, "--node", node) || node < 0 || node > 127 ||
+      !cli::option_double(argc, argv, "--seconds", seconds) || seconds <= 0) {
+    std::fprintf(stderr, "usage: qnav can listen IFACE [--seconds S] [--node N]\n");
+    return 2;
+  }
+  hal::SocketCanBus bus;
+  hal::SocketCanConfig cfg;
+  cfg.interface = iface;
+  const Status st = bus.open(cfg);
+  if (!st.is_ok()) {
+    std::fprintf(stderr, "qnav can: %s: %s\n", iface, st.message());
+    return 1;
+  }
+  auto d = std::make_unique<Decoder>(static_cast<std::uint8_t>(node));
+  const std::int64_t end = hal::monotonic_now_ns() + static_cast<std::int64_t>(seconds * 1e9);
+  hal::CanRxFrame f;
+  while (hal::monotonic_now_ns() < end) {
+    const Status r = bus.receive(f, 100);
+    if (r.is_ok()) d->on_frame(f);
+    else if (r != StatusCode::kTimeout) {
+      std::fprintf(stderr, "qnav can: %s: %s\n", iface, r.message());
+      return 1;
     }
   }
-  if (printed >= 20) std::printf("... (first 20 decoded lines shown)\n");
-  std::printf("frames %u, bad log lines %u, qnav inputs accepted %u, DroneCAN solutions %u, raw IMU %u\n", frames,
-              replay.bad_lines(), qrx.accepted(), solutions, drx.raw_imus());
-  print_counters("qnav rx counters", qrx.counters());
-  print_counters("dronecan transport counters", drx.reassembler().counters());
-  print_counters("dronecan ahrs counters", drx.counters());
+  d->summary(0);
+  const hal::CanBusStats bs = bus.stats();
+  std::printf("socket: rx %u, kernel drops %u, error frames %u, bus-off %u\n", bs.rx_frames, bs.rx_dropped, bs.error_frames, bs.bus_off);
   return 0;
 }
 
@@ -201,9 +253,10 @@ int simulate(int argc, char** argv) {
 
 int run_can(int argc, char** argv) {
   if (argc >= 2 && std::strcmp(argv[1], "decode") == 0) return decode(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "listen") == 0) return listen_live(argc, argv);
   if (argc >= 2 && std::strcmp(argv[1], "dbc") == 0) return dbc(argc, argv);
   if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
-  std::fprintf(stderr, "usage: qnav can decode LOG [--node N] | dbc FILE | simulate OUT [--seconds S] [--faults]\n");
+  std::fprintf(stderr, "usage: qnav can decode LOG [--node N] | listen IFACE [--seconds S] | dbc FILE | simulate OUT [--seconds S] [--faults]\n");
   return 2;
 }
 }  // namespace

@@ -2,6 +2,8 @@
 //   qnav dvl parse FILE [--pd6]      parse a capture of DVL output (Water Linked serial protocol, or
 //                                    RDI PD6 with --pd6 / when the first line starts with ':'); prints
 //                                    the velocities and the rejection counters
+//   qnav dvl listen DEVICE [--baud B] [--pd6] [--seconds S]
+//                                    live from a serial device through the termios backend
 //   qnav dvl simulate OUT [--seconds S] [--faults]
 //                                    write Water Linked sentences (wrz + wru at 8 Hz) with valid
 //                                    checksums; --faults adds bad checksums, lock losses and stale lines
@@ -10,11 +12,14 @@
 #include <cstring>
 #include <string>
 
+#include "drivers/dvl/dvl_driver.hpp"
 #include "drivers/dvl/line_assembler.hpp"
 #include "drivers/dvl/pd6_parser.hpp"
 #include "drivers/dvl/wl_parser.hpp"
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
+#include "hal/linux/monotonic_clock.hpp"
+#include "hal/linux/termios_serial.hpp"
 
 namespace {
 using namespace qnav;
@@ -81,6 +86,51 @@ int parse(int argc, char** argv) {
   return 0;
 }
 
+// Live: a DVL on a serial device (or a pty) through TermiosSerialPort + DvlSerialDriver.
+int listen_live(int argc, char** argv) {
+  static const char* const kValued[] = {"--baud", "--seconds", nullptr};
+  const char* dev = cli::positional(argc, argv, 2, 0, kValued);
+  long baud = 115200;
+  double seconds = 5;
+  if (dev == nullptr || !cli::option_long(argc, argv, "--baud", baud) || !cli::option_double(argc, argv, "--seconds", seconds) ||
+      seconds <= 0 || baud <= 0) {
+    std::fprintf(stderr, "usage: qnav dvl listen DEVICE [--baud B] [--pd6] [--seconds S]\n");
+    return 2;
+  }
+  hal::TermiosSerialPort port;
+  hal::SerialConfig cfg;
+  cfg.baud = static_cast<std::uint32_t>(baud);
+  const Status st = port.open(dev, cfg);
+  if (!st.is_ok()) {
+    std::fprintf(stderr, "qnav dvl: %s: %s\n", dev, st.message());
+    return 1;
+  }
+  const bool pd6 = cli::flag(argc, argv, "--pd6");
+  DvlSerialDriver drv(port, pd6 ? DvlProtocol::kPd6 : DvlProtocol::kWaterLinked);
+  const std::int64_t end = hal::monotonic_now_ns() + static_cast<std::int64_t>(seconds * 1e9);
+  unsigned n = 0;
+  while (hal::monotonic_now_ns() < end) {
+    auto r = drv.poll(100);
+    if (!r.is_ok()) {
+      std::fprintf(stderr, "qnav dvl: %s: %s\n", dev, r.status().message());
+      return 1;
+    }
+    DvlVelocity v;
+    while (drv.pop(v)) {
+      ++n;
+      std::printf("%.6f v = (%+.3f, %+.3f, %+.3f) m/s  lock %s  altitude %.2f m  latency %.1f ms\n",
+                  static_cast<double>(v.stamp.arrival_ns) * 1e-9, v.vx_mps, v.vy_mps, v.vz_mps, v.bottom_lock ? "yes" : "no ",
+                  v.altitude_m, static_cast<double>(v.stamp.arrival_ns - v.stamp.sample_ns) * 1e-6);
+    }
+  }
+  std::printf("%s: %u lines, %u velocity samples\n", dev, drv.lines(), n);
+  std::printf("rejected:");
+  for (std::size_t i = 0; i < static_cast<std::size_t>(DvlCounter::kCount); ++i)
+    std::printf(" %s=%u", kDvlCounterNames[i], drv.counter(static_cast<DvlCounter>(i)));
+  std::printf("\n");
+  return 0;
+}
+
 int simulate(int argc, char** argv) {
   static const char* const kValued[] = {"--seconds", nullptr};
   const char* out = cli::positional(argc, argv, 2, 0, kValued);
@@ -127,8 +177,9 @@ int simulate(int argc, char** argv) {
 
 int run_dvl(int argc, char** argv) {
   if (argc >= 2 && std::strcmp(argv[1], "parse") == 0) return parse(argc, argv);
+  if (argc >= 2 && std::strcmp(argv[1], "listen") == 0) return listen_live(argc, argv);
   if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
-  std::fprintf(stderr, "usage: qnav dvl parse FILE [--pd6] | simulate OUT [--seconds S] [--faults]\n");
+  std::fprintf(stderr, "usage: qnav dvl parse FILE [--pd6] | listen DEVICE [--baud B] [--pd6] [--seconds S] | simulate OUT [--seconds S] [--faults]\n");
   return 2;
 }
 }  // namespace
