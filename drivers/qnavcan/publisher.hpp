@@ -1,0 +1,50 @@
+// QnavCanPublisher: the output side of qnav's CAN interface. Holds the latest value of each output
+// message (NAV_STATUS, ROUTE_GUIDANCE, VO_STEP, HEALTH, HEARTBEAT), and poll(now_ns) sends each one
+// whose DBC period (GenMsgCycleTime) has elapsed, filling the rolling Counter itself. A full TX queue
+// (kCapacityExceeded from the bus) is counted as tx_busy and retried at the next poll; an encode
+// failure (a value outside the DBC range) is counted as encode_error and the message is not sent.
+// Messages never set are not sent. poll() is O(5 messages x signals); no heap.
+#pragma once
+
+#include <cstdint>
+
+#include "drivers/qnavcan/messages.hpp"
+#include "hal/core/can.hpp"
+#include "nav/core/counters.hpp"
+
+namespace qnav::drivers::qnavcan {
+
+enum class TxCounter : std::uint8_t { kSent, kTxBusy, kEncodeError, kBusError, kCount };
+inline constexpr const char* kTxCounterNames[] = {"sent", "tx_busy", "encode_error", "bus_error"};
+
+class QnavCanPublisher {
+ public:
+  explicit QnavCanPublisher(hal::CanBus& bus) noexcept : bus_(bus) {}
+
+  void set(const NavStatus& m) noexcept { nav_ = m, has_[0] = true; }
+  void set(const RouteGuidance& m) noexcept { guidance_ = m, has_[1] = true; }
+  void set(const VoStep& m) noexcept { vo_ = m, has_[2] = true; }
+  void set(const Health& m) noexcept { health_ = m, has_[3] = true; }
+  void set(const Heartbeat& m) noexcept { heartbeat_ = m, has_[4] = true; }
+
+  // Sends what is due; returns the number of frames sent.
+  int poll(std::int64_t now_ns) noexcept;
+  const CounterSet<TxCounter>& counters() const noexcept { return counters_; }
+
+ private:
+  static constexpr int kOutputs = 5;
+  Status encode_output(int i, hal::CanFrame& f) noexcept;
+  hal::CanBus& bus_;
+  NavStatus nav_;
+  RouteGuidance guidance_;
+  VoStep vo_;
+  Health health_;
+  Heartbeat heartbeat_;
+  bool has_[kOutputs] = {};
+  bool sent_once_[kOutputs] = {};
+  std::int64_t last_ns_[kOutputs] = {};
+  std::uint8_t counter_[kOutputs] = {};
+  CounterSet<TxCounter> counters_{kTxCounterNames};
+};
+
+}  // namespace qnav::drivers::qnavcan

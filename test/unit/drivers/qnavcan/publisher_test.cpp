@@ -1,0 +1,79 @@
+// The publisher on an in-process CAN bus: DBC periods, rolling counters, TX-full retry, bad values.
+#include "drivers/qnavcan/publisher.hpp"
+
+#include <gtest/gtest.h>
+
+#include "hal/sim/manual_clock.hpp"
+#include "hal/sim/sim_can.hpp"
+#include "test/support/alloc_guard.hpp"
+
+using namespace qnav;
+using namespace qnav::drivers::qnavcan;
+
+TEST(QnavCanPublisher, SendsEachOutputAtItsDbcPeriodWithRollingCounters) {
+  hal::ManualClock clock(0);
+  hal::SimCanNetwork net(clock);
+  hal::SimCanBus tx, rx;
+  ASSERT_TRUE(tx.attach(net).is_ok());
+  ASSERT_TRUE(rx.attach(net).is_ok());
+  QnavCanPublisher pub(tx);
+  pub.set(NavStatus{Mode::kRepeat, true, 90.0, 12, 0, 0});
+  pub.set(Health{0, 3, 0, 25.0, false, false});
+  int nav = 0, health = 0;
+  std::uint8_t last_counter = 0;
+  QNAV_EXPECT_NO_ALLOC(for (std::int64_t t = 0; t < 2000000000LL; t += 10000000LL) {  // 2 s in 10 ms steps
+    clock.set_ns(t);
+    pub.poll(t);
+    hal::CanRxFrame f;
+    while (rx.receive(f, 0).is_ok()) {
+      if (f.frame.id == kIdNavStatus) {
+        NavStatus m;
+        ASSERT_TRUE(decode(f.frame, m).is_ok());
+        if (nav > 0) {
+          EXPECT_EQ(m.counter, static_cast<std::uint8_t>(last_counter + 1));
+        }
+        last_counter = m.counter;
+        ++nav;
+      } else if (f.frame.id == kIdHealth) {
+        ++health;
+      }
+    }
+  });
+  EXPECT_EQ(nav, 20);    // 100 ms period over 2 s
+  EXPECT_EQ(health, 2);  // 1000 ms period
+  EXPECT_EQ(pub.counters().get(TxCounter::kSent), 22u);
+}
+
+namespace {
+// A bus whose TX queue is full for the first `busy` sends.
+class BusyBus final : public hal::CanBus {
+ public:
+  int busy = 2;
+  int sent = 0;
+  Status send(const hal::CanFrame&) noexcept override {
+    if (busy > 0) {
+      --busy;
+      return Status(StatusCode::kCapacityExceeded, "full");
+    }
+    ++sent;
+    return Status::ok();
+  }
+  Status receive(hal::CanRxFrame&, int) noexcept override { return Status(StatusCode::kTimeout, "none"); }
+  hal::CanBusStats stats() const noexcept override { return {}; }
+};
+}  // namespace
+
+TEST(QnavCanPublisher, RetriesWhenTxIsFullAndDropsUnencodableValues) {
+  BusyBus bus;
+  QnavCanPublisher pub(bus);
+  pub.set(Heartbeat{10, Mode::kIdle, 0, 1, 0});
+  EXPECT_EQ(pub.poll(0), 0);
+  EXPECT_EQ(pub.poll(1000000), 0);
+  EXPECT_EQ(pub.poll(2000000), 1);
+  EXPECT_EQ(pub.counters().get(TxCounter::kTxBusy), 2u);
+  pub.set(VoStep{100.0, 0, 0, 0, 0});  // 100 m step: outside the DBC range
+  EXPECT_EQ(pub.poll(3000000), 0);
+  EXPECT_EQ(pub.counters().get(TxCounter::kEncodeError), 1u);
+  EXPECT_EQ(pub.poll(4000000), 0);  // not retried
+  EXPECT_EQ(pub.counters().get(TxCounter::kEncodeError), 1u);
+}
