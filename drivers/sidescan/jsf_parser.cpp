@@ -118,9 +118,16 @@ Result<std::size_t> encode_jsf_sonar_message(Span<std::uint8_t> out, const JsfWr
   store_le_u16(b + 16, static_cast<std::uint16_t>(((n >> 16) & 0xF) << 8));
   store_le_u16(b + 28, 1);
   store_le_u16(b + 30, static_cast<std::uint16_t>(1u | (1u << 3) | (w.altitude_m > 0.0f ? (1u << 6) : 0u)));
-  store_le_u32(b + 80, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(w.lon_deg * 600000.0))));
-  store_le_u32(b + 84, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(w.lat_deg * 600000.0))));
-  store_le_u16(b + 88, 2);
+  if (w.coordinate_units == 1) {
+    if (!(std::fabs(w.x_m) < 2.1e6 && std::fabs(w.y_m) < 2.1e6)) return Status(StatusCode::kOutOfRange, "JSF mm coordinates beyond +-2100 km");
+    store_le_u32(b + 80, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(w.x_m * 1000.0))));
+    store_le_u32(b + 84, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(w.y_m * 1000.0))));
+    store_le_u16(b + 88, 1);
+  } else {
+    store_le_u32(b + 80, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(w.lon_deg * 600000.0))));
+    store_le_u32(b + 84, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(w.lat_deg * 600000.0))));
+    store_le_u16(b + 88, 2);
+  }
   store_le_u16(b + 114, static_cast<std::uint16_t>(n & 0xFFFF));
   store_le_u32(b + 116, w.sample_interval_ns);
   store_le_u32(b + 144, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(static_cast<double>(w.altitude_m) * 1000.0))));

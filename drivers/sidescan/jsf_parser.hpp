@@ -68,7 +68,9 @@ struct JsfWriteSonar {
   float sound_speed_mps = 1500.0f;
   float altitude_m = 0.0f;
   float heading_deg = 0.0f;
+  std::int16_t coordinate_units = 2;  // 2: lat_deg/lon_deg (arcmin x 10^4, ~0.19 m steps); 1: y_m/x_m in mm
   double lat_deg = 0.0, lon_deg = 0.0;
+  double y_m = 0.0, x_m = 0.0;         // northing/easting for coordinate_units 1 (|v| < 2147 km)
   Span<const float> samples;           // stored as envelope u16 = clamp(round(v * 2^weighting)), near first
   std::int16_t weighting_factor = 0;
 };

@@ -31,4 +31,9 @@ echo "-- simulator: 150 m pass over a procedural seabed with a 14 m wreck, writt
 "$QNAV" sonar simulate --out "$D/sim.xtf" --length-m 150 --samples 1024 --range-m 40 --truth "$D/sim_truth.png"
 "$QNAV" sonar tiles "$D/sim.xtf" --out "$D/sim_tiles" --lines 500 --res 0.1
 echo
+echo "-- the same pass as an EdgeTech JSF stream (message 80 per side), framed and paired, tiled"
+mkdir -p "$D/jsf_tiles"
+"$QNAV" sonar simulate --out "$D/sim.jsf" --length-m 150 --samples 1024 --range-m 40
+"$QNAV" sonar tiles "$D/sim.jsf" --out "$D/jsf_tiles" --lines 500 --res 0.1
+echo
 echo "outputs: $D/scotsman_waterfall*.png, $D/tiles/tile_000.png, $D/sim_tiles/, $D/sim_truth.png"

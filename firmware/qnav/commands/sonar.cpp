@@ -1,4 +1,4 @@
-// qnav sonar: side-scan tools over XTF files.
+// qnav sonar: side-scan tools over XTF and EdgeTech JSF files (told apart by their first bytes).
 //   qnav sonar waterfall FILE --out PNG [--corrected]
 //       port (far..near) | starboard (near..far), one row per ping, first ping at the top.
 //       --corrected shows ScanlineCorrector output (ground range from the detected first return,
@@ -8,9 +8,9 @@
 //       north-up tiles (tile_NNN.png, tile_NNN_coverage.png) and tiles.csv with each tile's pose.
 //       Altitude: the first return detected in the ping by default; `file` uses the altimeter field
 //       (on the Iver2 file it reads 15-20 % short of the first return, leaving water column in the tile).
-//   qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]
+//   qnav sonar simulate --out FILE.xtf|FILE.jsf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]
 //       [--samples 1024] [--range-m 40] [--truth PNG]
-//       flies the simulator along a straight route (metric nav) and writes an XTF file; --truth
+//       flies the simulator along a straight route (metric nav) and writes an XTF or JSF file; --truth
 //       writes the ground-truth reflectivity under the swath at 0.1 m.
 #include <algorithm>
 #include <cinttypes>
@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/sidescan/jsf_framer.hpp"
 #include "drivers/sidescan/sim_seabed.hpp"
 #include "drivers/sidescan/sim_sidescan.hpp"
 #include "drivers/sidescan/sim_trajectory.hpp"
@@ -97,6 +98,79 @@ int load_xtf(const char* path, FileData& out) {
   return 0;
 }
 
+// JSF file (EdgeTech): framed in 64 KiB reads, port + starboard paired into pings; positions in
+// lat/lon (units 2) or metres (units 1/3) become the same XtfPing fields the XTF path fills.
+int load_jsf(const char* path, FileData& out) {
+  FileSource src;
+  if (!src.open(path)) {
+    std::fprintf(stderr, "qnav sonar: cannot open %s\n", path);
+    return 1;
+  }
+  JsfFramer framer;
+  JsfPingAssembler pings;
+  if (!framer.init(4u << 20) || !pings.init(kMaxSamples)) return 1;
+  std::vector<std::uint8_t> chunk(65536);
+  bool latlon = true;
+  for (;;) {
+    const std::size_t got = src.read(chunk.data(), chunk.size());
+    if (got == 0) break;
+    Span<const std::uint8_t> c(chunk.data(), got);
+    while (!c.empty()) {
+      const std::size_t used = framer.feed(c);
+      c = c.subspan(used, c.size() - used);
+      JsfMessageView m;
+      while (framer.next(m)) {
+        if (!pings.add(m)) continue;
+        const sonar::SonarPing& sp = pings.ping();
+        const JsfSonarData& d = pings.port_data();
+        PingRec p;
+        p.ping.ping_number = sp.ping_number;
+        p.ping.stamp_ns = sp.stamp_ns;
+        p.ping.sensor_y = d.y;
+        p.ping.sensor_x = d.x;
+        p.ping.nav_valid = d.position_valid;
+        p.ping.heading_deg = d.heading_deg;
+        p.ping.sensor_speed_knots = d.speed_knots;
+        p.ping.altitude_m = sp.altitude_m;
+        p.ping.slant_range_m = sp.slant_range_m;
+        p.ping.samples_per_side = static_cast<std::uint32_t>(sp.port.size());
+        p.port.assign(sp.port.begin(), sp.port.end());
+        p.stbd.assign(sp.stbd.begin(), sp.stbd.end());
+        latlon = d.coordinate_units == 2;
+        out.pings.push_back(std::move(p));
+      }
+    }
+  }
+  out.header.nav_units = latlon ? 3 : 0;
+  char buf[512];
+  int n = 0;
+  for (std::size_t i = 0; i < framer.counters().size(); ++i)
+    n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), " %s=%u", framer.counters().name_at(i), framer.counters().count_at(i));
+  for (std::size_t i = 0; i < pings.counters().size(); ++i)
+    n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), " %s=%u", pings.counters().name_at(i), pings.counters().count_at(i));
+  if (framer.pending_bytes() > 0) n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), " truncated_tail_bytes=%zu", framer.pending_bytes());
+  out.counters = buf;
+  if (out.pings.empty()) {
+    std::fprintf(stderr, "qnav sonar: %s: no side-scan pings\n", path);
+    return 1;
+  }
+  return 0;
+}
+
+// XTF or JSF, told apart by the first bytes (XTF: 123; JSF: sync 01 16).
+int load_sonar_file(const char* path, FileData& out) {
+  std::FILE* f = std::fopen(path, "rb");
+  if (f == nullptr) {
+    std::fprintf(stderr, "qnav sonar: cannot open %s\n", path);
+    return 1;
+  }
+  std::uint8_t head[2] = {0, 0};
+  const std::size_t k = std::fread(head, 1, 2, f);
+  std::fclose(f);
+  if (k == 2 && head[0] == 0x01 && head[1] == 0x16) return load_jsf(path, out);
+  return load_xtf(path, out);
+}
+
 sonar::SonarPing as_ping(const PingRec& r, bool use_altimeter) {
   sonar::SonarPing p;
   p.stamp_ns = r.ping.stamp_ns;
@@ -125,7 +199,7 @@ int waterfall(int argc, char** argv) {
     return 2;
   }
   FileData fd;
-  if (load_xtf(file, fd) != 0) return 1;
+  if (load_sonar_file(file, fd) != 0) return 1;
   const bool corrected = cli::flag(argc, argv, "--corrected");
   const int rows = static_cast<int>(fd.pings.size());
   int side = static_cast<int>(fd.pings[0].port.size());
@@ -277,7 +351,7 @@ int tiles(int argc, char** argv) {
   const std::string nav = cli::option(argc, argv, "--nav", "fix");
   const std::string alt = cli::option(argc, argv, "--altitude", "detect");
   FileData fd;
-  if (load_xtf(file, fd) != 0) return 1;
+  if (load_sonar_file(file, fd) != 0) return 1;
   const NavTrack track = build_track(fd, nav == "dr", deg_to_rad(heading_off_deg));
   const float range = fd.pings[0].ping.slant_range_m;
 
@@ -416,9 +490,14 @@ int simulate(int argc, char** argv) {
     std::fprintf(stderr, "qnav sonar simulate: cannot write %s\n", out);
     return 1;
   }
-  std::vector<std::uint8_t> buf(xtf_ping_bytes(static_cast<std::size_t>(samples)) + kXtfFileHeaderBytes);
-  (void)encode_xtf_file_header(Span<std::uint8_t>(buf.data(), buf.size()), 0, "QNAV-SIM");
-  std::fwrite(buf.data(), 1, kXtfFileHeaderBytes, f);
+  const std::size_t out_len = std::strlen(out);
+  const bool jsf = out_len > 4 && std::strcmp(out + out_len - 4, ".jsf") == 0;
+  std::vector<std::uint8_t> buf(xtf_ping_bytes(static_cast<std::size_t>(samples)) + kXtfFileHeaderBytes +
+                                jsf_sonar_message_bytes(static_cast<std::size_t>(samples)));
+  if (!jsf) {
+    (void)encode_xtf_file_header(Span<std::uint8_t>(buf.data(), buf.size()), 0, "QNAV-SIM");
+    std::fwrite(buf.data(), 1, kXtfFileHeaderBytes, f);
+  }
   TrajectorySample ts;
   std::uint32_t n = 0;
   float peak = 0.0f;
@@ -427,6 +506,33 @@ int simulate(int argc, char** argv) {
   while (traj.next(ts)) {
     (void)sim.ping(ts.truth, ts.altitude_m, ts.index, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
     for (float v : port) peak = v > peak ? v : peak;
+    if (jsf) {
+      // Two message-80 records per ping (port, starboard), positions in mm (coordinate units 1).
+      bool ok = true;
+      for (std::uint8_t ch = 0; ch < 2 && ok; ++ch) {
+        JsfWriteSonar j;
+        j.channel = ch;
+        j.ping_number = ts.index;
+        j.stamp_ns = 1700000000000000000ull + ts.stamp_ns;
+        j.sample_interval_ns = static_cast<std::uint32_t>(std::lround(2.0 * range / 1500.0 / static_cast<double>(samples) * 1e9));
+        j.altitude_m = ts.altitude_m;
+        j.heading_deg = static_cast<float>(rad_to_deg(ts.nav.heading_rad));
+        j.coordinate_units = 1;
+        j.y_m = ts.nav.x_m;
+        j.x_m = ts.nav.y_m;
+        j.samples = ch == 0 ? Span<const float>(port.data(), port.size()) : Span<const float>(stbd.data(), stbd.size());
+        j.weighting_factor = 2;  // stored x4 (simulator amplitude ~ 0..16000 -> 16-bit)
+        const Result<std::size_t> b = encode_jsf_sonar_message(Span<std::uint8_t>(buf.data(), buf.size()), j);
+        ok = b.is_ok() && std::fwrite(buf.data(), 1, b.value(), f) == b.value();
+      }
+      if (!ok) {
+        std::fclose(f);
+        std::fprintf(stderr, "qnav sonar simulate: write failed\n");
+        return 1;
+      }
+      ++n;
+      continue;
+    }
     XtfWritePing w;
     w.stamp_ns = 1700000000000000000ull + ts.stamp_ns;
     w.ping_number = ts.index;
@@ -450,9 +556,10 @@ int simulate(int argc, char** argv) {
   }
   std::fclose(f);
   std::printf("simulated %u pings (%.0f m at %.1f m/s, %.0f Hz, %ld samples/side, %.0f m range, offset %.1f m%s) -> %s; "
-              "wreck 14 x 4 x 2.5 m at N %.1f E %.1f (metric nav, nav_units 0, false origin N 5000000 E 500000)\n",
+              "wreck 14 x 4 x 2.5 m at N %.1f E %.1f (%s)\n",
               n, length, trc.speed_mps, trc.ping_rate_hz, samples, range, offset, trc.reverse ? ", reverse" : "", out,
-              wreck.north_m, wreck.east_m);
+              wreck.north_m, wreck.east_m,
+              jsf ? "EdgeTech JSF, message 80 per side, positions in mm" : "XTF, metric nav around a false origin N 5000000 E 500000");
   if (const char* truth = cli::option(argc, argv, "--truth")) {
     const double res = 0.1;
     const int W = static_cast<int>(2.0 * range / res), H = static_cast<int>(length / res);
@@ -477,7 +584,7 @@ int run_sonar(int argc, char** argv) {
                "usage: qnav sonar waterfall FILE --out PNG [--corrected]\n"
                "       qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] [--nav fix|dr]\n"
                "                        [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]\n"
-               "       qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]\n"
+               "       qnav sonar simulate --out FILE.xtf|FILE.jsf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1]\n"
                "                        [--samples 1024] [--range-m 40] [--truth PNG]\n");
   return 2;
 }
