@@ -1,5 +1,5 @@
 // qnav can: qnav's CAN interface from the command line.
-//   qnav can decode LOG [--node N]   decode a candump log (candump -l): qnav messages (docs/qnav.dbc)
+//   qnav can decode LOG [--node N] [--all]  decode a candump log (candump -l): qnav messages (docs/qnav.dbc)
 //                                    and DroneCAN AHRS Solution/RawIMU; prints counters at the end
 //   qnav can listen IFACE [--seconds S] [--node N]
 //                                    the same, live from a SocketCAN interface (can0, vcan0)
@@ -75,10 +75,11 @@ struct Decoder {
     const Status s = qrx.on_frame(f);
     const qc::MessageDef* def = nullptr;
     double values[8];
-    if (printed < max_print && qc::decode_generic(f.frame, def, values, 8).is_ok() && def != nullptr) {
+    const Status g = printed < max_print ? qc::decode_generic(f.frame, def, values, 8) : Status(StatusCode::kEmpty, "");
+    if (def != nullptr && (g.is_ok() || g == StatusCode::kOutOfRange)) {  // out of range: values decoded, shown
       ++printed;
       std::printf("%10.6f %s", t_s, def->name);
-      for (std::size_t i = 0; i < def->signals.size(); ++i) std::printf(" %s=%g%s", def->signals[i].name, values[i], def->signals[i].unit);
+      for (std::size_t i = 0; i < def->signals.size(); ++i) std::printf(" %s=%.10g%s", def->signals[i].name, values[i], def->signals[i].unit);
       std::printf("%s\n", s.is_ok() ? "" : (std::string("  [rejected: ") + s.message() + "]").c_str());
     }
   }
@@ -97,7 +98,7 @@ int decode(int argc, char** argv) {
   const char* path = cli::positional(argc, argv, 2, 0, kValued);
   long node = 0;
   if (path == nullptr || !cli::option_long(argc, argv, "--node", node) || node < 0 || node > 127) {
-    std::fprintf(stderr, "usage: qnav can decode LOG [--node N]\n");
+    std::fprintf(stderr, "usage: qnav can decode LOG [--node N] [--all]\n");
     return 2;
   }
   std::string text;
@@ -107,6 +108,7 @@ int decode(int argc, char** argv) {
   }
   hal::CanLogReplay replay(text.data(), text.size(), 0);
   auto d = std::make_unique<Decoder>(static_cast<std::uint8_t>(node));
+  if (cli::flag(argc, argv, "--all")) d->max_print = ~0u;
   hal::CanRxFrame f;
   while (replay.receive(f, 0).is_ok()) d->on_frame(f);
   d->summary(replay.bad_lines());
