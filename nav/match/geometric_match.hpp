@@ -57,7 +57,7 @@ enum class MatchScoreKind : std::uint8_t { kBinary, kContinuous };  // fb-matchi
 
 struct GeometricMatchConfig {
   std::size_t max_landmarks = 512;              // per set; more are ignored (counted)
-  std::size_t max_candidates_per_landmark = 8;  // nearest candidates kept per prev landmark
+  std::size_t max_candidates_per_landmark = 5;  // nearest candidates kept per prev landmark
   std::size_t max_matches = 256;                // potential matches entering the consistency pass
   MatchScoreKind score = MatchScoreKind::kContinuous;
   double n_sigma = 3.0;

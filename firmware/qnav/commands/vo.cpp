@@ -65,8 +65,8 @@ vo::VoConfig bench_vo_config(const sim::StereoBench& b) {
   c.camera.cu_px = b.cu_px();
   c.camera.cv_px = b.cv_px();
   c.camera.baseline_m = b.baseline_m;
-  c.stereo.min_disparity_px = 4;
-  c.stereo.max_disparity_px = 48;
+  c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
+  c.stereo.max_disparity_px = 36;
   c.stereo.disparity_sigma_px = 0.15f;
   c.max_step_m = 0.6;
   return c;

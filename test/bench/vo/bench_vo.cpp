@@ -1,0 +1,102 @@
+// bench_vo: one VO step (frame t-1 -> t) on two rendered Mars-yard frames at 320x256, 300 corners.
+// Each iteration processes the reference frame (untimed) then the current one (timed): Harris +
+// stereo + matching + 3D/6D-VME + IRLS + ICP. Also the geometric matcher alone on the same landmarks.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <vector>
+
+#include "drivers/stereo_sim/mars_yard.hpp"
+#include "nav/vo/stereo_vo.hpp"
+
+namespace {
+
+using namespace qnav;
+
+struct Frames {
+  sim::StereoBench bench;
+  Image<std::uint8_t> l[2], r[2];
+  Pose3 step;
+  Frames() {
+    const sim::MarsYardTerrain terrain;
+    sim::MarsYardTrajectory traj;
+    const Pose3 c0 = traj.current().world_T_rover.compose(bench.rover_T_left());
+    const Pose3 c1 = traj.next().world_T_rover.compose(bench.rover_T_left());
+    step = c0.inverse().compose(c1);
+    for (int i = 0; i < 2; ++i) {
+      l[i] = std::move(Image<std::uint8_t>::allocate(bench.width(), bench.height()).value());
+      r[i] = std::move(Image<std::uint8_t>::allocate(bench.width(), bench.height()).value());
+      (void)sim::render_stereo(terrain, bench, i == 0 ? c0 : c1, 5 + i, l[i].view(), r[i].view());
+    }
+  }
+};
+
+const Frames& frames() {
+  static const Frames f;
+  return f;
+}
+
+vo::VoConfig config(vo::VmeMode mode, match::MatchScoreKind score, bool fast) {
+  const sim::StereoBench b;
+  vo::VoConfig c;
+  c.max_width = b.width();
+  c.max_height = b.height();
+  c.max_corners = 300;
+  c.camera.focal_px = b.focal_px();
+  c.camera.cu_px = b.cu_px();
+  c.camera.cv_px = b.cv_px();
+  c.camera.baseline_m = b.baseline_m;
+  c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
+  c.stereo.max_disparity_px = 36;
+  c.stereo.disparity_sigma_px = 0.15f;
+  c.mode = mode;
+  c.match.score = score;
+  c.match.fast = fast;
+  return c;
+}
+
+void BM_VoStep(benchmark::State& state, vo::VmeMode mode, match::MatchScoreKind score, bool fast) {
+  const Frames& f = frames();
+  const vo::VoConfig c = config(mode, score, fast);
+  ArenaStorage arena(vo::StereoVo::arena_bytes(c));
+  vo::StereoVo v;
+  if (!v.init(c, arena)) {
+    state.SkipWithError("init failed");
+    return;
+  }
+  vo::VoInput in0, in1;
+  in0.left = f.l[0].view();
+  in0.right = f.r[0].view();
+  in1.left = f.l[1].view();
+  in1.right = f.r[1].view();
+  in1.R_prev_cur = f.step.R;
+  in1.has_translation_prior = true;
+  in1.t_prev_cur_prior_m = 1.1 * f.step.t;
+  in1.t_prior_sigma_m = 0.04;
+  std::size_t matches = 0;
+  match::MatchStats stats;
+  for (auto _ : state) {
+    state.PauseTiming();
+    v.reset();
+    (void)v.process(in0);
+    state.ResumeTiming();
+    Result<vo::VoStep> s = v.process(in1);
+    matches = s ? s->matches : 0;
+    if (s) stats = s->match_stats;
+  }
+  state.counters["rounds"] = static_cast<double>(stats.rounds);
+  state.counters["candidates"] = static_cast<double>(stats.candidates);
+  state.counters["pair_evals"] = static_cast<double>(stats.pair_evaluations);
+  state.counters["matches"] = static_cast<double>(matches);
+  state.counters["arena_bytes"] = static_cast<double>(vo::StereoVo::arena_bytes(c));
+  state.counters["matcher_bytes"] = static_cast<double>(v.matcher_bytes());
+}
+
+BENCHMARK_CAPTURE(BM_VoStep, 3D_fc_fast, vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_VoStep, 6D_fc_fast, vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_VoStep, 3D_fc, vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_VoStep, 3D_fb, vo::VmeMode::k3D, match::MatchScoreKind::kBinary, false)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
