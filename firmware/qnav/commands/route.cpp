@@ -1,9 +1,7 @@
 // qnav route: route teach and repeat (route-following paper) on the side-scan simulator or XTF files.
 //   qnav route train  --sim --out FILE [--length-m 2000] [--seed N]      -> route file (durable)
-//   qnav route train  --xtf FILE --out FILE [--first-ping N] [--pings N]
 //   qnav route info   FILE                                                -> header, nodes, damage
-//   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N]
-//   qnav route repeat --route FILE --xtf FILE [--first-ping N] [--pings N] [--csv OUT]
+//   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]
 //   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--quick]    -> Table I, Fig. 5/7/9/10 data
 #include <algorithm>
 #include <chrono>
@@ -109,6 +107,7 @@ route::LocaliserConfig localiser_config(route::RouteDirection d, std::size_t max
   c.filter.kidnap_floor = 0.01;
   c.filter.lost_after_updates = 2;
   c.filter.lost_reset_mass = 0.9;
+  c.filter.chance_inliers = 5.0f;  // = min_inliers: a bare-minimum consensus carries no evidence
   c.registration.robust.inlier_threshold_m = 1.5;
   c.registration.robust.min_inliers = 5;
   c.registration.fc.sigma_dist_m = 1.0;
@@ -150,7 +149,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: qnav route train --sim --out FILE [--length-m M] [--seed N]\n"
                "       qnav route info FILE\n"
-               "       qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N]\n"
+               "       qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]\n"
                "       qnav route eval [--json] [--out DIR] [--length-m M] [--quick]\n");
   return 2;
 }
@@ -256,10 +255,10 @@ route::RouteSide expected_side(double lateral_m, bool reverse, double deadband) 
 
 int cmd_repeat(int argc, char** argv) {
   const char* path = cli::option(argc, argv, "--route");
-  double offset_pct = 0.0;
+  double offset_pct = 0.0, length_m = 2000.0;
   long seed = 1;
   if (path == nullptr || !cli::option_double(argc, argv, "--offset-pct", offset_pct) || !cli::option_long(argc, argv, "--seed", seed) ||
-      !(std::abs(offset_pct) <= 100.0))
+      !cli::option_double(argc, argv, "--length-m", length_m) || !(std::abs(offset_pct) <= 100.0) || !(length_m >= 200.0 && length_m <= 50000.0))
     return usage();
   if (!cli::flag(argc, argv, "--sim")) {
     std::fprintf(stderr, "qnav route repeat: only --sim is implemented in this version\n");
@@ -277,7 +276,7 @@ int cmd_repeat(int argc, char** argv) {
   const bool reverse = cli::flag(argc, argv, "--reverse");
   SimWorld w;
   tools::RouteTilePipeline pipe;
-  s = w.init(2000.0, static_cast<std::uint64_t>(seed));
+  s = w.init(length_m, static_cast<std::uint64_t>(seed));
   if (s) s = pipe.init(tools::default_route_tile_config());
   route::LocaliserConfig lc = localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
   ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
