@@ -150,8 +150,13 @@ Status RemapTable::build(const PinholeRadTan& raw, const Mat3d& K_out, const Mat
       }
       if (!radial_monotonic(raw, xy.squaredNorm())) continue;
       const Vec2d d = distort_normalised(raw, xy);
-      const double sx = raw.fx * d.x() + raw.cx, sy = raw.fy * d.y() + raw.cy;
-      if (!(sx >= 0.0 && sy >= 0.0 && sx < xmax && sy < ymax)) continue;
+      double sx = raw.fx * d.x() + raw.cx, sy = raw.fy * d.y() + raw.cy;
+      // A tolerance of 1e-6 px keeps the image border valid whatever the rounding (Eigen uses FMA on
+      // aarch64, so pixel 0 may map to -1e-15). The last column/row is sampled with weight 255/256.
+      constexpr double kEps = 1e-6;
+      if (!(sx >= -kEps && sy >= -kEps && sx <= xmax + kEps && sy <= ymax + kEps)) continue;
+      sx = sx < 0.0 ? 0.0 : (sx > xmax ? xmax : sx);
+      sy = sy < 0.0 ? 0.0 : (sy > ymax ? ymax : sy);
       int x0 = static_cast<int>(sx), y0 = static_cast<int>(sy);
       int fx = static_cast<int>(std::lround((sx - x0) * 256.0));
       int fy = static_cast<int>(std::lround((sy - y0) * 256.0));

@@ -200,6 +200,24 @@ TEST(Harris, FloatInputGivesTheSameCornersAsU8) {
   }
 }
 
+TEST(Harris, OddStrideViewGivesTheSameCornersAsAPackedCopy) {
+  const int W = 150, H = 110, S = 157;  // odd stride, not a multiple of anything useful
+  std::vector<std::uint8_t> packed(W * H), strided(S * H, 0xEE);
+  ImageViewU8 pv = ImageViewU8::make(packed.data(), W, H).value();
+  testing::texture(pv, 17);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) strided[static_cast<std::size_t>(y * S + x)] = pv(x, y);
+  Fixture a(small_config(W, H)), b(small_config(W, H));
+  ASSERT_TRUE(a.det.detect(ConstImageViewU8(pv), a.out).is_ok());
+  ASSERT_TRUE(b.det.detect(ConstImageViewU8::make(strided.data(), W, H, S).value(), b.out).is_ok());
+  ASSERT_EQ(a.out.size(), b.out.size());
+  ASSERT_GT(a.out.size(), 20u);
+  for (std::size_t i = 0; i < a.out.size(); ++i) {
+    EXPECT_EQ(a.out[i].x, b.out[i].x);
+    EXPECT_EQ(a.out[i].y, b.out[i].y);
+  }
+}
+
 TEST(Harris, DetectDoesNotAllocate) {
   std::vector<std::uint8_t> px(320 * 256);
   ImageViewU8 img = ImageViewU8::make(px.data(), 320, 256).value();

@@ -139,7 +139,10 @@ TEST(Rectify, IdentityTableReproducesTheImage) {
   ASSERT_TRUE(t.apply(ConstImageViewU8::make(src.data(), 64, 48).value(), ImageViewU8::make(dst.data(), 64, 48).value()).is_ok());
   for (int y = 0; y < 47; ++y)
     for (int x = 0; x < 63; ++x) ASSERT_EQ(dst[y * 64 + x], src[y * 64 + x]) << x << "," << y;
-  EXPECT_EQ(t.valid_pixels(), 63u * 47u);  // the last column/row has no bilinear neighbour
+  // The last column/row is sampled from its neighbour with weight 1/256 (no pixel beyond the edge).
+  for (int y = 0; y < 48; ++y) EXPECT_NEAR(dst[y * 64 + 63], src[y * 64 + 63], 1) << y;
+  for (int x = 0; x < 64; ++x) EXPECT_NEAR(dst[47 * 64 + x], src[47 * 64 + x], 1) << x;
+  EXPECT_EQ(t.valid_pixels(), 64u * 48u);
 }
 
 // Renders the raw image a camera (distortion, optional port) sees of smooth_scene, corrects it with a
@@ -264,6 +267,40 @@ TEST(Rectify, StereoRectificationPutsEpipolarLinesOnRows) {
   ASSERT_TRUE(t.init(rc, arena).is_ok());
   ASSERT_TRUE(t.build(l, s.K, s.R_left, FlatPortRefraction{}, 752, 480).is_ok());
   EXPECT_GT(t.valid_pixels(), 752u * 480u * 8 / 10);
+}
+
+TEST(Rectify, StridedSourceGivesTheSameOutputAsPacked) {
+  PinholeRadTan c = euroc_cam0();
+  c.fx /= 4;
+  c.fy /= 4;
+  c.cx /= 4;
+  c.cy /= 4;
+  c.width /= 4;
+  c.height /= 4;
+  const int W = c.width, H = c.height, S = W + 13;
+  std::vector<std::uint8_t> packed(static_cast<std::size_t>(W * H)), strided(static_cast<std::size_t>(S * H), 0xEE);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const auto v = static_cast<std::uint8_t>((x * 7 + y * 13 + (x * y) % 11) % 256);
+      packed[static_cast<std::size_t>(y * W + x)] = v;
+      strided[static_cast<std::size_t>(y * S + x)] = v;
+    }
+  RemapConfig rc;
+  rc.max_width = W;
+  rc.max_height = H;
+  rc.fill_value = 7;
+  ArenaStorage arena(static_cast<std::size_t>(W * H) * 8 + 64);
+  RemapTable t;
+  ASSERT_TRUE(t.init(rc, arena).is_ok());
+  FlatPortRefraction port;
+  port.enabled = true;  // refraction narrows the view: some output pixels get the fill value
+  ASSERT_TRUE(t.build_undistort(c, port).is_ok());
+  ASSERT_LT(t.valid_pixels(), static_cast<std::size_t>(W * H));
+  std::vector<std::uint8_t> a(packed.size()), b(packed.size());
+  ASSERT_TRUE(t.apply(ConstImageViewU8::make(packed.data(), W, H).value(), ImageViewU8::make(a.data(), W, H).value()).is_ok());
+  ASSERT_TRUE(t.apply(ConstImageViewU8::make(strided.data(), W, H, S).value(), ImageViewU8::make(b.data(), W, H).value()).is_ok());
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(a[0], 7);  // the corner ray, refracted, lands outside the raw image: fill value
 }
 
 TEST(Rectify, BadCalibrationIsRejected) {
