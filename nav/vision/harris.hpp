@@ -15,13 +15,15 @@
 // Threshold: R > max(min_response, quality_level * max R in the ROI).
 // Input: 8-bit grey or float images (float tiles from the sonar/route stages). Only pixels inside the
 // region of interest (clipped to the image minus the border) are reported; the response is computed
-// on the ROI grown by the filter support so the result equals the full-image result restricted to the ROI.
+// on the ROI grown by the filter support, so responses and NMS equal the full-image ones; the
+// threshold's max R and the normalisation statistics are taken over the ROI (the prediction of the
+// overlap is what the caller wants corners spread over).
 //
-// Memory (from the Arena in init()): one float response plane max_width*max_height, a ring of
-// 3*(2*block_radius+1) float rows plus 3 column-sum rows, the normalisation cell grid, max_corners Corner (top-K heap), 2*nms_radius+2
-// rows for the separable NMS max filter. No heap, no
-// allocation in detect(). Worst case time: O(W*H*(block + nms^2)) for the ROI + O(K log K) for K kept
-// corners; every loop is bounded by the configured image size and caps.
+// Memory (from the Arena in init(), see arena_bytes()): one float response plane
+// max_width*max_height, a ring of 3*(2*block_radius+1) float rows plus 3 column-sum rows, the
+// normalisation cell grid, max_corners Corner (top-K heap), 2*nms_radius+2 rows for the separable
+// NMS max filter. No heap, no allocation in detect(). Worst case time: O(W*H*(block + nms)) for the
+// ROI + O(K log K) for K kept corners; every loop is bounded by the configured image size and caps.
 #pragma once
 
 #include <cstddef>
