@@ -3,6 +3,8 @@
 //   qnav route info   FILE                                                -> header, nodes, damage
 //   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]
 //   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--quick]    -> Table I, Fig. 5/7/9/10 data
+//   qnav route xtf    --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]  -> real data: teach on pings A..B,
+//                     repeat on the shifted window C..D of the same pass
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,6 +22,8 @@
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/route_file.hpp"
 #include "firmware/tools/route_tiles.hpp"
+#include "drivers/sidescan/byte_source.hpp"
+#include "drivers/sidescan/xtf_reader.hpp"
 #include "nav/route/route_localiser.hpp"
 
 namespace {
@@ -28,7 +32,7 @@ using namespace qnav;
 using Clock = std::chrono::steady_clock;
 
 const char* const kValued[] = {"--out", "--length-m", "--seed", "--xtf", "--first-ping", "--pings", "--route", "--offset-pct",
-                               "--csv", "--kidnap-at", "--dump-tile", nullptr};
+                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", nullptr};
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // CPU time of this thread (the machine is shared: wall time includes other people's work).
@@ -150,7 +154,8 @@ int usage() {
                "usage: qnav route train --sim --out FILE [--length-m M] [--seed N]\n"
                "       qnav route info FILE\n"
                "       qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]\n"
-               "       qnav route eval [--json] [--out DIR] [--length-m M] [--quick]\n");
+               "       qnav route eval [--json] [--out DIR] [--length-m M] [--quick]\n"
+               "       qnav route xtf --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]\n");
   return 2;
 }
 
@@ -361,6 +366,7 @@ int cmd_repeat(int argc, char** argv) {
 }
 
 int cmd_eval(int argc, char** argv);
+int cmd_xtf(int argc, char** argv);
 
 int run_route(int argc, char** argv) {
   if (argc < 2) return usage();
@@ -368,6 +374,7 @@ int run_route(int argc, char** argv) {
   if (std::strcmp(argv[1], "info") == 0) return cmd_info(argc, argv);
   if (std::strcmp(argv[1], "repeat") == 0) return cmd_repeat(argc, argv);
   if (std::strcmp(argv[1], "eval") == 0) return cmd_eval(argc, argv);
+  if (std::strcmp(argv[1], "xtf") == 0) return cmd_xtf(argc, argv);
   return usage();
 }
 
@@ -769,4 +776,187 @@ int cmd_eval(int argc, char** argv) {
   }
   return 0;
 }
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------
+// qnav route xtf: real data. Teach on one window of pings of an XTF pass, repeat on a shifted,
+// overlapping window of the same pass (the only real data we have is one pass). The tiles of the
+// repeat are framed differently (shifted ping boundaries) and carry their own speckle-free copy of
+// the same pings, so this checks registration and the filter on real seabed texture, not repeat
+// -pass sonar physics.
+namespace {
+
+struct XtfPingData {
+  std::vector<float> port, stbd;
+  float slant_range_m = 0.0f;
+  float altitude_m = 0.0f;
+  std::uint64_t stamp_ns = 0;
+  Pose2 nav;  // north, east (local, from lat/lon), compass heading
+};
+
+bool parse_range(const char* s, long& a, long& b) {
+  if (s == nullptr) return true;
+  char* end = nullptr;
+  a = std::strtol(s, &end, 10);
+  if (end == s || *end != ':') return false;
+  const char* t = end + 1;
+  b = std::strtol(t, &end, 10);
+  return end != t && *end == '\0' && a >= 0 && b > a;
+}
+
+int cmd_xtf(int argc, char** argv) {
+  const char* path = cli::option(argc, argv, "--xtf");
+  long ta = 0, tb = 300, ra = 90, rb = 461;
+  if (path == nullptr || !parse_range(cli::option(argc, argv, "--train"), ta, tb) || !parse_range(cli::option(argc, argv, "--repeat"), ra, rb))
+    return usage();
+  sidescan::FileSource file;
+  sidescan::XtfReader reader;
+  Status s = file.open(path);
+  if (s) s = reader.init(sidescan::XtfReaderConfig{});
+  if (s) s = reader.open(file);
+  if (!s) {
+    std::fprintf(stderr, "qnav route xtf: %s: %s\n", path, s.message());
+    return 1;
+  }
+  std::vector<float> port(8192), stbd(8192);
+  std::vector<XtfPingData> pings;
+  sidescan::XtfRecord rec;
+  double lat0 = 0, lon0 = 0;
+  bool have0 = false;
+  for (;;) {
+    Result<bool> r = reader.next(rec, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
+    if (!r || !*r) break;
+    if (rec.kind != sidescan::XtfRecordKind::kPing || !rec.ping.nav_valid) continue;
+    const sidescan::XtfPing& p = rec.ping;
+    if (!have0) {
+      lat0 = p.sensor_y;
+      lon0 = p.sensor_x;
+      have0 = true;
+    }
+    XtfPingData d;
+    d.port.assign(port.begin(), port.begin() + p.samples_per_side);
+    d.stbd.assign(stbd.begin(), stbd.begin() + p.samples_per_side);
+    d.slant_range_m = p.slant_range_m;
+    d.altitude_m = p.altitude_m;
+    d.stamp_ns = p.stamp_ns;
+    const double k = 111320.0;
+    d.nav = Pose2{(p.sensor_y - lat0) * k, (p.sensor_x - lon0) * k * std::cos(lat0 * kPi / 180.0), deg_to_rad(static_cast<double>(p.heading_deg))};
+    pings.push_back(std::move(d));
+  }
+  if (pings.size() < 100) {
+    std::fprintf(stderr, "qnav route xtf: %s: only %zu pings with navigation\n", path, pings.size());
+    return 1;
+  }
+  tb = std::min<long>(tb, static_cast<long>(pings.size()));
+  rb = std::min<long>(rb, static_cast<long>(pings.size()));
+  // Tiles for a 30 m slant range: 0.1 m pixels, 100 pings per tile every 50 pings.
+  tools::RouteTileConfig tc = tools::default_route_tile_config();
+  tc.corrector.ground_bins_per_side = 300;
+  tc.corrector.ground_bin_m = 0.1f;
+  tc.corrector.nadir_gap_m = 1.0f;
+  tc.tiles.resolution_m = 0.1;
+  tc.tiles.tile_width_px = 800;
+  tc.tiles.tile_height_px = 800;
+  tc.tiles.max_bins_per_side = 300;
+  tc.tiles.scanlines_per_tile = 100;
+  tc.tiles.scanline_stride = 50;
+  tc.features.max_width = 800;
+  tc.features.max_height = 800;
+  tc.features.downsample = 3;
+  tools::RouteTilePipeline pipe;
+  s = pipe.init(tc);
+  if (!s) {
+    std::fprintf(stderr, "qnav route xtf: %s\n", s.message());
+    return 1;
+  }
+  auto run_window = [&](long a, long b, std::vector<tools::RouteTile>& out, std::vector<double>& centre_ping) {
+    pipe.reset_pass();
+    out.clear();
+    centre_ping.clear();
+    bool stop = false;
+    long first_in_tile = a;
+    for (long i = a; i < b && !stop; ++i) {
+      const XtfPingData& d = pings[static_cast<std::size_t>(i)];
+      sonar::SonarPing ping;
+      ping.stamp_ns = d.stamp_ns;
+      ping.ping_number = static_cast<std::uint32_t>(i - a);
+      ping.port = Span<const float>(d.port.data(), d.port.size());
+      ping.stbd = Span<const float>(d.stbd.data(), d.stbd.size());
+      ping.slant_range_m = d.slant_range_m;
+      ping.altitude_m = d.altitude_m;
+      const Status ps = pipe.push_ping(ping, d.nav, [&](const tools::RouteTile& t) {
+        out.push_back(t);
+        // The tile is made of the last scanlines_per_tile pings.
+        centre_ping.push_back(static_cast<double>(i) - 0.5 * (tc.tiles.scanlines_per_tile - 1));
+        return true;
+      }, &stop);
+      if (!ps) return ps;
+      static_cast<void>(first_in_tile);
+    }
+    return Status::ok();
+  };
+  std::vector<tools::RouteTile> train, rep;
+  std::vector<double> train_c, rep_c;
+  s = run_window(ta, tb, train, train_c);
+  if (s) s = run_window(ra, rb, rep, rep_c);
+  if (!s || train.size() < 2 || rep.empty()) {
+    std::fprintf(stderr, "qnav route xtf: %s (train %zu tiles, repeat %zu tiles)\n", s ? "too few tiles" : s.message(), train.size(), rep.size());
+    return 1;
+  }
+  // The two windows share pings: put the repeat window's nav in the training frame by using the
+  // same lat/lon origin (done above); node truth = the training tile whose centre ping is nearest.
+  double spacing = 0.0;
+  for (std::size_t i = 1; i < train.size(); ++i) spacing += train[i].node.meta.along_m - train[i - 1].node.meta.along_m;
+  spacing /= static_cast<double>(train.size() - 1);
+  std::vector<route::NodeMeta> meta;
+  for (std::size_t i = 0; i < train.size(); ++i) {
+    route::NodeMeta m = train[i].node.meta;
+    m.index = static_cast<std::uint32_t>(i);
+    meta.push_back(m);
+  }
+  TileSource src(&train);
+  route::LocaliserConfig lc = localiser_config(route::RouteDirection::kForward, 64);
+  lc.filter.belief_registrations = static_cast<std::uint32_t>(std::min<std::size_t>(train.size(), 8));
+  lc.registration.robust.inlier_threshold_m = 0.75;
+  lc.registration.fc.sigma_dist_m = 0.5;
+  ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
+  auto loc = std::make_unique<route::RouteLocaliser>();
+  route::RouteParams params = route_params(tc, spacing, 2.0 * static_cast<double>(pings[0].slant_range_m));
+  s = loc->init(lc, arena);
+  if (s) s = loc->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src);
+  if (!s) {
+    std::fprintf(stderr, "qnav route xtf: %s\n", s.message());
+    return 1;
+  }
+  const char* csv = cli::option(argc, argv, "--csv");
+  FILE* f = csv ? std::fopen(csv, "w") : nullptr;
+  if (f) std::fprintf(f, "tile,centre_ping,true_node,estimate,probability,entropy,inliers,status,cross_track_m,along_track_m\n");
+  double kp = 0.0;
+  for (const tools::RouteTile& t : train) kp += static_cast<double>(t.node.keypoints.size());
+  std::printf("real XTF %s: %zu pings; taught pings %ld..%ld -> %zu nodes (spacing %.1f m, %.0f keypoints/node); repeat pings %ld..%ld -> %zu tiles\n",
+              path, pings.size(), ta, tb - 1, train.size(), spacing, kp / static_cast<double>(train.size()), ra, rb - 1, rep.size());
+  std::printf("  tile  centre ping  true node  estimate  p      entropy  inliers  status       cross-track m  along-track m\n");
+  int ok = 0, exact = 0;
+  for (std::size_t k = 0; k < rep.size(); ++k) {
+    route::LocaliserStep st;
+    s = loc->step(rep[k].node, k == 0 ? 0.0 : rep[k].nav_step_m, st);
+    if (!s) break;
+    int truth = 0;
+    for (std::size_t i = 1; i < train_c.size(); ++i)
+      if (std::abs(train_c[i] - rep_c[k]) < std::abs(train_c[static_cast<std::size_t>(truth)] - rep_c[k])) truth = static_cast<int>(i);
+    const bool near = std::abs(train_c[static_cast<std::size_t>(truth)] - rep_c[k]) <= tc.tiles.scanline_stride;
+    ok += near && std::abs(static_cast<int>(st.estimate) - truth) <= 1;
+    exact += near && static_cast<int>(st.estimate) == truth;
+    std::printf("  %4zu  %11.0f  %9s  %8u  %.3f  %7.3f  %7u  %-11s  %13.2f  %13.2f\n", k, rep_c[k], near ? std::to_string(truth).c_str() : "beyond",
+                st.estimate, static_cast<double>(st.probability), st.entropy, st.best_inliers, route::to_string(st.guidance.status),
+                st.guidance.cross_track_m, st.guidance.along_track_m);
+    if (f)
+      std::fprintf(f, "%zu,%.0f,%d,%u,%.4f,%.4f,%u,%s,%.2f,%.2f\n", k, rep_c[k], near ? truth : -1, st.estimate, static_cast<double>(st.probability),
+                   st.entropy, st.best_inliers, route::to_string(st.guidance.status), st.guidance.cross_track_m, st.guidance.along_track_m);
+  }
+  if (f) std::fclose(f);
+  std::printf("  estimate within +/-1 node on %d tiles, exact on %d (tiles whose centre is within the taught pings)\n", ok, exact);
+  return s ? 0 : 1;
+}
+
 }  // namespace
