@@ -14,7 +14,7 @@ std::size_t ScanlineCorrector::arena_bytes(const ScanlineCorrectorConfig& c) noe
   const std::size_t n = c.max_samples_per_side > 0 ? static_cast<std::size_t>(c.max_samples_per_side) : 0;
   const std::size_t b = c.ground_bins_per_side > 0 ? static_cast<std::size_t>(c.ground_bins_per_side) : 0;
   return padded(n * sizeof(float)) + padded((n + 1) * sizeof(double)) + padded(n * sizeof(float)) +
-         4 * padded(b * sizeof(float)) + 2 * padded(b);
+         4 * padded(b * sizeof(float)) + 2 * padded(b) + 2 * padded(b * sizeof(std::uint16_t));
 }
 
 Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) noexcept {
@@ -43,11 +43,13 @@ Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) n
   smooth_ = arena.allocate<float>(n);
   egn_port_ = arena.allocate<float>(b);
   egn_stbd_ = arena.allocate<float>(b);
+  egn_n_port_ = arena.allocate<std::uint16_t>(b);
+  egn_n_stbd_ = arena.allocate<std::uint16_t>(b);
   out_port_ = arena.allocate<float>(b);
   out_stbd_ = arena.allocate<float>(b);
   valid_port_ = arena.allocate<std::uint8_t>(b);
   valid_stbd_ = arena.allocate<std::uint8_t>(b);
-  if (tvg_.empty() || prefix_.empty() || smooth_.empty() || egn_port_.empty() || egn_stbd_.empty() || out_port_.empty() ||
+  if (tvg_.empty() || prefix_.empty() || smooth_.empty() || egn_port_.empty() || egn_stbd_.empty() || egn_n_port_.empty() || egn_n_stbd_.empty() || out_port_.empty() ||
       out_stbd_.empty() || valid_port_.empty() || valid_stbd_.empty())
     return Status(StatusCode::kCapacityExceeded, "arena too small for ScanlineCorrector");
   cfg_ = c;
@@ -61,6 +63,8 @@ Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) n
 void ScanlineCorrector::reset_normalisation() noexcept {
   for (float& v : egn_port_) v = 0.0f;
   for (float& v : egn_stbd_) v = 0.0f;
+  for (std::uint16_t& n : egn_n_port_) n = 0;
+  for (std::uint16_t& n : egn_n_stbd_) n = 0;
 }
 
 Status ScanlineCorrector::check_ping(const SonarPing& ping) noexcept {
@@ -147,8 +151,8 @@ void ScanlineCorrector::update_tvg(float slant_range_m, int n) noexcept {
   tvg_n_ = n;
 }
 
-void ScanlineCorrector::correct_side(Span<const float> s, float dr_m, float altitude_m, float* egn, float* out,
-                                     std::uint8_t* valid) noexcept {
+void ScanlineCorrector::correct_side(Span<const float> s, float dr_m, float altitude_m, float* egn, std::uint16_t* egn_n,
+                                     float* out, std::uint8_t* valid) noexcept {
   const int n = static_cast<int>(s.size());
   prefix_[0] = 0.0;
   for (int i = 0; i < n; ++i)
@@ -196,8 +200,12 @@ void ScanlineCorrector::correct_side(Span<const float> s, float dr_m, float alti
     }
     float v = static_cast<float>(level);
     if (cfg_.egn_enabled) {
+      // Plain mean of the first 1/alpha values seen by the bin, then the exponential running mean.
       float& m = egn[b];
-      m = (m <= 0.0f) ? v : m + alpha * (v - m);
+      std::uint16_t& k = egn_n[b];
+      const float a = 1.0f / static_cast<float>(k + 1) > alpha ? 1.0f / static_cast<float>(k + 1) : alpha;
+      m += a * (v - m);
+      if (k < 65535) ++k;
       v = m > 1e-20f ? v / m : 0.0f;
     }
     out[b] = v;
@@ -221,8 +229,8 @@ Status ScanlineCorrector::correct(const SonarPing& ping, CorrectedScanline& out)
   const int n = static_cast<int>(ping.port.size());
   update_tvg(ping.slant_range_m, n);
   const float dr = ping.slant_range_m / static_cast<float>(n);
-  correct_side(ping.port, dr, h, egn_port_.data(), out_port_.data(), valid_port_.data());
-  correct_side(ping.stbd, dr, h, egn_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
+  correct_side(ping.port, dr, h, egn_port_.data(), egn_n_port_.data(), out_port_.data(), valid_port_.data());
+  correct_side(ping.stbd, dr, h, egn_stbd_.data(), egn_n_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
   out.stamp_ns = ping.stamp_ns;
   out.ping_number = ping.ping_number;
   out.bin_m = cfg_.ground_bin_m;

@@ -13,10 +13,10 @@
 //     it are AVERAGED (prefix sums, O(1) per bin); otherwise linear interpolation at the bin centre.
 //  4. Nadir gap: ground bins with g < nadir_gap_m, with slant r below the detected seabed, or beyond the
 //     last sample are marked invalid (value 0, valid 0); the tile builder interpolates small holes.
-//  5. Empirical gain normalisation (EGN): per side and per ground bin an exponential running mean
-//     (egn_alpha) of the TVG-corrected level; the output is level / running mean, so a flat uniform
-//     seabed comes out at 1.0 whatever the range, beam pattern or gain. Bins never seen keep mean 0
-//     and are initialised by their first valid value.
+//  5. Empirical gain normalisation (EGN): per side and per ground bin a running mean of the
+//     TVG-corrected level (the plain mean of the bin's first 1/egn_alpha values, then exponential with
+//     weight egn_alpha); the output is level / running mean, so a flat uniform seabed comes out at 1.0
+//     whatever the range, beam pattern or gain.
 // Memory: all buffers come from the Arena given to init() (sizes from the config); correct() makes
 // no allocation. Cost of correct(): O(samples_per_side + ground_bins) per side, one sqrt per bin;
 // bounded by max_samples_per_side and ground_bins_per_side.
@@ -93,8 +93,8 @@ class ScanlineCorrector {
   Status check_ping(const SonarPing& ping) noexcept;
   Result<float> detect_bottom_checked(const SonarPing& ping) noexcept;
   void update_tvg(float slant_range_m, int n) noexcept;
-  void correct_side(Span<const float> samples, float dr_m, float altitude_m, float* egn_mean, float* out,
-                    std::uint8_t* valid) noexcept;
+  void correct_side(Span<const float> samples, float dr_m, float altitude_m, float* egn_mean, std::uint16_t* egn_count,
+                    float* out, std::uint8_t* valid) noexcept;
 
   ScanlineCorrectorConfig cfg_{};
   bool ready_ = false;
@@ -102,6 +102,7 @@ class ScanlineCorrector {
   Span<double> prefix_;    // prefix sums of TVG-corrected samples (n + 1)
   Span<float> smooth_;     // bottom detection work buffer
   Span<float> egn_port_, egn_stbd_;
+  Span<std::uint16_t> egn_n_port_, egn_n_stbd_;  // values seen per bin (saturating)
   Span<float> out_port_, out_stbd_;
   Span<std::uint8_t> valid_port_, valid_stbd_;
   float tvg_range_m_ = -1.0f;

@@ -141,6 +141,32 @@ TEST(ScanlineCorrector, TvgAndEgnFlattenAUniformSeabed) {
   EXPECT_GT(valid, 400);
 }
 
+TEST(ScanlineCorrector, EgnStartsWithThePlainMeanThenRuns) {
+  // Pings of level 1 and 3 alternately: the second ping is divided by their mean 2 (plain mean
+  // during warm-up), not by a running mean still stuck near the first value.
+  ScanlineCorrectorConfig cfg;
+  cfg.tvg_enabled = false;
+  cfg.egn_alpha = 0.02f;
+  Fixture f(cfg);
+  std::vector<float> lo(512, 1.0f), hi(512, 3.0f);
+  SonarPing p;
+  p.slant_range_m = 50.0f;
+  p.altitude_m = 8.0f;
+  CorrectedScanline out;
+  p.port = p.stbd = Span<const float>(lo.data(), lo.size());
+  ASSERT_TRUE(f.corr.correct(p, out).is_ok());
+  EXPECT_NEAR(out.port[300], 1.0f, 1e-5f);
+  p.port = p.stbd = Span<const float>(hi.data(), hi.size());
+  ASSERT_TRUE(f.corr.correct(p, out).is_ok());
+  EXPECT_NEAR(out.port[300], 1.5f, 1e-5f);
+  // After 1/alpha = 50 pings the mean runs exponentially: one more ping at 3 moves it by alpha.
+  for (int k = 2; k < 100; ++k) {
+    p.port = p.stbd = Span<const float>(k % 2 ? hi.data() : lo.data(), 512);
+    ASSERT_TRUE(f.corr.correct(p, out).is_ok());
+  }
+  EXPECT_NEAR(out.port[300], 3.0f / 2.0f, 0.05f);
+}
+
 TEST(ScanlineCorrector, NadirGapBinsAreInvalid) {
   ScanlineCorrectorConfig cfg;
   cfg.nadir_gap_m = 1.5f;
