@@ -1,7 +1,8 @@
 // qnav vo: stereo visual odometry (Mars paper) on the synthetic Mars yard, KITTI and EuRoC sequences.
 //
 //   qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|all] [--seed N]
-//                [--traj-dir DIR]
+//                [--traj-dir DIR] [--length-27 M] [--length-100 M] [--verbose]
+//                tuning knobs: [--nt X] [--sigma-m-deg D] [--dsig PX] [--nsig N] [--app W]
 //       Synthetic evaluation with exact ground truth: a 27 m run (attitude drifting, no recalibration)
 //       and a 100 m run (attitude recalibrated every 2 m), paper's noise model (n_t = 10 %, small
 //       attitude noise), frames rendered once and fed to every configuration. Prints one JSON object
@@ -197,7 +198,7 @@ int run_eval(int argc, char** argv) {
   const bool quick = cli::flag(argc, argv, "--quick");
   g_verbose = cli::flag(argc, argv, "--verbose");
   const char* noise_name = cli::option(argc, argv, "--noise", "small");
-  const char* configs = cli::option(argc, argv, "--configs", "all");
+  const char* configs = cli::option(argc, argv, "--configs", "main");
   const char* traj_dir = cli::option(argc, argv, "--traj-dir");
   long seed = 3;
   if (!cli::option_long(argc, argv, "--seed", seed) || seed < 0) {
@@ -221,7 +222,13 @@ int run_eval(int argc, char** argv) {
   std::vector<EvalConfig> cfgs;
   if (std::strcmp(configs, "main") == 0) cfgs.push_back(kMain);
   else for (const EvalConfig& e : kAll) cfgs.push_back(e);
-  const Scenario scen[2] = {{"27m", quick ? 6.0 : 27.0, 0.0}, {"100m", quick ? 10.0 : 100.0, 2.0}};
+  double len27 = quick ? 6.0 : 27.0, len100 = quick ? 10.0 : 100.0;
+  if (!cli::option_double(argc, argv, "--length-27", len27) || !cli::option_double(argc, argv, "--length-100", len100) ||
+      !(len27 > 0.5) || !(len100 > 0.5)) {
+    std::fprintf(stderr, "vo eval: --length-27 / --length-100 want metres > 0.5\n");
+    return 2;
+  }
+  const Scenario scen[2] = {{"27m", len27, 0.0}, {"100m", len100, 2.0}};
   std::vector<RunResult> res[2];
   for (int i = 0; i < 2; ++i) {
     if (!run_scenario(scen[i], cfgs, noise, static_cast<std::uint64_t>(seed) + 10 * static_cast<std::uint64_t>(i), res[i])) {
@@ -529,7 +536,7 @@ int run_vo(int argc, char** argv) {
   if (cli::option(argc, argv, "--euroc") != nullptr) return run_euroc(argc, argv);
   std::fprintf(stderr,
                "usage: qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|all] [--seed N] "
-               "[--traj-dir DIR]\n"
+               "[--traj-dir DIR] [--length-27 M] [--length-100 M] [--verbose]\n"
                "       qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE]\n"
                "       qnav vo --euroc DIR --out poses.txt [--frames N]\n");
   return 2;
