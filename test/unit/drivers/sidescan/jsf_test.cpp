@@ -91,6 +91,33 @@ TEST(Jsf, DecodesASonarDataMessage) {
   EXPECT_EQ(d.stamp_ns, 1700000000700000000ull);
 }
 
+TEST(Jsf, AnalyticSamplesBecomeMagnitudes) {
+  // Data format 1: I, Q int16 pairs -> sqrt(I^2 + Q^2), scaled by 2^-weighting.
+  const int n = 16;
+  std::vector<std::uint8_t> s(16 + 240 + 4 * n, 0);
+  store_le_u16(s.data(), kJsfSync);
+  store_le_u16(s.data() + 4, 80);
+  s[7] = 21;
+  store_le_u32(s.data() + 12, static_cast<std::uint32_t>(240 + 4 * n));
+  std::uint8_t* b = s.data() + 16;
+  store_le_u16(b + 34, 1);
+  store_le_u16(b + 114, n);
+  store_le_u32(b + 116, 10000);
+  store_le_u16(b + 168, 1);
+  for (int i = 0; i < n; ++i) {
+    store_le_u16(b + 240 + 4 * i, static_cast<std::uint16_t>(3 * i));
+    store_le_u16(b + 240 + 4 * i + 2, static_cast<std::uint16_t>(static_cast<std::int16_t>(-4 * i)));
+  }
+  const JsfMessageHeader h = parse_jsf_message_header(Span<const std::uint8_t>(s.data(), s.size())).value();
+  std::vector<float> out(n);
+  JsfSonarData d;
+  ASSERT_TRUE(parse_jsf_sonar_data(h, Span<const std::uint8_t>(b, s.size() - 16), d, Span<float>(out.data(), out.size())).is_ok());
+  EXPECT_EQ(d.samples, 16u);
+  EXPECT_FLOAT_EQ(out[5], 12.5f);  // |3*5 - 4*5 i| = 25, / 2
+  EXPECT_LT(d.altitude_m, 0.0f);   // validity bit 6 not set: no altitude
+  EXPECT_FALSE(d.position_valid);
+}
+
 TEST(Jsf, RejectsBadSyncSizesAndFormats) {
   std::vector<std::uint8_t> s;
   append_message(s, 1, 0, 64);

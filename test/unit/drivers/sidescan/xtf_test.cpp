@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,31 @@ TEST(Xtf, WriterReaderRoundTrip) {
   EXPECT_FLOAT_EQ(p.pitch_deg, 1030.0f);  // port near sample (written far first, read back near first)
   EXPECT_FLOAT_EQ(p.roll_deg, 2030.0f);
   EXPECT_EQ(reader.counters().total(), 0u);
+}
+
+TEST(Xtf, HeaderWithMoreThanSixChannelsGrowsBy1024Bytes) {
+  // 2 sonar + 6 bathymetry channels: CHANINFO 7 and 8 live in a second 1024-byte block.
+  std::vector<std::uint8_t> h(2048, 0);
+  ASSERT_TRUE(encode_xtf_file_header(Span<std::uint8_t>(h.data(), 1024), 3, "BIG").is_ok());
+  store_le_u16(h.data() + 168, 6);
+  h[1024 + 128 + 0] = 3;  // channel 8: bathymetry
+  std::memcpy(h.data() + 1024 + 128 + 12, "EIGHTH", 6);
+  EXPECT_EQ(parse_xtf_file_header(Span<const std::uint8_t>(h.data(), 1024)).status(), StatusCode::kTruncated);
+  const Result<XtfFileHeader> r = parse_xtf_file_header(Span<const std::uint8_t>(h.data(), h.size()));
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->header_bytes, 2048u);
+  ASSERT_EQ(r->channels.size(), 8u);
+  EXPECT_STREQ(r->channels[7].name, "EIGHTH");
+  EXPECT_EQ(r->channels[7].type_of_channel, 3);
+  // Through the reader: the packets start after the 2048 bytes.
+  std::vector<std::uint8_t> f = make_file(2, 64);
+  f.insert(f.begin() + 1024, h.begin() + 1024, h.end());
+  store_le_u16(f.data() + 168, 6);
+  XtfReader reader = make_reader();
+  const ReadResult rr = read_all(f, reader);
+  EXPECT_TRUE(rr.error.is_ok()) << rr.error.message();
+  EXPECT_EQ(rr.pings, 2);
+  EXPECT_EQ(reader.header().header_bytes, 2048u);
 }
 
 TEST(Xtf, RejectsWrongFileMagicAndShortHeader) {
