@@ -65,29 +65,29 @@ def main():
         fig.savefig(out + "/route_%s.png" % name, dpi=90)
 
     f9 = rows(src + "/route_fig9.csv")
-    fig, ax = plt.subplots(figsize=(7, 5))
-    tn = [float(x["true_north"]) for x in f9]
-    te = [float(x["true_east"]) for x in f9]
-    nn = [float(x["node_north"]) for x in f9]
-    ne = [float(x["node_east"]) for x in f9]
-    ax.plot(ne, nn, "k.-", label="estimated nodes (on the route)")
-    ax.plot(te, tn, "bo", label="true vehicle position")
+    fig, ax = plt.subplots(figsize=(6, 7))
     for x in f9:
-        if x["status"] != "tracking":
-            continue
-        # Arrow from the vehicle towards the route: opposite of the side it reports.
-        dn, de = float(x["node_north"]) - float(x["true_north"]), float(x["node_east"]) - float(x["true_east"])
-        ok = x["side"] == x["true_side"]
-        ax.annotate("", xy=(float(x["true_east"]) + 0.5 * de, float(x["true_north"]) + 0.5 * dn),
-                    xytext=(float(x["true_east"]), float(x["true_north"])),
-                    arrowprops=dict(arrowstyle="->", color="g" if ok else "r"))
-    for x in f9:
-        ax.annotate(x["sensed"], (float(x["true_east"]), float(x["true_north"])), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        tn, te = float(x["true_north"]), float(x["true_east"])
+        nn, ne = float(x["node_north"]), float(x["node_east"])
+        ax.plot([te, ne], [tn, nn], ":", color="gray", lw=0.8)
+        ax.plot(ne, nn, "ks", ms=5)
+        ax.plot(te, tn, "bo", ms=6)
+        ax.annotate(x["sensed"], (te, tn), fontsize=8, xytext=(4, 4), textcoords="offset points")
+        if x["status"] == "tracking":
+            # Arrow from the vehicle towards the route, |cross-track| long, on the reported side.
+            dn, de = nn - tn, ne - te
+            d = max((dn * dn + de * de) ** 0.5, 1e-6)
+            L = abs(float(x["cross_track_m"]))
+            ok = x["side"] == x["true_side"]
+            ax.annotate("", xy=(te + L * de / d, tn + L * dn / d), xytext=(te, tn),
+                        arrowprops=dict(arrowstyle="->", color="g" if ok else "r", lw=1.5))
+    ax.plot([], [], "ks", label="estimated node (true position of its tile)")
+    ax.plot([], [], "bo", label="true vehicle position at the sensed tile")
+    ax.plot([], [], "g-", label="steer towards the route (tracking, side correct)")
     ax.set_xlabel("east, m")
     ax.set_ylabel("north, m")
-    ax.set_aspect("equal")
-    ax.legend(fontsize=7)
-    ax.set_title("sensed tiles, estimated nodes, side arrows (green = correct side)")
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_title("paper Fig. 9/10: estimate, route side (15 nodes, 8 tiles)")
     fig.tight_layout()
     fig.savefig(out + "/route_fig9.png", dpi=90)
 
