@@ -53,7 +53,7 @@ struct Detector {
 };
 
 double median(std::vector<double> v) {
-  if (v.empty()) return NAN;
+  if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
 }
@@ -123,7 +123,7 @@ int cmd_disparity(int argc, char** argv) {
   std::vector<StereoPoint> pts;
   if (!run_stereo(l, r, static_cast<int>(corners), static_cast<int>(max_d), d, pts, m)) return 1;
   std::vector<double> ds;
-  for (const StereoPoint& p : pts) ds.push_back(p.disparity_px);
+  for (const StereoPoint& p : pts) ds.push_back(static_cast<double>(p.disparity_px));
   std::printf("stereo: %dx%d, %zu corners, %zu matched (%.1f %%), disparity median %.2f px, range %.2f..%.2f px\n", l.width(),
               l.height(), d.out.size(), pts.size(), d.out.size() ? 100.0 * pts.size() / d.out.size() : 0.0, median(ds),
               ds.empty() ? 0.0 : *std::min_element(ds.begin(), ds.end()), ds.empty() ? 0.0 : *std::max_element(ds.begin(), ds.end()));
@@ -168,7 +168,7 @@ int cmd_aloe(int argc, char** argv) {
   std::vector<double> err;
   for (const StereoPoint& p : pts) {
     const int g = gt(static_cast<int>(std::lround(p.x_px)), static_cast<int>(std::lround(p.y_px)));
-    if (g > 0) err.push_back(std::fabs(p.disparity_px - g));
+    if (g > 0) err.push_back(std::fabs(static_cast<double>(p.disparity_px) - g));
   }
   const double within1 =
       err.empty() ? 0.0 : static_cast<double>(std::count_if(err.begin(), err.end(), [](double e) { return e <= 1.0; })) / err.size();

@@ -19,7 +19,7 @@ namespace {
 const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
 
 double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return NAN;
+  if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
   const std::size_t i = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
   return v[i];
@@ -65,7 +65,7 @@ TEST(StereoData, AloeDisparityAtHarrisCornersAgreesWithGroundTruth) {
   for (const StereoPoint& p : pts) {
     const int g = (*gt)(static_cast<int>(std::lround(p.x_px)), static_cast<int>(std::lround(p.y_px)));
     if (g == 0) continue;
-    err.push_back(std::fabs(p.disparity_px - g));
+    err.push_back(std::fabs(static_cast<double>(p.disparity_px) - g));
   }
   const double within1 = static_cast<double>(std::count_if(err.begin(), err.end(), [](double e) { return e <= 1.0; })) /
                          static_cast<double>(err.size());

@@ -87,4 +87,8 @@ inline void warp_point(int w, int h, double angle_rad, double scale, double qx, 
   py = s * (qx - cx) + c * (qy - cy) + cy;
 }
 
+inline void warp_point(int w, int h, double angle_rad, double scale, float qx, float qy, double& px, double& py) {
+  warp_point(w, h, angle_rad, scale, static_cast<double>(qx), static_cast<double>(qy), px, py);
+}
+
 }  // namespace qnav::vision::testing
