@@ -17,9 +17,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 def plot_eval(traj_dir, out):
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
-    for ax, scen, title in ((axes[0], "27m", "27 m, attitude drifting (no recalibration)"),
-                            (axes[1], "100m", "100 m, attitude recalibrated every 2 m")):
+    for ax, scen, title in ((axes[0], "27m", "%.0f m, attitude drifting (no recalibration)"),
+                            (axes[1], "100m", "%.0f m, attitude recalibrated every 2 m")):
         files = sorted(glob.glob(os.path.join(traj_dir, "vo_%s_*.csv" % scen)))
+        longest = 0.0
         for f in files:
             name = os.path.basename(f)[len("vo_%s_" % scen):-4]
             path, err = [], []
@@ -29,7 +30,8 @@ def plot_eval(traj_dir, out):
                     err.append(100.0 * float(row["err_m"]) / max(float(row["path_m"]), 1e-9) if float(row["path_m"]) > 1.0 else float("nan"))
             style = "-" if name.startswith("3D") else "--"
             ax.plot(path, err, style, label=name)
-        ax.set_title(title)
+            longest = max([longest] + path)
+        ax.set_title(title % longest)
         ax.set_xlabel("distance travelled [m]")
         ax.set_ylabel("position error / distance [%]")
         ax.grid(True, alpha=0.3)
@@ -51,15 +53,15 @@ def read_poses(p):
 
 
 def plot_kitti(ours, peer, out):
-    fig, ax = plt.subplots(figsize=(5, 8))
+    fig, ax = plt.subplots(figsize=(6, 7))
     x, z = read_poses(ours)
     px, pz = read_poses(peer)
     n = len(x)
     ax.plot(px[:n], pz[:n], "k--", label="libviso2 (peer, not ground truth)")
     ax.plot(x, z, "r-", label="qnav vo (6D-VME, fc fast)")
-    ax.set_xlabel("x [m] (right)")
+    ax.set_xlabel("x [m] (right; axis scale stretched 4x)")
     ax.set_ylabel("z [m] (forward)")
-    ax.set_aspect("equal")
+    ax.set_xlim(-12, 12)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("KITTI 2011_09_26 city, %d frames" % n)

@@ -4,9 +4,11 @@
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "drivers/stereo_sim/mars_yard.hpp"
+#include "firmware/tools/image_reader.hpp"
 #include "nav/vo/stereo_vo.hpp"
 
 namespace {
@@ -96,6 +98,71 @@ BENCHMARK_CAPTURE(BM_VoStep, 3D_fc_fast, vo::VmeMode::k3D, match::MatchScoreKind
 BENCHMARK_CAPTURE(BM_VoStep, 6D_fc_fast, vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, true)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_VoStep, 3D_fc, vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_VoStep, 3D_fb, vo::VmeMode::k3D, match::MatchScoreKind::kBinary, false)->Unit(benchmark::kMillisecond);
+
+// One KITTI step (1242x375, 400 corners, 6D-VME, the `qnav vo --kitti` configuration) on frames 10 -> 11
+// of the shared city sequence; skipped when the data is absent.
+void BM_KittiStep(benchmark::State& state) {
+  const std::string dir = std::string(QNAV_SHARED_DIR) + "/data/stereo/kitti_raw_2011_09_26_0013_city100/";
+  Result<ImageU8> l0 = tools::read_image_gray8((dir + "left/0000000010.png").c_str());
+  Result<ImageU8> r0 = tools::read_image_gray8((dir + "right/0000000010.png").c_str());
+  Result<ImageU8> l1 = tools::read_image_gray8((dir + "left/0000000011.png").c_str());
+  Result<ImageU8> r1 = tools::read_image_gray8((dir + "right/0000000011.png").c_str());
+  if (!l0 || !r0 || !l1 || !r1) {
+    state.SkipWithError("KITTI data not found");
+    return;
+  }
+  vo::VoConfig c;
+  c.max_width = 1242;
+  c.max_height = 375;
+  c.max_corners = 400;
+  c.camera.focal_px = 721.5377;
+  c.camera.cu_px = 609.5593;
+  c.camera.cv_px = 172.8540;
+  c.camera.baseline_m = 0.537150;
+  c.stereo.min_disparity_px = 2;
+  c.stereo.max_disparity_px = 120;
+  c.max_depth_m = 40.0;
+  c.mode = vo::VmeMode::k6D;
+  c.weighted = false;
+  c.lateral_sigma_px = 0.7;
+  c.match.attitude_sigma_rad = deg_to_rad(0.7);
+  c.match.max_gate_m = 3.0;
+  c.match.max_candidates_per_landmark = 16;
+  c.match.eps_n_floor_m = 0.05;
+  c.match.fast = true;
+  c.match.batch_size = 80;
+  c.match.min_matches = 40;
+  c.irls_config.huber_m = 0.1;
+  c.irls_config.inlier_m = 0.3;
+  c.max_rms_residual_m = 0.5;
+  c.max_step_m = 4.0;
+  ArenaStorage arena(vo::StereoVo::arena_bytes(c));
+  vo::StereoVo v;
+  if (!v.init(c, arena)) {
+    state.SkipWithError("init failed");
+    return;
+  }
+  vo::VoInput in0, in1;
+  in0.left = l0->view();
+  in0.right = r0->view();
+  in1.left = l1->view();
+  in1.right = r1->view();
+  in1.has_translation_prior = true;
+  in1.t_prev_cur_prior_m = Vec3d(0.0, 0.0, 1.17);  // constant-velocity prior, as in the tool
+  in1.t_prior_sigma_m = 0.33;
+  std::size_t matches = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    v.reset();
+    (void)v.process(in0);
+    state.ResumeTiming();
+    Result<vo::VoStep> s = v.process(in1);
+    matches = s ? s->matches : 0;
+  }
+  state.counters["matches"] = static_cast<double>(matches);
+  state.counters["arena_bytes"] = static_cast<double>(vo::StereoVo::arena_bytes(c));
+}
+BENCHMARK(BM_KittiStep)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
