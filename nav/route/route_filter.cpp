@@ -31,6 +31,7 @@ Status RouteFilter::reset(std::uint32_t node_count, double node_spacing_m) noexc
   updates_ = 0;
   selects_ = 0;
   misses_ = 0;
+  lost_ = false;
   wide_phase_ = 0;
   last_m_.clear();
   summarise();
@@ -142,8 +143,10 @@ Status RouteFilter::update(Span<const NodeMeasurement> m) noexcept {
       if (x.node < n_ && d >= -1 && d <= 1 && std::isfinite(x.inliers) && x.inliers > config_.chance_inliers) support = true;
     }
     misses_ = support ? 0 : misses_ + 1;
+    if (support) lost_ = false;
     if (misses_ >= config_.lost_after_updates) {
       misses_ = 0;
+      lost_ = true;
       counters_.increment(FilterCounter::kLostResets);
       const float keep = static_cast<float>(1.0 - config_.lost_reset_mass);
       const float add = static_cast<float>(config_.lost_reset_mass / static_cast<double>(n_));
@@ -188,7 +191,11 @@ std::size_t RouteFilter::select_nodes(Span<std::uint32_t> out) noexcept {
   if (n_ == 0 || out.empty()) return 0;
   std::size_t count = 0;
   // Top-B by belief (insertion into a short sorted list held at the front of out).
-  const std::size_t b = config_.belief_registrations < out.size() ? config_.belief_registrations : out.size();
+  // While lost, the belief peak has shown nothing: keep one belief node and give the rest of the
+  // registration budget to the wide search (same bound on registrations per update).
+  const std::uint32_t belief_budget = lost_ ? 1u : config_.belief_registrations;
+  const std::uint32_t wide_budget = config_.wide_search_registrations + (lost_ ? config_.belief_registrations - 1u : 0u);
+  const std::size_t b = belief_budget < out.size() ? belief_budget : out.size();
   const std::size_t want = b < n_ ? b : n_;
   for (std::uint32_t i = 0; i < n_; ++i) {
     const float p = bel_[i];
@@ -201,9 +208,9 @@ std::size_t RouteFilter::select_nodes(Span<std::uint32_t> out) noexcept {
     out[pos] = i;
   }
   for (std::size_t i = 0; i < count; ++i) mark_[out[i]] = 1;
-  const bool wide = !confident() || (selects_++ % config_.wide_search_period) == 0;
-  if (wide && config_.wide_search_registrations > 0) {
-    const std::uint32_t k = config_.wide_search_registrations;
+  const bool wide = lost_ || !confident() || (selects_++ % config_.wide_search_period) == 0;
+  if (wide && wide_budget > 0) {
+    const std::uint32_t k = wide_budget;
     const double stride = static_cast<double>(n_) / k;
     const double g = 0.6180339887498949 * static_cast<double>(wide_phase_);  // golden-ratio phases cover the gaps evenly
     const double phase = stride * (g - std::floor(g));

@@ -17,7 +17,9 @@
 //    every wide_search_period updates (and every update while not confident) wide_search_registrations
 //    nodes spread over the whole route with a rotating phase (recovers a lost or kidnapped vehicle).
 //  - lost: when no node within +/- 1 of the estimate shows similarity (S > chance_inliers) for
-//    lost_after_updates updates, lost_reset_mass of the belief is spread over the route (re-localisation).
+//    lost_after_updates updates, lost_reset_mass of the belief is spread over the route and, until a
+//    node near the estimate shows similarity again, select_nodes() keeps one belief node and spends
+//    the rest of the belief budget on the wide search (re-localisation; same registrations bound).
 //  - entropy (natural log, as the paper's Table I), argmax, mass within +/- 1 node of the argmax,
 //    confidence flag (that mass >= confident_mass).
 // Memory: 2 * max_nodes floats + max_nodes bytes from the Arena. Cost: predict O(N * taps), taps <=
@@ -89,6 +91,7 @@ class RouteFilter {
   // Shannon entropy of the belief, nats, O(N) (computed on demand).
   double entropy() const noexcept;
   bool confident() const noexcept { return mass_pm1_ >= config_.confident_mass; }
+  bool lost() const noexcept { return lost_; }
   const RouteFilterConfig& config() const noexcept { return config_; }
   const CounterSet<FilterCounter>& counters() const noexcept { return counters_; }
   std::uint32_t updates() const noexcept { return updates_; }
@@ -109,6 +112,7 @@ class RouteFilter {
   std::uint32_t wide_phase_ = 0;
   std::uint32_t selects_ = 0;
   std::uint32_t misses_ = 0;
+  bool lost_ = false;
   std::uint32_t argmax_ = 0;
   double mass_pm1_ = 0.0;
   CounterSet<FilterCounter> counters_;
