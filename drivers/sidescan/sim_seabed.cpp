@@ -30,24 +30,47 @@ Status Seabed::init(const SeabedConfig& c) noexcept {
   return Status::ok();
 }
 
-float Seabed::value_noise(double x, double y, std::uint64_t salt) const noexcept {
+float Seabed::value_noise(double x, double y, std::uint64_t salt, SeabedCache* cache, int slot) const noexcept {
   const double fx = std::floor(x), fy = std::floor(y);
   const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy);
   const float tx = smooth(static_cast<float>(x - fx)), ty = smooth(static_cast<float>(y - fy));
-  const float v00 = unit(hash3(ix, iy, salt)), v10 = unit(hash3(ix + 1, iy, salt));
-  const float v01 = unit(hash3(ix, iy + 1, salt)), v11 = unit(hash3(ix + 1, iy + 1, salt));
+  float v00, v10, v01, v11;
+  if (cache != nullptr && cache->ix[slot] == ix && cache->iy[slot] == iy) {
+    v00 = cache->v[slot][0];
+    v10 = cache->v[slot][1];
+    v01 = cache->v[slot][2];
+    v11 = cache->v[slot][3];
+  } else {
+    v00 = unit(hash3(ix, iy, salt));
+    v10 = unit(hash3(ix + 1, iy, salt));
+    v01 = unit(hash3(ix, iy + 1, salt));
+    v11 = unit(hash3(ix + 1, iy + 1, salt));
+    if (cache != nullptr) {
+      cache->ix[slot] = ix;
+      cache->iy[slot] = iy;
+      cache->v[slot][0] = v00;
+      cache->v[slot][1] = v10;
+      cache->v[slot][2] = v01;
+      cache->v[slot][3] = v11;
+    }
+  }
   const float a = v00 + tx * (v10 - v00), b = v01 + tx * (v11 - v01);
   return a + ty * (b - a);  // [0, 1)
 }
 
 SeabedSample Seabed::sample(double n, double e) const noexcept {
+  SeabedCache fresh;
+  return sample(n, e, fresh);
+}
+
+SeabedSample Seabed::sample(double n, double e, SeabedCache& cache) const noexcept {
   const std::uint64_t s = cfg_.seed * 0x2545F4914F6CDD1DULL;
   // Sediment patches and texture (zero-mean fields).
-  const float patch = value_noise(n / static_cast<double>(cfg_.patch_scale_m), e / static_cast<double>(cfg_.patch_scale_m), s + 1) - 0.5f;
+  const float patch = value_noise(n / static_cast<double>(cfg_.patch_scale_m), e / static_cast<double>(cfg_.patch_scale_m), s + 1, &cache, 0) - 0.5f;
   float tex = 0.0f, amp = 0.5f;
   double scale = static_cast<double>(cfg_.texture_scale_m);
   for (int o = 0; o < 3; ++o) {
-    tex += amp * (value_noise(n / scale, e / scale, s + 10 + static_cast<std::uint64_t>(o)) - 0.5f);
+    tex += amp * (value_noise(n / scale, e / scale, s + 10 + static_cast<std::uint64_t>(o), &cache, o + 1) - 0.5f);
     amp *= 0.5f;
     scale *= 0.5;
   }
@@ -66,14 +89,25 @@ SeabedSample Seabed::sample(double n, double e) const noexcept {
   if (cfg_.rock_cell_m > 0.0f) {
     const double cell = static_cast<double>(cfg_.rock_cell_m);
     const double fn = std::floor(n / cell), fe = std::floor(e / cell);
-    const std::uint64_t h = hash3(static_cast<std::int64_t>(fn), static_cast<std::int64_t>(fe), s + 100);
-    if (unit(h) < cfg_.rock_probability) {
-      const std::uint64_t h2 = mix64(h);
-      const std::uint64_t h3 = mix64(h2);
-      const float r = cfg_.rock_radius_min_m + unit(h2) * (cfg_.rock_radius_max_m - cfg_.rock_radius_min_m);
-      const double span = cell - 2.0 * static_cast<double>(r);
-      const double cn = fn * cell + static_cast<double>(r) + span * static_cast<double>(unit(h3));
-      const double ce = fe * cell + static_cast<double>(r) + span * static_cast<double>(unit(mix64(h3)));
+    const auto kn = static_cast<std::int64_t>(fn), ke = static_cast<std::int64_t>(fe);
+    if (cache.rock_fn != kn || cache.rock_fe != ke) {
+      const std::uint64_t h = hash3(kn, ke, s + 100);
+      cache.rock_fn = kn;
+      cache.rock_fe = ke;
+      cache.rock = unit(h) < cfg_.rock_probability;
+      if (cache.rock) {
+        const std::uint64_t h2 = mix64(h);
+        const std::uint64_t h3 = mix64(h2);
+        const float r = cfg_.rock_radius_min_m + unit(h2) * (cfg_.rock_radius_max_m - cfg_.rock_radius_min_m);
+        const double span = cell - 2.0 * static_cast<double>(r);
+        cache.rock_r = r;
+        cache.rock_cn = fn * cell + static_cast<double>(r) + span * static_cast<double>(unit(h3));
+        cache.rock_ce = fe * cell + static_cast<double>(r) + span * static_cast<double>(unit(mix64(h3)));
+      }
+    }
+    if (cache.rock) {
+      const float r = cache.rock_r;
+      const double cn = cache.rock_cn, ce = cache.rock_ce;
       const double dn = n - cn, de = e - ce;
       const double d2 = dn * dn + de * de, r2 = static_cast<double>(r) * static_cast<double>(r);
       if (d2 < r2) {

@@ -9,6 +9,7 @@
 // O(1) memory (the Seabed is a small value type). Reflectivity is in [0.02, 1].
 #pragma once
 
+#include <climits>
 #include <cstdint>
 
 #include "nav/core/fixed_vector.hpp"
@@ -53,17 +54,32 @@ struct SeabedSample {
   float height_m = 0.0f;      // height above the mean seabed plane (z up)
 };
 
+// Memo of the lattice corners and rock cell last used, for callers that sample many nearby points in
+// a row (the simulator's ground march). Results are bit-identical with and without it. One per
+// thread and per Seabed (the memo does not know which seabed filled it).
+struct SeabedCache {
+  std::int64_t ix[4] = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
+  std::int64_t iy[4] = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
+  float v[4][4] = {};
+  std::int64_t rock_fn = INT64_MIN, rock_fe = INT64_MIN;
+  bool rock = false;
+  float rock_r = 0.0f;
+  double rock_cn = 0.0, rock_ce = 0.0;
+};
+
 class Seabed {
  public:
   Seabed() noexcept = default;
   Status init(const SeabedConfig& config) noexcept;
   SeabedSample sample(double north_m, double east_m) const noexcept;
+  // Same value, reusing the corner hashes of the previous call when the point is in the same cells.
+  SeabedSample sample(double north_m, double east_m, SeabedCache& cache) const noexcept;
   float reflectivity(double north_m, double east_m) const noexcept { return sample(north_m, east_m).reflectivity; }
   float height_m(double north_m, double east_m) const noexcept { return sample(north_m, east_m).height_m; }
   const SeabedConfig& config() const noexcept { return cfg_; }
 
  private:
-  float value_noise(double x, double y, std::uint64_t salt) const noexcept;
+  float value_noise(double x, double y, std::uint64_t salt, SeabedCache* cache, int slot) const noexcept;
   SeabedConfig cfg_{};
   float ripple_cn_ = 0.0f, ripple_ce_ = 0.0f;
 };

@@ -73,11 +73,12 @@ void SideScanSimulator::render_side(const Pose2& pose, float altitude_m, int sid
   const Vec2d dir = (side == 0 ? -1.0 : 1.0) * sonar::starboard_unit(pose.heading_rad);
   const double dep0 = static_cast<double>(cfg_.depression_rad);
   const double inv_bw = 1.0 / static_cast<double>(cfg_.beam_width_rad);
+  SeabedCache cache;  // consecutive ground points share lattice cells: same values, fewer hashes
   double min_tan = 1e300;
   double h_prev = 0.0;
   for (int k = 0; k < m; ++k) {
     const double g = (k + 0.5) * dg;
-    const SeabedSample s = seabed_->sample(pose.x_m + g * dir.x(), pose.y_m + g * dir.y());
+    const SeabedSample s = seabed_->sample(pose.x_m + g * dir.x(), pose.y_m + g * dir.y(), cache);
     const double h = static_cast<double>(s.height_m);
     const double up = a - h;
     const double tan_dep = up / g;

@@ -49,6 +49,23 @@ TEST(SideScanSim, IsDeterministicPerSeedAndPing) {
   EXPECT_NE(bed.reflectivity(3.0, 4.0), other.reflectivity(3.0, 4.0));
 }
 
+TEST(SideScanSim, SeabedCacheGivesBitIdenticalSamples) {
+  SeabedConfig bc;
+  bc.rock_probability = 0.9f;
+  Seabed bed;
+  ASSERT_TRUE(bed.init(bc).is_ok());
+  SeabedCache cache;
+  int rocks = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const double n = -50.0 + 0.013 * k, e = 17.0 - 0.007 * k;  // a march crossing many cells
+    const SeabedSample a = bed.sample(n, e), b = bed.sample(n, e, cache);
+    ASSERT_EQ(a.reflectivity, b.reflectivity) << k;
+    ASSERT_EQ(a.height_m, b.height_m) << k;
+    rocks += a.height_m > 0.2f ? 1 : 0;
+  }
+  EXPECT_GT(rocks, 0);  // the march crossed rocks
+}
+
 TEST(SideScanSim, ObjectCastsAShadowOfTheExpectedLength) {
   SeabedConfig bc = flat_seabed();
   SeabedObject box;
