@@ -134,6 +134,70 @@ TEST(Xtf, HeaderWithMoreThanSixChannelsGrowsBy1024Bytes) {
   EXPECT_EQ(reader.header().header_bytes, 2048u);
 }
 
+TEST(Xtf, EightBitSamplesNavigationAndAttitudePackets) {
+  // A hand-built file: 8-bit channels, one ping, one navigation (42) and one attitude (3) packet.
+  std::vector<std::uint8_t> f(kXtfFileHeaderBytes);
+  ASSERT_TRUE(encode_xtf_file_header(Span<std::uint8_t>(f.data(), f.size()), 3, "EIGHT").is_ok());
+  store_le_u16(f.data() + 256 + 6, 1);
+  store_le_u16(f.data() + 256 + 128 + 6, 1);
+  const int n = 40;
+  std::vector<std::uint8_t> ping(kXtfPingHeaderBytes + 2 * (kXtfPingChanHeaderBytes + n), 0);
+  store_le_u16(ping.data(), kXtfMagic);
+  store_le_u16(ping.data() + 4, 2);
+  store_le_u32(ping.data() + 10, static_cast<std::uint32_t>(ping.size()));
+  store_le_u32(ping.data() + 28, 99);
+  for (int c = 0; c < 2; ++c) {
+    std::uint8_t* q = ping.data() + kXtfPingHeaderBytes + c * (kXtfPingChanHeaderBytes + n);
+    store_le_u16(q, static_cast<std::uint16_t>(c));
+    store_le_f32(q + 4, 20.0f);
+    store_le_u32(q + 42, n);
+    for (int i = 0; i < n; ++i) q[kXtfPingChanHeaderBytes + i] = static_cast<std::uint8_t>(c == 0 ? 200 - i : 10 + i);
+  }
+  std::vector<std::uint8_t> nav(64, 0), att(64, 0);
+  store_le_u16(nav.data(), kXtfMagic);
+  nav[2] = 42;
+  store_le_u32(nav.data() + 10, 64);
+  store_le_u32(nav.data() + 29, 123456);
+  store_le_f64(nav.data() + 33, 48.5);
+  store_le_f64(nav.data() + 41, -68.5);
+  store_le_f32(nav.data() + 49, 12.5f);
+  store_le_u16(att.data(), kXtfMagic);
+  att[2] = 3;
+  store_le_u32(att.data() + 10, 64);
+  store_le_f32(att.data() + 30, 1.5f);
+  store_le_f32(att.data() + 34, -2.5f);
+  store_le_f32(att.data() + 50, 271.0f);
+  f.insert(f.end(), nav.begin(), nav.end());
+  f.insert(f.end(), ping.begin(), ping.end());
+  f.insert(f.end(), att.begin(), att.end());
+  XtfReader reader = make_reader();
+  MemorySource src(Span<const std::uint8_t>(f.data(), f.size()));
+  ASSERT_TRUE(reader.open(src).is_ok());
+  std::vector<float> port(64), stbd(64);
+  XtfRecord rec;
+  ASSERT_TRUE(reader.next(rec, Span<float>(port.data(), 64), Span<float>(stbd.data(), 64)).value());
+  ASSERT_EQ(rec.kind, XtfRecordKind::kNavigation);
+  EXPECT_EQ(rec.navigation.time_tag_ms, 123456u);
+  EXPECT_DOUBLE_EQ(rec.navigation.raw_y, 48.5);
+  EXPECT_DOUBLE_EQ(rec.navigation.raw_x, -68.5);
+  EXPECT_FLOAT_EQ(rec.navigation.raw_altitude_m, 12.5f);
+  ASSERT_TRUE(reader.next(rec, Span<float>(port.data(), 64), Span<float>(stbd.data(), 64)).value());
+  ASSERT_EQ(rec.kind, XtfRecordKind::kPing);
+  EXPECT_EQ(rec.ping.ping_number, 99u);
+  EXPECT_EQ(rec.ping.samples_per_side, 40u);
+  EXPECT_FLOAT_EQ(port[0], 161.0f);  // stored far first: the last stored byte (200 - 39) is the nearest
+  EXPECT_FLOAT_EQ(port[39], 200.0f);
+  EXPECT_FLOAT_EQ(stbd[0], 10.0f);
+  EXPECT_FLOAT_EQ(stbd[39], 49.0f);
+  ASSERT_TRUE(reader.next(rec, Span<float>(port.data(), 64), Span<float>(stbd.data(), 64)).value());
+  ASSERT_EQ(rec.kind, XtfRecordKind::kAttitude);
+  EXPECT_FLOAT_EQ(rec.attitude.pitch_deg, 1.5f);
+  EXPECT_FLOAT_EQ(rec.attitude.roll_deg, -2.5f);
+  EXPECT_FLOAT_EQ(rec.attitude.heading_deg, 271.0f);
+  EXPECT_FALSE(reader.next(rec, Span<float>(port.data(), 64), Span<float>(stbd.data(), 64)).value());
+  EXPECT_EQ(reader.counters().total(), 1u);  // the ping has no position: ping_without_nav
+}
+
 TEST(Xtf, RejectsWrongFileMagicAndShortHeader) {
   std::vector<std::uint8_t> f = make_file(1, 64);
   f[0] = 0x7A;
