@@ -42,7 +42,7 @@ Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> met
   }
   if (meta.size() < 2) return Status(StatusCode::kInvalidArgument, "localiser: a route needs at least 2 nodes");
   if (source.node_count() != meta.size()) return Status(StatusCode::kInvalidArgument, "localiser: node source and metadata disagree");
-  QNAV_RETURN_IF_ERROR(filter_.reset(static_cast<std::uint32_t>(meta.size()), params.node_spacing_m));
+  QNAV_RETURN_IF_ERROR(filter_.reset(static_cast<std::uint32_t>(meta.size()), static_cast<double>(params.node_spacing_m)));
   QNAV_RETURN_IF_ERROR(window_.bind(source));
   meta_ = meta;
   guidance_.reset();
