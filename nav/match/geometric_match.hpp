@@ -69,7 +69,7 @@ struct GeometricMatchConfig {
   double appearance_weight = 0.0;      // 0 = pure geometry; (0,1] = fc appearance term
   double min_support = 2.0;            // minimum matching score of a potential match
   bool fast = false;                   // fast matching (batches in Harris order)
-  std::size_t batch_size = 40;
+  std::size_t batch_size = 60;
   std::size_t min_matches = 24;  // fast matching stops when this many consistent matches exist
 };
 
