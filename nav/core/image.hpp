@@ -60,7 +60,9 @@ class ImageView {
   }
 
   // Read-only view of the same pixels.
-  template <typename U = T, typename = std::enable_if_t<!std::is_const<U>::value>>
+  // U is deduced from the target type, so it is pinned to T: a view converts only to the read-only
+  // view of the same pixel type (never, say, u8 to const float), and a const view has no conversion.
+  template <typename U, typename = std::enable_if_t<std::is_same<U, T>::value && !std::is_const<U>::value>>
   operator ImageView<const U>() const noexcept {  // NOLINT
     return ImageView<const U>::unchecked(data_, width_, height_, stride_);
   }

@@ -3,11 +3,19 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <type_traits>
 
 #include "test/support/alloc_guard.hpp"
 
 namespace qnav {
 namespace {
+
+// A view converts to the read-only view of the same pixel type and to nothing else.
+static_assert(std::is_convertible<ImageViewU8, ConstImageViewU8>::value, "u8 -> const u8");
+static_assert(std::is_convertible<ImageViewF32, ConstImageViewF32>::value, "f32 -> const f32");
+static_assert(!std::is_convertible<ImageViewU8, ConstImageViewF32>::value, "u8 must not reinterpret as float");
+static_assert(!std::is_convertible<ImageViewF32, ConstImageViewU8>::value, "float must not reinterpret as u8");
+static_assert(!std::is_convertible<ConstImageViewU8, ImageViewU8>::value, "const must not become mutable");
 
 TEST(ImageView, MakeRejectsBadGeometry) {
   std::uint8_t px[16] = {};
