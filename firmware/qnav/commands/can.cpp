@@ -62,7 +62,8 @@ struct Decoder {
       if (drx.on_frame(f) == dc::AhrsUpdate::kSolution) {
         ++solutions;
         const dc::AhrsSolution& s = drx.solution().value;
-        const double x = s.orientation_xyzw[0], y = s.orientation_xyzw[1], z = s.orientation_xyzw[2], w = s.orientation_xyzw[3];
+        const double x = static_cast<double>(s.orientation_xyzw[0]), y = static_cast<double>(s.orientation_xyzw[1]),
+                     z = static_cast<double>(s.orientation_xyzw[2]), w = static_cast<double>(s.orientation_xyzw[3]);
         const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y));
         const double pitch = std::asin(std::fmax(-1.0, std::fmin(1.0, 2 * (w * y - z * x))));
         const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
