@@ -11,40 +11,25 @@
 
 #include "drivers/dvl/dvl_driver.hpp"
 #include "hal/linux/monotonic_clock.hpp"
+#include "test/support/pty.hpp"
 #include "hal/linux/termios_serial.hpp"
 #include "recorded.hpp"
 
 using namespace qnav;
 using namespace qnav::drivers::dvl;
 
-namespace {
-struct Pty {
-  int master = -1;
-  char slave[128] = {};
-  Pty() {
-    master = posix_openpt(O_RDWR | O_NOCTTY);
-    if (master >= 0 && grantpt(master) == 0 && unlockpt(master) == 0) {
-      const char* n = ptsname(master);
-      if (n) std::strncpy(slave, n, sizeof slave - 1);
-    }
-  }
-  ~Pty() {
-    if (master >= 0) close(master);
-  }
-};
-}  // namespace
 
 TEST(DvlPty, WaterLinkedSentencesThroughATerminal) {
-  Pty pty;
-  ASSERT_GE(pty.master, 0);
+  test::PseudoTerminal pty;
+  ASSERT_TRUE(pty.ok());
   hal::TermiosSerialPort port;
-  ASSERT_TRUE(port.open(pty.slave, hal::SerialConfig{}).is_ok());
+  ASSERT_TRUE(port.open(pty.slave_path(), hal::SerialConfig{}).is_ok());
   DvlSerialDriver drv(port, DvlProtocol::kWaterLinked);
   std::string s;
   for (const char* w : qnav_test::kWlWru) s += std::string(w) + "\r\n";
   s += std::string(qnav_test::kWlWrz) + "\r\n";
   const std::int64_t t0 = hal::monotonic_now_ns();
-  ASSERT_EQ(write(pty.master, s.data(), s.size()), static_cast<ssize_t>(s.size()));
+  ASSERT_EQ(write(pty.master_fd(), s.data(), s.size()), static_cast<ssize_t>(s.size()));
   int got = 0;
   for (int i = 0; i < 20 && got == 0; ++i) {
     auto r = drv.poll(100);
@@ -59,24 +44,24 @@ TEST(DvlPty, WaterLinkedSentencesThroughATerminal) {
   EXPECT_EQ(drv.lines(), 5u);
   // Command out through the terminal.
   ASSERT_TRUE(drv.send_command("wcr").is_ok());
-  pollfd p{pty.master, POLLIN, 0};
+  pollfd p{pty.master_fd(), POLLIN, 0};
   ASSERT_EQ(poll(&p, 1, 1000), 1);
   char back[16] = {};
-  const ssize_t n = read(pty.master, back, sizeof back);
+  const ssize_t n = read(pty.master_fd(), back, sizeof back);
   ASSERT_EQ(n, 7);
   EXPECT_EQ(std::string(back, 4), "wcr*");
 }
 
 TEST(DvlPty, Pd6ThroughATerminal) {
-  Pty pty;
-  ASSERT_GE(pty.master, 0);
+  test::PseudoTerminal pty;
+  ASSERT_TRUE(pty.ok());
   hal::TermiosSerialPort port;
   hal::SerialConfig c;
   c.baud = 9600;
-  ASSERT_TRUE(port.open(pty.slave, c).is_ok());
+  ASSERT_TRUE(port.open(pty.slave_path(), c).is_ok());
   DvlSerialDriver drv(port, DvlProtocol::kPd6);
   const std::string s = qnav_test::kPd6Ensemble;
-  ASSERT_EQ(write(pty.master, s.data(), s.size()), static_cast<ssize_t>(s.size()));
+  ASSERT_EQ(write(pty.master_fd(), s.data(), s.size()), static_cast<ssize_t>(s.size()));
   int got = 0;
   for (int i = 0; i < 20 && got == 0; ++i) got += drv.poll(100).value_or(0);
   ASSERT_EQ(got, 1);

@@ -12,37 +12,22 @@
 #include <cstring>
 
 #include "hal/linux/monotonic_clock.hpp"
+#include "test/support/pty.hpp"
 #include "test/support/alloc_guard.hpp"
 
 using namespace qnav;
 using namespace qnav::hal;
 
-namespace {
-struct Pty {
-  int master = -1;
-  char slave[128] = {};
-  Pty() {
-    master = posix_openpt(O_RDWR | O_NOCTTY);
-    if (master >= 0 && grantpt(master) == 0 && unlockpt(master) == 0) {
-      const char* n = ptsname(master);
-      if (n) std::strncpy(slave, n, sizeof slave - 1);
-    }
-  }
-  ~Pty() {
-    if (master >= 0) close(master);
-  }
-};
-}  // namespace
 
 TEST(TermiosSerial, ReadsAndWritesThroughAPseudoTerminal) {
-  Pty pty;
-  ASSERT_GE(pty.master, 0);
+  test::PseudoTerminal pty;
+  ASSERT_TRUE(pty.ok());
   TermiosSerialPort port;
   SerialConfig cfg;
   cfg.baud = 115200;
-  ASSERT_TRUE(port.open(pty.slave, cfg).is_ok());
+  ASSERT_TRUE(port.open(pty.slave_path(), cfg).is_ok());
   const char sentence[] = "wrz,0.120,-0.400,2.000,y,1.30,1.855,1e-07;0;1.4;0;1.2;0;0.2;0;1e+09,7,14,123.00,1*50\n";
-  ASSERT_EQ(write(pty.master, sentence, sizeof sentence - 1), static_cast<ssize_t>(sizeof sentence - 1));
+  ASSERT_EQ(write(pty.master_fd(), sentence, sizeof sentence - 1), static_cast<ssize_t>(sizeof sentence - 1));
   std::uint8_t buf[256];
   std::size_t got = 0;
   const std::int64_t t0 = monotonic_now_ns();
@@ -61,19 +46,19 @@ TEST(TermiosSerial, ReadsAndWritesThroughAPseudoTerminal) {
   auto w = port.write(Span<const std::uint8_t>(cmd, sizeof cmd));
   ASSERT_TRUE(w.is_ok());
   EXPECT_EQ(w.value(), sizeof cmd);
-  pollfd p{pty.master, POLLIN, 0};
+  pollfd p{pty.master_fd(), POLLIN, 0};
   ASSERT_EQ(poll(&p, 1, 1000), 1);
   char back[16] = {};
-  ASSERT_EQ(read(pty.master, back, sizeof back), static_cast<ssize_t>(sizeof cmd));
+  ASSERT_EQ(read(pty.master_fd(), back, sizeof back), static_cast<ssize_t>(sizeof cmd));
   EXPECT_EQ(std::memcmp(back, cmd, sizeof cmd), 0);
   EXPECT_EQ(port.stats().rx_bytes, sizeof sentence - 1);
 }
 
 TEST(TermiosSerial, TimeoutReturnsZeroBytesWithoutHeap) {
-  Pty pty;
-  ASSERT_GE(pty.master, 0);
+  test::PseudoTerminal pty;
+  ASSERT_TRUE(pty.ok());
   TermiosSerialPort port;
-  ASSERT_TRUE(port.open(pty.slave, SerialConfig{}).is_ok());
+  ASSERT_TRUE(port.open(pty.slave_path(), SerialConfig{}).is_ok());
   std::uint8_t buf[8];
   const std::int64_t t0 = monotonic_now_ns();
   Result<SerialRead> r = SerialRead{};
@@ -117,12 +102,12 @@ TEST(TermiosSerial, BuildsFramingBits) {
 }
 
 TEST(TermiosSerial, PtyTakesTheRequestedSpeed) {
-  Pty pty;
-  ASSERT_GE(pty.master, 0);
+  test::PseudoTerminal pty;
+  ASSERT_TRUE(pty.ok());
   TermiosSerialPort port;
   SerialConfig cfg;
   cfg.baud = 9600;
-  ASSERT_TRUE(port.open(pty.slave, cfg).is_ok());
+  ASSERT_TRUE(port.open(pty.slave_path(), cfg).is_ok());
   termios t{};
   ASSERT_EQ(tcgetattr(port.fd(), &t), 0);
   EXPECT_EQ(cfgetispeed(&t), static_cast<speed_t>(B9600));
