@@ -1,6 +1,7 @@
 #include "nav/vision/descriptor.hpp"
 
 #include <cmath>
+#include <cstring>
 
 namespace qnav::vision {
 
@@ -82,18 +83,41 @@ float zncc(const PatchDescriptor& a, const PatchDescriptor& b) noexcept {
   return d;
 }
 
-// atan2 by a minimax polynomial on [0, 1] (max error ~1e-5 rad), in [0, 2 pi). Deterministic and
-// much cheaper than libm's atan2 in the descriptor's inner loop.
-inline float fast_angle(float y, float x) noexcept {
-  const float ax = std::fabs(x), ay = std::fabs(y);
-  const float mx = ax > ay ? ax : ay, mn = ax > ay ? ay : ax;
-  if (!(mx > 0.0f)) return 0.0f;
-  const float a = mn / mx, s = a * a;
+// atan2 of integer gradients by a minimax polynomial on [0, 1] (max error ~1e-5 rad), in [0, 2 pi).
+// Deterministic and much cheaper than libm's atan2. The octant tests are integer compares and the
+// float steps are unconditional (selects of constants: base + 1 * r and base - r are exactly the
+// values of the branchy form), so the gradient loop vectorises under the default -ftrapping-math.
+// For integer inputs r stays in [0, 2 pi) (r >= 2 pi would need y < 0 and r = 0 before the last
+// step, but y < 0 gives r >= min(|y| / max, pi / 4) > 0), so no final wrap is needed.
+inline float fast_angle(int y, int x) noexcept {
+  const int ax = x < 0 ? -x : x, ay = y < 0 ? -y : y;
+  const bool swap = ay > ax;
+  const int mx = swap ? ay : ax, mn = swap ? ax : ay;
+  const float a = static_cast<float>(mn) / static_cast<float>(mx > 0 ? mx : 1), s = a * a;
   float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
-  if (ay > ax) r = 1.57079637f - r;
-  if (x < 0.0f) r = 3.14159274f - r;
-  if (y < 0.0f) r = kTwoPi - r;
-  return r >= kTwoPi ? r - kTwoPi : r;
+  r = (swap ? 1.57079637f : 0.0f) + (swap ? -1.0f : 1.0f) * r;
+  r = (x < 0 ? 3.14159274f : 0.0f) + (x < 0 ? -1.0f : 1.0f) * r;
+  r = (y < 0 ? kTwoPi : 0.0f) + (y < 0 ? -1.0f : 1.0f) * r;
+  return r;
+}
+
+inline std::int32_t bits_of(float f) noexcept {
+  std::int32_t i;
+  std::memcpy(&i, &f, sizeof i);
+  return i;
+}
+constexpr std::uint32_t kBits5 = 0x40a00000u;  // bits of 5.0f
+
+// w[i] = exp(-(d0 + i)^2 k), i in [0, n), by the exact recurrence g(i+1) = g(i) r(i),
+// r(i+1) = r(i) exp(-2k): three exp() per table instead of n (relative error ~n * 1e-7).
+inline void gaussian_table(float d0, float k, int n, float* w) noexcept {
+  float g = std::exp(-d0 * d0 * k), r = std::exp(-(2.0f * d0 + 1.0f) * k);
+  const float q = std::exp(-2.0f * k);
+  for (int i = 0; i < n; ++i) {
+    w[i] = g;
+    g *= r;
+    r *= q;
+  }
 }
 
 Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
@@ -118,42 +142,51 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
     const std::uint8_t* c = img.row(yi - radius + j + 1) + (xi - radius);
     float* __restrict m = mag + j * side;
     float* __restrict t = ang + j * side;
+    // Sobel gx, gy (integers, exact in float) per row; the angle and magnitude below run over the
+    // whole support as one flat loop (vectorised, without a scalar remainder per row).
     for (int i = 0; i < side; ++i) {
-      const float gx = static_cast<float>((a[i + 1] - a[i - 1]) + 2 * (b[i + 1] - b[i - 1]) + (c[i + 1] - c[i - 1]));
-      const float gy = static_cast<float>((c[i - 1] + 2 * c[i] + c[i + 1]) - (a[i - 1] + 2 * a[i] + a[i + 1]));
-      m[i] = std::sqrt(gx * gx + gy * gy);
-      t[i] = fast_angle(gy, gx);
+      m[i] = static_cast<float>((a[i + 1] - a[i - 1]) + 2 * (b[i + 1] - b[i - 1]) + (c[i + 1] - c[i - 1]));
+      t[i] = static_cast<float>((c[i - 1] + 2 * c[i] + c[i + 1]) - (a[i - 1] + 2 * a[i] + a[i + 1]));
     }
   }
+  const int n = side * side;
+  for (int k = 0; k < n; ++k) {
+    const int gx = static_cast<int>(mag[k]), gy = static_cast<int>(ang[k]);
+    mag[k] = static_cast<float>(gx * gx + gy * gy);  // exact: at most 2 * 1020^2
+    ang[k] = fast_angle(gy, gx);
+  }
+  // The sqrt in a separate scalar pass: libm sqrt keeps its errno path, which does not vectorise.
+  for (int k = 0; k < n; ++k) mag[k] = std::sqrt(mag[k]);
   // Separable Gaussian weights around the sub-pixel position.
   const float ox = static_cast<float>(xi) - x, oy = static_cast<float>(yi) - y;
   float wxo[kOrientedMaxSide], wyo[kOrientedMaxSide], wxd[kOrientedMaxSide], wyd[kOrientedMaxSide];
   const float sigma_o = 4.5f * scale;
   const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * half_w * half_w);
-  for (int i = 0; i < side; ++i) {
-    const float dx = static_cast<float>(i - radius) + ox, dy = static_cast<float>(i - radius) + oy;
-    wxo[i] = std::exp(-dx * dx * inv2so);
-    wyo[i] = std::exp(-dy * dy * inv2so);
-    wxd[i] = std::exp(-dx * dx * inv2sd);
-    wyd[i] = std::exp(-dy * dy * inv2sd);
-  }
+  const float d0x = static_cast<float>(-radius) + ox, d0y = static_cast<float>(-radius) + oy;
+  gaussian_table(d0x, inv2so, side, wxo);
+  gaussian_table(d0y, inv2so, side, wyo);
+  gaussian_table(d0x, inv2sd, side, wxd);
+  gaussian_table(d0y, inv2sd, side, wyd);
   // 1. Dominant orientation: 36-bin histogram of Gaussian-weighted gradients (sigma 4.5 scale,
   //    inside a circle of radius 2 sigma).
   constexpr int kOriBins = 36;
   float hist[kOriBins] = {};
   const int ro = static_cast<int>(std::ceil(2.0f * sigma_o)) < radius ? static_cast<int>(std::ceil(2.0f * sigma_o)) : radius;
   float total = 0.0f;
-  for (int dy = -ro; dy <= ro; ++dy)
-    for (int dx = -ro; dx <= ro; ++dx) {
-      if (dx * dx + dy * dy > ro * ro) continue;
-      const int k = (dy + radius) * side + (dx + radius);
-      const float wm = mag[k] * wxo[dx + radius] * wyo[dy + radius];
-      if (!(wm > 0.0f)) continue;
-      int b = static_cast<int>(ang[k] * (kOriBins / kTwoPi));
+  for (int dy = -ro; dy <= ro; ++dy) {
+    int hx = 0;  // half-width of the circle on this row
+    while ((hx + 1) * (hx + 1) + dy * dy <= ro * ro) ++hx;
+    const float wy = wyo[dy + radius];
+    const float* mrow = mag + (dy + radius) * side + radius;
+    const float* arow = ang + (dy + radius) * side + radius;
+    for (int dx = -hx; dx <= hx; ++dx) {
+      const float wm = mrow[dx] * wxo[dx + radius] * wy;
+      int b = static_cast<int>(arow[dx] * (kOriBins / kTwoPi));
       b = b >= kOriBins ? kOriBins - 1 : b;
       hist[b] += wm;
       total += wm;
     }
+  }
   if (!(total > 1e-3f)) return Status(StatusCode::kDegenerate, "descriptor: no gradient around the point");
   float smooth[kOriBins];
   for (int i = 0; i < kOriBins; ++i)
@@ -167,38 +200,70 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   const float ori = wrap_2pi((static_cast<float>(best) + 0.5f + off) * (kTwoPi / kOriBins));
 
   // 2. 4 x 4 x 8 histogram in the rotated frame, trilinear binning, Gaussian weight sigma = half_w.
-  for (float& v : out.v) v = 0.0f;
+  //    Accumulated in a 6 x 6 x 8 histogram with a one-cell border (cells -1..4) so the trilinear
+  //    scatter needs no bounds tests; the border (weights of samples beyond the outer cell centres)
+  //    is dropped at the end, as the bounds tests did.
+  //    Even and odd samples of a row go to two copies (summed at the end), which halves the chains of
+  //    read-modify-write updates of the same bins by neighbouring samples.
+  float h6[2 * 6 * 6 * 8] = {};
   const float co = std::cos(ori), so = std::sin(ori);
   const float inv_cell = 1.0f / cell;
+  const float cx = co * inv_cell, sx = so * inv_cell;
+  constexpr float kOBin = 8.0f / kTwoPi;
   for (int dy = -radius; dy <= radius; ++dy) {
     const float fy = static_cast<float>(dy) + oy;
-    for (int dx = -radius; dx <= radius; ++dx) {
-      const float fx = static_cast<float>(dx) + ox;
-      const float rx = (co * fx + so * fy) * inv_cell, ry = (-so * fx + co * fy) * inv_cell;
-      const float bx = rx + 1.5f, by = ry + 1.5f;  // cell centres at 0..3
-      if (bx <= -1.0f || bx >= 4.0f || by <= -1.0f || by >= 4.0f) continue;
-      const int k = (dy + radius) * side + (dx + radius);
-      const float m = mag[k] * wxd[dx + radius] * wyd[dy + radius];
+    const float wy = wyd[dy + radius];
+    const float* mrow = mag + (dy + radius) * side + radius;
+    const float* arow = ang + (dy + radius) * side + radius;
+    // Shifted bin coordinates: cell centres at 1..4, the window is 0 < b < 5.
+    const float bx0 = sx * fy + 2.5f, by0 = cx * fy + 2.5f;
+    // Pass A (vectorised): bin coordinates and weight of every sample of the row; samples outside
+    // the window get weight 0 and clamped coordinates. Pass B: scatter of the non-zero samples.
+    float pbx[kOrientedMaxSide], pby[kOrientedMaxSide], pbo[kOrientedMaxSide], pm[kOrientedMaxSide];
+    for (int i = 0; i < side; ++i) {
+      const float fx = static_cast<float>(i - radius) + ox;
+      const float bx = cx * fx + bx0, by = by0 - sx * fx;
+      // 0 < b < 5 tested on the IEEE bit patterns (the uint32 order of the bits is the value order
+      // on positive floats; -0 and negatives wrap to large values after - 1): exactly the float
+      // test, but integer arithmetic, which the compiler vectorises (float compares it will not
+      // if-convert under -ftrapping-math).
+      const std::uint32_t inx = static_cast<std::uint32_t>(bits_of(bx)) - 1u < kBits5 - 1u ? 1u : 0u;
+      const std::uint32_t iny = static_cast<std::uint32_t>(bits_of(by)) - 1u < kBits5 - 1u ? 1u : 0u;
+      const float keep = static_cast<float>(static_cast<int>(inx & iny));
+      pm[i] = mrow[i - radius] * wxd[i] * wy * keep;
+      pbx[i] = bx * keep;
+      pby[i] = by * keep;
+      const float da = arow[i - radius] - ori;
+      pbo[i] = (da + (bits_of(da) < 0 ? kTwoPi : 0.0f)) * kOBin;  // da < 0 (or -0: same bin)
+    }
+    for (int i = 0; i < side; ++i) {
+      const float m = pm[i];
       if (!(m > 0.0f)) continue;
-      const float bo = wrap_2pi(ang[k] - ori) * (8.0f / kTwoPi);
-      const int x0 = static_cast<int>(std::floor(bx)), y0 = static_cast<int>(std::floor(by));
-      const int o0 = static_cast<int>(bo) & 7;
-      const float wx = bx - static_cast<float>(x0), wy = by - static_cast<float>(y0), wo = bo - std::floor(bo);
-      for (int iy = 0; iy < 2; ++iy) {
-        const int yy = y0 + iy;
-        if (yy < 0 || yy > 3) continue;
-        const float wyy = iy ? wy : 1.0f - wy;
-        for (int ix = 0; ix < 2; ++ix) {
-          const int xx = x0 + ix;
-          if (xx < 0 || xx > 3) continue;
-          const float wxx = ix ? wx : 1.0f - wx;
-          float* h = out.v + (yy * 4 + xx) * 8;
-          h[o0] += m * wyy * wxx * (1.0f - wo);
-          h[(o0 + 1) & 7] += m * wyy * wxx * wo;
-        }
-      }
+      const float bx = pbx[i], by = pby[i], bo = pbo[i];
+      const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
+      const float wx = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
+      const int o0 = oi & 7, o1 = (oi + 1) & 7;
+      const float m1 = m * wyy, m0 = m - m1;        // rows y0, y0 + 1
+      const float m00 = m0 - m0 * wx, m01 = m0 * wx;  // (y0, x0), (y0, x0 + 1)
+      const float m10 = m1 - m1 * wx, m11 = m1 * wx;
+      float* h = h6 + (i & 1) * (6 * 6 * 8) + (y0 * 6 + x0) * 8;  // even / odd samples: two copies
+      const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
+      h[o0] += m00 - v00;
+      h[o1] += v00;
+      h[8 + o0] += m01 - v01;
+      h[8 + o1] += v01;
+      h[48 + o0] += m10 - v10;
+      h[48 + o1] += v10;
+      h[56 + o0] += m11 - v11;
+      h[56 + o1] += v11;
     }
   }
+  for (int cy = 0; cy < 4; ++cy)
+    for (int cxi = 0; cxi < 4; ++cxi)
+      for (int o = 0; o < 8; ++o) {
+        const int k = ((cy + 1) * 6 + cxi + 1) * 8 + o;
+        out.v[(cy * 4 + cxi) * 8 + o] = h6[k] + h6[6 * 6 * 8 + k];
+      }
   float ss = 0.0f;
   for (float v : out.v) ss += v * v;
   if (!(ss > 1e-12f)) return Status(StatusCode::kDegenerate, "descriptor: empty histogram");

@@ -70,7 +70,7 @@ struct OrientedDescriptor {
 
 // Computes the descriptor at (x, y) of `image` (a pyramid level) with sample scale `scale` (level
 // pixels, 0.25..4): orientation window sigma 4.5 * scale, descriptor window 4 cells of 3 * scale px.
-// Stack: 41 KB of scratch (gradient magnitude and angle of the support).
+// Stack: 44 KB of scratch (gradient magnitude and angle of the support, two 6 x 6 x 8 histograms).
 // Fills v, orientation_rad, valid; x/y/scale are left for the caller (level-0 bookkeeping).
 // Errors: kOutOfRange (support leaves the image), kDegenerate (no gradient), kInvalidArgument.
 Status compute_oriented_descriptor(ConstImageViewU8 image, float x, float y, float scale, OrientedDescriptor& out) noexcept;
