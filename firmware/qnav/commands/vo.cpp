@@ -28,6 +28,7 @@
 #include "drivers/stereo_sim/noise_model.hpp"
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
+#include "firmware/tools/vo_sim_config.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "nav/vision/rectify.hpp"
@@ -58,17 +59,8 @@ struct VoBox {
 };
 
 vo::VoConfig bench_vo_config(const sim::StereoBench& b) {
-  vo::VoConfig c;
-  c.max_width = b.width();
-  c.max_height = b.height();
+  vo::VoConfig c = tools::vo_config_for_bench(b);
   c.max_corners = 300;
-  c.camera.focal_px = b.focal_px();
-  c.camera.cu_px = b.cu_px();
-  c.camera.cv_px = b.cv_px();
-  c.camera.baseline_m = b.baseline_m;
-  c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
-  c.stereo.max_disparity_px = 36;
-  c.stereo.disparity_sigma_px = 0.15f;
   c.max_step_m = 0.6;
   return c;
 }

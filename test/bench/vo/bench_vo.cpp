@@ -2,6 +2,7 @@
 // Each iteration processes the reference frame (untimed) then the current one (timed): Harris +
 // stereo + matching + 3D/6D-VME + IRLS + ICP. Also the geometric matcher alone on the same landmarks.
 #include <benchmark/benchmark.h>
+#include "firmware/tools/vo_sim_config.hpp"
 
 #include <memory>
 #include <string>
@@ -39,18 +40,8 @@ const Frames& frames() {
 }
 
 vo::VoConfig config(vo::VmeMode mode, match::MatchScoreKind score, bool fast) {
-  const sim::StereoBench b;
-  vo::VoConfig c;
-  c.max_width = b.width();
-  c.max_height = b.height();
+  vo::VoConfig c = tools::vo_config_for_bench(sim::StereoBench{});
   c.max_corners = 300;
-  c.camera.focal_px = b.focal_px();
-  c.camera.cu_px = b.cu_px();
-  c.camera.cv_px = b.cv_px();
-  c.camera.baseline_m = b.baseline_m;
-  c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
-  c.stereo.max_disparity_px = 36;
-  c.stereo.disparity_sigma_px = 0.15f;
   c.mode = mode;
   c.match.score = score;
   c.match.fast = fast;

@@ -1,6 +1,7 @@
 #include "nav/vo/stereo_vo.hpp"
 
 #include <gtest/gtest.h>
+#include "firmware/tools/vo_sim_config.hpp"
 
 #include <cmath>
 #include <memory>
@@ -37,16 +38,7 @@ struct SimRun {
 };
 
 VoConfig bench_config(const sim::StereoBench& b, VmeMode mode, bool fast) {
-  VoConfig c;
-  c.max_width = b.width();
-  c.max_height = b.height();
-  c.camera.focal_px = b.focal_px();
-  c.camera.cu_px = b.cu_px();
-  c.camera.cv_px = b.cv_px();
-  c.camera.baseline_m = b.baseline_m;
-  c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
-  c.stereo.max_disparity_px = 36;
-  c.stereo.disparity_sigma_px = 0.15f;
+  VoConfig c = tools::vo_config_for_bench(b);
   c.mode = mode;
   c.match.fast = fast;
   return c;
