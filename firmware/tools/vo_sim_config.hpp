@@ -3,7 +3,11 @@
 // bench_vo and test_nav_vo; callers set the rest (corner cap, VME mode, matching, step limit).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 #include "drivers/stereo_sim/mars_yard.hpp"
+#include "drivers/stereo_sim/noise_model.hpp"
 #include "nav/vo/stereo_vo.hpp"
 
 namespace qnav::tools {
@@ -19,6 +23,24 @@ inline vo::VoConfig vo_config_for_bench(const sim::StereoBench& b) {
   c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
   c.stereo.max_disparity_px = 36;
   c.stereo.disparity_sigma_px = 0.15f;
+  return c;
+}
+
+// The attitude filter's sensor model from the simulated sensor's noise model (its "datasheet"):
+// white noise sigma_m; the drift grows every stability period T_s by the bias (sigma_b, redrawn every
+// T_b) plus a random walk (sigma_s per T_s). As continuous densities: drift rate sigma sigma_b / T_s,
+// rate walk sqrt(sigma_s^2 / T_s^3 + sigma_b^2 / (T_s^2 T_b)), drift walk (the per-period steps)
+// sqrt((sigma_b^2 + sigma_s^2) / T_s). Floors keep it valid for the noise-free preset.
+inline motion::AttitudeBiasConfig attitude_bias_config_for_noise(const sim::NoiseConfig& n) {
+  motion::AttitudeBiasConfig c;
+  const double floor = deg_to_rad(0.001);
+  const double ts = n.stability_period_s, tb = n.bias_period_s;
+  const double sb = std::max(n.sigma_b_rad, floor), ss = std::max(n.sigma_s_rad, floor);
+  c.sensor_sigma_rad = std::max(n.sigma_m_rad, floor);
+  c.initial_drift_sigma_rad = sb;
+  c.initial_rate_sigma_rad_s = sb / ts;
+  c.rate_walk_rad_s_sqrt_s = std::sqrt(ss * ss / (ts * ts * ts) + sb * sb / (ts * ts * tb));
+  c.drift_walk_rad_sqrt_s = std::sqrt((sb * sb + ss * ss) / ts);
   return c;
 }
 

@@ -8,6 +8,8 @@ namespace qnav::motion {
 
 namespace {
 
+using Vec6d = Eigen::Matrix<double, 6, 1>;
+
 Mat3d skew(const Vec3d& v) noexcept {
   Mat3d m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -181,6 +183,80 @@ Result<RigidEstimate> refine_irls_3d(Span<const Vec3d> prev, Span<const Vec3d> c
   const Mat3d R = initial.pose.R;
   return irls(prev, cur, initial, config, weights_scratch, base_weights,
               [&](Span<const double> w) { return estimate_translation_3d(prev, cur, R, w); });
+}
+
+namespace {
+
+Mat3d stereo_cov(const Vec3d& p, const StereoPointModel& m) noexcept {
+  const double z = std::fabs(p.z());
+  const double n = p.norm();
+  const Vec3d u = n > 0.0 ? Vec3d(p / n) : Vec3d::UnitZ();
+  double sr = m.ray_sigma_per_z2 * z * z, sl = m.lateral_sigma_per_z * z;
+  if (sr < m.min_sigma_m) sr = m.min_sigma_m;
+  if (sl < m.min_sigma_m) sl = m.min_sigma_m;
+  const Mat3d uu = u * u.transpose();
+  return sr * sr * uu + sl * sl * (Mat3d::Identity() - uu);
+}
+
+}  // namespace
+
+Result<RigidEstimate> refine_rigid_6d_stereo(Span<const Vec3d> prev, Span<const Vec3d> cur, const RigidEstimate& initial,
+                                             const StereoPointModel& model, std::size_t iterations,
+                                             double huber_k) noexcept {
+  QNAV_RETURN_IF_ERROR(check_inputs(prev, cur, Span<const double>()));
+  if (!(model.ray_sigma_per_z2 >= 0.0) || !(model.lateral_sigma_per_z >= 0.0) || !(model.min_sigma_m > 0.0) ||
+      !std::isfinite(model.ray_sigma_per_z2) || !std::isfinite(model.lateral_sigma_per_z) ||
+      !std::isfinite(model.min_sigma_m) || iterations > 20 || !(huber_k > 0.0) || !initial.pose.is_finite())
+    return Status(StatusCode::kInvalidArgument, "stereo 6D refinement: model or initial pose out of range");
+  const std::size_t n = prev.size();
+  if (n < 3) return Status(StatusCode::kDegenerate, "6D motion needs 3 points");
+  RigidEstimate e = initial;
+  Mat6d H = Mat6d::Zero();
+  double chi2 = 0.0, r2 = 0.0;
+  std::size_t used = 0;
+  // iterations solves, then one pass to evaluate the final pose.
+  for (std::size_t it = 0; it <= iterations; ++it) {
+    H = Mat6d::Zero();
+    Vec6d g = Vec6d::Zero();
+    chi2 = 0.0;
+    r2 = 0.0;
+    used = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3d rc = e.pose.R * cur[i];
+      const Vec3d r = prev[i] - (rc + e.pose.t);
+      const Mat3d S = stereo_cov(prev[i], model) + e.pose.R * stereo_cov(cur[i], model) * e.pose.R.transpose();
+      const Mat3d W = S.inverse();
+      const double d2 = r.dot(W * r);
+      if (!std::isfinite(d2)) continue;
+      const double d = std::sqrt(d2);
+      const double hw = d <= huber_k ? 1.0 : huber_k / d;
+      Eigen::Matrix<double, 3, 6> J;
+      J.leftCols<3>() = skew(rc);
+      J.rightCols<3>() = -Mat3d::Identity();
+      H += hw * J.transpose() * W * J;
+      g += hw * J.transpose() * W * r;
+      chi2 += hw * d2;
+      r2 += r.squaredNorm();
+      ++used;
+    }
+    if (used < 3) return Status(StatusCode::kDegenerate, "6D motion needs 3 finite points");
+    if (it == iterations) break;
+    Eigen::FullPivLU<Mat6d> lu(H);
+    if (!lu.isInvertible()) return Status(StatusCode::kDegenerate, "singular 6D information matrix");
+    const Vec6d dx = -lu.solve(g);
+    if (!dx.allFinite()) return Status(StatusCode::kDegenerate, "non-finite 6D update");
+    e.pose.R = rotation_exp(dx.head<3>()) * e.pose.R;
+    e.pose.t += dx.tail<3>();
+  }
+  Eigen::FullPivLU<Mat6d> lu(H);
+  if (!lu.isInvertible()) return Status(StatusCode::kDegenerate, "singular 6D information matrix");
+  const double dof = 3.0 * static_cast<double>(used) - 6.0;
+  const double scale = dof > 0.0 && chi2 / dof > 1.0 ? chi2 / dof : 1.0;
+  e.covariance = scale * lu.inverse();
+  e.rms_residual_m = std::sqrt(r2 / static_cast<double>(used));
+  e.points = n;
+  if (!e.covariance.allFinite() || !e.pose.is_finite()) return Status(StatusCode::kDegenerate, "non-finite estimate");
+  return e;
 }
 
 }  // namespace qnav::motion

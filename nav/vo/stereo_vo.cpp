@@ -6,7 +6,8 @@ namespace qnav::vo {
 
 const char* const StereoVo::kCounterNames[static_cast<std::size_t>(VoCounter::kCount)] = {
     "vo_bad_image",     "vo_bad_attitude", "vo_bad_prior",        "vo_few_corners",      "vo_few_stereo",
-    "vo_few_matches",   "vo_high_residual", "vo_degenerate",      "vo_implausible_step", "vo_lost_frames"};
+    "vo_few_matches",   "vo_high_residual", "vo_degenerate",      "vo_implausible_step", "vo_lost_frames",
+    "vo_attitude_filter_rejected"};
 
 namespace {
 
@@ -48,6 +49,9 @@ Status StereoVo::init(const VoConfig& config, Arena& arena) noexcept {
   config_ = config;
   QNAV_RETURN_IF_ERROR(harris_.init(harris_config(config), arena));
   QNAV_RETURN_IF_ERROR(stereo_.init(config.stereo, config.camera));
+  if (!(config.frame_period_s > 0.0) || !std::isfinite(config.frame_period_s))
+    return Status(StatusCode::kInvalidArgument, "VO frame_period_s must be > 0");
+  QNAV_RETURN_IF_ERROR(att_filter_.init(config.attitude_bias));
   match::GeometricMatchConfig mc = config.match;
   mc.max_landmarks = static_cast<std::size_t>(config.max_corners);
   if (mc.max_matches > mc.max_landmarks) mc.max_matches = mc.max_landmarks;
@@ -86,6 +90,31 @@ void StereoVo::reset(const Pose3& world_T_start) noexcept {
   chain_t_ = Vec3d::Zero();
   chain_sigma2_ = 0.0;
   chain_has_t_ = true;
+  att_filter_.reset();
+  filter_stamp_ns_ = 0;
+  frames_since_filter_ = 0;
+  filter_ref_R_ = Mat3d::Identity();
+}
+
+bool StereoVo::filter_active(const VoInput& in) const noexcept {
+  return config_.estimate_attitude_bias && config_.mode == VmeMode::k3D && in.has_absolute_attitude &&
+         is_rotation(in.world_R_cam);
+}
+
+const Mat3d* StereoVo::filter_frame(const VoInput& in, bool has_vo, const Mat3d& dR_vo, const Mat3d& cov_vo_right,
+                                    VoStep& step) noexcept {
+  if (!filter_active(in)) return (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+  double dt_s = config_.frame_period_s * static_cast<double>(frames_since_filter_ > 0 ? frames_since_filter_ : 1);
+  if (filter_stamp_ns_ != 0 && in.stamp_ns > filter_stamp_ns_) dt_s = 1e-9 * static_cast<double>(in.stamp_ns - filter_stamp_ns_);
+  if (in.attitude_recalibrated) att_filter_.recalibrated();
+  const Status s = att_filter_.update(in.world_R_cam, dt_s, has_vo, dR_vo, cov_vo_right);
+  filter_stamp_ns_ = in.stamp_ns;
+  frames_since_filter_ = 0;
+  if (!s.is_ok()) counters_.increment(VoCounter::kAttitudeFilterRejected);
+  if (!att_filter_.initialised()) return &in.world_R_cam;
+  step.attitude_corrected = true;
+  step.attitude_drift_rad = att_filter_.drift_rad();
+  return &att_filter_.corrected();
 }
 
 void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
@@ -107,16 +136,15 @@ void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
   }
 }
 
-void StereoVo::finish_lost(VoStep& step, const VoInput& in, std::uint32_t why) noexcept {
+void StereoVo::finish_lost(VoStep& step, const VoInput& in, std::uint32_t why, bool feed_filter) noexcept {
   step.flags |= why | kVoLost;
   counters_.increment(VoCounter::kLostFrames);
   step.visual = false;
+  const Mat3d* att = feed_filter ? filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step)
+                                 : ((config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr);
   if (chain_has_t_ && is_rotation(chain_R_) && chain_t_.allFinite()) {
     const Pose3 dr{chain_R_, chain_t_};
     const Mat3d cov = Mat3d::Identity() * (chain_sigma2_ > 0.0 ? chain_sigma2_ : 0.0);
-    const Mat3d* att = (config_.mode == VmeMode::k3D && in.has_absolute_attitude && is_rotation(in.world_R_cam))
-                           ? &in.world_R_cam
-                           : nullptr;
     if (integrator_.add_step(dr, cov, att).is_ok()) {
       step.flags |= kVoDeadReckoned;
       step.prev_T_cur = dr;
@@ -167,6 +195,7 @@ std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
 Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   if (!ready_) return Status(StatusCode::kNotReady, "StereoVo::process before init");
   VoStep step;
+  if (frames_since_filter_ < 1000000u) ++frames_since_filter_;
   // --- input checks ----------------------------------------------------------------------------
   const bool image_ok = !in.left.empty() && !in.right.empty() && in.left.width() == in.right.width() &&
                         in.left.height() == in.right.height() && in.left.width() <= config_.max_width &&
@@ -197,6 +226,8 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
       chain_t_ = Vec3d::Zero();
       chain_sigma2_ = 0.0;
       chain_has_t_ = true;
+      att_filter_.reset();  // restarts from the next good sample
+      filter_stamp_ns_ = 0;
     }
     // With a good attitude the reference is kept and the chained prior carries this frame's motion.
     step.world_T_cur = integrator_.pose();
@@ -232,11 +263,13 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   }
   if (!have_prev_) {
     step.flags |= kVoFirstFrame;
-    if (in.has_absolute_attitude && config_.mode == VmeMode::k3D && integrator_.steps() == 0) {
+    const Mat3d* att = filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step);
+    if (att != nullptr && integrator_.steps() == 0) {
       Pose3 p = integrator_.pose();
-      p.R = in.world_R_cam;
+      p.R = *att;
       integrator_.reset(p);
     }
+    filter_ref_R_ = att != nullptr ? *att : Mat3d::Identity();
     cur_ = next;
     have_prev_ = true;
     chain_R_ = Mat3d::Identity();
@@ -262,6 +295,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   step.match_stats = matcher_.stats();
   std::uint32_t why = 0;
   motion::RigidEstimate est;
+  std::size_t n_final_pairs = 0;  // pairs in mp_/mc_/w_ that est was computed from (0: inconsistent)
   if (!mr) {
     why = kVoDegenerate;
     counters_.increment(VoCounter::kDegenerate);
@@ -284,6 +318,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
       const Span<const Vec3d> P(mp_.data(), n), C(mc_.data(), n);
       const Span<const double> W(w_.data(), n);
       std::size_t n_final = n;
+      std::size_t n_buf = n;
       Result<motion::RigidEstimate> r = config_.mode == VmeMode::k6D ? motion::estimate_rigid_6d(P, C, W)
                                                                     : motion::estimate_translation_3d(P, C, chain_R_, W);
       if (r && config_.irls) {
@@ -293,6 +328,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
       }
       for (int it = 0; r && it < config_.icp_iterations; ++it) {
         const std::size_t m = icp_associate(ref, lms, r->pose);
+        n_buf = m;
         if (m < config_.min_matches) break;
         const Span<const Vec3d> P2(mp_.data(), m), C2(mc_.data(), m);
         const Span<const double> W2(w_.data(), m);
@@ -314,6 +350,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
         counters_.increment(VoCounter::kDegenerate);
       } else {
         est = r.value();
+        n_final_pairs = n_buf == n_final ? n_final : 0;
         step.inliers = est.inliers;
         step.rms_residual_m = est.rms_residual_m;
         // w = 1e-4 / s2 (weighted) -> predicted rms sigma from the weights' harmonic mean.
@@ -334,18 +371,55 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
     }
   }
   if (why != 0) {
-    finish_lost(step, in, why);
+    finish_lost(step, in, why, true);
   } else {
-    const Mat3d cov_t = est.covariance.bottomRightCorner<3, 3>();
     const Mat3d* att = (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+    if (filter_active(in)) {
+      // 6D-VME on the final pairs gives this step's visual rotation for the attitude filter.
+      const Span<const Vec3d> P(mp_.data(), n_final_pairs), C(mc_.data(), n_final_pairs);
+      const Span<const double> W(w_.data(), n_final_pairs);
+      Result<motion::RigidEstimate> r6 = motion::estimate_rigid_6d(P, C, W);
+      if (r6 && config_.irls)
+        r6 = motion::refine_irls_6d(P, C, r6.value(), config_.irls_config, Span<double>(scratch_.data(), n_final_pairs), W);
+      if (r6 && config_.anisotropic_vo_rotation) {
+        motion::StereoPointModel pm;
+        const double fb = config_.camera.focal_px * config_.camera.baseline_m;
+        pm.ray_sigma_per_z2 = fb > 0.0 ? static_cast<double>(config_.stereo.disparity_sigma_px) / fb : 0.0;
+        pm.lateral_sigma_per_z = config_.camera.focal_px > 0.0 ? config_.lateral_sigma_px / config_.camera.focal_px : 0.0;
+        Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, r6.value(), pm);
+        if (ra) r6 = ra;
+      }
+      const bool vo_ok = n_final_pairs >= config_.min_matches && r6 && r6->pose.is_finite() && rotation_angle_rad(r6->pose.R) <= config_.max_step_rotation_rad;
+      const Mat3d R6 = vo_ok ? r6->pose.R : Mat3d::Identity();
+      const Mat3d cov_right = vo_ok ? Mat3d(R6.transpose() * r6->covariance.topLeftCorner<3, 3>() * R6) : Mat3d::Zero();
+      step.has_vo_rotation = vo_ok;
+      step.vo_R_prev_cur = R6;
+      step.vo_rotation_cov_right = cov_right;
+      const Mat3d ref_R = filter_ref_R_;
+      const bool was_init = att_filter_.initialised();
+      att = filter_frame(in, vo_ok, R6, cov_right, step);
+      if (config_.corrected_step_rotation && was_init && att_filter_.initialised() && step.attitude_corrected) {
+        // 3D-VME again with the corrected step rotation (same pairs, same weights).
+        const Mat3d R_step = ref_R.transpose() * (*att);
+        Result<motion::RigidEstimate> r3 = motion::estimate_translation_3d(P, C, R_step, W);
+        if (r3 && config_.irls)
+          r3 = motion::refine_irls_3d(P, C, r3.value(), config_.irls_config, Span<double>(scratch_.data(), n_final_pairs), W);
+        if (r3 && r3->pose.is_finite() && r3->pose.t.norm() <= config_.max_step_m) {
+          est.pose = r3->pose;
+          est.covariance = r3->covariance;
+        }
+      }
+    }
+    const Mat3d cov_t = est.covariance.bottomRightCorner<3, 3>();
     if (integrator_.add_step(est.pose, cov_t, att).is_ok()) {
       step.visual = true;
       step.prev_T_cur = est.pose;
       step.covariance = est.covariance;
     } else {
-      finish_lost(step, in, kVoDegenerate);
+      finish_lost(step, in, kVoDegenerate, false);
     }
   }
+  filter_ref_R_ = (step.attitude_corrected ? att_filter_.corrected() : (in.has_absolute_attitude ? in.world_R_cam : Mat3d::Identity()));
   // This frame becomes the reference (it has enough landmarks), so the next good frame recovers.
   cur_ = next;
   chain_R_ = Mat3d::Identity();

@@ -6,6 +6,10 @@
 // geometric matching against the previous frame's landmarks with the prior (fb / fc / fast) ->
 // 6D-VME (Arun) or 3D-VME (eq. 9, R from the sensor), weighted by 1/sigma^2, optional IRLS ->
 // quality checks -> pose integration (3D mode: orientation from the absolute attitude when given).
+// 3D mode with estimate_attitude_bias (default): an AttitudeBiasFilter (nav/motion) fuses each good
+// step's 6D-VME rotation with the sensor samples and estimates the sensor's drift; its corrected
+// orientation replaces the sensor's in 3D-VME and in the integration (a second O(matches) 6D solve +
+// IRLS and a 3D re-solve per step). A NaN attitude resets it with the chain.
 //
 // Honest failure: a step that fails a check (too few corners / stereo points / matches, residual too
 // high, implausible step, degenerate geometry, bad input) is flagged kLost and NOT integrated as a
@@ -30,6 +34,7 @@
 #include "nav/core/image.hpp"
 #include "nav/core/status.hpp"
 #include "nav/match/geometric_match.hpp"
+#include "nav/motion/attitude_bias_filter.hpp"
 #include "nav/motion/pose_integrator.hpp"
 #include "nav/motion/rigid3d.hpp"
 #include "nav/vision/harris.hpp"
@@ -66,6 +71,18 @@ struct VoConfig {
   double max_step_m = 5.0;
   double max_step_rotation_rad = 0.5;
   double default_translation_sigma_m = 0.5;  // gate when no odometry prior is given
+  // Attitude drift estimation (3D mode with an absolute attitude only; see
+  // nav/motion/attitude_bias_filter.hpp): each good step's 6D-VME rotation (on the final 3D-VME pairs)
+  // and the sensor sample feed an AttitudeBiasFilter; its drift-corrected orientation replaces the sensor
+  // in 3D-VME (step rotation, when corrected_step_rotation) and in the pose integration. Off = the
+  // paper's 3D-VME (orientation straight from the sensor).
+  bool estimate_attitude_bias = true;
+  bool corrected_step_rotation = true;
+  // The filter's VO rotation: Arun + IRLS, then Gauss-Newton with each point's anisotropic stereo
+  // covariance (depth sigma along the ray, lateral_sigma_px across; motion::refine_rigid_6d_stereo).
+  bool anisotropic_vo_rotation = true;
+  motion::AttitudeBiasConfig attitude_bias;
+  double frame_period_s = 10.0;  // filter dt when stamp_ns is missing (0) or not increasing
 };
 
 // Input of one frame. Rotations and translations are in the left camera frame (x right, y down, z fwd).
@@ -79,6 +96,7 @@ struct VoInput {
   double t_prior_sigma_m = 0.05;
   bool has_absolute_attitude = false;  // world_R_cam from the sensor (3D-VME integration)
   Mat3d world_R_cam = Mat3d::Identity();
+  bool attitude_recalibrated = false;  // the sensor was just reset against an absolute reference
 };
 
 enum VoFlag : std::uint32_t {
@@ -107,6 +125,11 @@ struct VoStep {
   std::size_t inliers = 0;
   double rms_residual_m = 0.0;
   double normalized_residual = 0.0;
+  bool attitude_corrected = false;  // world_T_cur.R is the attitude filter's estimate, not the raw sensor
+  Vec3d attitude_drift_rad = Vec3d::Zero();  // the filter's estimate of the sensor drift
+  bool has_vo_rotation = false;               // the filter's 6D rotation of this step (diagnostics)
+  Mat3d vo_R_prev_cur = Mat3d::Identity();
+  Mat3d vo_rotation_cov_right = Mat3d::Zero();
   match::MatchStats match_stats;
 };
 
@@ -121,6 +144,7 @@ enum class VoCounter : std::uint8_t {
   kDegenerate,
   kImplausibleStep,
   kLostFrames,
+  kAttitudeFilterRejected,  // sample or VO step refused by the attitude filter (its own counters say why)
   kCount
 };
 
@@ -142,6 +166,7 @@ class StereoVo {
   const vision::HarrisDetector& harris() const noexcept { return harris_; }
   const vision::StereoMatcher& stereo() const noexcept { return stereo_; }
   const match::GeometricMatcher& matcher() const noexcept { return matcher_; }
+  const motion::AttitudeBiasFilter& attitude_filter() const noexcept { return att_filter_; }
   std::size_t matcher_bytes() const noexcept { return matcher_.working_set_bytes(); }
   // Landmarks of the last processed frame (in decreasing Harris score).
   Span<const match::Landmark3> current_landmarks() const noexcept {
@@ -152,7 +177,12 @@ class StereoVo {
 
  private:
   void build_landmarks(BoundedVector<match::Landmark3>& out) noexcept;
-  void finish_lost(VoStep& step, const VoInput& in, std::uint32_t why) noexcept;
+  void finish_lost(VoStep& step, const VoInput& in, std::uint32_t why, bool feed_filter) noexcept;
+  bool filter_active(const VoInput& in) const noexcept;
+  // Feeds the attitude filter with this frame (the reference frame since the last call); returns the
+  // attitude to integrate with (corrected, or the sensor's if the filter refused).
+  const Mat3d* filter_frame(const VoInput& in, bool has_vo, const Mat3d& dR_vo, const Mat3d& cov_vo_right,
+                            VoStep& step) noexcept;
   // Re-associates ref and cur under est (mutual nearest within the gate); returns the pair count written
   // to mp_/mc_/w_.
   std::size_t icp_associate(const BoundedVector<match::Landmark3>& ref, const BoundedVector<match::Landmark3>& cur,
@@ -180,6 +210,10 @@ class StereoVo {
   Vec3d chain_t_ = Vec3d::Zero();
   double chain_sigma2_ = 0.0;
   bool chain_has_t_ = false;
+  motion::AttitudeBiasFilter att_filter_;
+  std::uint64_t filter_stamp_ns_ = 0;
+  std::uint32_t frames_since_filter_ = 0;
+  Mat3d filter_ref_R_ = Mat3d::Identity();  // corrected attitude of the reference frame
   CounterSet<VoCounter> counters_{kCounterNames};
 };
 

@@ -1,13 +1,17 @@
 // qnav vo: stereo visual odometry (Mars paper) on the synthetic Mars yard, KITTI and EuRoC sequences.
 //
-//   qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|all] [--seed N]
+//   qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|att|all] [--seed N]
+//                [--seeds N,M,... | --seeds A-B]
 //                [--traj-dir DIR] [--length-27 M] [--length-100 M] [--calib-27 M] [--verbose]
 //                tuning knobs: [--nt X] [--sigma-m-deg D] [--dsig PX] [--nsig N] [--app W]
 //       Synthetic evaluation with exact ground truth: a 27 m run (attitude drifting, no recalibration)
 //       and a 100 m run (attitude recalibrated every 2 m), paper's noise model (n_t = 10 %, small
 //       attitude noise), frames rendered once and fed to every configuration. Prints one JSON object
 //       (--json) or a table. --quick: 6 m and 10 m (for the demo). --traj-dir writes per-config CSVs
-//       (path_m, err_m) for scripts/vo_plot.py.
+//       (path_m, err_m, primary seed) for scripts/vo_plot.py. --seeds runs every seed (the first is the
+//       primary: rel_error_pct_27m / _100m), and reports per-seed lists, max and mean.
+//       Configurations: main = 3D-fc-fast-att (3D-VME with the attitude drift filter, the default),
+//       3D-fc-fast (the paper's 3D-VME), 6D-fc-fast; att = the first only; all = + full fc / fb.
 //   qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE] [--weighted] [--max-depth M]
 //       Rectified KITTI-layout sequence; no attitude sensor: 6D-VME with a constant-velocity prior.
 //       Writes the KITTI pose format (row-major 3x4 per frame, left camera in frame-0 coordinates),
@@ -16,6 +20,7 @@
 //       Raw EuRoC pairs: rectified with nav/vision's RemapTable, 6D-VME, zero-motion prior; prints the
 //       drift against groundtruth_tum.txt when present.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -72,16 +77,24 @@ struct EvalConfig {
   vo::VmeMode mode;
   match::MatchScoreKind score;
   bool fast;
+  bool attitude_bias;  // AttitudeBiasFilter on (3D only)
 };
 
-const EvalConfig kMain = {"3D-fc-fast", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, true};
+// The first entry is the main configuration (reported as rel_error_pct_27m / _100m).
+const EvalConfig kMain = {"3D-fc-fast-att", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, true, true};
+const EvalConfig kMainSet[] = {
+    kMain,
+    {"3D-fc-fast", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, true, false},
+    {"6D-fc-fast", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, true, false},
+};
 const EvalConfig kAll[] = {
     kMain,
-    {"3D-fc", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, false},
-    {"3D-fb", vo::VmeMode::k3D, match::MatchScoreKind::kBinary, false},
-    {"6D-fc-fast", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, true},
-    {"6D-fc", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, false},
-    {"6D-fb", vo::VmeMode::k6D, match::MatchScoreKind::kBinary, false},
+    {"3D-fc-fast", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, true, false},
+    {"3D-fc", vo::VmeMode::k3D, match::MatchScoreKind::kContinuous, false, false},
+    {"3D-fb", vo::VmeMode::k3D, match::MatchScoreKind::kBinary, false, false},
+    {"6D-fc-fast", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, true, false},
+    {"6D-fc", vo::VmeMode::k6D, match::MatchScoreKind::kContinuous, false, false},
+    {"6D-fb", vo::VmeMode::k6D, match::MatchScoreKind::kBinary, false, false},
 };
 
 struct RunResult {
@@ -120,6 +133,8 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     c.stereo.disparity_sigma_px = static_cast<float>(g_dsig);
     c.match.n_sigma = g_nsig;
     c.match.appearance_weight = g_app;
+    c.estimate_attitude_bias = e.attitude_bias;
+    c.attitude_bias = tools::attitude_bias_config_for_noise(noise_cfg);
     std::unique_ptr<VoBox> b(new VoBox);
     if (!b->init(c)) return false;
     vos.push_back(std::move(b));
@@ -135,9 +150,11 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     if (s.path_m > sc.length_m + 1e-9) break;
     const Pose3 cam = s.world_T_rover.compose(bench.rover_T_left());
     noise.advance_to(s.time_s);
+    bool recalibrated = false;
     if (sc.calib_every_m > 0.0 && s.path_m - last_calib_m >= sc.calib_every_m - 1e-9) {
       noise.calibrate();
       last_calib_m = s.path_m;
+      recalibrated = true;
     }
     const Mat3d meas = noise.measure_attitude(cam.R);
     if (!sim::render_stereo(terrain, bench, cam, seed * 100000 + frame, left.view(), right.view())) return false;
@@ -146,6 +163,8 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     in.right = right.view();
     in.has_absolute_attitude = true;
     in.world_R_cam = meas;
+    in.attitude_recalibrated = recalibrated;
+    in.stamp_ns = static_cast<std::uint64_t>(std::llround(s.time_s * 1e9)) + 1;  // never 0 (0 = no stamp)
     if (frame == 0) {
       start_cam = cam;
       for (auto& v : vos) v->vo.reset(cam);
@@ -166,10 +185,22 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
       if (g_verbose && frame > 0 && r) {
         const Pose3 ts = prev_cam.inverse().compose(cam);
         const Vec3d d = r->prev_T_cur.t - ts.t;
-        std::printf("%s f%zu %s corners %zu stereo %zu matches %zu rms %.4f step %.4f err %+.4f %+.4f %+.4f flags 0x%x  att_err %.3f deg\n",
+        const Mat3d& Rv = r->has_vo_rotation ? r->vo_R_prev_cur : r->prev_T_cur.R;
+        const Vec3d rot_err = motion::rotation_log(ts.R.transpose() * Rv);
+        const Mat3d rc = r->has_vo_rotation ? r->vo_rotation_cov_right
+                                            : Mat3d(Rv.transpose() * r->covariance.topLeftCorner<3, 3>() * Rv);
+        const Vec3d att_err = motion::rotation_log(cam.R.transpose() * vos[k]->vo.pose().R);
+        std::printf("%s f%zu %s corners %zu stereo %zu matches %zu rms %.4f step %.4f err %+.4f %+.4f %+.4f flags 0x%x  "
+                    "step_rot_err %+.4f %+.4f %+.4f deg pred_sigma %.4f %.4f %.4f deg  att_err %+.4f %+.4f %+.4f deg "
+                    "drift %+.4f %+.4f %+.4f est %+.4f %+.4f %+.4f deg\n",
                     cfgs[k].name, frame, sc.name, r->corners, r->stereo_points, r->matches, r->rms_residual_m,
-                    ts.t.norm(), d.x(), d.y(), d.z(), r->flags,
-                    rad_to_deg(rotation_angle_rad(in.R_prev_cur * ts.R.transpose())));
+                    ts.t.norm(), d.x(), d.y(), d.z(), r->flags, rad_to_deg(rot_err.x()), rad_to_deg(rot_err.y()),
+                    rad_to_deg(rot_err.z()), rad_to_deg(std::sqrt(std::max(0.0, rc(0, 0)))),
+                    rad_to_deg(std::sqrt(std::max(0.0, rc(1, 1)))), rad_to_deg(std::sqrt(std::max(0.0, rc(2, 2)))),
+                    rad_to_deg(att_err.x()), rad_to_deg(att_err.y()), rad_to_deg(att_err.z()),
+                    rad_to_deg(noise.drift_rad().x()), rad_to_deg(noise.drift_rad().y()),
+                    rad_to_deg(noise.drift_rad().z()), rad_to_deg(r->attitude_drift_rad.x()),
+                    rad_to_deg(r->attitude_drift_rad.y()), rad_to_deg(r->attitude_drift_rad.z()));
       }
       if (!r || (frame > 0 && !r->visual)) ++rr.lost;
       const double err = (vos[k]->vo.pose().t - cam.t).norm();
@@ -212,8 +243,13 @@ int run_eval(int argc, char** argv) {
     return 2;
   noise.sigma_m_rad = deg_to_rad(sm_deg);
   std::vector<EvalConfig> cfgs;
-  if (std::strcmp(configs, "main") == 0) cfgs.push_back(kMain);
-  else for (const EvalConfig& e : kAll) cfgs.push_back(e);
+  if (std::strcmp(configs, "main") == 0) {
+    for (const EvalConfig& e : kMainSet) cfgs.push_back(e);
+  } else if (std::strcmp(configs, "att") == 0) {
+    cfgs.push_back(kMain);
+  } else {
+    for (const EvalConfig& e : kAll) cfgs.push_back(e);
+  }
   double len27 = quick ? 6.0 : 27.0, len100 = quick ? 10.0 : 100.0;
   if (!cli::option_double(argc, argv, "--length-27", len27) || !cli::option_double(argc, argv, "--length-100", len100) ||
       !(len27 > 0.5) || !(len100 > 0.5)) {
@@ -223,11 +259,42 @@ int run_eval(int argc, char** argv) {
   double calib27 = 0.0;  // the 27 m run lets the attitude drift unless told otherwise
   if (!cli::option_double(argc, argv, "--calib-27", calib27)) return 2;
   const Scenario scen[2] = {{"27m", len27, calib27}, {"100m", len100, 2.0}};
-  std::vector<RunResult> res[2];
-  for (int i = 0; i < 2; ++i) {
-    if (!run_scenario(scen[i], cfgs, noise, static_cast<std::uint64_t>(seed) + 10 * static_cast<std::uint64_t>(i), res[i])) {
-      std::fprintf(stderr, "vo eval: scenario %s failed\n", scen[i].name);
-      return 1;
+  // --seeds: comma list ("3,4,5") or inclusive range ("3-7"); the first is the primary seed.
+  std::vector<long> seeds;
+  if (const char* ss = cli::option(argc, argv, "--seeds")) {
+    long a = 0, b = 0;
+    char dash = 0;
+    if (std::sscanf(ss, "%ld%c%ld", &a, &dash, &b) == 3 && dash == '-' && a >= 0 && b >= a && b - a < 100) {
+      for (long v = a; v <= b; ++v) seeds.push_back(v);
+    } else {
+      const char* p = ss;
+      while (*p != 0) {
+        char* e = nullptr;
+        const long v = std::strtol(p, &e, 10);
+        if (e == p || v < 0 || seeds.size() >= 100) {
+          std::fprintf(stderr, "vo eval: --seeds wants N,M,... or A-B (non-negative)\n");
+          return 2;
+        }
+        seeds.push_back(v);
+        p = (*e == ',') ? e + 1 : e;
+        if (*e != ',' && *e != 0) {
+          std::fprintf(stderr, "vo eval: --seeds wants N,M,... or A-B (non-negative)\n");
+          return 2;
+        }
+      }
+    }
+  }
+  if (seeds.empty()) seeds.push_back(seed);
+  seed = seeds[0];
+  // res[s][i][k]: seed s, scenario i, configuration k.
+  std::vector<std::array<std::vector<RunResult>, 2>> res(seeds.size());
+  for (std::size_t si = 0; si < seeds.size(); ++si) {
+    for (int i = 0; i < 2; ++i) {
+      if (!run_scenario(scen[i], cfgs, noise, static_cast<std::uint64_t>(seeds[si]) + 10 * static_cast<std::uint64_t>(i),
+                        res[si][i])) {
+        std::fprintf(stderr, "vo eval: scenario %s failed\n", scen[i].name);
+        return 1;
+      }
     }
   }
   if (traj_dir != nullptr) {
@@ -240,40 +307,89 @@ int run_eval(int argc, char** argv) {
           return 1;
         }
         std::fprintf(f, "path_m,err_m\n");
-        for (std::size_t j = 0; j < res[i][k].trace_path.size(); ++j)
-          std::fprintf(f, "%.4f,%.5f\n", res[i][k].trace_path[j], res[i][k].trace_err[j]);
+        const RunResult& rr = res[0][i][k];  // primary seed
+        for (std::size_t j = 0; j < rr.trace_path.size(); ++j) std::fprintf(f, "%.4f,%.5f\n", rr.trace_path[j], rr.trace_err[j]);
         std::fclose(f);
       }
   }
   auto pct = [](const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.end_error_m / r.path_m : 0.0; };
-  std::vector<double> all_ms = res[0][0].step_ms;
-  all_ms.insert(all_ms.end(), res[1][0].step_ms.begin(), res[1][0].step_ms.end());
+  auto max_pct = [](const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.max_error_m / r.path_m : 0.0; };
+  // Per-configuration lists over the seeds.
+  struct Stats {
+    std::vector<double> v;
+    double max() const { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+    double mean() const {
+      double s = 0.0;
+      for (double x : v) s += x;
+      return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+    }
+  };
+  auto collect = [&](std::size_t k, int i) {
+    Stats st;
+    for (std::size_t si = 0; si < seeds.size(); ++si) st.v.push_back(pct(res[si][i][k]));
+    return st;
+  };
+  auto ms_of = [&](std::size_t k) {
+    std::vector<double> ms;
+    for (std::size_t si = 0; si < seeds.size(); ++si)
+      for (int i = 0; i < 2; ++i) ms.insert(ms.end(), res[si][i][k].step_ms.begin(), res[si][i][k].step_ms.end());
+    return ms;
+  };
+  auto lost_of = [&](std::size_t k, int i) {
+    std::size_t n = 0;
+    for (std::size_t si = 0; si < seeds.size(); ++si) n += res[si][i][k].lost;
+    return n;
+  };
+  auto print_list = [](const Stats& st) {
+    std::printf("[");
+    for (std::size_t j = 0; j < st.v.size(); ++j) std::printf("%s%.3f", j ? "," : "", st.v[j]);
+    std::printf("]");
+  };
   if (json) {
-    std::printf("{\"noise\":\"%s\",\"seed\":%ld,\"main\":\"%s\",\"rel_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
-                "\"step_ms_median\":%.3f,\"image\":\"320x256\",\"length_27m_m\":%.2f,\"length_100m_m\":%.2f,"
-                "\"configs\":[",
-                noise_name, seed, cfgs[0].name, pct(res[0][0]), pct(res[1][0]), median(all_ms), res[0][0].path_m,
-                res[1][0].path_m);
+    const Stats s27 = collect(0, 0), s100 = collect(0, 1);
+    std::printf("{\"noise\":\"%s\",\"seed\":%ld,\"seeds\":[", noise_name, seed);
+    for (std::size_t si = 0; si < seeds.size(); ++si) std::printf("%s%ld", si ? "," : "", seeds[si]);
+    std::printf("],\"main\":\"%s\",\"rel_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
+                cfgs[0].name, pct(res[0][0][0]), pct(res[0][1][0]));
+    print_list(s27);
+    std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", s27.max(),
+                s27.mean());
+    print_list(s100);
+    std::printf(",\"rel_error_pct_100m_max\":%.3f,\"rel_error_pct_100m_mean\":%.3f,\"step_ms_median\":%.3f,"
+                "\"image\":\"320x256\",\"length_27m_m\":%.2f,\"length_100m_m\":%.2f,\"configs\":[",
+                s100.max(), s100.mean(), median(ms_of(0)), res[0][0][0].path_m, res[0][1][0].path_m);
     for (std::size_t k = 0; k < cfgs.size(); ++k) {
-      std::vector<double> ms = res[0][k].step_ms;
-      ms.insert(ms.end(), res[1][k].step_ms.begin(), res[1][k].step_ms.end());
+      const Stats a = collect(k, 0), b = collect(k, 1);
       std::printf("%s{\"name\":\"%s\",\"rel_error_pct_27m\":%.3f,\"max_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
-                  "\"max_error_pct_100m\":%.3f,\"step_ms_median\":%.3f,\"lost_27m\":%zu,\"lost_100m\":%zu,\"frames\":%zu}",
-                  k ? "," : "", cfgs[k].name, pct(res[0][k]), 100.0 * res[0][k].max_error_m / res[0][k].path_m,
-                  pct(res[1][k]), 100.0 * res[1][k].max_error_m / res[1][k].path_m, median(ms), res[0][k].lost,
-                  res[1][k].lost, res[0][k].frames + res[1][k].frames);
+                  "\"max_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
+                  k ? "," : "", cfgs[k].name, pct(res[0][0][k]), max_pct(res[0][0][k]), pct(res[0][1][k]),
+                  max_pct(res[0][1][k]));
+      print_list(a);
+      std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", a.max(),
+                  a.mean());
+      print_list(b);
+      std::printf(",\"rel_error_pct_100m_max\":%.3f,\"step_ms_median\":%.3f,\"lost_27m\":%zu,\"lost_100m\":%zu}", b.max(),
+                  median(ms_of(k)), lost_of(k, 0), lost_of(k, 1));
     }
     std::printf("]}\n");
   } else {
-    std::printf("synthetic Mars yard, noise %s, seed %ld, 320x256, 300 corners\n", noise_name, seed);
-    std::printf("%-12s %10s %10s %10s %10s %8s %6s\n", "config", "end%27m", "end%100m", "max%27m", "max%100m", "ms/step",
-                "lost");
+    std::printf("synthetic Mars yard, noise %s, 320x256, 300 corners\n", noise_name);
+    std::printf("%-15s %5s %10s %10s %10s %10s %8s %6s\n", "config", "seed", "end%27m", "end%100m", "max%27m", "max%100m",
+                "ms/step", "lost");
     for (std::size_t k = 0; k < cfgs.size(); ++k) {
-      std::vector<double> ms = res[0][k].step_ms;
-      ms.insert(ms.end(), res[1][k].step_ms.begin(), res[1][k].step_ms.end());
-      std::printf("%-12s %10.3f %10.3f %10.3f %10.3f %8.2f %6zu\n", cfgs[k].name, pct(res[0][k]), pct(res[1][k]),
-                  100.0 * res[0][k].max_error_m / res[0][k].path_m, 100.0 * res[1][k].max_error_m / res[1][k].path_m,
-                  median(ms), res[0][k].lost + res[1][k].lost);
+      for (std::size_t si = 0; si < seeds.size(); ++si) {
+        const RunResult& a = res[si][0][k];
+        const RunResult& b = res[si][1][k];
+        std::vector<double> ms = a.step_ms;
+        ms.insert(ms.end(), b.step_ms.begin(), b.step_ms.end());
+        std::printf("%-15s %5ld %10.3f %10.3f %10.3f %10.3f %8.2f %6zu\n", cfgs[k].name, seeds[si], pct(a), pct(b),
+                    max_pct(a), max_pct(b), median(ms), a.lost + b.lost);
+      }
+      if (seeds.size() > 1) {
+        const Stats a = collect(k, 0), b = collect(k, 1);
+        std::printf("%-15s %5s %10.3f %10.3f   (mean %.3f / %.3f)\n", cfgs[k].name, "max", a.max(), b.max(), a.mean(),
+                    b.mean());
+      }
     }
   }
   return 0;
@@ -534,7 +650,8 @@ int run_vo(int argc, char** argv) {
   if (cli::option(argc, argv, "--kitti") != nullptr) return run_kitti(argc, argv);
   if (cli::option(argc, argv, "--euroc") != nullptr) return run_euroc(argc, argv);
   std::fprintf(stderr,
-               "usage: qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|all] [--seed N] "
+               "usage: qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|att|all] [--seed N] "
+               "[--seeds N,M,..|A-B] "
                "[--traj-dir DIR] [--length-27 M] [--length-100 M] [--verbose]\n"
                "       qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE]\n"
                "       qnav vo --euroc DIR --out poses.txt [--frames N]\n");
