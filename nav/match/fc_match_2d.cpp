@@ -136,6 +136,9 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
       if (la < 1e-9) continue;
       const double sphi = config_.sigma_dir_rad + config_.sigma_dist_m / la;
       const double inv2sp = 1.0 / (2.0 * sphi * sphi);
+      // Gate: f >= 1e-3 needs dd^2 < 13.8 sd^2 and phi^2 < 13.8 sphi^2, so |vb - va|^2 (~ dd^2 +
+      // (la phi)^2) stays below 13.8 (sd^2 + la^2 sphi^2); x2 margin for the small-angle form.
+      const double gate2 = 2.0 * 13.8 * (config_.sigma_dist_m * config_.sigma_dist_m + la * la * sphi * sphi);
       for (std::size_t q = 0; q < nci; ++q) {
         const Candidate& cc = cand_[c0 + q];
         const Vec2d pb = b.position_m[cc.b];
@@ -143,6 +146,7 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
         for (std::uint32_t c2 = first_[i2]; c2 < first_[i2 + 1]; ++c2) {
           if (cand_[c2].b == cc.b) continue;
           const Vec2d vb = b.position_m[cand_[c2].b] - pb;
+          if ((vb - va).squaredNorm() > gate2) continue;
           const double lb = vb.norm();
           const double dd = la - lb;
           const double ed = dd * dd * inv2sd;

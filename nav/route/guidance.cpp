@@ -19,7 +19,7 @@ GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const
   GuidanceOutput g;
   g.node = node.index;
   const bool finite_heading = std::isfinite(vehicle_heading_rad);
-  if (!confident || !reg.ok || !reg.sensed_to_node.is_finite() || !finite_heading) {
+  if (!confident || !reg.ok || reg.inliers < config_.min_inliers || !reg.sensed_to_node.is_finite() || !finite_heading) {
     g.status = GuidanceStatus::kHoldCourse;
     g.commanded_heading_rad = have_command_ ? last_command_rad_ : (finite_heading ? wrap_angle_rad(vehicle_heading_rad) : 0.0);
     return g;

@@ -31,6 +31,7 @@ const char* to_string(RouteSide s) noexcept;
 struct GuidanceConfig {
   double lookahead_nodes = 2.0;
   double side_deadband_m = 0.5;
+  std::uint32_t min_inliers = 0;  // a registration with fewer inliers is not steered on (hold course)
 };
 
 struct GuidanceOutput {

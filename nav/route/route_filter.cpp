@@ -7,7 +7,7 @@ namespace qnav::route {
 Status RouteFilter::init(const RouteFilterConfig& c, Arena& arena) noexcept {
   if (c.max_nodes < 2 || c.max_advance_nodes < 1 || c.max_advance_nodes > 64 || !(c.sigma_w2 > 0.0) ||
       !(c.odometry_sigma_frac >= 0.0) || !(c.odometry_sigma_min_nodes > 0.0) || !(c.kidnap_floor >= 0.0 && c.kidnap_floor < 1.0) ||
-      !(c.inlier_floor > 0.0f) || !(c.chance_inliers >= 0.0f) || c.belief_registrations == 0 ||
+      !(c.inlier_floor > 0.0f) || !(c.chance_inliers >= 0.0f) || c.belief_registrations == 0 || c.searching_belief_registrations == 0 ||
       c.wide_search_period == 0 || !(c.confident_mass > 0.0 && c.confident_mass <= 1.0) || !(c.lost_reset_mass >= 0.0 && c.lost_reset_mass <= 1.0))
     return Status(StatusCode::kInvalidArgument, "route filter: bad configuration");
   bel_ = arena.allocate<float>(c.max_nodes);
@@ -31,8 +31,10 @@ Status RouteFilter::reset(std::uint32_t node_count, double node_spacing_m) noexc
   updates_ = 0;
   selects_ = 0;
   misses_ = 0;
+  unsupported_ = 0;
   lost_ = false;
   wide_phase_ = 0;
+  wide_shift_nodes_ = 0.0;
   last_m_.clear();
   summarise();
   return Status::ok();
@@ -83,6 +85,15 @@ Status RouteFilter::predict(double distance_m) noexcept {
     }
   }
   const int dir = config_.direction == RouteDirection::kForward ? 1 : -1;
+  {
+    double mean = 0.0, wsum = 0.0;
+    for (int k = lo; k <= hi; ++k) {
+      mean += static_cast<double>(w[k - lo]) * k;
+      wsum += static_cast<double>(w[k - lo]);
+    }
+    if (wsum > 0.0) wide_shift_nodes_ += dir * mean / wsum;
+    wide_shift_nodes_ -= std::floor(wide_shift_nodes_ / static_cast<double>(n_)) * static_cast<double>(n_);
+  }
   const std::int64_t n = n_;
   // tmp[j] = sum_k w[k] bel[j - dir k]; the interior runs without bounds checks.
   const std::int64_t klo = lo, khi = hi;
@@ -134,16 +145,28 @@ Status RouteFilter::update(Span<const NodeMeasurement> m) noexcept {
   if (n_ == 0) return Status(StatusCode::kNotReady, "route filter: reset() first");
   last_m_.clear();
   const float fl = config_.inlier_floor;
-  // Lost: the nodes around the estimate have shown no similarity for lost_after_updates updates
-  // (kidnapped, or drifted off the route): give mass back to the whole route before this update.
+  // Lost: the nodes around the estimate have shown no similarity while nodes elsewhere have, for
+  // lost_after_updates updates (kidnapped, or the estimate is wrong): give mass back to the whole
+  // route before this update. No similarity anywhere is no evidence (a featureless stretch, a tile
+  // seen from far off the route): the belief then runs on the motion model alone.
   if (config_.lost_after_updates > 0) {
-    bool support = false;
+    bool support = false, elsewhere = false;
     for (const NodeMeasurement& x : m) {
+      if (x.node >= n_ || !std::isfinite(x.inliers) || !(x.inliers > config_.chance_inliers)) continue;
       const std::int64_t d = static_cast<std::int64_t>(x.node) - static_cast<std::int64_t>(argmax_);
-      if (x.node < n_ && d >= -1 && d <= 1 && std::isfinite(x.inliers) && x.inliers > config_.chance_inliers) support = true;
+      if (d >= -1 && d <= 1)
+        support = true;
+      else if (x.inliers >= config_.lost_evidence_inliers)
+        elsewhere = true;
     }
-    misses_ = support ? 0 : misses_ + 1;
-    if (support) lost_ = false;
+    if (support) {
+      misses_ = 0;
+      unsupported_ = 0;
+      lost_ = false;
+    } else {
+      ++unsupported_;
+      if (elsewhere && confident()) ++misses_;  // not confident: nothing to be lost from, Bayes moves the mass
+    }
     if (misses_ >= config_.lost_after_updates) {
       misses_ = 0;
       lost_ = true;
@@ -191,10 +214,13 @@ std::size_t RouteFilter::select_nodes(Span<std::uint32_t> out) noexcept {
   if (n_ == 0 || out.empty()) return 0;
   std::size_t count = 0;
   // Top-B by belief (insertion into a short sorted list held at the front of out).
-  // While lost, the belief peak has shown nothing: keep one belief node and give the rest of the
-  // registration budget to the wide search (same bound on registrations per update).
-  const std::uint32_t belief_budget = lost_ ? 1u : config_.belief_registrations;
-  const std::uint32_t wide_budget = config_.wide_search_registrations + (lost_ ? config_.belief_registrations - 1u : 0u);
+  // Searching (lost, not confident, or the estimate has shown nothing lately): the belief peak is
+  // not worth the whole belief budget; keep searching_belief_registrations belief nodes and give the
+  // rest to the wide search (same bound on registrations per update).
+  const bool searching = lost_ || !confident() || unsupported_ > 0;
+  std::uint32_t belief_budget = config_.belief_registrations;
+  if (searching && config_.searching_belief_registrations < belief_budget) belief_budget = config_.searching_belief_registrations;
+  const std::uint32_t wide_budget = searching ? config_.max_registrations() - belief_budget : config_.wide_search_registrations;
   const std::size_t b = belief_budget < out.size() ? belief_budget : out.size();
   const std::size_t want = b < n_ ? b : n_;
   for (std::uint32_t i = 0; i < n_; ++i) {
@@ -208,12 +234,16 @@ std::size_t RouteFilter::select_nodes(Span<std::uint32_t> out) noexcept {
     out[pos] = i;
   }
   for (std::size_t i = 0; i < count; ++i) mark_[out[i]] = 1;
-  const bool wide = lost_ || !confident() || (selects_++ % config_.wide_search_period) == 0;
+  // Every update while searching; otherwise every wide_search_period updates.
+  const bool wide = searching || (selects_++ % config_.wide_search_period) == 0;
   if (wide && wide_budget > 0) {
     const std::uint32_t k = wide_budget;
     const double stride = static_cast<double>(n_) / k;
-    const double g = 0.6180339887498949 * static_cast<double>(wide_phase_);  // golden-ratio phases cover the gaps evenly
-    const double phase = stride * (g - std::floor(g));
+    // Golden-ratio phases cover the gaps evenly relative to the vehicle: the grid also moves with
+    // the predicted advance, else a grid stepping in step with the vehicle would miss it every time.
+    const double g = 0.6180339887498949 * static_cast<double>(wide_phase_);
+    double phase = stride * (g - std::floor(g)) + wide_shift_nodes_;
+    phase -= std::floor(phase / static_cast<double>(n_)) * static_cast<double>(n_);
     ++wide_phase_;
     for (std::uint32_t i = 0; i < k && count < out.size(); ++i) {
       const std::uint32_t node = static_cast<std::uint32_t>(phase + i * stride) % n_;

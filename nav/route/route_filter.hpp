@@ -14,12 +14,18 @@
 //    get L = inlier_floor, so one bad tile (all S small) leaves the belief as predicted instead of
 //    zeroing the truth. measurement_probability() gives eq. 9's normalised p(z | w).
 //  - select_nodes(): which nodes to register: the belief_registrations most probable nodes, plus
-//    every wide_search_period updates (and every update while not confident) wide_search_registrations
-//    nodes spread over the whole route with a rotating phase (recovers a lost or kidnapped vehicle).
-//  - lost: when no node within +/- 1 of the estimate shows similarity (S > chance_inliers) for
-//    lost_after_updates updates, lost_reset_mass of the belief is spread over the route and, until a
-//    node near the estimate shows similarity again, select_nodes() keeps one belief node and spends
-//    the rest of the belief budget on the wide search (re-localisation; same registrations bound).
+//    every wide_search_period updates wide_search_registrations nodes spread over the whole route
+//    on a grid whose phase rotates by the golden ratio relative to the predicted motion (recovers a
+//    lost or kidnapped vehicle; a grid fixed to the route could step in step with the vehicle). While searching (lost, not
+//    confident, or no similarity near the estimate in the last update) the wide search runs every
+//    update with all of max_registrations() but searching_belief_registrations belief nodes.
+//  - lost: when for lost_after_updates confident updates no node within +/- 1 of the estimate shows similarity
+//    (S > chance_inliers) but a node elsewhere does (S > chance_inliers and S >=
+//    lost_evidence_inliers), lost_reset_mass of the belief is spread over
+//    the route and, until a node near the estimate shows similarity again, select_nodes() keeps one
+//    belief node and spends the rest of the belief budget on the wide search (re-localisation; same
+//    registrations bound). Updates with no similarity anywhere are not evidence of being lost (the
+//    belief runs on the motion model), but they make the wide search run every update.
 //  - entropy (natural log, as the paper's Table I), argmax, mass within +/- 1 node of the argmax,
 //    confidence flag (that mass >= confident_mass).
 // Memory: 2 * max_nodes floats + max_nodes bytes from the Arena. Cost: predict O(N * taps), taps <=
@@ -54,9 +60,17 @@ struct RouteFilterConfig {
   std::uint32_t belief_registrations = 5;
   std::uint32_t wide_search_registrations = 8;
   std::uint32_t wide_search_period = 4;
+  std::uint32_t searching_belief_registrations = 2;  // belief nodes while searching (rest -> wide search)
+  std::uint32_t searching_registrations = 0;         // all registrations while searching; 0 = belief + wide
+  // Most nodes select_nodes() returns in one update.
+  std::uint32_t max_registrations() const noexcept {
+    const std::uint32_t normal = belief_registrations + wide_search_registrations;
+    return searching_registrations > normal ? searching_registrations : normal;
+  }
   double confident_mass = 0.6;
   std::uint32_t lost_after_updates = 3;  // 0 = never declare lost
   double lost_reset_mass = 0.5;          // mass spread uniformly when lost
+  float lost_evidence_inliers = 0.0f;    // similarity elsewhere that counts towards lost (and > chance)
 };
 
 struct NodeMeasurement {
@@ -110,8 +124,10 @@ class RouteFilter {
   FixedVector<NodeMeasurement, 64> last_m_;  // last update's measurements (<= 64 kept)
   std::uint32_t updates_ = 0;
   std::uint32_t wide_phase_ = 0;
+  double wide_shift_nodes_ = 0.0;  // predicted advance so far (mod N): the wide-search grid moves with it
   std::uint32_t selects_ = 0;
-  std::uint32_t misses_ = 0;
+  std::uint32_t misses_ = 0;       // updates with similarity elsewhere but none near the estimate
+  std::uint32_t unsupported_ = 0;  // updates without similarity near the estimate
   bool lost_ = false;
   std::uint32_t argmax_ = 0;
   double mass_pm1_ = 0.0;

@@ -6,7 +6,7 @@ namespace qnav::route {
 
 namespace {
 std::size_t max_selected(const LocaliserConfig& c) noexcept {
-  return c.filter.belief_registrations + c.filter.wide_search_registrations + 1;
+  return c.filter.max_registrations() + 1;
 }
 }  // namespace
 
@@ -52,6 +52,7 @@ Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> met
 
 Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, LocaliserStep& out) noexcept {
   out = LocaliserStep{};
+  last_nm_ = 0;
   if (!started_) return Status(StatusCode::kNotReady, "localiser: start() first");
   if (sensed.keypoints.empty()) counters_.increment(LocaliserCounter::kEmptySensedTile);
   QNAV_RETURN_IF_ERROR(filter_.predict(distance_m));
@@ -72,6 +73,7 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
     measurements_[nm++] = NodeMeasurement{node, static_cast<float>(r.inliers)};
   }
   out.registrations = static_cast<std::uint32_t>(k);
+  last_nm_ = nm;
   Status us = filter_.update(Span<const NodeMeasurement>(measurements_.data(), nm));
   us.ignore();  // a degenerate belief was reset to uniform and counted by the filter
   out.estimate = filter_.argmax();
@@ -94,13 +96,17 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
       ++out.registrations;
     }
   }
-  // Registration to the estimate failed: use the best registration to a neighbour (+/- 1 node),
-  // carried into the estimate's frame through the two nodes' route-frame poses.
-  if (!out.registration.ok) {
+  // A neighbour (+/- 1 node) registered with more inliers than the estimate: use it, carried into
+  // the estimate's frame through the two nodes' route-frame poses (the tile lies between nodes).
+  {
     std::size_t best = k;
+    std::uint32_t best_inliers = out.registration.ok ? out.registration.inliers : 0;
     for (std::size_t i = 0; i < k; ++i) {
       const std::int64_t d = static_cast<std::int64_t>(selected_[i]) - static_cast<std::int64_t>(out.estimate);
-      if (results_[i].ok && (d == 1 || d == -1) && (best == k || results_[i].inliers > results_[best].inliers)) best = i;
+      if (results_[i].ok && (d == 1 || d == -1) && results_[i].inliers > best_inliers) {
+        best = i;
+        best_inliers = results_[i].inliers;
+      }
     }
     if (best < k) {
       const Pose2 est_from_nb = meta_[out.estimate].pose.inverse().compose(meta_[selected_[best]].pose);

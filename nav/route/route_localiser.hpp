@@ -5,7 +5,7 @@
 //   when that one failed, the best registration to a neighbouring node carried through the node poses).
 // Owns the filter, registrar, window and guidance; the NodeSource (route file / memory) and the route
 // metadata index (per-node pose and along-track distance, for guidance) are the caller's.
-// Bounds: registrations per update <= belief_registrations + wide_search_registrations (+1 when the
+// Bounds: registrations per update <= filter.max_registrations() (+1 when the
 // argmax was not registered); memory: sum of the parts' arena_bytes(). No heap after init().
 #pragma once
 
@@ -64,6 +64,8 @@ class RouteLocaliser {
   const NodeWindow& window() const noexcept { return window_; }
   const Registrar& registrar() const noexcept { return registrar_; }
   const CounterSet<LocaliserCounter>& counters() const noexcept { return counters_; }
+  // The (node, similarity) pairs the last step() registered, for diagnostics and logs.
+  Span<const NodeMeasurement> last_measurements() const noexcept { return Span<const NodeMeasurement>(measurements_.data(), last_nm_); }
 
  private:
   LocaliserConfig config_{};
@@ -76,6 +78,7 @@ class RouteLocaliser {
   Span<const NodeMeta> meta_;
   Span<std::uint32_t> selected_;
   Span<NodeMeasurement> measurements_;
+  std::size_t last_nm_ = 0;
   Span<RegistrationResult> results_;
   CounterSet<LocaliserCounter> counters_;
 };

@@ -34,7 +34,7 @@ inline const char* to_string(SensorKind k) noexcept {
 
 struct RouteKeypoint {
   float x_m = 0.0f;  // tile frame, along-track
-  float y_m = 0.0f;  // tile frame, to port
+  float y_m = 0.0f;  // tile frame, to starboard
   float score = 0.0f;  // detector response (larger is stronger)
   std::int8_t descriptor[kDescriptorBytes] = {};
 };

@@ -151,6 +151,103 @@ TEST(RouteFilter, KidnapFloorLetsAStrongMeasurementElsewhereWin) {
   EXPECT_LE(steps, 4);
 }
 
+// Localises the filter on node `at` (odometry model, one node per update).
+void localise(RouteFilter& f, std::uint32_t at) {
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_TRUE(f.predict(40.0).is_ok());
+    NodeMeasurement m[1] = {{at - 3 + static_cast<std::uint32_t>(k), 30.0f}};
+    ASSERT_TRUE(f.update(Span<const NodeMeasurement>(m)).is_ok());
+  }
+  ASSERT_EQ(f.argmax(), at);
+  ASSERT_TRUE(f.confident());
+}
+
+TEST(RouteFilter, NoSimilarityAnywhereIsNotLostTheBeliefRunsOnOdometry) {
+  RouteFilterConfig c = small(MotionModel::kOdometry);
+  c.kidnap_floor = 0.01;
+  c.chance_inliers = 5.0f;
+  c.lost_after_updates = 1;
+  c.lost_evidence_inliers = 8.0f;
+  c.lost_reset_mass = 0.9;
+  F t(c);
+  ASSERT_TRUE(t.f.reset(60, 40.0).is_ok());
+  localise(t.f, 20);
+  // Ten featureless tiles: every registration returns nothing.
+  for (int k = 1; k <= 10; ++k) {
+    ASSERT_TRUE(t.f.predict(40.0).is_ok());
+    NodeMeasurement m[3] = {{static_cast<std::uint32_t>(20 + k), 0.0f}, {5, 0.0f}, {50, 3.0f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+    EXPECT_EQ(t.f.argmax(), static_cast<std::uint32_t>(20 + k));
+  }
+  EXPECT_FALSE(t.f.lost());
+  EXPECT_EQ(t.f.counters().get(FilterCounter::kLostResets), 0u);
+  // Weak similarity elsewhere (above chance, below the lost evidence) is not enough either.
+  ASSERT_TRUE(t.f.predict(40.0).is_ok());
+  NodeMeasurement weak[1] = {{50, 7.0f}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(weak)).is_ok());
+  EXPECT_FALSE(t.f.lost());
+  EXPECT_EQ(t.f.argmax(), 31u);
+  // Strong similarity elsewhere and none near the estimate: lost, mass spread, then the new place wins.
+  ASSERT_TRUE(t.f.predict(40.0).is_ok());
+  NodeMeasurement strong[2] = {{32, 0.0f}, {50, 20.0f}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(strong)).is_ok());
+  EXPECT_TRUE(t.f.lost());
+  EXPECT_EQ(t.f.counters().get(FilterCounter::kLostResets), 1u);
+  EXPECT_EQ(t.f.argmax(), 50u);
+}
+
+TEST(RouteFilter, WhileSearchingMostOfTheBudgetGoesToTheWideSearch) {
+  RouteFilterConfig c = small(MotionModel::kOdometry);
+  c.belief_registrations = 4;
+  c.wide_search_registrations = 6;
+  c.searching_registrations = 16;
+  c.searching_belief_registrations = 2;
+  c.chance_inliers = 5.0f;
+  F t(c);
+  ASSERT_EQ(c.max_registrations(), 16u);
+  ASSERT_TRUE(t.f.reset(100, 40.0).is_ok());
+  std::uint32_t sel[17];
+  EXPECT_FALSE(t.f.confident());
+  const std::size_t searching = t.f.select_nodes(Span<std::uint32_t>(sel));  // uniform belief: searching
+  EXPECT_GE(searching, 15u);  // 16 less a wide node that may coincide with a belief node
+  EXPECT_LE(searching, 16u);
+  localise(t.f, 40);
+  // Confident and supported: 4 belief nodes, the wide search only every wide_search_period updates.
+  std::size_t sizes[4];
+  for (std::size_t& n : sizes) n = t.f.select_nodes(Span<std::uint32_t>(sel));
+  int wide = 0;
+  for (std::size_t n : sizes) {
+    EXPECT_TRUE(n == 4u || n == 10u) << n;
+    wide += n == 10u;
+  }
+  EXPECT_EQ(wide, 1);
+}
+
+// A wide-search grid fixed to the route can step in step with a vehicle moving one node per update
+// and miss it every time; the grid moves with the predicted advance, so it cannot.
+TEST(RouteFilter, WideSearchFindsAVehicleMovingInStepWithTheGrid) {
+  for (RouteDirection d : {RouteDirection::kForward, RouteDirection::kReverse})
+    for (std::uint32_t wide : {12u, 14u, 16u, 17u}) {
+      RouteFilterConfig c = small(MotionModel::kOdometry, d);
+      c.belief_registrations = 1;
+      c.wide_search_registrations = wide;
+      F t(c);
+      ASSERT_TRUE(t.f.reset(34, 40.0).is_ok());
+      std::uint32_t sel[20];
+      std::int64_t truth = d == RouteDirection::kForward ? 0 : 33;
+      int hits = 0;
+      for (int k = 0; k < 12; ++k) {
+        ASSERT_TRUE(t.f.predict(k == 0 ? 0.0 : 40.0).is_ok());
+        if (k > 0) truth += d == RouteDirection::kForward ? 1 : -1;
+        const std::size_t n = t.f.select_nodes(Span<std::uint32_t>(sel));
+        for (std::size_t i = 0; i < n; ++i) hits += sel[i] == truth;
+        NodeMeasurement none[1] = {{0, 0.0f}};
+        ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(none)).is_ok());
+      }
+      EXPECT_GE(hits, 3) << "wide " << wide << (d == RouteDirection::kForward ? " forward" : " reverse");
+    }
+}
+
 TEST(RouteFilter, BadInputIsRejectedAndCounted) {
   F t(small(MotionModel::kOdometry));
   EXPECT_EQ(t.f.predict(1.0), StatusCode::kNotReady);

@@ -146,6 +146,29 @@ TEST(RouteLocaliser, SensorMismatchOneNodeRouteAndDamagedRecordAreClearErrors) {
   EXPECT_EQ(loc->counters().get(LocaliserCounter::kEmptySensedTile), 1u);
 }
 
+TEST(Guidance, HoldsCourseOnARegistrationWithTooFewInliers) {
+  GuidanceConfig gc;
+  gc.min_inliers = 7;
+  Guidance g(gc);
+  NodeMeta node, ahead;
+  ahead.pose = Pose2{100.0, 0.0, 0.0};
+  RegistrationResult r;
+  r.ok = true;
+  r.inliers = 6;
+  r.sensed_to_node = Pose2{2.0, 12.0, 0.01};
+  GuidanceOutput out = g.compute(true, RouteDirection::kForward, node, ahead, r, 0.0);
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+  EXPECT_EQ(out.side, RouteSide::kOnRoute);
+  r.inliers = 7;
+  out = g.compute(true, RouteDirection::kForward, node, ahead, r, 0.0);
+  EXPECT_EQ(out.status, GuidanceStatus::kTracking);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+  EXPECT_NEAR(out.cross_track_m, 12.0, 1e-9);
+  // Not confident: hold course whatever the registration, with the last command.
+  out = g.compute(false, RouteDirection::kForward, node, ahead, r, 0.3);
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+}
+
 TEST(RouteLocaliser, StepDoesNotAllocateAfterInit) {
   Scenario s;
   LocaliserConfig c = config(RouteDirection::kForward);
