@@ -30,6 +30,9 @@ struct RouteTile {
   double nav_step_m = 0.0;         // nav distance travelled since the previous tile of the pass
   double truth_along_m = -1.0;     // simulated passes: along-route distance of the tile centre
   double truth_lateral_m = 0.0;    // simulated passes: offset right of the route's forward direction
+  Pose2 truth_pose{};              // simulated passes: true pose at the tile's pose ping (keypoint
+                                   // truth position ~ truth_pose.apply(keypoint), dead-reckoning drift aside)
+  bool has_truth_pose = false;
   float coverage_fraction = 0.0f;
   std::uint32_t tile_index = 0;
 };
@@ -75,6 +78,7 @@ class RouteTilePipeline {
   std::unique_ptr<RouteTile> tile_;
   // per-pass state
   std::vector<double> ping_along_m_;   // truth along-route per ping (sim)
+  std::vector<Pose2> ping_truth_;      // true pose per ping (sim)
   std::vector<double> ping_nav_dist_m_;  // nav distance per ping from the pass start
   double truth_lateral_m_ = 0.0;
   double last_tile_nav_m_ = 0.0;
@@ -98,10 +102,10 @@ inline RouteTileConfig default_route_tile_config() {
   c.tiles.max_bins_per_side = 256;
   c.features.max_width = 704;
   c.features.max_height = 704;
-  c.features.max_keypoints = 96;
+  c.features.max_keypoints = 128;     // = kMaxKeypointsPerNode: more keypoints, more of them repeat at large offsets
   c.features.downsample = 3;          // 0.6 m pixels: sand ripples (0.9 m) and speckle average out
   c.features.descriptor_step_px = 2;  // 1.2 m between descriptor samples: 8.4 m footprint
-  c.features.blur_radius_px = 1;
+  c.features.blur_radius_px = 2;      // 3 m box on 0.6 m pixels: corners of the seabed texture, not of speckle
   c.features.harris_block_radius = 1;
   c.features.harris_nms_radius = 3;
   c.features.harris_norm_cell_px = 16;
@@ -141,6 +145,7 @@ inline Status RouteTilePipeline::init(const RouteTileConfig& config) {
 inline void RouteTilePipeline::reset_pass() {
   if (builder_) builder_->reset();
   ping_along_m_.clear();
+  ping_truth_.clear();
   ping_nav_dist_m_.clear();
   last_tile_nav_m_ = 0.0;
   have_prev_nav_ = false;
@@ -165,6 +170,9 @@ inline Status RouteTilePipeline::emit(const RouteTileSink& sink, bool* stop) {
   last_tile_nav_m_ = out.node.meta.along_m;
   out.truth_along_m = mid < ping_along_m_.size() ? ping_along_m_[mid] : -1.0;
   out.truth_lateral_m = truth_lateral_m_;
+  const std::uint32_t pose_ping = t.first_ping + (t.last_ping - t.first_ping + 1) / 2;  // the builder's pose slot
+  out.has_truth_pose = pose_ping < ping_truth_.size();
+  out.truth_pose = out.has_truth_pose ? ping_truth_[pose_ping] : Pose2{};
   out.coverage_fraction = t.coverage_fraction;
   out.tile_index = t.index;
   if (!sink(out) && stop != nullptr) *stop = true;
@@ -210,6 +218,8 @@ inline Status RouteTilePipeline::run_sim_pass(const sidescan::Seabed& seabed, co
     ping.altitude_m = s.altitude_m;
     if (s.index >= ping_along_m_.size()) ping_along_m_.resize(s.index + 1, s.along_route_m);
     ping_along_m_[s.index] = s.along_route_m;
+    if (s.index >= ping_truth_.size()) ping_truth_.resize(s.index + 1, s.truth);
+    ping_truth_[s.index] = s.truth;
     QNAV_RETURN_IF_ERROR(push_ping(ping, s.nav, sink, &stop));
   }
   return Status::ok();

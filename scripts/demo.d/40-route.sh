@@ -11,8 +11,8 @@ rm -f "$out/demo.qroute"
 "$QNAV" route repeat --route "$out/demo.qroute" --sim --length-m 900 --seed 3 --offset-pct 20 --reverse --csv "$out/repeat_rev.csv"
 echo "last tiles of the forward repeat (tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m):"
 tail -n 4 "$out/repeat_fwd.csv" | cut -d, -f1-11
-# A damaged file is detected, never half-read: flip one byte inside node 5 (record = 48 + 96 x 76 + 4
+# A damaged file is detected, never half-read: flip one byte inside node 5 (record = 48 + 128 x 76 + 4
 # bytes after the 64-byte header) and check again.
 cp "$out/demo.qroute" "$out/damaged.qroute"
-printf '\x5a' | dd of="$out/damaged.qroute" bs=1 seek=$((64 + 5 * (48 + 96 * 76 + 4) + 100)) conv=notrunc status=none
+printf '\x5a' | dd of="$out/damaged.qroute" bs=1 seek=$((64 + 5 * (48 + 128 * 76 + 4) + 100)) conv=notrunc status=none
 if "$QNAV" route info "$out/damaged.qroute"; then echo "ERROR: damage not detected"; exit 1; fi

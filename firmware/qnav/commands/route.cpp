@@ -2,7 +2,7 @@
 //   qnav route train  --sim --out FILE [--length-m 2000] [--seed N]      -> route file (durable)
 //   qnav route info   FILE                                                -> header, nodes, damage
 //   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]
-//   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--quick]    -> Table I, Fig. 5/7/9/10 data
+//   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--seabeds 3] [--quick] -> Table I, Fig. 5/7/9/10 data
 //   qnav route xtf    --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]  -> real data: teach on pings A..B,
 //                     repeat on the shifted window C..D of the same pass
 #include <algorithm>
@@ -32,7 +32,7 @@ using namespace qnav;
 using Clock = std::chrono::steady_clock;
 
 const char* const kValued[] = {"--out", "--length-m", "--seed", "--xtf", "--first-ping", "--pings", "--route", "--offset-pct",
-                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", nullptr};
+                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", "--seabeds", nullptr};
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // CPU time of this thread (the machine is shared: wall time includes other people's work).
@@ -109,18 +109,21 @@ route::LocaliserConfig localiser_config(route::RouteDirection d, std::size_t max
   c.filter.direction = d;
   c.filter.motion = route::MotionModel::kOdometry;
   c.filter.kidnap_floor = 0.01;
-  c.filter.lost_after_updates = 2;
+  c.filter.lost_after_updates = 1;       // one update with strong similarity elsewhere and none near the estimate
+  c.filter.lost_evidence_inliers = 8.0f;  // "strong": no registration with >= 8 inliers was wrong in `qnav route eval`
   c.filter.lost_reset_mass = 0.9;
   c.filter.chance_inliers = 5.0f;  // = min_inliers: a bare-minimum consensus carries no evidence
   c.registration.robust.inlier_threshold_m = 1.5;
   c.registration.robust.min_inliers = 5;
   c.registration.fc.sigma_dist_m = 1.0;
-  c.registration.fc.max_points = 96;
+  c.registration.fc.max_points = 128;
   c.registration.fc.max_candidates_per_point = 3;
   c.registration.fc.min_appearance = 0.35f;
   c.filter.belief_registrations = 4;
   c.filter.wide_search_registrations = 6;
+  c.filter.searching_registrations = 16;  // 2 belief + 14 wide while searching (update <= ~15 ms, 10,000 nodes)
   c.guidance.side_deadband_m = 1.0;
+  c.guidance.min_inliers = 7;  // chance_inliers + 2: at 5-6 inliers the side was wrong on 8-30% of tiles
   return c;
 }
 
@@ -154,7 +157,7 @@ int usage() {
                "usage: qnav route train --sim --out FILE [--length-m M] [--seed N]\n"
                "       qnav route info FILE\n"
                "       qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]\n"
-               "       qnav route eval [--json] [--out DIR] [--length-m M] [--quick]\n"
+               "       qnav route eval [--json] [--out DIR] [--length-m M] [--seabeds N (3)] [--quick]\n"
                "       qnav route xtf --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]\n");
   return 2;
 }
@@ -388,6 +391,7 @@ QNAV_COMMAND("route", "route teach and repeat: train, info, repeat, eval (route-
 namespace {
 
 struct TileRecord {
+  int seabed = 1;
   int pct = 0;
   bool reverse = false;
   int tile = 0;
@@ -397,11 +401,18 @@ struct TileRecord {
 };
 
 struct PassStats {
+  int seabed = 1;
   int pct = 0;
   bool reverse = false;
   double lateral_m = 0.0;
   int tiles = 0, scored = 0, within1 = 0, side_n = 0, side_ok = 0, tracking = 0;
+  int off_route = 0;  // scored tiles whose true side is port or starboard
   double mean_entropy = 0.0;
+  int reg_true_ok = 0;               // tiles that register (S > chance) on their true node
+  double reg_true_mean_inliers = 0.0;
+  int reg_false_ok = 0;              // tiles that register on a node 3+ away (chance consensus)
+  int reg_true_right = 0;            // ... of reg_true_ok, with the transform right (simulator truth)
+  double repeated_keypoints = 0.0;   // mean per tile: sensed keypoints with a node keypoint on the same spot
 };
 
 constexpr int kWarmupTiles = 2;  // tiles before scoring (uniform start; the paper's first tile copies eq. 9)
@@ -429,6 +440,7 @@ Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteT
     if (static_cast<int>(k) >= kWarmupTiles) {
       ++ps.scored;
       ps.within1 += std::abs(static_cast<int>(r.st.estimate) - r.truth) <= 1;
+      ps.off_route += r.want != route::RouteSide::kOnRoute;
       if (r.st.guidance.status == route::GuidanceStatus::kTracking) {
         ++ps.tracking;
         if (r.want != route::RouteSide::kOnRoute) {
@@ -440,6 +452,108 @@ Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteT
     if (records) records->push_back(r);
   }
   if (ps.tiles) ps.mean_entropy /= ps.tiles;
+  return Status::ok();
+}
+
+// Registration alone, without the filter: each tile against its true node and against a node three
+// away (a chance consensus there is what the measurement floor must absorb). With the simulator's
+// true poses also: keypoints that repeat (a node keypoint within 1.5 m of the same seabed spot) and
+// whether the registered transform is right (tile origin within 5 m of where the truth puts it).
+void registration_at_truth(const route::RegistrationConfig& rc, const std::vector<tools::RouteTile>& train, const std::vector<tools::RouteTile>& tiles,
+                           const std::vector<double>& node_along, PassStats& ps) {
+  ArenaStorage arena(route::Registrar::arena_bytes(rc));
+  auto reg = std::make_unique<route::Registrar>();
+  if (!reg->init(rc, arena)) return;
+  const int n = static_cast<int>(train.size());
+  const double chance = static_cast<double>(rc.robust.min_inliers);
+  double sum = 0.0, rep = 0.0;
+  for (const tools::RouteTile& t : tiles) {
+    const int tn = true_node(node_along, t.truth_along_m);
+    if (tn < 0 || tn >= n) continue;
+    const tools::RouteTile& node = train[static_cast<std::size_t>(tn)];
+    route::RegistrationResult r;
+    if (reg->register_tile(t.node, node.node, r)) {
+      sum += r.inliers;
+      ps.reg_true_ok += r.ok && r.inliers > chance;
+      if (r.ok && r.inliers > chance && t.has_truth_pose && node.has_truth_pose) {
+        const Vec2d truth = node.truth_pose.inverse().apply(t.truth_pose.translation());
+        ps.reg_true_right += (r.sensed_to_node.translation() - truth).norm() < 5.0;
+      }
+    }
+    if (t.has_truth_pose && node.has_truth_pose)
+      for (const route::RouteKeypoint& a : t.node.keypoints) {
+        const Vec2d wa = t.truth_pose.apply(Vec2d(a.x_m, a.y_m));
+        for (const route::RouteKeypoint& b : node.node.keypoints)
+          if ((node.truth_pose.apply(Vec2d(b.x_m, b.y_m)) - wa).norm() < 1.5) {
+            rep += 1.0;
+            break;
+          }
+      }
+    const int far = tn + 3 < n ? tn + 3 : tn - 3;
+    if (far >= 0 && reg->register_tile(t.node, train[static_cast<std::size_t>(far)].node, r)) ps.reg_false_ok += r.ok && r.inliers > chance;
+  }
+  ps.reg_true_mean_inliers = tiles.empty() ? 0.0 : sum / static_cast<double>(tiles.size());
+  ps.repeated_keypoints = tiles.empty() ? 0.0 : rep / static_cast<double>(tiles.size());
+}
+
+struct SweepInputs {
+  tools::RouteTilePipeline* pipe;
+  const SimWorld* world;
+  const std::vector<tools::RouteTile>* train;
+  route::NodeSource* source;
+  const route::RouteParams* params;
+  Span<const route::NodeMeta> meta;
+  const std::vector<double>* node_along;
+  const std::vector<int>* pcts;
+  int seabed;
+  FILE* log;
+};
+
+// Repeat passes at every offset, forwards and in reverse, over one taught route. kidnap_src (if
+// given) receives the 20% forward pass's tiles; eq5_within the paper's motion model on that pass.
+Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecord>& records, std::vector<PassStats>& stats,
+                    std::vector<tools::RouteTile>* kidnap_src, double* eq5_within) {
+  std::vector<tools::RouteTile> tiles;
+  const std::size_t nodes = in.meta.size();
+  for (int pct : *in.pcts) {
+    for (bool rev : {false, true}) {
+      const double lateral = pct / 100.0 * in.world->swath_m;
+      const auto t0 = Clock::now();
+      QNAV_RETURN_IF_ERROR(fly(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), tiles));
+      route::LocaliserConfig lc = localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
+      ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
+      auto loc = std::make_unique<route::RouteLocaliser>();
+      QNAV_RETURN_IF_ERROR(loc->init(lc, arena));
+      QNAV_RETURN_IF_ERROR(loc->start(*in.params, in.meta, *in.source));
+      PassStats ps;
+      ps.seabed = in.seabed;
+      std::vector<TileRecord> rec;
+      QNAV_RETURN_IF_ERROR(run_localiser(*loc, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, &rec, ps, nullptr));
+      for (TileRecord& r : rec) {
+        r.seabed = in.seabed;
+        records.push_back(r);
+      }
+      registration_at_truth(lc.registration, *in.train, tiles, *in.node_along, ps);
+      stats.push_back(ps);
+      std::fprintf(in.log, "  seabed %d offset %2d%% (%5.1f m) %-7s: %3d tiles, node +/-1 %5.1f%%, side correct %d/%d, tracking %d/%d; registration alone: on the true node %d/%d (transform right %d, mean S %.1f, repeated keypoints %.1f), on a node 3 away %d (%.1f s)\n",
+                   in.seabed, pct, lateral, rev ? "reverse" : "forward", ps.tiles, ps.scored ? 100.0 * ps.within1 / ps.scored : 0.0, ps.side_ok, ps.side_n,
+                   ps.tracking, ps.scored, ps.reg_true_ok, ps.tiles, ps.reg_true_right, ps.reg_true_mean_inliers, ps.repeated_keypoints, ps.reg_false_ok,
+                   ms_since(t0) / 1000.0);
+      if (pct == 20 && !rev && kidnap_src != nullptr) *kidnap_src = tiles;
+      if (pct == 20 && !rev && eq5_within != nullptr) {
+        // The paper's motion model (eq. 5) on the same tiles, for comparison.
+        route::LocaliserConfig lc5 = lc;
+        lc5.filter.motion = route::MotionModel::kPaperEq5;
+        ArenaStorage a5(route::RouteLocaliser::arena_bytes(lc5));
+        auto l5 = std::make_unique<route::RouteLocaliser>();
+        PassStats p5;
+        if (l5->init(lc5, a5) && l5->start(*in.params, in.meta, *in.source) &&
+            run_localiser(*l5, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, nullptr, p5, nullptr))
+          *eq5_within = p5.scored ? 100.0 * p5.within1 / p5.scored : 0.0;
+      }
+    }
+  }
+  if (kidnap_src != nullptr && kidnap_src->empty()) *kidnap_src = tiles;
   return Status::ok();
 }
 
@@ -457,6 +571,8 @@ int cmd_eval(int argc, char** argv) {
   if (!cli::option_double(argc, argv, "--length-m", length_m) || !(length_m >= 400.0 && length_m <= 20000.0)) return usage();
   const bool json = cli::flag(argc, argv, "--json");
   const bool quick = cli::flag(argc, argv, "--quick");
+  long seabeds = quick ? 1 : 3;
+  if (!cli::option_long(argc, argv, "--seabeds", seabeds) || seabeds < 1 || seabeds > 20) return usage();
   const std::string out_dir = cli::option(argc, argv, "--out", "route_eval");
   if (!ensure_dir(out_dir)) {
     std::fprintf(stderr, "qnav route eval: cannot create %s\n", out_dir.c_str());
@@ -511,53 +627,52 @@ int cmd_eval(int argc, char** argv) {
   std::fprintf(log, "taught: %zu nodes over %.0f m (spacing %.1f m, swath %.1f m, %.1f keypoints/node), pass %.1f s, append+fdatasync %.2f ms/node\n",
                train.size(), length_m, spacing, w.swath_m, kp_mean, fly_ms / 1000.0, append_ms);
 
-  // 2. Repeat passes at lateral offsets, forwards and reverse.
+  // 2. Repeat passes at lateral offsets, forwards and reverse: on this seabed (nodes read from the
+  //    route file), then on further seabeds (each taught afresh, nodes in memory).
   std::vector<int> pcts = quick ? std::vector<int>{0, 20, 40} : std::vector<int>{0, 10, 20, 30, 40, 50};
   std::vector<TileRecord> records;
   std::vector<PassStats> stats;
-  std::vector<tools::RouteTile> tiles, kidnap_src;
+  std::vector<tools::RouteTile> kidnap_src;
   const std::size_t nodes = meta.size();
   double eq5_within = -1.0;
-  int seed = 100;
-  for (int pct : pcts) {
-    for (bool rev : {false, true}) {
-      const double lateral = pct / 100.0 * w.swath_m;
-      t0 = Clock::now();
-      s = fly(pipe, w, w.pass(lateral, rev, static_cast<std::uint64_t>(++seed)), tiles);
-      if (!s) break;
-      route::LocaliserConfig lc = localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
-      ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-      auto loc = std::make_unique<route::RouteLocaliser>();
-      s = loc->init(lc, arena);
-      if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
-      PassStats ps;
-      if (s) s = run_localiser(*loc, tiles, node_along, pct, rev, lateral, lc.guidance.side_deadband_m, &records, ps, nullptr);
-      if (!s) break;
-      stats.push_back(ps);
-      std::fprintf(log, "  offset %2d%% (%5.1f m) %-7s: %3d tiles, node +/-1 %5.1f%%, side correct %d/%d, tracking %d/%d (%.1f s)\n", pct, lateral,
-                   rev ? "reverse" : "forward", ps.tiles, ps.scored ? 100.0 * ps.within1 / ps.scored : 0.0, ps.side_ok, ps.side_n, ps.tracking,
-                   ps.scored, ms_since(t0) / 1000.0);
-      if (pct == 20 && !rev) kidnap_src = tiles;
-      if (pct == 20 && !rev) {
-        // The paper's motion model (eq. 5) on the same tiles, for comparison.
-        route::LocaliserConfig lc5 = lc;
-        lc5.filter.motion = route::MotionModel::kPaperEq5;
-        ArenaStorage a5(route::RouteLocaliser::arena_bytes(lc5));
-        auto l5 = std::make_unique<route::RouteLocaliser>();
-        PassStats p5;
-        if (l5->init(lc5, a5) && l5->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader) &&
-            run_localiser(*l5, tiles, node_along, pct, rev, lateral, lc.guidance.side_deadband_m, nullptr, p5, nullptr))
-          eq5_within = p5.scored ? 100.0 * p5.within1 / p5.scored : 0.0;
-      }
+  int pass_seed = 100;
+  SweepInputs in{&pipe, &w, &train, &reader, &reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), &node_along, &pcts, 1, log};
+  s = offset_sweep(in, pass_seed, records, stats, &kidnap_src, &eq5_within);
+  std::vector<double> seed_within;
+  for (long sb = 2; s && sb <= seabeds; ++sb) {
+    SimWorld w2;
+    std::vector<tools::RouteTile> train2;
+    s = w2.init(length_m, static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, w2, w2.pass(0.0, false, 11 + 1000 * static_cast<std::uint64_t>(sb)), train2);
+    if (!s || train2.size() < 2) break;
+    const double sp2 = (train2.back().node.meta.along_m - train2.front().node.meta.along_m) / static_cast<double>(train2.size() - 1);
+    const route::RouteParams p2 = route_params(pipe.config(), sp2, w2.swath_m);
+    std::vector<route::NodeMeta> meta2;
+    std::vector<double> along2;
+    for (std::size_t i = 0; i < train2.size(); ++i) {
+      meta2.push_back(train2[i].node.meta);
+      meta2.back().index = static_cast<std::uint32_t>(i);
+      along2.push_back(train2[i].truth_along_m);
     }
-    if (!s) break;
+    TileSource src2(&train2);
+    std::fprintf(log, "seabed %ld: taught %zu nodes (spacing %.1f m)\n", sb, train2.size(), sp2);
+    SweepInputs in2{&pipe, &w2, &train2, &src2, &p2, Span<const route::NodeMeta>(meta2.data(), meta2.size()), &along2, &pcts, static_cast<int>(sb), log};
+    s = offset_sweep(in2, pass_seed, records, stats, nullptr, nullptr);
   }
   if (!s) {
     std::fprintf(stderr, "qnav route eval: repeat pass failed: %s\n", s.message());
     return 1;
   }
-  if (kidnap_src.empty()) kidnap_src = tiles;
-  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0;
+  for (long sb = 1; sb <= seabeds; ++sb) {
+    int sc = 0, wi = 0;
+    for (const PassStats& p : stats)
+      if (p.seabed == sb) {
+        sc += p.scored;
+        wi += p.within1;
+      }
+    seed_within.push_back(sc ? 100.0 * wi / sc : 0.0);
+  }
+  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0, off_route = 0;
   for (const PassStats& p : stats) {
     scored += p.scored;
     within += p.within1;
@@ -565,6 +680,7 @@ int cmd_eval(int argc, char** argv) {
     if (p.pct > 5) {
       side_n += p.side_n;
       side_ok += p.side_ok;
+      off_route += p.off_route;
     }
   }
 
@@ -740,19 +856,39 @@ int cmd_eval(int argc, char** argv) {
 
   // CSV outputs for the plots.
   if (FILE* f = std::fopen((out_dir + "/route_eval_offsets.csv").c_str(), "w")) {
-    std::fprintf(f, "offset_pct,lateral_m,direction,tiles,scored,within1_pct,side_correct,side_n,tracking_pct,mean_entropy\n");
-    for (const PassStats& p : stats)
-      std::fprintf(f, "%d,%.2f,%s,%d,%d,%.2f,%d,%d,%.2f,%.4f\n", p.pct, p.lateral_m, p.reverse ? "reverse" : "forward", p.tiles, p.scored,
-                   p.scored ? 100.0 * p.within1 / p.scored : 0.0, p.side_ok, p.side_n, p.scored ? 100.0 * p.tracking / p.scored : 0.0,
-                   p.mean_entropy);
+    // One row per offset and direction, summed over the seabeds.
+    std::fprintf(f, "offset_pct,lateral_m,direction,tiles,scored,within1_pct,side_correct,side_n,tracking_pct,mean_entropy,seabeds,registered_on_true_node_pct\n");
+    for (int pct : pcts)
+      for (bool rev : {false, true}) {
+        PassStats a;
+        int n = 0, reg = 0;
+        for (const PassStats& p : stats)
+          if (p.pct == pct && p.reverse == rev) {
+            a.lateral_m = p.lateral_m;
+            a.tiles += p.tiles;
+            a.scored += p.scored;
+            a.within1 += p.within1;
+            a.side_ok += p.side_ok;
+            a.side_n += p.side_n;
+            a.tracking += p.tracking;
+            a.mean_entropy += p.mean_entropy;
+            reg += p.reg_true_ok;
+            ++n;
+          }
+        if (n == 0) continue;
+        std::fprintf(f, "%d,%.2f,%s,%d,%d,%.2f,%d,%d,%.2f,%.4f,%d,%.2f\n", pct, a.lateral_m, rev ? "reverse" : "forward", a.tiles, a.scored,
+                     a.scored ? 100.0 * a.within1 / a.scored : 0.0, a.side_ok, a.side_n, a.scored ? 100.0 * a.tracking / a.scored : 0.0,
+                     a.mean_entropy / n, n, a.tiles ? 100.0 * reg / a.tiles : 0.0);
+      }
     std::fclose(f);
   }
   if (FILE* f = std::fopen((out_dir + "/route_eval_tiles.csv").c_str(), "w")) {
-    std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m\n");
+    std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,seabed\n");
     for (const TileRecord& r : records)
-      std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth, r.st.estimate,
+      std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%d\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth, r.st.estimate,
                    static_cast<double>(r.st.probability), r.st.entropy, r.st.confident ? 1 : 0, r.st.best_inliers,
-                   route::to_string(r.st.guidance.status), route::to_string(r.st.guidance.side), route::to_string(r.want), r.st.guidance.cross_track_m);
+                   route::to_string(r.st.guidance.status), route::to_string(r.st.guidance.side), route::to_string(r.want), r.st.guidance.cross_track_m,
+                   r.seabed);
     std::fclose(f);
   }
   const double within_pct = scored ? 100.0 * within / scored : 0.0;
@@ -768,6 +904,9 @@ int cmd_eval(int argc, char** argv) {
                 within_pct, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_p95, upd_max, upd_cpu_mean, upd_cpu_max, pred_ms, pred_cpu_ms, eq5_within, paper_localised,
                 paper_side, scored, nodes, length_m, spacing, w.swath_m);
     for (std::size_t i = 0; i < pcts.size(); ++i) std::printf("%s%d", i ? ", " : "", pcts[i]);
+    std::printf("], \"side_correct_pct_of_offset_tiles\": %.2f, \"offset_tiles\": %d, \"seabeds\": %ld, \"node_within_1_pct_per_seabed\": [",
+                off_route ? 100.0 * side_ok / off_route : 0.0, off_route, seabeds);
+    for (std::size_t i = 0; i < seed_within.size(); ++i) std::printf("%s%.2f", i ? ", " : "", seed_within[i]);
     std::printf("], \"warmup_tiles\": %d, \"seconds\": %.1f}\n", kWarmupTiles, ms_since(t_all) / 1000.0);
   } else {
     std::printf("node within +/-1: %.1f%% of %d tiles; side correct %.1f%% of %d decided tiles (tracking %.1f%%); re-localised after %d tiles; "
