@@ -8,9 +8,15 @@
 //  - steering: a look-ahead waypoint lookahead_nodes ahead on the route (the paper's future-work
 //    control strategy) expressed as a bearing relative to the vehicle heading and a commanded
 //    compass heading.
-// When the filter is not confident or the registration to the estimated node failed, the paper's
-// default strategy: hold course (commanded heading = last good command, or the current heading),
-// status kHoldCourse. Pure function of its inputs + the held command; O(1), no heap.
+// Status kTracking: the filter is confident and the registration to the estimated node (or a
+// neighbour) has at least min_inliers inliers.
+// Status kDeadReckoned: confident, no such registration now, but one within dead_reckon_max_m of
+// travel: the vehicle's route-frame pose at that fix is carried forward by the dead-reckoned motion
+// since (nav pose of the fix tile -> nav pose of this tile), and the offsets are taken against the
+// estimated node. Cross-track error then grows with the heading error of the dead reckoning.
+// Otherwise the paper's default strategy: hold course (commanded heading = last good command, or the
+// current heading), status kHoldCourse. Pure function of its inputs + the held command and fix;
+// O(1), no heap.
 #pragma once
 
 #include <cstdint>
@@ -23,7 +29,7 @@
 
 namespace qnav::route {
 
-enum class GuidanceStatus : std::uint8_t { kTracking, kHoldCourse };
+enum class GuidanceStatus : std::uint8_t { kTracking, kHoldCourse, kDeadReckoned };
 enum class RouteSide : std::int8_t { kPort = -1, kOnRoute = 0, kStarboard = 1 };
 const char* to_string(GuidanceStatus s) noexcept;
 const char* to_string(RouteSide s) noexcept;
@@ -32,6 +38,7 @@ struct GuidanceConfig {
   double lookahead_nodes = 2.0;
   double side_deadband_m = 0.5;
   std::uint32_t min_inliers = 0;  // a registration with fewer inliers is not steered on (hold course)
+  double dead_reckon_max_m = 0.0;  // travel after the last fix still steered on dead reckoning; 0 = never
 };
 
 struct GuidanceOutput {
@@ -51,14 +58,21 @@ class Guidance {
   explicit Guidance(const GuidanceConfig& c = GuidanceConfig{}) noexcept : config_(c) {}
   // node/ahead: the estimated node and the look-ahead node's metadata (route frame poses);
   // vehicle_heading_rad: compass heading now. reg: registration of the sensed tile to `node`.
+  // sensed_nav_pose: the sensed tile's pose in the pass's dead-reckoned frame (for kDeadReckoned).
   GuidanceOutput compute(bool confident, RouteDirection direction, const NodeMeta& node, const NodeMeta& ahead,
-                         const RegistrationResult& reg, double vehicle_heading_rad) noexcept;
-  void reset() noexcept { have_command_ = false; }
+                         const RegistrationResult& reg, double vehicle_heading_rad, const Pose2& sensed_nav_pose = Pose2{}) noexcept;
+  void reset() noexcept {
+    have_command_ = false;
+    have_fix_ = false;
+  }
 
  private:
   GuidanceConfig config_;
   bool have_command_ = false;
   double last_command_rad_ = 0.0;
+  bool have_fix_ = false;
+  Pose2 fix_route_{};  // vehicle pose in the route frame at the last kTracking output
+  Pose2 fix_nav_{};    // the same instant in the pass's dead-reckoned frame
 };
 
 }  // namespace qnav::route

@@ -121,7 +121,7 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
   if (ahead < 0) ahead = 0;
   if (ahead >= static_cast<std::int64_t>(meta_.size())) ahead = static_cast<std::int64_t>(meta_.size()) - 1;
   out.guidance = guidance_.compute(out.confident, config_.filter.direction, meta_[out.estimate], meta_[static_cast<std::size_t>(ahead)],
-                                   out.registration, sensed.meta.pose.heading_rad);
+                                   out.registration, sensed.meta.pose.heading_rad, sensed.meta.pose);
   return Status::ok();
 }
 

@@ -116,6 +116,7 @@ route::LocaliserConfig localiser_config(route::RouteDirection d, std::size_t max
   c.registration.robust.inlier_threshold_m = 1.5;
   c.registration.robust.min_inliers = 5;
   c.registration.fc.sigma_dist_m = 1.0;
+  c.registration.fc.sigma_dir_rad = 0.02;  // compass between passes: bias 0.003-0.004 rad + 0.002 rad noise
   c.registration.fc.max_points = 128;
   c.registration.fc.max_candidates_per_point = 3;
   c.registration.fc.min_appearance = 0.35f;
@@ -124,6 +125,7 @@ route::LocaliserConfig localiser_config(route::RouteDirection d, std::size_t max
   c.filter.searching_registrations = 16;  // 2 belief + 14 wide while searching (update <= ~15 ms, 10,000 nodes)
   c.guidance.side_deadband_m = 1.0;
   c.guidance.min_inliers = 7;  // chance_inliers + 2: at 5-6 inliers the side was wrong on 8-30% of tiles
+  c.guidance.dead_reckon_max_m = 150.0;  // ~2.5 nodes of travel on dead reckoning after the last fix
   return c;
 }
 
@@ -407,6 +409,7 @@ struct PassStats {
   double lateral_m = 0.0;
   int tiles = 0, scored = 0, within1 = 0, side_n = 0, side_ok = 0, tracking = 0;
   int off_route = 0;  // scored tiles whose true side is port or starboard
+  int dead_reckoned = 0;  // scored tiles steered on dead reckoning from the last fix
   double mean_entropy = 0.0;
   int reg_true_ok = 0;               // tiles that register (S > chance) on their true node
   double reg_true_mean_inliers = 0.0;
@@ -441,8 +444,9 @@ Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteT
       ++ps.scored;
       ps.within1 += std::abs(static_cast<int>(r.st.estimate) - r.truth) <= 1;
       ps.off_route += r.want != route::RouteSide::kOnRoute;
-      if (r.st.guidance.status == route::GuidanceStatus::kTracking) {
-        ++ps.tracking;
+      ps.tracking += r.st.guidance.status == route::GuidanceStatus::kTracking;
+      ps.dead_reckoned += r.st.guidance.status == route::GuidanceStatus::kDeadReckoned;
+      if (r.st.guidance.status != route::GuidanceStatus::kHoldCourse) {
         if (r.want != route::RouteSide::kOnRoute) {
           ++ps.side_n;
           ps.side_ok += r.st.guidance.side == r.want;
@@ -672,11 +676,12 @@ int cmd_eval(int argc, char** argv) {
       }
     seed_within.push_back(sc ? 100.0 * wi / sc : 0.0);
   }
-  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0, off_route = 0;
+  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0, off_route = 0, dead_reckoned = 0;
   for (const PassStats& p : stats) {
     scored += p.scored;
     within += p.within1;
     tracking += p.tracking;
+    dead_reckoned += p.dead_reckoned;
     if (p.pct > 5) {
       side_n += p.side_n;
       side_ok += p.side_ok;
@@ -828,7 +833,7 @@ int cmd_eval(int argc, char** argv) {
         const int truth = true_node(sub_along, sensed[k].truth_along_m);
         const route::RouteSide want = expected_side(lateral, false, lc.guidance.side_deadband_m);
         paper_localised += std::abs(static_cast<int>(st.estimate) - truth) <= 0 ? 1 : 0;
-        paper_side += st.guidance.status == route::GuidanceStatus::kTracking && st.guidance.side == want;
+        paper_side += st.guidance.status != route::GuidanceStatus::kHoldCourse && st.guidance.side == want;
         std::fprintf(t1, "%zu,%u,%d,%.3f,%s,%s,%u\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
                      route::to_string(want), st.best_inliers);
         std::fprintf(log, "  %6zu  %8u  %5d  %7.2f  %-9s  %s\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
@@ -904,8 +909,9 @@ int cmd_eval(int argc, char** argv) {
                 within_pct, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_p95, upd_max, upd_cpu_mean, upd_cpu_max, pred_ms, pred_cpu_ms, eq5_within, paper_localised,
                 paper_side, scored, nodes, length_m, spacing, w.swath_m);
     for (std::size_t i = 0; i < pcts.size(); ++i) std::printf("%s%d", i ? ", " : "", pcts[i]);
-    std::printf("], \"side_correct_pct_of_offset_tiles\": %.2f, \"offset_tiles\": %d, \"seabeds\": %ld, \"node_within_1_pct_per_seabed\": [",
-                off_route ? 100.0 * side_ok / off_route : 0.0, off_route, seabeds);
+    std::printf("], \"side_correct_pct_of_offset_tiles\": %.2f, \"offset_tiles\": %d, \"dead_reckoned_pct\": %.2f, \"seabeds\": %ld, "
+                "\"node_within_1_pct_per_seabed\": [",
+                off_route ? 100.0 * side_ok / off_route : 0.0, off_route, scored ? 100.0 * dead_reckoned / scored : 0.0, seabeds);
     for (std::size_t i = 0; i < seed_within.size(); ++i) std::printf("%s%.2f", i ? ", " : "", seed_within[i]);
     std::printf("], \"warmup_tiles\": %d, \"seconds\": %.1f}\n", kWarmupTiles, ms_since(t_all) / 1000.0);
   } else {
