@@ -169,6 +169,39 @@ TEST(Guidance, HoldsCourseOnARegistrationWithTooFewInliers) {
   EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
 }
 
+TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
+  GuidanceConfig gc;
+  gc.min_inliers = 7;
+  gc.dead_reckon_max_m = 100.0;
+  Guidance g(gc);
+  NodeMeta node, next, ahead;
+  node.pose = Pose2{0.0, 0.0, 0.0};  // route runs north
+  next.pose = Pose2{60.0, 0.0, 0.0};
+  next.index = 1;
+  ahead.pose = Pose2{180.0, 0.0, 0.0};
+  RegistrationResult fix;
+  fix.ok = true;
+  fix.inliers = 12;
+  fix.sensed_to_node = Pose2{5.0, 20.0, 0.0};  // 20 m to starboard (east)
+  // The pass's dead-reckoned frame differs from the route frame by a shift and a rotation.
+  const Pose2 nav0{1000.0, -300.0, 0.5};
+  ASSERT_EQ(g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.5, nav0).status, GuidanceStatus::kTracking);
+  // 60 m further along the vehicle's own heading, 2 m drift to port, no registration.
+  const Pose2 nav1 = nav0.compose(Pose2{60.0, -2.0, 0.0});
+  RegistrationResult none;
+  GuidanceOutput out = g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav1);
+  EXPECT_EQ(out.status, GuidanceStatus::kDeadReckoned);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+  EXPECT_NEAR(out.cross_track_m, 18.0, 1e-6);
+  EXPECT_NEAR(out.along_track_m, 5.0, 1e-6);
+  // Beyond dead_reckon_max_m from the fix: hold course.
+  const Pose2 nav2 = nav0.compose(Pose2{120.0, 0.0, 0.0});
+  EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav2).status, GuidanceStatus::kHoldCourse);
+  // A reset forgets the fix.
+  g.reset();
+  EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav1).status, GuidanceStatus::kHoldCourse);
+}
+
 TEST(RouteLocaliser, StepDoesNotAllocateAfterInit) {
   Scenario s;
   LocaliserConfig c = config(RouteDirection::kForward);
