@@ -22,6 +22,7 @@
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/route_file.hpp"
 #include "firmware/tools/route_tiles.hpp"
+#include "firmware/tools/sonar_file.hpp"
 #include "drivers/sidescan/byte_source.hpp"
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "nav/route/route_localiser.hpp"
@@ -32,7 +33,8 @@ using namespace qnav;
 using Clock = std::chrono::steady_clock;
 
 const char* const kValued[] = {"--out", "--length-m", "--seed", "--xtf", "--first-ping", "--pings", "--route", "--offset-pct",
-                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", "--seabeds", nullptr};
+                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", "--seabeds", "--sonar", "--pings", "--nav",
+                               "--heading-offset-deg", "--lines", "--stride", nullptr};
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // CPU time of this thread (the machine is shared: wall time includes other people's work).
@@ -164,6 +166,9 @@ int usage() {
   return 2;
 }
 
+int cmd_train_file(const char* path, int argc, char** argv);
+int cmd_repeat_file(const char* path, int argc, char** argv);
+
 int cmd_train(int argc, char** argv) {
   const char* out = cli::option(argc, argv, "--out");
   double length_m = 2000.0;
@@ -171,8 +176,9 @@ int cmd_train(int argc, char** argv) {
   if (out == nullptr || !cli::option_double(argc, argv, "--length-m", length_m) || !cli::option_long(argc, argv, "--seed", seed) ||
       !(length_m >= 200.0 && length_m <= 50000.0))
     return usage();
+  if (const char* file = cli::option(argc, argv, "--sonar")) return cmd_train_file(file, argc, argv);
   if (!cli::flag(argc, argv, "--sim")) {
-    std::fprintf(stderr, "qnav route train: only --sim is implemented in this version (XTF: see qnav route eval --xtf notes)\n");
+    std::fprintf(stderr, "qnav route train: give --sim or --sonar FILE (XTF or JSF)\n");
     return 2;
   }
   SimWorld w;
@@ -270,8 +276,9 @@ int cmd_repeat(int argc, char** argv) {
   if (path == nullptr || !cli::option_double(argc, argv, "--offset-pct", offset_pct) || !cli::option_long(argc, argv, "--seed", seed) ||
       !cli::option_double(argc, argv, "--length-m", length_m) || !(std::abs(offset_pct) <= 100.0) || !(length_m >= 200.0 && length_m <= 50000.0))
     return usage();
+  if (const char* file = cli::option(argc, argv, "--sonar")) return cmd_repeat_file(file, argc, argv);
   if (!cli::flag(argc, argv, "--sim")) {
-    std::fprintf(stderr, "qnav route repeat: only --sim is implemented in this version\n");
+    std::fprintf(stderr, "qnav route repeat: give --sim or --sonar FILE (XTF or JSF)\n");
     return 2;
   }
   tools::RouteFileReader reader;
@@ -931,13 +938,90 @@ int cmd_eval(int argc, char** argv) {
 // -pass sonar physics.
 namespace {
 
-struct XtfPingData {
-  std::vector<float> port, stbd;
-  float slant_range_m = 0.0f;
-  float altitude_m = 0.0f;
-  std::uint64_t stamp_ns = 0;
-  Pose2 nav;  // north, east (local, from lat/lon), compass heading
+// ---- side-scan files (XTF / JSF) for train, repeat and xtf ----
+struct FilePass {
+  tools::FileData fd;
+  tools::NavTrack track;
+  tools::RouteTileConfig tiles;
+  double swath_m = 0.0;
 };
+
+// Loads a file and derives its tile geometry from the median slant range: 300 ground bins per side
+// (0.1 m for the Iver2's 30 m), 800 x 800 px rasters at the bin size, --lines pings per tile every
+// --stride pings (defaults 100 / 50). Navigation from the fixes (--nav fix) or dead reckoning
+// (--nav dr), --heading-offset-deg added to the compass; the bottom is detected in each ping.
+int open_file_pass(const char* path, int argc, char** argv, FilePass& out) {
+  double hoff_deg = 0.0;
+  long lines = 100, stride = 50;
+  const char* nav = cli::option(argc, argv, "--nav", "fix");
+  if (!cli::option_double(argc, argv, "--heading-offset-deg", hoff_deg) || !cli::option_long(argc, argv, "--lines", lines) ||
+      !cli::option_long(argc, argv, "--stride", stride) || lines < 10 || lines > 2000 || stride < 1 || stride > lines ||
+      (std::strcmp(nav, "fix") != 0 && std::strcmp(nav, "dr") != 0)) {
+    usage();
+    return 2;
+  }
+  if (tools::load_sonar_file(path, out.fd) != 0) return 1;
+  out.track = tools::build_track(out.fd, std::strcmp(nav, "dr") == 0, deg_to_rad(hoff_deg));
+  std::vector<float> ranges;
+  for (const tools::PingRec& p : out.fd.pings)
+    if (std::isfinite(p.ping.slant_range_m) && p.ping.slant_range_m > 0.0f) ranges.push_back(p.ping.slant_range_m);
+  if (ranges.empty()) {
+    std::fprintf(stderr, "qnav route: %s: no ping with a slant range\n", path);
+    return 1;
+  }
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
+  const double range = static_cast<double>(ranges[ranges.size() / 2]);
+  const double bin = std::max(0.02, range / 300.0);
+  tools::RouteTileConfig& tc = out.tiles;
+  tc = tools::default_route_tile_config();
+  tc.corrector.ground_bins_per_side = 300;
+  tc.corrector.ground_bin_m = static_cast<float>(bin);
+  tc.corrector.nadir_gap_m = static_cast<float>(std::max(0.5, range / 30.0));
+  tc.tiles.resolution_m = bin;
+  tc.tiles.tile_width_px = 800;
+  tc.tiles.tile_height_px = 800;
+  tc.tiles.max_bins_per_side = 300;
+  tc.tiles.scanlines_per_tile = static_cast<int>(lines);
+  tc.tiles.scanline_stride = static_cast<int>(stride);
+  tc.features.max_width = 800;
+  tc.features.max_height = 800;
+  tc.features.downsample = 3;
+  tc.features.blur_radius_px = 1;
+  out.swath_m = 2.0 * range;
+  return 0;
+}
+
+// Tiles of pings [a, b) of a file. centre_ping (optional) receives each tile's centre ping index.
+Status file_tiles(tools::RouteTilePipeline& pipe, const FilePass& fp, long a, long b, std::vector<tools::RouteTile>& out,
+                  std::vector<double>* centre_ping) {
+  pipe.reset_pass();
+  out.clear();
+  if (centre_ping) centre_ping->clear();
+  bool stop = false;
+  const double half = 0.5 * (fp.tiles.tiles.scanlines_per_tile - 1);
+  for (long i = a; i < b && !stop; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    if (!fp.track.ok[k]) continue;
+    sonar::SonarPing ping = tools::as_ping(fp.fd.pings[k], false);
+    ping.ping_number = static_cast<std::uint32_t>(i - a);
+    QNAV_RETURN_IF_ERROR(pipe.push_ping(ping, fp.track.pose[k], [&](const tools::RouteTile& t) {
+      out.push_back(t);
+      if (centre_ping) centre_ping->push_back(static_cast<double>(i) - half);  // the tile is the last scanlines_per_tile pings
+      return true;
+    }, &stop));
+  }
+  return Status::ok();
+}
+
+// Registration on real tiles at 0.1 m: tighter positions than the simulator's 0.6 m feature pixels.
+route::LocaliserConfig file_localiser_config(route::RouteDirection d, std::size_t max_nodes, std::size_t nodes, double spacing_m) {
+  route::LocaliserConfig lc = localiser_config(d, max_nodes);
+  lc.guidance.dead_reckon_max_m = 2.5 * spacing_m;  // as in the simulator: ~2.5 nodes after the last fix
+  lc.filter.belief_registrations = static_cast<std::uint32_t>(std::max<std::size_t>(1, std::min<std::size_t>(nodes, 8)));
+  lc.registration.robust.inlier_threshold_m = 0.75;
+  lc.registration.fc.sigma_dist_m = 0.5;
+  return lc;
+}
 
 bool parse_range(const char* s, long& a, long& b) {
   if (s == nullptr) return true;
@@ -951,99 +1035,29 @@ bool parse_range(const char* s, long& a, long& b) {
 
 int cmd_xtf(int argc, char** argv) {
   const char* path = cli::option(argc, argv, "--xtf");
-  long ta = 0, tb = 300, ra = 90, rb = 461;
+  long ta = 0, tb = 301, ra = 90, rb = 461;  // ping 0 of the Iver2 file has no fix: 300 taught pings
   if (path == nullptr || !parse_range(cli::option(argc, argv, "--train"), ta, tb) || !parse_range(cli::option(argc, argv, "--repeat"), ra, rb))
     return usage();
-  sidescan::FileSource file;
-  sidescan::XtfReader reader;
-  Status s = file.open(path);
-  if (s) s = reader.init(sidescan::XtfReaderConfig{});
-  if (s) s = reader.open(file);
-  if (!s) {
-    std::fprintf(stderr, "qnav route xtf: %s: %s\n", path, s.message());
+  FilePass fp;
+  if (open_file_pass(path, argc, argv, fp) != 0) return 1;
+  const long n = static_cast<long>(fp.fd.pings.size());
+  if (n < 100) {
+    std::fprintf(stderr, "qnav route xtf: %s: only %ld pings\n", path, n);
     return 1;
   }
-  std::vector<float> port(8192), stbd(8192);
-  std::vector<XtfPingData> pings;
-  sidescan::XtfRecord rec;
-  double lat0 = 0, lon0 = 0;
-  bool have0 = false;
-  for (;;) {
-    Result<bool> r = reader.next(rec, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
-    if (!r || !*r) break;
-    if (rec.kind != sidescan::XtfRecordKind::kPing || !rec.ping.nav_valid) continue;
-    const sidescan::XtfPing& p = rec.ping;
-    if (!have0) {
-      lat0 = p.sensor_y;
-      lon0 = p.sensor_x;
-      have0 = true;
-    }
-    XtfPingData d;
-    d.port.assign(port.begin(), port.begin() + p.samples_per_side);
-    d.stbd.assign(stbd.begin(), stbd.begin() + p.samples_per_side);
-    d.slant_range_m = p.slant_range_m;
-    d.altitude_m = p.altitude_m;
-    d.stamp_ns = p.stamp_ns;
-    const double k = 111320.0;
-    d.nav = Pose2{(p.sensor_y - lat0) * k, (p.sensor_x - lon0) * k * std::cos(lat0 * kPi / 180.0), deg_to_rad(static_cast<double>(p.heading_deg))};
-    pings.push_back(std::move(d));
-  }
-  if (pings.size() < 100) {
-    std::fprintf(stderr, "qnav route xtf: %s: only %zu pings with navigation\n", path, pings.size());
-    return 1;
-  }
-  tb = std::min<long>(tb, static_cast<long>(pings.size()));
-  rb = std::min<long>(rb, static_cast<long>(pings.size()));
-  // Tiles for a 30 m slant range: 0.1 m pixels, 100 pings per tile every 50 pings.
-  tools::RouteTileConfig tc = tools::default_route_tile_config();
-  tc.corrector.ground_bins_per_side = 300;
-  tc.corrector.ground_bin_m = 0.1f;
-  tc.corrector.nadir_gap_m = 1.0f;
-  tc.tiles.resolution_m = 0.1;
-  tc.tiles.tile_width_px = 800;
-  tc.tiles.tile_height_px = 800;
-  tc.tiles.max_bins_per_side = 300;
-  tc.tiles.scanlines_per_tile = 100;
-  tc.tiles.scanline_stride = 50;
-  tc.features.max_width = 800;
-  tc.features.max_height = 800;
-  tc.features.downsample = 3;
+  tb = std::min<long>(tb, n);
+  rb = std::min<long>(rb, n);
+  const tools::RouteTileConfig& tc = fp.tiles;
   tools::RouteTilePipeline pipe;
-  s = pipe.init(tc);
+  Status s = pipe.init(tc);
   if (!s) {
     std::fprintf(stderr, "qnav route xtf: %s\n", s.message());
     return 1;
   }
-  auto run_window = [&](long a, long b, std::vector<tools::RouteTile>& out, std::vector<double>& centre_ping) {
-    pipe.reset_pass();
-    out.clear();
-    centre_ping.clear();
-    bool stop = false;
-    long first_in_tile = a;
-    for (long i = a; i < b && !stop; ++i) {
-      const XtfPingData& d = pings[static_cast<std::size_t>(i)];
-      sonar::SonarPing ping;
-      ping.stamp_ns = d.stamp_ns;
-      ping.ping_number = static_cast<std::uint32_t>(i - a);
-      ping.port = Span<const float>(d.port.data(), d.port.size());
-      ping.stbd = Span<const float>(d.stbd.data(), d.stbd.size());
-      ping.slant_range_m = d.slant_range_m;
-      ping.altitude_m = d.altitude_m;
-      const Status ps = pipe.push_ping(ping, d.nav, [&](const tools::RouteTile& t) {
-        out.push_back(t);
-        // The tile is made of the last scanlines_per_tile pings.
-        centre_ping.push_back(static_cast<double>(i) - 0.5 * (tc.tiles.scanlines_per_tile - 1));
-        return true;
-      }, &stop);
-      if (!ps) return ps;
-      static_cast<void>(first_in_tile);
-    }
-    return Status::ok();
-  };
   std::vector<tools::RouteTile> train, rep;
   std::vector<double> train_c, rep_c;
-  s = run_window(ta, tb, train, train_c);
-  if (s) s = run_window(ra, rb, rep, rep_c);
+  s = file_tiles(pipe, fp, ta, tb, train, &train_c);
+  if (s) s = file_tiles(pipe, fp, ra, rb, rep, &rep_c);
   if (!s || train.size() < 2 || rep.empty()) {
     std::fprintf(stderr, "qnav route xtf: %s (train %zu tiles, repeat %zu tiles)\n", s ? "too few tiles" : s.message(), train.size(), rep.size());
     return 1;
@@ -1060,13 +1074,10 @@ int cmd_xtf(int argc, char** argv) {
     meta.push_back(m);
   }
   TileSource src(&train);
-  route::LocaliserConfig lc = localiser_config(route::RouteDirection::kForward, 64);
-  lc.filter.belief_registrations = static_cast<std::uint32_t>(std::min<std::size_t>(train.size(), 8));
-  lc.registration.robust.inlier_threshold_m = 0.75;
-  lc.registration.fc.sigma_dist_m = 0.5;
+  route::LocaliserConfig lc = file_localiser_config(route::RouteDirection::kForward, 64, train.size(), spacing);
   ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
   auto loc = std::make_unique<route::RouteLocaliser>();
-  route::RouteParams params = route_params(tc, spacing, 2.0 * static_cast<double>(pings[0].slant_range_m));
+  route::RouteParams params = route_params(tc, spacing, fp.swath_m);
   s = loc->init(lc, arena);
   if (s) s = loc->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src);
   if (!s) {
@@ -1078,8 +1089,8 @@ int cmd_xtf(int argc, char** argv) {
   if (f) std::fprintf(f, "tile,centre_ping,true_node,estimate,probability,entropy,inliers,status,cross_track_m,along_track_m\n");
   double kp = 0.0;
   for (const tools::RouteTile& t : train) kp += static_cast<double>(t.node.keypoints.size());
-  std::printf("real XTF %s: %zu pings; taught pings %ld..%ld -> %zu nodes (spacing %.1f m, %.0f keypoints/node); repeat pings %ld..%ld -> %zu tiles\n",
-              path, pings.size(), ta, tb - 1, train.size(), spacing, kp / static_cast<double>(train.size()), ra, rb - 1, rep.size());
+  std::printf("real XTF %s: %ld pings; taught pings %ld..%ld -> %zu nodes (spacing %.1f m, %.0f keypoints/node); repeat pings %ld..%ld -> %zu tiles\n",
+              path, n, ta, tb - 1, train.size(), spacing, kp / static_cast<double>(train.size()), ra, rb - 1, rep.size());
   std::printf("  tile  centre ping  true node  estimate  p      entropy  inliers  status       cross-track m  along-track m\n");
   int ok = 0, exact = 0;
   for (std::size_t k = 0; k < rep.size(); ++k) {
@@ -1102,6 +1113,106 @@ int cmd_xtf(int argc, char** argv) {
   if (f) std::fclose(f);
   std::printf("  estimate within +/-1 node on %d tiles, exact on %d (tiles whose centre is within the taught pings)\n", ok, exact);
   return s ? 0 : 1;
+}
+
+// qnav route train --sonar FILE: teach a route on pings [A, B) of a recorded pass. The nodes are
+// written durably one by one (fdatasync each) once the pass's node spacing is known.
+int cmd_train_file(const char* path, int argc, char** argv) {
+  const char* out = cli::option(argc, argv, "--out");
+  long a = 0, b = 1L << 40;
+  if (out == nullptr || !parse_range(cli::option(argc, argv, "--pings"), a, b)) return usage();
+  FilePass fp;
+  if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
+  b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
+  tools::RouteTilePipeline pipe;
+  std::vector<tools::RouteTile> tiles;
+  Status s = pipe.init(fp.tiles);
+  if (s) s = file_tiles(pipe, fp, a, b, tiles, nullptr);
+  if (s && tiles.size() < 2) s = Status(StatusCode::kInvalidArgument, "fewer than 2 tiles in the ping range: a route needs 2 nodes");
+  if (!s) {
+    std::fprintf(stderr, "qnav route train: %s: %s\n", path, s.message());
+    return 1;
+  }
+  const double spacing = (tiles.back().node.meta.along_m - tiles.front().node.meta.along_m) / static_cast<double>(tiles.size() - 1);
+  tools::RouteFileWriter writer;
+  tools::RouteWriterOptions o;
+  o.overwrite = cli::flag(argc, argv, "--force");
+  s = writer.create(out, route_params(fp.tiles, spacing, fp.swath_m), o);
+  const bool created = s.is_ok();
+  std::size_t kps = 0;
+  for (const tools::RouteTile& t : tiles) {
+    if (!s) break;
+    s = writer.append(t.node);
+    kps += t.node.keypoints.size();
+  }
+  const Status cs = created ? writer.close() : Status::ok();  // nodes appended before an error stay durable
+  if (!s || !cs) {
+    std::fprintf(stderr, "qnav route train: %s: %s\n", out, (!s ? s : cs).message());
+    return 1;
+  }
+  std::printf("route %s: %u nodes from %s pings %ld..%ld, spacing %.1f m, swath %.1f m, %.1f keypoints/node (%s)\n", out, writer.node_count(), path,
+              a, b - 1, spacing, fp.swath_m, static_cast<double>(kps) / static_cast<double>(tiles.size()), fp.fd.counters.c_str());
+  return 0;
+}
+
+// qnav route repeat --sonar FILE: localise the tiles of pings [C, D) of a recorded pass on a route.
+// No ground truth: the CSV's true_node is -1.
+int cmd_repeat_file(const char* path, int argc, char** argv) {
+  const char* route_path = cli::option(argc, argv, "--route");
+  long a = 0, b = 1L << 40;
+  if (route_path == nullptr || !parse_range(cli::option(argc, argv, "--pings"), a, b)) return usage();
+  tools::RouteFileReader reader;
+  Status s = reader.open(route_path);
+  std::vector<route::NodeMeta> meta;
+  if (s) s = reader.read_all_meta(meta, nullptr);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s: %s\n", route_path, s.message());
+    return 1;
+  }
+  FilePass fp;
+  if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
+  b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
+  const bool reverse = cli::flag(argc, argv, "--reverse");
+  route::LocaliserConfig lc = file_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8,
+                                                    meta.size(), static_cast<double>(reader.params().node_spacing_m));
+  ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
+  auto loc = std::make_unique<route::RouteLocaliser>();
+  tools::RouteTilePipeline pipe;
+  std::vector<tools::RouteTile> tiles;
+  std::vector<double> centre;
+  s = loc->init(lc, arena);
+  if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
+  if (s) s = pipe.init(fp.tiles);
+  if (s) s = file_tiles(pipe, fp, a, b, tiles, &centre);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
+    return 1;
+  }
+  const char* csv = cli::option(argc, argv, "--csv");
+  FILE* f = csv ? std::fopen(csv, "w") : stdout;
+  if (f == nullptr) {
+    std::fprintf(stderr, "qnav route repeat: cannot write %s\n", csv);
+    return 1;
+  }
+  print_csv_header(f);
+  int tracking = 0;
+  for (std::size_t k = 0; k < tiles.size() && s; ++k) {
+    route::LocaliserStep st;
+    s = loc->step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, st);
+    if (!s) break;
+    tracking += st.guidance.status == route::GuidanceStatus::kTracking;
+    std::fprintf(f, "%zu,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%.2f,%.4f,%.4f\n", k, -1, st.estimate, static_cast<double>(st.probability), st.entropy,
+                 st.confident ? 1 : 0, st.best_inliers, route::to_string(st.guidance.status), route::to_string(st.guidance.side), "unknown",
+                 st.guidance.cross_track_m, st.guidance.along_track_m, st.guidance.heading_error_rad, st.guidance.waypoint_bearing_rad);
+  }
+  if (csv) std::fclose(f);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
+    return 1;
+  }
+  std::fprintf(csv ? stdout : stderr, "repeat %s on %s pings %ld..%ld%s: %zu tiles, %d tracking (registered and confident)\n", route_path, path, a,
+               b - 1, reverse ? " reverse" : "", tiles.size(), tracking);
+  return 0;
 }
 
 }  // namespace
