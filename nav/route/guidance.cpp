@@ -8,6 +8,7 @@ const char* to_string(GuidanceStatus s) noexcept {
   switch (s) {
     case GuidanceStatus::kTracking: return "tracking";
     case GuidanceStatus::kDeadReckoned: return "dead_reckoned";
+    case GuidanceStatus::kRouteEnd: return "route_end";
     case GuidanceStatus::kHoldCourse: break;
   }
   return "hold_course";
@@ -52,6 +53,11 @@ GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const
   g.waypoint_bearing_rad = std::atan2(rel.y(), rel.x());
   g.commanded_heading_rad = wrap_angle_rad(vehicle_heading_rad + g.waypoint_bearing_rad);
   g.status = registered ? GuidanceStatus::kTracking : GuidanceStatus::kDeadReckoned;
+  if (ahead.index == node.index && g.along_track_m > 0.0) {  // past the route's end
+    g.status = GuidanceStatus::kRouteEnd;
+    g.waypoint_bearing_rad = 0.0;
+    g.commanded_heading_rad = wrap_angle_rad(vehicle_heading_rad);
+  }
   if (registered && nav_ok) {
     have_fix_ = true;
     fix_route_ = vehicle;

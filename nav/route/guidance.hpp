@@ -14,6 +14,9 @@
 // travel: the vehicle's route-frame pose at that fix is carried forward by the dead-reckoned motion
 // since (nav pose of the fix tile -> nav pose of this tile), and the offsets are taken against the
 // estimated node. Cross-track error then grows with the heading error of the dead reckoning.
+// Status kRouteEnd: tracking or dead-reckoned, but past the last node in the direction of travel
+// (the look-ahead node is the estimated node and the vehicle is ahead of it): offsets and side are
+// reported, the commanded heading is the current heading (no turn back to the last waypoint).
 // Otherwise the paper's default strategy: hold course (commanded heading = last good command, or the
 // current heading), status kHoldCourse. Pure function of its inputs + the held command and fix;
 // O(1), no heap.
@@ -29,7 +32,7 @@
 
 namespace qnav::route {
 
-enum class GuidanceStatus : std::uint8_t { kTracking, kHoldCourse, kDeadReckoned };
+enum class GuidanceStatus : std::uint8_t { kTracking, kHoldCourse, kDeadReckoned, kRouteEnd };
 enum class RouteSide : std::int8_t { kPort = -1, kOnRoute = 0, kStarboard = 1 };
 const char* to_string(GuidanceStatus s) noexcept;
 const char* to_string(RouteSide s) noexcept;

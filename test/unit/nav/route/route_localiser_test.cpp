@@ -152,6 +152,7 @@ TEST(Guidance, HoldsCourseOnARegistrationWithTooFewInliers) {
   Guidance g(gc);
   NodeMeta node, ahead;
   ahead.pose = Pose2{100.0, 0.0, 0.0};
+  ahead.index = 2;
   RegistrationResult r;
   r.ok = true;
   r.inliers = 6;
@@ -179,6 +180,7 @@ TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
   next.pose = Pose2{60.0, 0.0, 0.0};
   next.index = 1;
   ahead.pose = Pose2{180.0, 0.0, 0.0};
+  ahead.index = 3;
   RegistrationResult fix;
   fix.ok = true;
   fix.inliers = 12;
@@ -197,6 +199,11 @@ TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
   // Beyond dead_reckon_max_m from the fix: hold course.
   const Pose2 nav2 = nav0.compose(Pose2{120.0, 0.0, 0.0});
   EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav2).status, GuidanceStatus::kHoldCourse);
+  // Past the last node (the look-ahead node is the node itself): route end, no turn back.
+  GuidanceOutput end = g.compute(true, RouteDirection::kForward, next, next, fix, 0.5, nav1);
+  EXPECT_EQ(end.status, GuidanceStatus::kRouteEnd);
+  EXPECT_EQ(end.side, RouteSide::kStarboard);
+  EXPECT_NEAR(end.commanded_heading_rad, 0.5, 1e-12);
   // A reset forgets the fix.
   g.reset();
   EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav1).status, GuidanceStatus::kHoldCourse);
