@@ -30,22 +30,26 @@ def main():
     for d, m in (("forward", "o-"), ("reverse", "s--")):
         r = [x for x in offs if x["direction"] == d]
         pct = [int(x["offset_pct"]) for x in r]
-        ax[0].plot(pct, [float(x["within1_pct"]) for x in r], m, label=d)
+        ax[0].plot(pct, [float(x["within1_pct"]) for x in r], m, label=d + ": filter, node +/-1")
+        if "registered_on_true_node_pct" in r[0]:
+            ax[0].plot(pct, [float(x["registered_on_true_node_pct"]) for x in r], m, alpha=0.35,
+                       label=d + ": registration alone on the true node")
         side = [100.0 * int(x["side_correct"]) / int(x["side_n"]) if int(x["side_n"]) else float("nan") for x in r]
-        ax[1].plot(pct, side, m, label=d + " (side correct)")
-        ax[1].plot(pct, [float(x["tracking_pct"]) for x in r], m, alpha=0.4, label=d + " (tracking, side decided)")
+        ax[1].plot(pct, side, m, label=d + " (side correct, of decided)")
+        decided = [100.0 * int(x["side_n"]) / int(x["scored"]) if int(x["scored"]) and int(x["offset_pct"]) > 0 else float("nan") for x in r]
+        ax[1].plot(pct, decided, m, alpha=0.4, label=d + " (side decided, of tiles)")
     ax[0].set_xlabel("lateral offset, % of swath")
-    ax[0].set_ylabel("% tiles with estimate within +/-1 node")
+    ax[0].set_ylabel("% of tiles")
     ax[0].set_ylim(0, 105)
     ax[0].axhline(95, color="gray", lw=0.5)
-    ax[0].legend()
+    ax[0].legend(fontsize=7)
     ax[0].set_title("localisation vs offset")
     ax[1].set_xlabel("lateral offset, % of swath")
     ax[1].set_ylabel("%")
     ax[1].set_ylim(0, 105)
     ax[1].axhline(95, color="gray", lw=0.5)
     ax[1].legend(fontsize=7)
-    ax[1].set_title("route side (tiles where guidance is tracking)")
+    ax[1].set_title("route side (decided: tracking, dead-reckoned or route end)")
     fig.tight_layout()
     fig.savefig(out + "/route_offsets.png", dpi=90)
 

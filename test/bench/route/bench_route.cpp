@@ -37,7 +37,7 @@ class SyntheticSource final : public NodeSource {
   std::uint32_t node_count() const noexcept override { return n_; }
   Status load(std::uint32_t i, RouteNode& out) noexcept override {
     // The world repeats every 30 nodes (its length); the route keeps counting.
-    out = world_->observe(Pose2{30.0 + kSpacing * (i % 30), 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 96, 1000 + i, 20);
+    out = world_->observe(Pose2{30.0 + kSpacing * (i % 30), 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 1000 + i, 20);
     out.meta.index = i;
     out.meta.pose.x_m = 30.0 + kSpacing * i;
     out.meta.along_m = kSpacing * i;
@@ -49,12 +49,14 @@ class SyntheticSource final : public NodeSource {
   std::uint32_t n_;
 };
 
-void BM_Registration96(benchmark::State& state) {
+// The configuration `qnav route eval` uses: 128 keypoints per tile and node, 3 candidates each.
+void BM_Registration128(benchmark::State& state) {
   testing::SyntheticWorld world(2000.0, 200.0, 0.008, 3);
-  RouteNode a = world.observe(Pose2{300.0, 12.0, 0.02}, 45.0, 49.0, 0.3, 0.8, 96, 1, 20);
-  RouteNode b = world.observe(Pose2{310.0, 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 96, 2, 20);
+  RouteNode a = world.observe(Pose2{300.0, 12.0, 0.02}, 45.0, 49.0, 0.3, 0.8, 128, 1, 20);
+  RouteNode b = world.observe(Pose2{310.0, 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 2, 20);
   RegistrationConfig c;
-  c.fc.max_points = 96;
+  c.fc.max_points = 128;
+  c.fc.sigma_dir_rad = 0.02;
   c.fc.max_candidates_per_point = 3;
   c.robust.min_inliers = 5;
   ArenaStorage arena(Registrar::arena_bytes(c));
@@ -67,7 +69,7 @@ void BM_Registration96(benchmark::State& state) {
   }
   state.counters["inliers"] = out.inliers;
 }
-BENCHMARK(BM_Registration96)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Registration128)->Unit(benchmark::kMillisecond);
 
 void BM_LocaliserUpdate10000(benchmark::State& state) {
   testing::SyntheticWorld world(1900.0, 200.0, 0.008, 3);
@@ -83,7 +85,9 @@ void BM_LocaliserUpdate10000(benchmark::State& state) {
   c.filter.max_nodes = n;
   c.filter.belief_registrations = 4;
   c.filter.wide_search_registrations = 6;
-  c.registration.fc.max_points = 96;
+  c.filter.searching_registrations = 16;
+  c.registration.fc.max_points = 128;
+  c.registration.fc.sigma_dir_rad = 0.02;
   c.registration.fc.max_candidates_per_point = 3;
   c.registration.robust.min_inliers = 5;
   ArenaStorage arena(RouteLocaliser::arena_bytes(c));
@@ -94,7 +98,7 @@ void BM_LocaliserUpdate10000(benchmark::State& state) {
   if (!loc->init(c, arena) || !loc->start(p, Span<const NodeMeta>(meta.data(), n), src)) state.SkipWithError("init");
   std::vector<RouteNode> tiles;
   for (int k = 0; k < 16; ++k)
-    tiles.push_back(world.observe(Pose2{30.0 + kSpacing * (5 + k) + 10.0, 15.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 96, 50 + static_cast<std::uint64_t>(k), 20));
+    tiles.push_back(world.observe(Pose2{30.0 + kSpacing * (5 + k) + 10.0, 15.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 50 + static_cast<std::uint64_t>(k), 20));
   std::size_t k = 0;
   LocaliserStep st;
   for (auto _ : state) {
