@@ -10,7 +10,7 @@ namespace qnav::motion {
 
 const char* const AttitudeBiasFilter::kCounterNames[static_cast<std::size_t>(AttitudeBiasCounter::kCount)] = {
     "attbias_bad_attitude", "attbias_bad_vo_step", "attbias_bad_dt", "attbias_vo_gated", "attbias_innovation_gated",
-    "attbias_restarts"};
+    "attbias_implausible_drift", "attbias_restarts"};
 
 namespace {
 
@@ -28,7 +28,8 @@ Status AttitudeBiasFilter::init(const AttitudeBiasConfig& c) noexcept {
       !sigma_ok(c.initial_rate_sigma_rad_s) || !sigma_ok(c.rate_walk_rad_s_sqrt_s) || !sigma_ok(c.drift_walk_rad_sqrt_s) ||
       !(c.vo_sigma_scale > 0.0) || !std::isfinite(c.vo_sigma_scale) || !sigma_ok(c.vo_sigma_floor_rad) ||
       !(c.gate_sigma > 0.0) || !(c.max_dt_s > 0.0) || !(c.max_sigma_rad > 0.0) || !std::isfinite(c.max_sigma_rad) ||
-      !std::isfinite(c.gate_sigma) || !std::isfinite(c.max_dt_s))
+      !std::isfinite(c.gate_sigma) || !std::isfinite(c.max_dt_s) || !(c.max_drift_rate_rad_s > 0.0) ||
+      !(c.max_drift_rad > 0.0))
     return Status(StatusCode::kInvalidArgument, "attitude bias filter config out of range");
   config_ = c;
   ready_ = true;
@@ -172,6 +173,13 @@ Status AttitudeBiasFilter::update(const Mat3d& A, double dt_s, bool has_vo, cons
   P_ = IKH * P_ * IKH.transpose() + K * (Mat3d::Identity() * m2) * K.transpose();
   bound_covariance();
   ++updates_;
+  if ((rate_.cwiseAbs().array() > config_.max_drift_rate_rad_s).any() ||
+      (drift_.cwiseAbs().array() > config_.max_drift_rad).any()) {
+    counters_.increment(AttitudeBiasCounter::kImplausibleDrift);
+    counters_.increment(AttitudeBiasCounter::kRestarts);
+    initialised_ = false;
+    return update(A, dt_s, false, dR_vo, cov_vo_right);
+  }
   return Status::ok();
 }
 

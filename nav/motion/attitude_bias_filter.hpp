@@ -20,8 +20,10 @@
 //
 // Rejections (counted, state untouched): non-finite / non-rotation inputs, dt <= 0 or > max_dt_s, a VO
 // step whose disagreement with the sensor increment exceeds gate_sigma (predict falls back to the sensor
-// increment), an innovation beyond gate_sigma (chi-square, 3 dof). Covariance is symmetrised and its
-// diagonal bounded (max_sigma_rad), so it stays finite on any input sequence.
+// increment), an innovation beyond gate_sigma (Mahalanobis, 3 dof). Restarts from the sensor (counted):
+// kMaxGatedInRow gated innovations in a row, or a drift / drift rate beyond max_drift_rad /
+// max_drift_rate_rad_s (a biased VO would otherwise be absorbed as sensor drift). Covariance is
+// symmetrised and its diagonal bounded (max_sigma_rad), so it stays finite on any input sequence.
 // Cost: O(1) (9x9 fixed-size products, one 3x3 inverse) per call; no heap; no I/O.
 #pragma once
 
@@ -48,6 +50,12 @@ struct AttitudeBiasConfig {
   double gate_sigma = 5.0;                          // innovation / VO-vs-sensor gate (sigmas)
   double max_dt_s = 600.0;                          // a longer gap between samples is rejected
   double max_sigma_rad = deg_to_rad(30.0);          // bound on every state sigma
+  // Plausibility of the estimate: a drift rate or drift beyond these (per axis) means the VO and the sensor
+  // disagree in a way the drift model does not explain (e.g. a biased VO): restart from the sensor.
+  // Default rate: 5 sigma of the small model's rate after one bias period (bias 0.001 deg/s plus the
+  // walk's sqrt(10) * 0.001 deg/s).
+  double max_drift_rate_rad_s = deg_to_rad(0.016);
+  double max_drift_rad = deg_to_rad(10.0);
 };
 
 enum class AttitudeBiasCounter : std::uint8_t {
@@ -56,7 +64,8 @@ enum class AttitudeBiasCounter : std::uint8_t {
   kBadDt,         // dt <= 0, non-finite or > max_dt_s
   kVoGated,       // VO step disagrees with the sensor increment beyond the gate (sensor increment used)
   kInnovationGated,  // sensor sample beyond the gate (not fused)
-  kRestarts,      // kMaxGatedInRow samples in a row beyond the gate: restarted from the sensor
+  kImplausibleDrift,  // drift or drift rate beyond its maximum: restarted from the sensor
+  kRestarts,      // restarted from the sensor (kMaxGatedInRow gated samples in a row, or implausible drift)
   kCount
 };
 

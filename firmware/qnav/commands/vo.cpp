@@ -3,7 +3,8 @@
 //   qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|att|all] [--seed N]
 //                [--seeds N,M,... | --seeds A-B]
 //                [--traj-dir DIR] [--length-27 M] [--length-100 M] [--calib-27 M] [--verbose]
-//                tuning knobs: [--nt X] [--sigma-m-deg D] [--dsig PX] [--nsig N] [--app W]
+//                tuning knobs: [--nt X] [--sigma-m-deg D] [--dsig PX] [--nsig N] [--app W] [--lat-px PX]
+//                attitude filter knobs: [--att-vo-scale X] [--att-rate-scale X] [--att-no-step-rot] [--att-iso]
 //       Synthetic evaluation with exact ground truth: a 27 m run (attitude drifting, no recalibration)
 //       and a 100 m run (attitude recalibrated every 2 m), paper's noise model (n_t = 10 %, small
 //       attitude noise), frames rendered once and fed to every configuration. Prints one JSON object
@@ -45,6 +46,8 @@ using namespace qnav;
 using Clock = std::chrono::steady_clock;
 bool g_verbose = false;
 double g_dsig = 0.15, g_nsig = 3.0, g_app = 0.0;
+double g_att_vo_scale = tools::kVoRotationSigmaScale, g_att_rate_scale = 1.0, g_lat_px = -1.0;
+bool g_att_step_rot = true, g_att_aniso = true;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -135,6 +138,12 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     c.match.appearance_weight = g_app;
     c.estimate_attitude_bias = e.attitude_bias;
     c.attitude_bias = tools::attitude_bias_config_for_noise(noise_cfg);
+    c.attitude_bias.vo_sigma_scale = g_att_vo_scale;
+    c.attitude_bias.initial_rate_sigma_rad_s *= g_att_rate_scale;
+    c.attitude_bias.rate_walk_rad_s_sqrt_s *= g_att_rate_scale;
+    c.corrected_step_rotation = g_att_step_rot;
+    c.anisotropic_vo_rotation = g_att_aniso;
+    if (g_lat_px > 0.0) c.lateral_sigma_px = g_lat_px;
     std::unique_ptr<VoBox> b(new VoBox);
     if (!b->init(c)) return false;
     vos.push_back(std::move(b));
@@ -239,8 +248,12 @@ int run_eval(int argc, char** argv) {
   if (!cli::option_double(argc, argv, "--nt", nt) || !cli::option_double(argc, argv, "--sigma-m-deg", sm_deg)) return 2;
   noise.translation_noise = nt;
   if (!cli::option_double(argc, argv, "--dsig", g_dsig) || !cli::option_double(argc, argv, "--nsig", g_nsig) ||
-      !cli::option_double(argc, argv, "--app", g_app))
+      !cli::option_double(argc, argv, "--app", g_app) || !cli::option_double(argc, argv, "--att-vo-scale", g_att_vo_scale) ||
+      !cli::option_double(argc, argv, "--att-rate-scale", g_att_rate_scale) ||
+      !cli::option_double(argc, argv, "--lat-px", g_lat_px))
     return 2;
+  g_att_step_rot = !cli::flag(argc, argv, "--att-no-step-rot");
+  g_att_aniso = !cli::flag(argc, argv, "--att-iso");
   noise.sigma_m_rad = deg_to_rad(sm_deg);
   std::vector<EvalConfig> cfgs;
   if (std::strcmp(configs, "main") == 0) {
