@@ -17,14 +17,23 @@ constexpr double kDt = 10.0;  // s per frame (the Mars-yard rover: 0.2 m steps a
 // Synthetic run: the true camera turns slowly; the sensor reads R exp(D + m) with a drift D whose rate
 // is given per step; VO reads the true step times exp(v).
 struct Synth {
-  std::mt19937 rng{7};
-  std::normal_distribution<double> n01{0.0, 1.0};
+  explicit Synth(std::uint32_t seed = 7) : rng(seed) {}
+  std::mt19937 rng;
+  // Box-Muller on the raw mt19937 stream: the same numbers with every compiler / standard library.
+  double n01() {
+    const double u1 = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
+    const double u2 = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+  }
   double sensor_sigma = deg_to_rad(0.1);
   double vo_sigma = deg_to_rad(0.03);
   Mat3d R = Mat3d::Identity();
   Mat3d R_prev = Mat3d::Identity();
   Vec3d D = Vec3d::Zero();
-  Vec3d gauss(double s) { return Vec3d(n01(rng), n01(rng), n01(rng)) * s; }
+  Vec3d gauss(double s) {
+    const double a = n01(), b = n01(), c = n01();
+    return Vec3d(a, b, c) * s;
+  }
   // Advances one frame with the given drift rate [rad/s]; returns the sensor sample, fills the VO step.
   Mat3d step(const Vec3d& rate, Mat3d& vo) {
     R_prev = R;
@@ -51,57 +60,86 @@ AttitudeBiasConfig test_config(bool constant_bias = false) {
 
 double angle_deg(const Mat3d& a, const Mat3d& b) { return rad_to_deg(rotation_angle_rad(a.transpose() * b)); }
 
+// Over 20 independent runs (each 150 frames, 1500 s) with a constant drift rate of the paper's small
+// bias size and a filter configured for a constant bias. Measured: rms rate error 0.00019 deg/s (the rate
+// is ~0.0015 deg/s), rms drift error at the end 0.29 deg, worst estimate error over frames 50-150 at
+// 0.27 of the raw sensor's end error on average.
 TEST(AttitudeBiasFilter, ConvergesToAConstantDriftRateAndRemovesTheDrift) {
-  AttitudeBiasFilter f;
-  ASSERT_TRUE(f.init(test_config(true)).is_ok());
-  Synth s;
-  const Vec3d rate = Vec3d(0.8, -0.5, 1.0) * deg_to_rad(0.001);  // the paper's small bias: ~0.01 deg / 10 s
-  Mat3d vo;
-  ASSERT_TRUE(f.update(s.step(Vec3d::Zero(), vo), kDt, false, vo, s.vo_cov()).is_ok());
-  double max_err_late = 0.0, raw_err_end = 0.0;
-  for (int k = 1; k <= 150; ++k) {
-    const Mat3d A = s.step(rate, vo);
-    ASSERT_TRUE(f.update(A, kDt, true, vo, s.vo_cov()).is_ok()) << k;
-    if (k >= 50) max_err_late = std::max(max_err_late, angle_deg(f.corrected(), s.R));
-    raw_err_end = angle_deg(A, s.R);
+  const int runs = 20;
+  double rate_e2 = 0.0, drift_e2 = 0.0, ratio_sum = 0.0;
+  for (int run = 0; run < runs; ++run) {
+    AttitudeBiasFilter f;
+    ASSERT_TRUE(f.init(test_config(true)).is_ok());
+    Synth s(100 + static_cast<std::uint32_t>(run));
+    const Vec3d rate = Vec3d(0.8, -0.5, 1.0) * deg_to_rad(0.001);  // ~0.01 deg / 10 s: the paper's bias size
+    Mat3d vo;
+    ASSERT_TRUE(f.update(s.step(Vec3d::Zero(), vo), kDt, false, vo, s.vo_cov()).is_ok());
+    double max_err_late = 0.0, raw_err_end = 0.0;
+    for (int k = 1; k <= 150; ++k) {
+      const Mat3d A = s.step(rate, vo);
+      ASSERT_TRUE(f.update(A, kDt, true, vo, s.vo_cov()).is_ok()) << k;
+      if (k >= 50) max_err_late = std::max(max_err_late, angle_deg(f.corrected(), s.R));
+      raw_err_end = angle_deg(A, s.R);
+    }
+    EXPECT_GT(raw_err_end, 1.5);
+    EXPECT_EQ(f.vo_steps(), 150u);
+    EXPECT_EQ(f.counters().total(), 0u);
+    rate_e2 += (f.drift_rate_rad_s() - rate).squaredNorm() / 3.0;
+    drift_e2 += (f.drift_rad() - s.D).squaredNorm() / 3.0;
+    ratio_sum += max_err_late / raw_err_end;
   }
-  // The raw sensor is off by ~2.1 deg at the end. Measured (this seed): the estimate's worst error over
-  // frames 50-150 is 0.60 deg (the VO's own random walk, 0.03 deg/frame, is not observable), the drift
-  // rate is within 5-12 % per axis after 150 frames, the drift within 0.21 deg.
-  EXPECT_GT(raw_err_end, 1.5);
-  EXPECT_LT(max_err_late, 0.9);
-  EXPECT_LT(max_err_late, 0.45 * raw_err_end);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(f.drift_rate_rad_s()(i), rate(i), 0.25 * std::fabs(rate(i))) << i;
-  EXPECT_LT(rad_to_deg((f.drift_rad() - s.D).norm()), 0.4);
-  EXPECT_EQ(f.vo_steps(), 150u);
-  EXPECT_EQ(f.counters().total(), 0u);
+  const double rate_rms_deg_s = rad_to_deg(std::sqrt(rate_e2 / runs));
+  const double drift_rms_deg = rad_to_deg(std::sqrt(drift_e2 / runs));
+  std::printf("constant bias, %d runs: rms rate error %.5f deg/s, rms drift error %.3f deg, mean late/raw %.3f\n", runs,
+              rate_rms_deg_s, drift_rms_deg, ratio_sum / runs);
+  EXPECT_LT(rate_rms_deg_s, 0.0003);
+  EXPECT_LT(drift_rms_deg, 0.4);
+  EXPECT_LT(ratio_sum / runs, 0.5);
 }
 
+// The paper's model (default config): the drift rate random-walks by 0.001 deg/s every 10 s, so the rate
+// estimate itself stays noisy; what must follow a bias step is the drift. 20 runs: 100 frames at +0.01
+// deg/frame (z), then the bias jumps to -0.02 deg/frame (a new bias period). Within 30 frames of the
+// step the drift error is back to its level before the step.
 TEST(AttitudeBiasFilter, TracksAStepInTheDriftRateWithinThirtyFrames) {
-  // The paper's model (default config): the drift rate random-walks by 0.001 deg/s every 10 s, so the rate
-  // estimate itself stays noisy (sigma ~0.0025 deg/s); what must follow a bias step is the drift.
-  AttitudeBiasFilter f;
-  ASSERT_TRUE(f.init(test_config()).is_ok());
-  Synth s;
-  const Vec3d r1 = Vec3d(0.0, 0.0, deg_to_rad(0.001)), r2 = Vec3d(0.0, 0.0, -deg_to_rad(0.002));
-  Mat3d vo, A;
-  ASSERT_TRUE(f.update(s.step(Vec3d::Zero(), vo), kDt, false, vo, s.vo_cov()).is_ok());
-  for (int k = 1; k <= 100; ++k) ASSERT_TRUE(f.update(s.step(r1, vo), kDt, true, vo, s.vo_cov()).is_ok());
-  // The bias jumps (a new bias period) from +0.01 to -0.02 deg per frame. Measured: the drift error is
-  // 0.26 deg at the step (z), <= 0.16 deg from frame 20 and <= 0.06 deg over frames 30-40 (z; the
-  // norm over the three axes <= 0.46); the orientation
-  // error <= 0.53 deg throughout, the raw sensor's 1 deg at the step.
-  double max_err = 0.0, max_drift_err_late = 0.0;
-  for (int k = 1; k <= 40; ++k) {
-    A = s.step(r2, vo);
-    ASSERT_TRUE(f.update(A, kDt, true, vo, s.vo_cov()).is_ok());
-    max_err = std::max(max_err, angle_deg(f.corrected(), s.R));
-    if (k >= 30) max_drift_err_late = std::max(max_drift_err_late, rad_to_deg((f.drift_rad() - s.D).norm()));
+  const int runs = 20;
+  double late_e2 = 0.0, at_step_e2 = 0.0, max_err_sum = 0.0, raw_sum = 0.0;
+  int late_n = 0;
+  for (int run = 0; run < runs; ++run) {
+    AttitudeBiasFilter f;
+    ASSERT_TRUE(f.init(test_config()).is_ok());
+    Synth s(200 + static_cast<std::uint32_t>(run));
+    const Vec3d r1 = Vec3d(0.0, 0.0, deg_to_rad(0.001)), r2 = Vec3d(0.0, 0.0, -deg_to_rad(0.002));
+    Mat3d vo, A;
+    ASSERT_TRUE(f.update(s.step(Vec3d::Zero(), vo), kDt, false, vo, s.vo_cov()).is_ok());
+    for (int k = 1; k <= 100; ++k) {
+      ASSERT_TRUE(f.update(s.step(r1, vo), kDt, true, vo, s.vo_cov()).is_ok());
+      const double e = rad_to_deg(f.drift_rad().z() - s.D.z());
+      if (k > 90) at_step_e2 += e * e;
+    }
+    double max_err = 0.0;
+    for (int k = 1; k <= 40; ++k) {
+      A = s.step(r2, vo);
+      ASSERT_TRUE(f.update(A, kDt, true, vo, s.vo_cov()).is_ok());
+      const double e = rad_to_deg(f.drift_rad().z() - s.D.z());
+      if (k >= 30) {
+        late_e2 += e * e;
+        ++late_n;
+      }
+      max_err = std::max(max_err, angle_deg(f.corrected(), s.R));
+    }
+    max_err_sum += max_err;
+    raw_sum += angle_deg(A, s.R);
   }
-  EXPECT_LT(max_drift_err_late, 0.6);  // norm: x and y wander by the VO's random walk (no drift there)
-  EXPECT_NEAR(rad_to_deg(f.drift_rad().z()), rad_to_deg(s.D.z()), 0.2);
-  EXPECT_LT(max_err, 0.8);
-  EXPECT_LT(f.drift_rate_rad_s().z(), 0.0);  // the sign of the new bias is found
+  const double before = std::sqrt(at_step_e2 / (10 * runs)), late = std::sqrt(late_e2 / late_n);
+  std::printf("bias step, %d runs: rms drift error (z) %.3f deg in the 10 frames before the step, %.3f deg in frames "
+              "30-40 after it; mean worst orientation error %.3f deg (raw sensor at the end %.3f deg)\n",
+              runs, before, late, max_err_sum / runs, raw_sum / runs);
+  // Measured: 0.27 deg before and after (the VO's random walk, 0.03 deg/frame over 140 frames, is the
+  // floor); the step (0.8 deg of drift change in 40 frames) leaves no lasting error.
+  EXPECT_LT(late, 1.3 * before);
+  EXPECT_LT(late, 0.4);
+  EXPECT_LT(max_err_sum / runs, 0.9);
 }
 
 TEST(AttitudeBiasFilter, RejectsNaNAndNonRotationsAndKeepsItsState) {
