@@ -100,11 +100,18 @@ Status RouteFilter::predict(double distance_m) noexcept {
   // j - dir*k in [0, n) for every k in [klo, khi]  <=>  j in [jlo, jhi)
   const std::int64_t jlo = dir > 0 ? (khi > 0 ? khi : 0) : (-klo > 0 ? -klo : 0);
   const std::int64_t jhi = dir > 0 ? n + (klo < 0 ? klo : 0) : n - (khi > 0 ? khi : 0);
+  // Before the entry end (node 0 forwards, node n-1 in reverse) the route is open: a vehicle may
+  // join it there, with the belief the entry node has (a uniform belief stays uniform). Mass pushed
+  // past the exit end leaves the route and is dropped.
+  const std::size_t entry = dir > 0 ? 0 : static_cast<std::size_t>(n - 1);
   auto edge = [&](std::int64_t j) {
     float acc = 0.0f;
     for (std::int64_t k = klo; k <= khi; ++k) {
       const std::int64_t src = j - dir * k;
-      if (src >= 0 && src < n) acc += w[k - klo] * bel_[static_cast<std::size_t>(src)];
+      if (src >= 0 && src < n)
+        acc += w[k - klo] * bel_[static_cast<std::size_t>(src)];
+      else if ((dir > 0 && src < 0) || (dir < 0 && src >= n))
+        acc += w[k - klo] * bel_[entry];
     }
     tmp_[static_cast<std::size_t>(j)] = acc;
   };

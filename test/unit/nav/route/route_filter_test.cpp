@@ -72,6 +72,25 @@ TEST(RouteFilter, OdometryModelMovesTheBeliefByDistanceOverSpacingInEitherDirect
   }
 }
 
+TEST(RouteFilter, TheEntryEndIsOpenAndMassPastTheExitLeavesTheRoute) {
+  for (RouteDirection d : {RouteDirection::kForward, RouteDirection::kReverse}) {
+    F t(small(MotionModel::kOdometry, d));
+    ASSERT_TRUE(t.f.reset(20, 40.0).is_ok());
+    // No information: a uniform belief stays uniform however far the vehicle goes (it may have
+    // joined the route at its entry end).
+    for (int k = 0; k < 5; ++k) ASSERT_TRUE(t.f.predict(40.0).is_ok());
+    for (float v : t.f.belief()) EXPECT_NEAR(v, 1.0f / 20.0f, 1e-5f);
+    // A peak at the exit end moves off the route: what is left renormalises onto the other nodes.
+    const std::uint32_t exit_node = d == RouteDirection::kForward ? 19u : 0u;
+    NodeMeasurement m[1] = {{exit_node, 1e4f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+    ASSERT_GT(t.f.probability(exit_node), 0.99f);
+    ASSERT_TRUE(t.f.predict(80.0).is_ok());
+    EXPECT_LT(t.f.probability(exit_node), 0.5f);
+    EXPECT_NEAR(sum(t.f.belief()), 1.0, 1e-5);
+  }
+}
+
 TEST(RouteFilter, InlierCountsLocaliseAndOneBadTileDoesNotZeroTheTruth) {
   F t(small(MotionModel::kOdometry));
   ASSERT_TRUE(t.f.reset(30, 40.0).is_ok());
