@@ -19,6 +19,9 @@ std::size_t RouteLocaliser::arena_bytes(const LocaliserConfig& c) noexcept {
 Status RouteLocaliser::init(const LocaliserConfig& c, Arena& arena) noexcept {
   if (c.window_slots < max_selected(c))
     return Status(StatusCode::kInvalidArgument, "localiser: window_slots must hold every node registered in one update");
+  // Guidance reads "look-ahead node == estimated node" as the route's end.
+  if (!(c.guidance.lookahead_nodes >= 0.5 && c.guidance.lookahead_nodes <= 1000.0))
+    return Status(StatusCode::kInvalidArgument, "localiser: guidance lookahead_nodes must be >= 0.5 (rounds to >= 1 node)");
   QNAV_RETURN_IF_ERROR(filter_.init(c.filter, arena));
   QNAV_RETURN_IF_ERROR(registrar_.init(c.registration, arena));
   QNAV_RETURN_IF_ERROR(window_.init(c.window_slots, arena));
@@ -42,6 +45,9 @@ Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> met
   }
   if (meta.size() < 2) return Status(StatusCode::kInvalidArgument, "localiser: a route needs at least 2 nodes");
   if (source.node_count() != meta.size()) return Status(StatusCode::kInvalidArgument, "localiser: node source and metadata disagree");
+  for (std::size_t i = 0; i < meta.size(); ++i)
+    if (meta[i].index != i || !meta[i].pose.is_finite())
+      return Status(StatusCode::kInvalidArgument, "localiser: node metadata out of order or not finite");
   QNAV_RETURN_IF_ERROR(filter_.reset(static_cast<std::uint32_t>(meta.size()), static_cast<double>(params.node_spacing_m)));
   QNAV_RETURN_IF_ERROR(window_.bind(source));
   meta_ = meta;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "synthetic_route.hpp"
@@ -123,6 +124,12 @@ TEST(RouteLocaliser, SensorMismatchOneNodeRouteAndDamagedRecordAreClearErrors) {
   MemorySource one;
   one.nodes.push_back(s.source.nodes[0]);
   EXPECT_EQ(loc->start(s.params, Span<const NodeMeta>(s.meta.data(), 1), one), StatusCode::kInvalidArgument);
+  std::vector<NodeMeta> shuffled = s.meta;
+  std::swap(shuffled[3], shuffled[4]);
+  EXPECT_EQ(loc->start(s.params, Span<const NodeMeta>(shuffled.data(), shuffled.size()), s.source), StatusCode::kInvalidArgument);
+  shuffled = s.meta;
+  shuffled[7].pose.x_m = std::nan("");
+  EXPECT_EQ(loc->start(s.params, Span<const NodeMeta>(shuffled.data(), shuffled.size()), s.source), StatusCode::kInvalidArgument);
   LocaliserStep st;
   EXPECT_EQ(loc->step(s.source.nodes[0], 0.0, st), StatusCode::kNotReady);
   // A damaged record is reported per step and treated as "no similarity"; the run goes on.
