@@ -45,7 +45,10 @@ void AttitudeBiasFilter::reset() noexcept {
   rate_ = Vec3d::Zero();
   P_ = Mat9::Zero();
   gated_in_row_ = 0;
+  recalibrated_ = false;
 }
+
+Mat3d AttitudeBiasFilter::rotation_exp_small(const Vec3d& w) noexcept { return rotation_exp(w); }
 
 void AttitudeBiasFilter::bound_covariance() noexcept {
   P_ = 0.5 * (P_ + P_.transpose());
@@ -64,11 +67,7 @@ void AttitudeBiasFilter::bound_covariance() noexcept {
 
 void AttitudeBiasFilter::recalibrated() noexcept {
   if (!initialised_) return;
-  drift_ = Vec3d::Zero();
-  const double d2 = config_.initial_drift_sigma_rad * config_.initial_drift_sigma_rad;
-  P_.block<3, 9>(3, 0).setZero();
-  P_.block<9, 3>(0, 3).setZero();
-  P_.block<3, 3>(3, 3) = Mat3d::Identity() * d2;
+  recalibrated_ = true;
 }
 
 Status AttitudeBiasFilter::update(const Mat3d& A, double dt_s, bool has_vo, const Mat3d& dR_vo,
@@ -79,7 +78,14 @@ Status AttitudeBiasFilter::update(const Mat3d& A, double dt_s, bool has_vo, cons
     return Status(StatusCode::kInvalidArgument, "attitude sample not a rotation");
   }
   const double m2 = config_.sensor_sigma_rad * config_.sensor_sigma_rad;
+  if (recalibrated_ && initialised_) {
+    // An absolute fix: a full restart from this sample (orientation = sample, drift and rate zero with
+    // their initial variances). The rate is dropped too: between frequent fixes it is learned mostly from
+    // the VO's random walk, and carrying it bent the recalibrated 100 m run (docs/vo.md).
+    initialised_ = false;
+  }
   if (!initialised_) {
+    recalibrated_ = false;
     R_hat_ = A;
     A_prev_ = A;
     drift_ = Vec3d::Zero();

@@ -79,8 +79,10 @@ class AttitudeBiasFilter {
   Status init(const AttitudeBiasConfig& config) noexcept;
   // Forget everything; the next sample restarts the filter (Rh = A, D = 0).
   void reset() noexcept;
-  // The sensor was just recalibrated against an absolute reference: its drift is zero again (D = 0,
-  // drift variance = initial); the orientation estimate and the drift rate (bias) are kept.
+  // The sensor was just recalibrated against an absolute reference (an absolute fix): the next sample
+  // restarts the filter (orientation = sample, drift and drift rate zero with their initial variances).
+  // The rate (the bias, which a recalibration does not remove) is dropped on purpose: between frequent
+  // fixes it is learned mostly from the VO's random walk.
   void recalibrated() noexcept;
   static constexpr std::uint32_t kMaxGatedInRow = 3;
   // One frame: the sensor's absolute attitude world_R_sensor, the time since the previous frame, and the
@@ -91,7 +93,10 @@ class AttitudeBiasFilter {
                 const Mat3d& cov_vo_right) noexcept;
 
   bool initialised() const noexcept { return initialised_; }
-  const Mat3d& corrected() const noexcept { return R_hat_; }  // estimate of world_R_sensor
+  const Mat3d& corrected() const noexcept { return R_hat_; }  // estimate of world_R_sensor (filtered)
+  // The last sample with the estimated drift removed, A exp(-D_hat): keeps the sensor's white noise white
+  // (harmless to dead reckoning, where a correlated error bends the path) and removes the drift.
+  Mat3d corrected_sample() const noexcept { return A_prev_ * rotation_exp_small(-drift_); }
   const Vec3d& drift_rad() const noexcept { return drift_; }  // D_hat
   const Vec3d& drift_rate_rad_s() const noexcept { return rate_; }
   const Mat9& covariance() const noexcept { return P_; }
@@ -102,9 +107,11 @@ class AttitudeBiasFilter {
 
  private:
   void bound_covariance() noexcept;
+  static Mat3d rotation_exp_small(const Vec3d& w) noexcept;
   AttitudeBiasConfig config_;
   bool ready_ = false;
   bool initialised_ = false;
+  bool recalibrated_ = false;
   Mat3d R_hat_ = Mat3d::Identity();
   Mat3d A_prev_ = Mat3d::Identity();
   Vec3d drift_ = Vec3d::Zero();

@@ -114,7 +114,9 @@ const Mat3d* StereoVo::filter_frame(const VoInput& in, bool has_vo, const Mat3d&
   if (!att_filter_.initialised()) return &in.world_R_cam;
   step.attitude_corrected = true;
   step.attitude_drift_rad = att_filter_.drift_rad();
-  return &att_filter_.corrected();
+  if (config_.use_filtered_orientation) return &att_filter_.corrected();
+  filter_out_R_ = att_filter_.corrected_sample();
+  return &filter_out_R_;
 }
 
 void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
@@ -419,7 +421,8 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
       finish_lost(step, in, kVoDegenerate, false);
     }
   }
-  filter_ref_R_ = (step.attitude_corrected ? att_filter_.corrected() : (in.has_absolute_attitude ? in.world_R_cam : Mat3d::Identity()));
+  filter_ref_R_ = (step.attitude_corrected ? (config_.use_filtered_orientation ? att_filter_.corrected() : filter_out_R_)
+                                           : (in.has_absolute_attitude ? in.world_R_cam : Mat3d::Identity()));
   // This frame becomes the reference (it has enough landmarks), so the next good frame recovers.
   cur_ = next;
   chain_R_ = Mat3d::Identity();

@@ -78,6 +78,9 @@ struct VoConfig {
   // paper's 3D-VME (orientation straight from the sensor).
   bool estimate_attitude_bias = true;
   bool corrected_step_rotation = true;
+  // true: the filtered orientation (AttitudeBiasFilter::corrected); false: the sensor sample with the
+  // estimated drift removed (corrected_sample), whose white noise does not accumulate along the path.
+  bool use_filtered_orientation = false;
   // The filter's VO rotation: Arun + IRLS, then Gauss-Newton with each point's anisotropic stereo
   // covariance (depth sigma along the ray, lateral_sigma_px across; motion::refine_rigid_6d_stereo).
   bool anisotropic_vo_rotation = true;
@@ -214,6 +217,7 @@ class StereoVo {
   std::uint64_t filter_stamp_ns_ = 0;
   std::uint32_t frames_since_filter_ = 0;
   Mat3d filter_ref_R_ = Mat3d::Identity();  // corrected attitude of the reference frame
+  Mat3d filter_out_R_ = Mat3d::Identity();  // corrected_sample() of this frame
   CounterSet<VoCounter> counters_{kCounterNames};
 };
 

@@ -5,6 +5,7 @@
 //                [--traj-dir DIR] [--length-27 M] [--length-100 M] [--calib-27 M] [--verbose]
 //                tuning knobs: [--nt X] [--sigma-m-deg D] [--dsig PX] [--nsig N] [--app W] [--lat-px PX]
 //                attitude filter knobs: [--att-vo-scale X] [--att-rate-scale X] [--att-no-step-rot] [--att-iso]
+//                [--att-filtered]
 //       Synthetic evaluation with exact ground truth: a 27 m run (attitude drifting, no recalibration)
 //       and a 100 m run (attitude recalibrated every 2 m), paper's noise model (n_t = 10 %, small
 //       attitude noise), frames rendered once and fed to every configuration. Prints one JSON object
@@ -47,7 +48,7 @@ using Clock = std::chrono::steady_clock;
 bool g_verbose = false;
 double g_dsig = 0.15, g_nsig = 3.0, g_app = 0.0;
 double g_att_vo_scale = tools::kVoRotationSigmaScale, g_att_rate_scale = 1.0, g_lat_px = -1.0;
-bool g_att_step_rot = true, g_att_aniso = true;
+bool g_att_step_rot = true, g_att_aniso = true, g_att_filtered = false;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -143,6 +144,7 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     c.attitude_bias.rate_walk_rad_s_sqrt_s *= g_att_rate_scale;
     c.corrected_step_rotation = g_att_step_rot;
     c.anisotropic_vo_rotation = g_att_aniso;
+    c.use_filtered_orientation = g_att_filtered;
     if (g_lat_px > 0.0) c.lateral_sigma_px = g_lat_px;
     std::unique_ptr<VoBox> b(new VoBox);
     if (!b->init(c)) return false;
@@ -254,6 +256,7 @@ int run_eval(int argc, char** argv) {
     return 2;
   g_att_step_rot = !cli::flag(argc, argv, "--att-no-step-rot");
   g_att_aniso = !cli::flag(argc, argv, "--att-iso");
+  g_att_filtered = cli::flag(argc, argv, "--att-filtered");
   noise.sigma_m_rad = deg_to_rad(sm_deg);
   std::vector<EvalConfig> cfgs;
   if (std::strcmp(configs, "main") == 0) {

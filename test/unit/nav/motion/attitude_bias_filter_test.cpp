@@ -229,7 +229,12 @@ TEST(AttitudeBiasFilter, StaysBoundedOnGarbageAndRecalibrationZeroesTheDrift) {
   for (int k = 0; k < 60; ++k) ASSERT_TRUE(f.update(s.step(Vec3d(0.0, 0.0, deg_to_rad(0.002)), vo), kDt, true, vo, s.vo_cov()).is_ok());
   EXPECT_GT(rad_to_deg(f.drift_rad().norm()), 0.5);
   f.recalibrated();
+  const Mat3d A = s.step(Vec3d::Zero(), vo);
+  ASSERT_TRUE(f.update(A, kDt, true, vo, s.vo_cov()).is_ok());
   EXPECT_EQ(f.drift_rad().norm(), 0.0);
+  EXPECT_EQ(f.drift_rate_rad_s().norm(), 0.0);
+  EXPECT_TRUE(f.corrected().isApprox(A));
+  EXPECT_TRUE(f.corrected_sample().isApprox(A));
   EXPECT_NEAR(f.covariance()(3, 3), std::pow(test_config().initial_drift_sigma_rad, 2), 1e-15);
 }
 
