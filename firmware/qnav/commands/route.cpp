@@ -245,8 +245,21 @@ int cmd_info(int argc, char** argv) {
   return 0;
 }
 
-void print_csv_header(FILE* f) {
+// The per-tile CSV of `route repeat`: --csv FILE or stdout, header written. nullptr (reported) if FILE
+// cannot be opened; close with close_csv.
+FILE* open_repeat_csv(int argc, char** argv) {
+  const char* csv = cli::option(argc, argv, "--csv");
+  FILE* f = csv ? std::fopen(csv, "w") : stdout;
+  if (f == nullptr) {
+    std::fprintf(stderr, "qnav route repeat: cannot write %s\n", csv);
+    return nullptr;
+  }
   std::fprintf(f, "tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,along_track_m,heading_error_rad,waypoint_bearing_rad\n");
+  return f;
+}
+
+void close_csv(FILE* f) {
+  if (f != stdout) std::fclose(f);
 }
 
 // Nearest trained node (by true along-route distance) to a sensed tile.
@@ -307,13 +320,9 @@ int cmd_repeat(int argc, char** argv) {
   // Node truth: trained on the route at zero offset, node i's tile centre is at along_m (nav) ~ truth.
   std::vector<double> node_along;
   for (const route::NodeMeta& m : meta) node_along.push_back(m.along_m);
-  const char* csv = cli::option(argc, argv, "--csv");
-  FILE* f = csv ? std::fopen(csv, "w") : stdout;
-  if (f == nullptr) {
-    std::fprintf(stderr, "qnav route repeat: cannot write %s\n", csv);
-    return 1;
-  }
-  print_csv_header(f);
+  FILE* f = open_repeat_csv(argc, argv);
+  if (f == nullptr) return 1;
+  const bool csv = f != stdout;
   const double lateral = offset_pct / 100.0 * w.swath_m;
   int tiles = 0, ok1 = 0;
   double worst_ms = 0.0;
@@ -367,7 +376,7 @@ int cmd_repeat(int argc, char** argv) {
     ++tiles;
     return true;
   });
-  if (csv) std::fclose(f);
+  close_csv(f);
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
@@ -1188,13 +1197,9 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
   }
-  const char* csv = cli::option(argc, argv, "--csv");
-  FILE* f = csv ? std::fopen(csv, "w") : stdout;
-  if (f == nullptr) {
-    std::fprintf(stderr, "qnav route repeat: cannot write %s\n", csv);
-    return 1;
-  }
-  print_csv_header(f);
+  FILE* f = open_repeat_csv(argc, argv);
+  if (f == nullptr) return 1;
+  const bool csv = f != stdout;
   int tracking = 0;
   for (std::size_t k = 0; k < tiles.size() && s; ++k) {
     route::LocaliserStep st;
@@ -1205,7 +1210,7 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
                  st.confident ? 1 : 0, st.best_inliers, route::to_string(st.guidance.status), route::to_string(st.guidance.side), "unknown",
                  st.guidance.cross_track_m, st.guidance.along_track_m, st.guidance.heading_error_rad, st.guidance.waypoint_bearing_rad);
   }
-  if (csv) std::fclose(f);
+  close_csv(f);
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
