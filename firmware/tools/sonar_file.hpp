@@ -231,12 +231,15 @@ inline NavTrack build_track(const FileData& fd, bool dead_reckon, double heading
     }
   } else {
     ne[first] = Vec2d::Zero();
+    // A ping with a non-finite speed or heading adds no distance (one NaN heading must not poison
+    // every later position of the track); the ping itself is marked not ok below.
     for (std::size_t i = first + 1; i < n; ++i) {
       const XtfPing& p = fd.pings[i].ping;
       const double dt = static_cast<double>(p.stamp_ns - fd.pings[i - 1].ping.stamp_ns) * 1e-9;
       const double v = static_cast<double>(p.sensor_speed_knots) * 0.514444;
       const double h = deg_to_rad(static_cast<double>(p.heading_deg)) + heading_offset_rad;
-      ne[i] = ne[i - 1] + (std::isfinite(v) && dt > 0.0 && dt < 10.0 ? v * dt : 0.0) * sonar::forward_unit(h);
+      const bool valid = std::isfinite(v) && std::isfinite(h) && dt > 0.0 && dt < 10.0;
+      ne[i] = valid ? Vec2d(ne[i - 1] + v * dt * sonar::forward_unit(h)) : ne[i - 1];
     }
     for (std::size_t i = 0; i < first; ++i) ne[i] = Vec2d::Zero();
   }

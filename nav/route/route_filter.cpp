@@ -1,5 +1,6 @@
 #include "nav/route/route_filter.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace qnav::route {
@@ -8,7 +9,8 @@ Status RouteFilter::init(const RouteFilterConfig& c, Arena& arena) noexcept {
   if (c.max_nodes < 2 || c.max_advance_nodes < 1 || c.max_advance_nodes > 64 || !(c.sigma_w2 > 0.0) ||
       !(c.odometry_sigma_frac >= 0.0) || !(c.odometry_sigma_min_nodes > 0.0) || !(c.kidnap_floor >= 0.0 && c.kidnap_floor < 1.0) ||
       !(c.inlier_floor > 0.0f) || !(c.chance_inliers >= 0.0f) || c.belief_registrations == 0 || c.searching_belief_registrations == 0 ||
-      c.wide_search_period == 0 || !(c.confident_mass > 0.0 && c.confident_mass <= 1.0) || !(c.lost_reset_mass >= 0.0 && c.lost_reset_mass <= 1.0))
+      c.wide_search_period == 0 || !(c.confident_mass > 0.0 && c.confident_mass <= 1.0) || !(c.lost_reset_mass >= 0.0 && c.lost_reset_mass <= 1.0) ||
+      !std::isfinite(c.lost_evidence_inliers) || c.max_registrations() > kMaxMeasurementsKept)
     return Status(StatusCode::kInvalidArgument, "route filter: bad configuration");
   bel_ = arena.allocate<float>(c.max_nodes);
   tmp_ = arena.allocate<float>(c.max_nodes);
@@ -67,20 +69,25 @@ Status RouteFilter::predict(double distance_m) noexcept {
   if (config_.motion == MotionModel::kPaperEq5) {
     for (int k = lo; k <= hi; ++k) w[k - lo] = static_cast<float>(std::exp(-static_cast<double>(k) / config_.sigma_w2));
   } else {
-    const double a = distance_m / spacing_m_;
+    const int m = config_.max_advance_nodes;
+    const double a_raw = distance_m / spacing_m_;
+    if (!std::isfinite(a_raw)) {
+      counters_.increment(FilterCounter::kBadDistance);
+      return Status(StatusCode::kInvalidArgument, "route filter: distance / node spacing not finite");
+    }
+    // A longer jump than the kernel bound is clamped to it (counted): the kernel, its width and its
+    // taps all come from the clamped advance, so lo and hi stay inside [-m, m].
+    if (a_raw > m) counters_.increment(FilterCounter::kBadDistance);
+    const double a = a_raw > m ? m : a_raw;
     double s = config_.odometry_sigma_frac * a;
     if (s < config_.odometry_sigma_min_nodes) s = config_.odometry_sigma_min_nodes;
-    const int m = config_.max_advance_nodes;
     double flo = std::floor(a - 3.0 * s), fhi = std::ceil(a + 3.0 * s);
     if (flo < -m) flo = -m;
-    if (fhi > m) fhi = m;  // a longer jump than the kernel bound is clamped (counted)
-    if (a > m) counters_.increment(FilterCounter::kBadDistance);
+    if (fhi > m) fhi = m;
     lo = static_cast<int>(flo);
     hi = static_cast<int>(fhi);
-    if (hi < lo) hi = lo;
-    const double ac = a > m ? m : a;
     for (int k = lo; k <= hi; ++k) {
-      const double d = (k - ac) / s;
+      const double d = (k - a) / s;
       w[k - lo] = static_cast<float>(std::exp(-0.5 * d * d));
     }
   }
@@ -101,9 +108,11 @@ Status RouteFilter::predict(double distance_m) noexcept {
   const std::int64_t jlo = dir > 0 ? (khi > 0 ? khi : 0) : (-klo > 0 ? -klo : 0);
   const std::int64_t jhi = dir > 0 ? n + (klo < 0 ? klo : 0) : n - (khi > 0 ? khi : 0);
   // Before the entry end (node 0 forwards, node n-1 in reverse) the route is open: a vehicle may
-  // join it there, with the belief the entry node has (a uniform belief stays uniform). Mass pushed
-  // past the exit end leaves the route and is dropped.
-  const std::size_t entry = dir > 0 ? 0 : static_cast<std::size_t>(n - 1);
+  // join it there. The virtual nodes before the entry carry min(entry belief, 1/n): a uniform belief
+  // stays uniform, and a belief peaked on the entry node still moves on (copying the entry's own
+  // belief there would keep feeding it). Mass pushed past the exit end leaves the route and is dropped.
+  const std::size_t entry_node = dir > 0 ? 0 : static_cast<std::size_t>(n - 1);
+  const float join = std::min(bel_[entry_node], 1.0f / static_cast<float>(n));
   auto edge = [&](std::int64_t j) {
     float acc = 0.0f;
     for (std::int64_t k = klo; k <= khi; ++k) {
@@ -111,7 +120,7 @@ Status RouteFilter::predict(double distance_m) noexcept {
       if (src >= 0 && src < n)
         acc += w[k - klo] * bel_[static_cast<std::size_t>(src)];
       else if ((dir > 0 && src < 0) || (dir < 0 && src >= n))
-        acc += w[k - klo] * bel_[entry];
+        acc += w[k - klo] * join;
     }
     tmp_[static_cast<std::size_t>(j)] = acc;
   };

@@ -7,7 +7,10 @@
 //      kOdometry:  the paper's future work: expected advance a = distance_m / node_spacing_m (DVL/INS
 //                  distance against the stored spacing), p(n) ~ exp(-(n - a)^2 / 2 s^2),
 //                  s = max(odometry_sigma_min_nodes, odometry_sigma_frac * a), n within a +/- 3 s.
-//    Mass pushed past the route's end is dropped and the belief renormalised; then a uniform floor
+//    An advance beyond max_advance_nodes is clamped to it (counted as a bad distance). The entry end is
+//    open (a vehicle may join the route there): the virtual nodes before it carry min(entry belief, 1/N),
+//    so a uniform belief stays uniform and a peak on the entry node moves on.
+//    Mass pushed past the route's exit end is dropped and the belief renormalised; then a uniform floor
 //    (kidnap_floor spread over all nodes) keeps every node reachable for a kidnapped vehicle.
 //  - update(): eq. 3 with the measurement model of eq. 9 built from inlier counts S_i of the nodes
 //    registered this step: L_i = inlier_floor + max(0, S_i - chance_inliers); nodes not registered
@@ -22,9 +25,9 @@
 //  - lost: when for lost_after_updates confident updates no node within +/- 1 of the estimate shows similarity
 //    (S > chance_inliers) but a node elsewhere does (S > chance_inliers and S >=
 //    lost_evidence_inliers), lost_reset_mass of the belief is spread over
-//    the route and, until a node near the estimate shows similarity again, select_nodes() keeps one
-//    belief node and spends the rest of the belief budget on the wide search (re-localisation; same
-//    registrations bound). Updates with no similarity anywhere are not evidence of being lost (the
+//    the route and, until a node near the estimate shows similarity again, select_nodes() is in the
+//    searching mode above (searching_belief_registrations belief nodes, the rest of max_registrations()
+//    on the wide search). Updates with no similarity anywhere are not evidence of being lost (the
 //    belief runs on the motion model), but they make the wide search run every update.
 //  - entropy (natural log, as the paper's Table I), argmax, mass within +/- 1 node of the argmax,
 //    confidence flag (that mass >= confident_mass).
@@ -45,6 +48,9 @@ namespace qnav::route {
 
 enum class RouteDirection : std::uint8_t { kForward, kReverse };
 enum class MotionModel : std::uint8_t { kPaperEq5, kOdometry };
+// Measurements of one update that the filter keeps for measurement_probability(); init() refuses a
+// configuration whose max_registrations() exceeds it.
+inline constexpr std::uint32_t kMaxMeasurementsKept = 64;
 
 struct RouteFilterConfig {
   std::size_t max_nodes = 100000;
@@ -121,7 +127,7 @@ class RouteFilter {
   Span<float> bel_;
   Span<float> tmp_;
   Span<std::uint8_t> mark_;
-  FixedVector<NodeMeasurement, 64> last_m_;  // last update's measurements (<= 64 kept)
+  FixedVector<NodeMeasurement, kMaxMeasurementsKept> last_m_;  // last update's measurements
   std::uint32_t updates_ = 0;
   std::uint32_t wide_phase_ = 0;
   double wide_shift_nodes_ = 0.0;  // predicted advance so far (mod N): the wide-search grid moves with it

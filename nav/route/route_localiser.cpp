@@ -61,6 +61,9 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
   last_nm_ = 0;
   if (!started_) return Status(StatusCode::kNotReady, "localiser: start() first");
   if (sensed.keypoints.empty()) counters_.increment(LocaliserCounter::kEmptySensedTile);
+  const bool heading_ok = std::isfinite(sensed.meta.pose.heading_rad);
+  if (!heading_ok && !sensed.keypoints.empty()) counters_.increment(LocaliserCounter::kBadSensedTile);
+  const bool usable = heading_ok && !sensed.keypoints.empty();
   QNAV_RETURN_IF_ERROR(filter_.predict(distance_m));
   const std::size_t k = filter_.select_nodes(Span<std::uint32_t>(selected_.data(), selected_.size() - 1));
   std::size_t nm = 0;
@@ -73,7 +76,7 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
     if (ref == nullptr) {
       counters_.increment(LocaliserCounter::kLoadError);
       ++out.load_errors;
-    } else if (!sensed.keypoints.empty()) {
+    } else if (usable) {
       QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, r));
     }
     measurements_[nm++] = NodeMeasurement{node, static_cast<float>(r.inliers)};
@@ -95,7 +98,7 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
       found = true;
       break;
     }
-  if (!found && !sensed.keypoints.empty()) {
+  if (!found && usable) {
     const RouteNode* ref = window_.get(out.estimate);
     if (ref != nullptr) {
       QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, out.registration));

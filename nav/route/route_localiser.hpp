@@ -1,8 +1,8 @@
 // RouteLocaliser: one repeat-mode update per sensed tile, in fixed memory and bounded time:
 //   predict (motion model, distance travelled) -> select the nodes carrying belief (+ the periodic
 //   wide search) -> fetch them through the NodeWindow -> register the sensed tile against each ->
-//   update (eq. 9 from the inlier counts) -> guidance from the registration to the argmax node (or,
-//   when that one failed, the best registration to a neighbouring node carried through the node poses).
+//   update (eq. 9 from the inlier counts) -> guidance from the strongest registration among the argmax
+//   node and its +/- 1 neighbours (a neighbour's carried into the argmax's frame through the node poses).
 // Owns the filter, registrar, window and guidance; the NodeSource (route file / memory) and the route
 // metadata index (per-node pose and along-track distance, for guidance) are the caller's.
 // Bounds: registrations per update <= filter.max_registrations() (+1 when the
@@ -38,15 +38,17 @@ struct LocaliserStep {
   double entropy = 0.0;
   bool confident = false;
   std::uint32_t registrations = 0;
-  std::uint32_t best_inliers = 0;   // at the estimate
+  std::uint32_t best_inliers = 0;   // of the registration used (the estimate's, or a neighbour's: via_neighbour)
   RegistrationResult registration;  // to the estimate
   bool via_neighbour = false;       // registration came from node estimate +/- 1 (composed through the node poses)
   GuidanceOutput guidance;
   std::uint32_t load_errors = 0;    // damaged records met this step (treated as no similarity)
 };
 
-enum class LocaliserCounter : std::uint8_t { kSensorMismatch, kEmptySensedTile, kLoadError, kCount };
-inline constexpr const char* kLocaliserCounterNames[] = {"sensor_mismatch", "empty_sensed_tile", "load_error"};
+// kBadSensedTile: a sensed tile whose heading is not finite: not registered (the filter still predicts
+// on the distance; guidance holds course).
+enum class LocaliserCounter : std::uint8_t { kSensorMismatch, kEmptySensedTile, kLoadError, kBadSensedTile, kCount };
+inline constexpr const char* kLocaliserCounterNames[] = {"sensor_mismatch", "empty_sensed_tile", "load_error", "bad_sensed_tile"};
 
 class RouteLocaliser {
  public:

@@ -33,7 +33,7 @@ using namespace qnav;
 using Clock = std::chrono::steady_clock;
 
 const char* const kValued[] = {"--out", "--length-m", "--seed", "--xtf", "--first-ping", "--pings", "--route", "--offset-pct",
-                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", "--seabeds", "--sonar", "--pings", "--nav",
+                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", "--seabeds", "--sonar", "--nav",
                                "--heading-offset-deg", "--lines", "--stride", nullptr};
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
@@ -333,6 +333,7 @@ int cmd_repeat(int argc, char** argv) {
   long dump = -1;
   if (!cli::option_long(argc, argv, "--dump-tile", dump)) return usage();
   const sidescan::TrajectoryConfig tcr = w.pass(lateral, reverse, static_cast<std::uint64_t>(seed) * 13 + 5);
+  Status step_status;
   s = pipe.run_sim_pass(w.seabed, w.sonar_for(tcr.seed), tcr, [&](const tools::RouteTile& t) {
     if (tiles == dump) {  // debug: the tile raster and its keypoints
       const sonar::SonarTile& raw = pipe.last_tile();
@@ -363,9 +364,9 @@ int cmd_repeat(int argc, char** argv) {
     }
     route::LocaliserStep st;
     const auto t0 = Clock::now();
-    const Status ss = loc->step(t.node, tiles == 0 ? 0.0 : t.nav_step_m, st);
+    step_status = loc->step(t.node, tiles == 0 ? 0.0 : t.nav_step_m, st);
     worst_ms = std::max(worst_ms, ms_since(t0));
-    if (!ss) return false;
+    if (!step_status) return false;  // reported below: the pass stops, the command fails
     const double along_fwd = t.truth_along_m;
     const int tn = true_node(node_along, along_fwd);
     ok1 += std::abs(static_cast<int>(st.estimate) - tn) <= 1;
@@ -377,6 +378,7 @@ int cmd_repeat(int argc, char** argv) {
     return true;
   });
   close_csv(f);
+  if (s && !step_status) s = step_status;
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
@@ -1193,6 +1195,7 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
   if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
   if (s) s = pipe.init(fp.tiles);
   if (s) s = file_tiles(pipe, fp, a, b, tiles, &centre);
+  if (s && tiles.empty()) s = Status(StatusCode::kInvalidArgument, "no complete tile in the ping range");
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;

@@ -88,6 +88,19 @@ TEST(RouteFilter, TheEntryEndIsOpenAndMassPastTheExitLeavesTheRoute) {
     ASSERT_TRUE(t.f.predict(80.0).is_ok());
     EXPECT_LT(t.f.probability(exit_node), 0.5f);
     EXPECT_NEAR(sum(t.f.belief()), 1.0, 1e-5);
+    // A peak on the entry node moves on with the vehicle: the open entry does not keep feeding it
+    // (found in review: virtual nodes carrying the entry's own belief held the argmax at the entry).
+    const std::uint32_t entry_node = d == RouteDirection::kForward ? 0u : 19u;
+    NodeMeasurement e[1] = {{entry_node, 1e4f}};
+    ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(e)).is_ok());
+    ASSERT_GT(t.f.probability(entry_node), 0.99f);
+    for (int k = 1; k <= 3; ++k) {
+      ASSERT_TRUE(t.f.predict(40.0).is_ok());
+      const std::uint32_t want = d == RouteDirection::kForward ? static_cast<std::uint32_t>(k) : static_cast<std::uint32_t>(19 - k);
+      EXPECT_EQ(t.f.argmax(), want) << "step " << k;
+      EXPECT_GT(t.f.probability(want), 0.6f) << "step " << k;
+      EXPECT_LT(t.f.probability(entry_node), 0.1f) << "step " << k;
+    }
   }
 }
 
@@ -281,6 +294,35 @@ TEST(RouteFilter, BadInputIsRejectedAndCounted) {
   EXPECT_EQ(t.f.counters().get(FilterCounter::kBadMeasurement), 2u);
   EXPECT_NEAR(t.f.probability(3), 0.1f, 1e-6f);
   for (float v : t.f.belief()) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(RouteFilter, AHugeOrInfiniteAdvanceIsClampedOrRejectedNotACrash) {
+  // Review finding: the kernel's lower bound was not capped at max_advance_nodes, so predict(1e12)
+  // cast ~4e9 to int (undefined) and wrote past the 129-tap kernel; 1e308 / 0.5 m made it NaN.
+  RouteFilterConfig c = small(MotionModel::kOdometry);
+  F t(c);
+  ASSERT_TRUE(t.f.reset(100, 60.0).is_ok());
+  NodeMeasurement m[1] = {{10, 1e4f}};
+  ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  ASSERT_TRUE(t.f.predict(1e12).is_ok());  // clamped to max_advance_nodes, counted
+  EXPECT_EQ(t.f.counters().get(FilterCounter::kBadDistance), 1u);
+  EXPECT_EQ(t.f.argmax(), 10u + static_cast<std::uint32_t>(c.max_advance_nodes));
+  EXPECT_NEAR(sum(t.f.belief()), 1.0, 1e-5);
+  // 100 nodes: also clamped (it was a 25-node rigid shift); the clamped kernel is cut at +m, so the
+  // belief moves on by at most m per step.
+  ASSERT_TRUE(t.f.predict(100.0 * 60.0).is_ok());
+  EXPECT_GT(t.f.argmax(), 10u + static_cast<std::uint32_t>(c.max_advance_nodes));
+  EXPECT_LE(t.f.argmax(), 10u + 2u * static_cast<std::uint32_t>(c.max_advance_nodes));
+  ASSERT_TRUE(t.f.reset(100, 0.5).is_ok());
+  EXPECT_EQ(t.f.predict(1e308), StatusCode::kInvalidArgument);  // distance / spacing overflows
+  // A zero odometry sigma fraction still leaves the floor: the belief does not vanish on a long jump.
+  c.odometry_sigma_frac = 0.0;
+  F z(c);
+  ASSERT_TRUE(z.f.reset(100, 60.0).is_ok());
+  ASSERT_TRUE(z.f.update(Span<const NodeMeasurement>(m)).is_ok());
+  EXPECT_TRUE(z.f.predict(20.0 * 60.0).is_ok());
+  EXPECT_EQ(z.f.argmax(), 10u + static_cast<std::uint32_t>(c.max_advance_nodes));
+  for (float v : z.f.belief()) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(RouteFilter, PredictAndUpdateDoNotAllocate) {

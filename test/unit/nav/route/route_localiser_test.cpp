@@ -151,6 +151,16 @@ TEST(RouteLocaliser, SensorMismatchOneNodeRouteAndDamagedRecordAreClearErrors) {
   ASSERT_TRUE(loc->step(empty, kSpacing, st).is_ok());
   EXPECT_EQ(st.guidance.status, GuidanceStatus::kHoldCourse);
   EXPECT_EQ(loc->counters().get(LocaliserCounter::kEmptySensedTile), 1u);
+  // A tile with keypoints but a non-finite compass heading: not registered (counted), the step still
+  // succeeds on the distance travelled, guidance holds course with a finite command.
+  RouteNode bad = s.world.observe(Pose2{50.0 + kSpacing * 13, 5.0, 0.0}, kHalfLen, kHalfWidth, 0.2, 0.85, 64, 91, 8);
+  ASSERT_FALSE(bad.keypoints.empty());
+  bad.meta.pose.heading_rad = std::nan("");
+  ASSERT_TRUE(loc->step(bad, kSpacing, st).is_ok());
+  EXPECT_FALSE(st.registration.ok);
+  EXPECT_EQ(st.guidance.status, GuidanceStatus::kHoldCourse);
+  EXPECT_TRUE(std::isfinite(st.guidance.commanded_heading_rad));
+  EXPECT_EQ(loc->counters().get(LocaliserCounter::kBadSensedTile), 1u);
 }
 
 TEST(Guidance, HoldsCourseOnARegistrationWithTooFewInliers) {
