@@ -25,3 +25,5 @@ if [ -f "$X" ]; then
 else
   echo "(no $X: real-data step skipped)"
 fi
+# The same route teach and repeat on a downward camera over the synthetic Mars yard (3 m route).
+"$QNAV" route camera --length-m 3

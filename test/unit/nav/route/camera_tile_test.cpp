@@ -29,6 +29,14 @@ Vec3d ground_of_pixel(const Pose3& cam, double u, double v) {
   return cam.t + s * ray;
 }
 
+// A 1 cm raster of 256 x 256 (2.56 m square).
+CameraTileConfig config_1cm() {
+  CameraTileConfig c;
+  c.resolution_m = 0.01;
+  c.width_px = c.height_px = 256;
+  return c;
+}
+
 struct Buffers {
   std::vector<std::uint8_t> img = std::vector<std::uint8_t>(kW * kH, 0);
   std::vector<float> out = std::vector<float>(256 * 256, 0.0f);
@@ -39,12 +47,8 @@ struct Buffers {
 };
 
 TEST(CameraTile, ABrightSpotLandsOnItsGroundPointWhateverTheAttitude) {
-  CameraTileConfig c;
-  c.resolution_m = 0.01;
-  c.width_px = 256;
-  c.height_px = 256;
   CameraTileProjector p;
-  ASSERT_TRUE(p.init(c).is_ok());
+  ASSERT_TRUE(p.init(config_1cm()).is_ok());
   const double headings[] = {0.0, 0.5, 3.0, -2.0};
   for (const double h : headings) {
     const Pose3 cam = camera_pose(10.0, 5.0, 2.0, h, deg_to_rad(5.0), deg_to_rad(-3.0));
@@ -89,12 +93,8 @@ TEST(CameraTile, ABrightSpotLandsOnItsGroundPointWhateverTheAttitude) {
 }
 
 TEST(CameraTile, IntensityIsBilinearInsideTheFootprintAndUncoveredOutside) {
-  CameraTileConfig c;
-  c.resolution_m = 0.01;
-  c.width_px = 256;
-  c.height_px = 256;
   CameraTileProjector p;
-  ASSERT_TRUE(p.init(c).is_ok());
+  ASSERT_TRUE(p.init(config_1cm()).is_ok());
   Buffers b;
   for (int v = 0; v < kH; ++v)
     for (int u = 0; u < kW; ++u) b.img[static_cast<std::size_t>(v * kW + u)] = static_cast<std::uint8_t>(u);  // intensity = column
@@ -134,10 +134,7 @@ TEST(CameraTile, BadInputIsAClearErrorAndCounted) {
   bad = CameraTileConfig{};
   bad.width_px = 4;
   EXPECT_EQ(p.init(bad), StatusCode::kInvalidArgument);
-  CameraTileConfig c;
-  c.resolution_m = 0.01;
-  c.width_px = c.height_px = 256;
-  ASSERT_TRUE(p.init(c).is_ok());
+  ASSERT_TRUE(p.init(config_1cm()).is_ok());
   // Non-finite pose / intrinsics.
   Pose3 nan_pose = cam;
   nan_pose.t.x() = std::nan("");
@@ -171,10 +168,7 @@ TEST(CameraTile, BadInputIsAClearErrorAndCounted) {
 
 TEST(CameraTile, ProjectDoesNotAllocate) {
   CameraTileProjector p;
-  CameraTileConfig c;
-  c.resolution_m = 0.01;
-  c.width_px = c.height_px = 256;
-  ASSERT_TRUE(p.init(c).is_ok());
+  ASSERT_TRUE(p.init(config_1cm()).is_ok());
   Buffers b;
   TileGeometry g;
   const Pose3 cam = camera_pose(1.0, 2.0, 2.0, 1.0, 0.02, 0.01);
