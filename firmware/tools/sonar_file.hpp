@@ -180,6 +180,7 @@ struct NavTrack {
   std::vector<Pose2> pose;
   std::vector<bool> ok;
   double lat0 = 0.0, lon0 = 0.0;
+  std::size_t not_finite = 0;  // pings after the first fix without a finite position / heading (not ok)
 };
 
 inline NavTrack build_track(const FileData& fd, bool dead_reckon, double heading_offset_rad) {
@@ -247,6 +248,7 @@ inline NavTrack build_track(const FileData& fd, bool dead_reckon, double heading
     const double h = deg_to_rad(static_cast<double>(fd.pings[i].ping.heading_deg)) + heading_offset_rad;
     t.pose[i] = Pose2{ne[i].x(), ne[i].y(), wrap_angle_rad(h)};
     t.ok[i] = t.pose[i].is_finite() && i >= first;
+    if (i >= first && !t.ok[i]) ++t.not_finite;
   }
   return t;
 }

@@ -267,8 +267,13 @@ FILE* open_repeat_csv(int argc, char** argv) {
   return f;
 }
 
-void close_csv(FILE* f) {
-  if (f != stdout) std::fclose(f);
+// false (reported) if the data did not reach the file (disk full, I/O error).
+bool close_csv(FILE* f) {
+  const bool had_error = std::ferror(f) != 0;
+  const bool closed = f == stdout ? std::fflush(f) == 0 : std::fclose(f) == 0;
+  const bool ok = !had_error && closed;
+  if (!ok) std::fprintf(stderr, "qnav route repeat: writing the CSV failed\n");
+  return ok;
 }
 
 // Nearest trained node (by true along-route distance) to a sensed tile.
@@ -386,8 +391,9 @@ int cmd_repeat(int argc, char** argv) {
     ++tiles;
     return true;
   });
-  close_csv(f);
+  const bool written = close_csv(f);
   if (s && !step_status) s = step_status;
+  if (s && !written) return 1;
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
@@ -984,6 +990,8 @@ int open_file_pass(const char* path, int argc, char** argv, FilePass& out) {
   }
   if (tools::load_sonar_file(path, out.fd) != 0) return 1;
   out.track = tools::build_track(out.fd, std::strcmp(nav, "dr") == 0, deg_to_rad(hoff_deg));
+  if (out.track.not_finite > 0)
+    std::fprintf(stderr, "qnav route: %s: %zu pings without a finite position or heading are skipped\n", path, out.track.not_finite);
   std::vector<float> ranges;
   for (const tools::PingRec& p : out.fd.pings)
     if (std::isfinite(p.ping.slant_range_m) && p.ping.slant_range_m > 0.0f) ranges.push_back(p.ping.slant_range_m);
@@ -1224,7 +1232,8 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
                  st.confident ? 1 : 0, st.best_inliers, route::to_string(st.guidance.status), route::to_string(st.guidance.side), "unknown",
                  st.guidance.cross_track_m, st.guidance.along_track_m, st.guidance.heading_error_rad, st.guidance.waypoint_bearing_rad);
   }
-  close_csv(f);
+  const bool written = close_csv(f);
+  if (s && !written) return 1;
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
