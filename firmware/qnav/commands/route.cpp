@@ -1328,7 +1328,7 @@ Status camera_pass(const CameraWorld& w, route::CameraTileProjector& proj, route
     g.pose.y_m = nav_e;
     CameraPassFrame f;
     QNAV_RETURN_IF_ERROR(fx.extract(raster.view(), cover.view(), g, f.node));
-    f.node.meta.along_m = static_cast<float>(scale * spacing_m * i);
+    f.node.meta.along_m = scale * spacing_m * i;
     f.nav_step_m = i == 0 ? 0.0 : scale * std::abs(n - prev_n);
     f.truth_north_m = true_centre_n;  // the tile centre (optical axis on the ground), true north
     prev_n = n;

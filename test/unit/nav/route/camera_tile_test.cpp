@@ -67,7 +67,7 @@ TEST(CameraTile, ABrightSpotLandsOnItsGroundPointWhateverTheAttitude) {
     double sw = 0.0, sc = 0.0, sr = 0.0;
     for (int r = 0; r < 256; ++r)
       for (int col = 0; col < 256; ++col) {
-        const double v = b.out[static_cast<std::size_t>(r * 256 + col)];
+        const double v = static_cast<double>(b.out[static_cast<std::size_t>(r * 256 + col)]);
         if (v > 30.0) {
           sw += v;
           sc += v * col;
@@ -114,7 +114,7 @@ TEST(CameraTile, IntensityIsBilinearInsideTheFootprintAndUncoveredOutside) {
       EXPECT_EQ(b.cov[i] != 0, inside) << r << "," << col;
       if (inside) {
         ++covered;
-        EXPECT_NEAR(b.out[i], u, 1e-3) << r << "," << col;
+        EXPECT_NEAR(static_cast<double>(b.out[i]), u, 1e-3) << r << "," << col;
       } else {
         EXPECT_EQ(b.out[i], 0.0f);
       }
