@@ -96,14 +96,17 @@ void StereoVo::reset(const Pose3& world_T_start) noexcept {
   filter_ref_R_ = Mat3d::Identity();
 }
 
+const Mat3d* StereoVo::sensor_attitude(const VoInput& in) const noexcept {
+  return (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+}
+
 bool StereoVo::filter_active(const VoInput& in) const noexcept {
-  return config_.estimate_attitude_bias && config_.mode == VmeMode::k3D && in.has_absolute_attitude &&
-         is_rotation(in.world_R_cam);
+  return config_.estimate_attitude_bias && sensor_attitude(in) != nullptr && is_rotation(in.world_R_cam);
 }
 
 const Mat3d* StereoVo::filter_frame(const VoInput& in, bool has_vo, const Mat3d& dR_vo, const Mat3d& cov_vo_right,
                                     VoStep& step) noexcept {
-  if (!filter_active(in)) return (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+  if (!filter_active(in)) return sensor_attitude(in);
   double dt_s = config_.frame_period_s * static_cast<double>(frames_since_filter_ > 0 ? frames_since_filter_ : 1);
   if (filter_stamp_ns_ != 0 && in.stamp_ns > filter_stamp_ns_) dt_s = 1e-9 * static_cast<double>(in.stamp_ns - filter_stamp_ns_);
   if (in.attitude_recalibrated) att_filter_.recalibrated();
@@ -138,12 +141,10 @@ void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
   }
 }
 
-void StereoVo::finish_lost(VoStep& step, const VoInput& in, std::uint32_t why, bool feed_filter) noexcept {
+void StereoVo::finish_lost(VoStep& step, std::uint32_t why, const Mat3d* att) noexcept {
   step.flags |= why | kVoLost;
   counters_.increment(VoCounter::kLostFrames);
   step.visual = false;
-  const Mat3d* att = feed_filter ? filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step)
-                                 : ((config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr);
   if (chain_has_t_ && is_rotation(chain_R_) && chain_t_.allFinite()) {
     const Pose3 dr{chain_R_, chain_t_};
     const Mat3d cov = Mat3d::Identity() * (chain_sigma2_ > 0.0 ? chain_sigma2_ : 0.0);
@@ -373,9 +374,9 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
     }
   }
   if (why != 0) {
-    finish_lost(step, in, why, true);
+    finish_lost(step, why, filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step));
   } else {
-    const Mat3d* att = (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+    const Mat3d* att = sensor_attitude(in);
     if (filter_active(in)) {
       // 6D-VME on the final pairs gives this step's visual rotation for the attitude filter.
       const Span<const Vec3d> P(mp_.data(), n_final_pairs), C(mc_.data(), n_final_pairs);
@@ -418,7 +419,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
       step.prev_T_cur = est.pose;
       step.covariance = est.covariance;
     } else {
-      finish_lost(step, in, kVoDegenerate, false);
+      finish_lost(step, kVoDegenerate, att);  // dead-reckon with the attitude this frame already has
     }
   }
   filter_ref_R_ = (step.attitude_corrected ? (config_.use_filtered_orientation ? att_filter_.corrected() : filter_out_R_)

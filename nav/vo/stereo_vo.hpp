@@ -180,7 +180,11 @@ class StereoVo {
 
  private:
   void build_landmarks(BoundedVector<match::Landmark3>& out) noexcept;
-  void finish_lost(VoStep& step, const VoInput& in, std::uint32_t why, bool feed_filter) noexcept;
+  // Flags the step lost and dead-reckons it on the chained prior, integrated with att (3D mode: the
+  // attitude this frame integrates with; nullptr in 6D mode or without an absolute attitude).
+  void finish_lost(VoStep& step, std::uint32_t why, const Mat3d* att) noexcept;
+  // The sensor's absolute attitude when 3D-VME integrates with it (input-checked: a rotation), else nullptr.
+  const Mat3d* sensor_attitude(const VoInput& in) const noexcept;
   bool filter_active(const VoInput& in) const noexcept;
   // Feeds the attitude filter with this frame (the reference frame since the last call); returns the
   // attitude to integrate with (corrected, or the sensor's if the filter refused).

@@ -146,21 +146,24 @@ Status fly(tools::RouteTilePipeline& pipe, const SimWorld& w, const sidescan::Tr
   });
 }
 
-// An in-memory node source over trained tiles (eval) -- the file path is exercised by train/repeat.
-class TileSource final : public route::NodeSource {
+// An in-memory node source over taught tiles or frames (anything with a .node; eval and the camera
+// route) -- the file path is exercised by train/repeat.
+template <typename Taught>
+class VectorNodeSource final : public route::NodeSource {
  public:
-  explicit TileSource(const std::vector<tools::RouteTile>* t) : tiles_(t) {}
-  std::uint32_t node_count() const noexcept override { return static_cast<std::uint32_t>(tiles_->size()); }
+  explicit VectorNodeSource(const std::vector<Taught>* t) : taught_(t) {}
+  std::uint32_t node_count() const noexcept override { return static_cast<std::uint32_t>(taught_->size()); }
   Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
-    if (i >= tiles_->size()) return Status(StatusCode::kOutOfRange, "no such node");
-    out = (*tiles_)[i].node;
+    if (i >= taught_->size()) return Status(StatusCode::kOutOfRange, "no such node");
+    out = (*taught_)[i].node;
     out.meta.index = i;
     return Status::ok();
   }
 
  private:
-  const std::vector<tools::RouteTile>* tiles_;
+  const std::vector<Taught>* taught_;
 };
+using TileSource = VectorNodeSource<tools::RouteTile>;
 
 int usage() {
   std::fprintf(stderr,
@@ -1337,21 +1340,6 @@ Status camera_pass(const CameraWorld& w, route::CameraTileProjector& proj, route
   return Status::ok();
 }
 
-class NodeVectorSource final : public route::NodeSource {
- public:
-  explicit NodeVectorSource(const std::vector<CameraPassFrame>* f) : f_(f) {}
-  std::uint32_t node_count() const noexcept override { return static_cast<std::uint32_t>(f_->size()); }
-  Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
-    if (i >= f_->size()) return Status(StatusCode::kOutOfRange, "no such node");
-    out = (*f_)[i].node;
-    out.meta.index = i;
-    return Status::ok();
-  }
-
- private:
-  const std::vector<CameraPassFrame>* f_;
-};
-
 int cmd_camera(int argc, char** argv) {
   double length_m = 12.0, spacing_m = 0.3;
   long seed = 7;
@@ -1412,17 +1400,16 @@ int cmd_camera(int argc, char** argv) {
       const double half = 0.5 * spacing_m;
       s = rev ? camera_pass(w, proj, fx, length_m - half, 0.0, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2 + 1, rep)
               : camera_pass(w, proj, fx, half, length_m, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2, rep);
-      route::LocaliserConfig lc = localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, taught.size() + 8);
+      // The recorded-file configuration with its metric settings scaled from 0.3 m feature pixels to 4 mm.
+      route::LocaliserConfig lc = file_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
+                                                        taught.size() + 8, taught.size(), spacing_m);
       lc.sensor = route::SensorKind::kCamera;
-      // Metric settings from the sonar file configuration scaled to the 8 mm feature pixel.
       lc.registration.robust.inlier_threshold_m = 0.02;
       lc.registration.fc.sigma_dist_m = 0.013;
       lc.guidance.side_deadband_m = 0.02;
-      lc.guidance.dead_reckon_max_m = 2.5 * spacing_m;
-      lc.filter.belief_registrations = static_cast<std::uint32_t>(std::min<std::size_t>(taught.size(), 8));
       ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
       auto loc = std::make_unique<route::RouteLocaliser>();
-      NodeVectorSource src(&taught);
+      VectorNodeSource<CameraPassFrame> src(&taught);
       if (s) s = loc->init(lc, arena);
       if (s) s = loc->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src);
       if (!s) {
