@@ -1,0 +1,226 @@
+#include "nav/vision/patch_align.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace qnav::vision {
+
+namespace {
+
+// Bilinear sample; the caller has checked the 2x2 support (inside()). (Keys cubic interpolation was
+// tried: the same accuracy on the Mars yard, 0.4 ms more per VO step.)
+inline float sample(ConstImageViewU8 img, float x, float y) noexcept {
+  const float fx0 = std::floor(x), fy0 = std::floor(y);
+  const int x0 = static_cast<int>(fx0), y0 = static_cast<int>(fy0);
+  const float ax = x - fx0, ay = y - fy0;
+  const std::uint8_t* r0 = img.row(y0) + x0;
+  const std::uint8_t* r1 = img.row(y0 + 1) + x0;
+  const float top = static_cast<float>(r0[0]) + ax * (static_cast<float>(r0[1]) - static_cast<float>(r0[0]));
+  const float bot = static_cast<float>(r1[0]) + ax * (static_cast<float>(r1[1]) - static_cast<float>(r1[0]));
+  return top + ay * (bot - top);
+}
+
+// True when a square of half-side h (pixels) around (x, y) can be sampled bilinearly.
+inline bool inside(ConstImageViewU8 img, float x, float y, int h) noexcept {
+  if (!std::isfinite(x) || !std::isfinite(y)) return false;
+  const float lo_x = std::floor(x - static_cast<float>(h)), lo_y = std::floor(y - static_cast<float>(h));
+  const float hi_x = std::floor(x + static_cast<float>(h)) + 1.0f, hi_y = std::floor(y + static_cast<float>(h)) + 1.0f;
+  return lo_x >= 0.0f && lo_y >= 0.0f && hi_x <= static_cast<float>(img.width() - 1) &&
+         hi_y <= static_cast<float>(img.height() - 1);
+}
+
+}  // namespace
+
+Status PatchAligner::configure(const PatchAlignConfig& c) noexcept {
+  ready_ = false;
+  if (c.radius < 1 || c.radius > kMaxRadius || c.max_iterations < 1 || c.max_iterations > 100 ||
+      !(c.converge_px > 0.0f) || !(c.max_shift_px > 0.0f) || !std::isfinite(c.max_shift_px) ||
+      !(c.min_zncc >= -1.0f && c.min_zncc <= 1.0f) || !(c.min_gradient_energy > 0.0f) ||
+      !std::isfinite(c.min_gradient_energy))
+    return Status(StatusCode::kInvalidArgument, "patch align config out of range");
+  config_ = c;
+  ready_ = true;
+  return Status::ok();
+}
+
+Status PatchAligner::align(ConstImageViewU8 ref, float ref_x, float ref_y, ConstImageViewU8 target, float x0, float y0,
+                           bool rows_only, PatchAlignResult& out) noexcept {
+  static constexpr float kIdentity[4] = {1.0f, 0.0f, 0.0f, 1.0f};
+  return align_warped(ref, ref_x, ref_y, kIdentity, target, x0, y0, rows_only, out);
+}
+
+Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y, const float (&warp)[4],
+                                  ConstImageViewU8 target, float x0, float y0, bool rows_only,
+                                  PatchAlignResult& out) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "PatchAligner::align before configure");
+  if (ref.empty() || target.empty()) return Status(StatusCode::kInvalidArgument, "patch align: empty image");
+  const float det_w = warp[0] * warp[3] - warp[1] * warp[2];
+  const float norm_w = std::fabs(warp[0]) + std::fabs(warp[1]) + std::fabs(warp[2]) + std::fabs(warp[3]);
+  if (!std::isfinite(det_w) || !std::isfinite(norm_w) || !(std::fabs(det_w) >= 1.0f / 16.0f) || !(std::fabs(det_w) <= 16.0f) ||
+      !(norm_w <= 16.0f))
+    return Status(StatusCode::kInvalidArgument, "patch align: warp not finite or scaling beyond 4x");
+  const int r = config_.radius;
+  const int s = 2 * r + 1, g = s + 2, n = s * s;
+  if (!std::isfinite(ref_x) || !std::isfinite(ref_y) || !std::isfinite(x0) || !std::isfinite(y0))
+    return Status(StatusCode::kOutOfRange, "patch align: position not finite");
+  // The template is centred on the reference point's nearest pixel (with the identity warp its samples
+  // are pixels, not interpolations: an interpolated template is blurred differently from the target and
+  // moved the optimum by up to 0.03 px on blob texture); the nearest pixel's target position is solved
+  // for and moved back by the warped sub-pixel offset. Target offset of a reference offset: warp^-1.
+  const float cx = std::round(ref_x), cy = std::round(ref_y);
+  const float ddx = ref_x - cx, ddy = ref_y - cy;
+  const float ox = (warp[3] * ddx - warp[1] * ddy) / det_w, oy = (warp[0] * ddy - warp[2] * ddx) / det_w;
+  const float xs = x0 - ox, ys = y0 - oy;
+  // Reach of the warped template grid in the reference image (its corners).
+  const float reach = static_cast<float>(r + 1) * std::max(std::fabs(warp[0]) + std::fabs(warp[1]),
+                                                           std::fabs(warp[2]) + std::fabs(warp[3]));
+  if (!inside(ref, cx, cy, static_cast<int>(std::ceil(reach))) || !inside(target, xs, ys, r))
+    return Status(StatusCode::kOutOfRange, "patch align: patch outside the image");
+  // Template grid one pixel wider than the patch (for central-difference gradients), laid out in target
+  // coordinates and sampled in the reference image through the warp.
+  for (int j = 0; j < g; ++j)
+    for (int i = 0; i < g; ++i) {
+      const float dx = static_cast<float>(i - r - 1), dy = static_cast<float>(j - r - 1);
+      grid_[j * g + i] = sample(ref, cx + warp[0] * dx + warp[1] * dy, cy + warp[2] * dx + warp[3] * dy);
+    }
+  double sum = 0.0;
+  for (int j = 0; j < s; ++j)
+    for (int i = 0; i < s; ++i) {
+      const int k = j * s + i, c = (j + 1) * g + (i + 1);
+      t_[k] = grid_[c];
+      gx_[k] = 0.5f * (grid_[c + 1] - grid_[c - 1]);
+      gy_[k] = 0.5f * (grid_[c + g] - grid_[c - g]);
+      sum += static_cast<double>(t_[k]);
+    }
+  const float mean_t = static_cast<float>(sum / n);
+  double ss = 0.0;
+  for (int k = 0; k < n; ++k) {
+    t_[k] -= mean_t;
+    ss += static_cast<double>(t_[k]) * static_cast<double>(t_[k]);
+  }
+  if (!(ss > 1e-6)) return Status(StatusCode::kDegenerate, "patch align: flat template");
+  const float inv = static_cast<float>(1.0 / std::sqrt(ss));
+  double mgx = 0.0, mgy = 0.0;
+  for (int k = 0; k < n; ++k) {
+    t_[k] *= inv;
+    gx_[k] *= inv;
+    gy_[k] *= inv;
+    mgx += static_cast<double>(gx_[k]);
+    mgy += static_cast<double>(gy_[k]);
+  }
+  // The target patch is normalised too (zero mean, unit norm), so a shift can only change it within the
+  // complement of {constant, template}: project both out of the gradient images. (Without this a patch
+  // on a brightness ramp -- gradients with a large mean -- gets a Hessian the error never sees, and
+  // every step falls short.)
+  mgx /= n;
+  mgy /= n;
+  double gxt = 0.0, gyt = 0.0;
+  for (int k = 0; k < n; ++k) {
+    gx_[k] -= static_cast<float>(mgx);
+    gy_[k] -= static_cast<float>(mgy);
+    gxt += static_cast<double>(gx_[k]) * static_cast<double>(t_[k]);
+    gyt += static_cast<double>(gy_[k]) * static_cast<double>(t_[k]);
+  }
+  double hxx = 0.0, hxy = 0.0, hyy = 0.0;
+  for (int k = 0; k < n; ++k) {
+    gx_[k] -= static_cast<float>(gxt) * t_[k];
+    gy_[k] -= static_cast<float>(gyt) * t_[k];
+    hxx += static_cast<double>(gx_[k]) * static_cast<double>(gx_[k]);
+    hxy += static_cast<double>(gx_[k]) * static_cast<double>(gy_[k]);
+    hyy += static_cast<double>(gy_[k]) * static_cast<double>(gy_[k]);
+  }
+  const double min_e = static_cast<double>(config_.min_gradient_energy);
+  double det = 0.0;
+  if (rows_only) {
+    if (!(hxx > min_e)) return Status(StatusCode::kDegenerate, "patch align: no texture along the row");
+  } else {
+    const double tr = hxx + hyy;
+    det = hxx * hyy - hxy * hxy;
+    const double lmin = 0.5 * (tr - std::sqrt(std::max(0.0, tr * tr - 4.0 * det)));
+    if (!(lmin > min_e) || !(det > 0.0)) return Status(StatusCode::kDegenerate, "patch align: template without 2D texture");
+  }
+  float x = xs, y = ys;
+  bool converged = false;
+  int it = 0;
+  double ess = 0.0, cross = 0.0;
+  for (; it < config_.max_iterations; ++it) {
+    if (!inside(target, x, y, r)) return Status(StatusCode::kOutOfRange, "patch align: left the image");
+    // Normalised target patch at the current estimate: every sample has the same fractional offset, so
+    // the bilinear weights are computed once.
+    const float fx0 = std::floor(x), fy0 = std::floor(y);
+    const float ax = x - fx0, ay = y - fy0;
+    const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay), w10 = (1.0f - ax) * ay, w11 = ax * ay;
+    const int px0 = static_cast<int>(fx0) - r, py0 = static_cast<int>(fy0) - r;
+    double tsum = 0.0;
+    for (int j = 0; j < s; ++j) {
+      const std::uint8_t* r0 = target.row(py0 + j) + px0;
+      const std::uint8_t* r1 = target.row(py0 + j + 1) + px0;
+      float row_sum = 0.0f;
+      for (int i = 0; i < s; ++i) {
+        const float v = w00 * static_cast<float>(r0[i]) + w01 * static_cast<float>(r0[i + 1]) +
+                        w10 * static_cast<float>(r1[i]) + w11 * static_cast<float>(r1[i + 1]);
+        grid_[j * s + i] = v;
+        row_sum += v;
+      }
+      tsum += static_cast<double>(row_sum);
+    }
+    const float mean_i = static_cast<float>(tsum / n);
+    float iss = 0.0f;
+    for (int k = 0; k < n; ++k) {
+      grid_[k] -= mean_i;
+      iss += grid_[k] * grid_[k];
+    }
+    if (!(iss > 1e-6f)) return Status(StatusCode::kNotFound, "patch align: flat target patch");
+    const float inv_i = 1.0f / std::sqrt(iss);
+    // Single-precision sums over at most (2 kMaxRadius + 1)^2 = 225 terms of unit-norm patches.
+    float sbx = 0.0f, sby = 0.0f, sess = 0.0f, scross = 0.0f;
+    for (int k = 0; k < n; ++k) {
+      const float iv = grid_[k] * inv_i;
+      const float e = iv - t_[k];
+      sbx += gx_[k] * e;
+      sby += gy_[k] * e;
+      sess += e * e;
+      scross += iv * t_[k];
+    }
+    const double bx = static_cast<double>(sbx), by = static_cast<double>(sby);
+    ess = static_cast<double>(sess);
+    cross = static_cast<double>(scross);
+    double dx = 0.0, dy = 0.0;
+    if (rows_only) {
+      dx = bx / hxx;
+    } else {
+      dx = (hyy * bx - hxy * by) / det;
+      dy = (hxx * by - hxy * bx) / det;
+    }
+    // Inverse compositional update for a translation: p <- p - dp.
+    x -= static_cast<float>(dx);
+    y -= static_cast<float>(dy);
+    if (std::fabs(x - xs) > config_.max_shift_px || std::fabs(y - ys) > config_.max_shift_px)
+      return Status(StatusCode::kNotFound, "patch align: moved beyond max_shift_px");
+    if (std::sqrt(dx * dx + dy * dy) < static_cast<double>(config_.converge_px)) {
+      converged = true;
+      ++it;
+      break;
+    }
+  }
+  if (!converged) return Status(StatusCode::kNotFound, "patch align: no convergence");
+  // Quality and uncertainty from the last evaluated patch (the final update was below converge_px).
+  const float zncc = static_cast<float>(cross);
+  if (!(zncc >= config_.min_zncc)) return Status(StatusCode::kNotFound, "patch align: final ZNCC below min_zncc");
+  const int dof = rows_only ? 1 : 2;
+  const double var = ess / static_cast<double>(n > dof ? n - dof : 1);
+  out.x_px = x + ox;
+  out.y_px = rows_only ? y0 : y + oy;
+  out.zncc = zncc;
+  out.iterations = it;
+  if (rows_only) {
+    out.sigma_x_px = static_cast<float>(std::sqrt(var / hxx));
+    out.sigma_y_px = 0.0f;
+  } else {
+    out.sigma_x_px = static_cast<float>(std::sqrt(var * hyy / det));
+    out.sigma_y_px = static_cast<float>(std::sqrt(var * hxx / det));
+  }
+  return Status::ok();
+}
+
+}  // namespace qnav::vision

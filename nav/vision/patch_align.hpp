@@ -1,0 +1,82 @@
+// PatchAligner: sub-pixel alignment of a small patch from one image into another (Lucas-Kanade,
+// inverse compositional, translation only, invariant to gain and bias).
+//
+// What it is for: a Harris corner is re-detected in the next frame with a localisation jitter of a few
+// tenths of a pixel, and that jitter -- not the stereo depth -- limits the rotation a stereo VO step can
+// measure. Aligning the previous frame's patch around its corner into the current frame gives the same
+// physical point to a few hundredths of a pixel (on textured patches). One-dimensional mode (along
+// rows) refines a stereo disparity on a rectified pair the same way.
+//
+// Method: the template T is the (2r+1)^2 patch of `ref` centred on the (sub-pixel) reference point,
+// sampled bilinearly, made zero-mean and unit-norm, with its gradients (central differences on a grid
+// one pixel wider). Each iteration samples the target patch at the current estimate, normalises it the
+// same way (gain and bias drop out), and solves the 2x2 (1x1 in row mode) normal equations of the
+// template gradients for the update (inverse compositional: the Hessian is computed once). It stops
+// when the update is below converge_px, after max_iterations, or when the estimate leaves
+// max_shift_px of the start or the image.
+//
+// Result: position, the final ZNCC between template and target (the quality), iterations, and the
+// position's 1-sigma from the residual and the Hessian (sigma^2 = residual variance * H^-1).
+// Errors (nothing written): kNotReady before configure, kOutOfRange (patch not inside either image,
+// or the estimate left the image), kDegenerate (template without texture in some direction: the
+// smaller Hessian eigenvalue below min_gradient_energy), kNotFound (no convergence, moved beyond
+// max_shift_px, or final ZNCC below min_zncc).
+// Cost: O((2r+3)^2) to build the template + O(iterations * (2r+1)^2); no heap (fixed arrays for
+// radius <= kMaxRadius).
+#pragma once
+
+#include "nav/core/image.hpp"
+#include "nav/core/status.hpp"
+
+namespace qnav::vision {
+
+struct PatchAlignConfig {
+  int radius = 3;                  // template (2r+1)^2, 1..kMaxRadius
+  int max_iterations = 12;
+  float converge_px = 0.01f;       // stop when the update is smaller than this
+  float max_shift_px = 2.0f;       // from the start position
+  float min_zncc = 0.85f;          // final quality
+  float min_gradient_energy = 1e-3f;  // smaller eigenvalue of the normalised template's Hessian
+};
+
+struct PatchAlignResult {
+  float x_px = 0.0f;
+  float y_px = 0.0f;
+  float zncc = 0.0f;
+  int iterations = 0;
+  float sigma_x_px = 0.0f;  // 1-sigma of the position from the final residual (0 in row mode for y)
+  float sigma_y_px = 0.0f;
+};
+
+class PatchAligner {
+ public:
+  static constexpr int kMaxRadius = 7;
+
+  PatchAligner() noexcept = default;
+  // kInvalidArgument for a radius outside 1..kMaxRadius or a non-positive / non-finite bound.
+  Status configure(const PatchAlignConfig& config) noexcept;
+  const PatchAlignConfig& config() const noexcept { return config_; }
+
+  // Aligns the patch of `ref` at (ref_x, ref_y) into `target`, starting at (x0, y0). rows_only: the
+  // row is held at y0 (stereo on a rectified pair).
+  Status align(ConstImageViewU8 ref, float ref_x, float ref_y, ConstImageViewU8 target, float x0, float y0,
+               bool rows_only, PatchAlignResult& out) noexcept;
+  // Same, with the template sampled through a local affine map: the target offset (dx, dy) from the
+  // aligned point corresponds to the reference offset (a00 dx + a01 dy, a10 dx + a11 dy), warp =
+  // {a00, a01, a10, a11} (e.g. the perspective change of a ground patch predicted from the motion).
+  // kInvalidArgument for a non-finite warp or one that scales by more than 4 or less than 1/4.
+  Status align_warped(ConstImageViewU8 ref, float ref_x, float ref_y, const float (&warp)[4], ConstImageViewU8 target,
+                      float x0, float y0, bool rows_only, PatchAlignResult& out) noexcept;
+
+ private:
+  static constexpr int kMaxSide = 2 * kMaxRadius + 1;
+  static constexpr int kMaxGrid = kMaxSide + 2;
+  PatchAlignConfig config_{};
+  bool ready_ = false;
+  float grid_[kMaxGrid * kMaxGrid] = {};
+  float t_[kMaxSide * kMaxSide] = {};
+  float gx_[kMaxSide * kMaxSide] = {};
+  float gy_[kMaxSide * kMaxSide] = {};
+};
+
+}  // namespace qnav::vision
