@@ -224,14 +224,31 @@ Result<RigidEstimate> refine_rigid_6d_stereo(Span<const Vec3d> prev, Span<const 
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3d rc = e.pose.R * cur[i];
       const Vec3d r = prev[i] - (rc + e.pose.t);
-      const Mat3d S = stereo_cov(prev[i], model) + e.pose.R * stereo_cov(cur[i], model) * e.pose.R.transpose();
+      // Covariances at the fused landmark X (the maximum-likelihood point given both measurements), not at
+      // the measurements: X is uncorrelated with the residual, a measurement is not (a covariance taken
+      // at a noisy point weights the points measured nearer more and biases the rotation). X itself
+      // needs a covariance: the one at the measurements, once.
+      const Mat3d Sc0 = e.pose.R * stereo_cov(cur[i], model) * e.pose.R.transpose();
+      const Mat3d S0 = stereo_cov(prev[i], model) + Sc0;
+      Mat3d Sc = Sc0, S = S0;
+      if (model.fused_linearisation) {
+        const Vec3d x0 = rc + e.pose.t + Sc0 * S0.ldlt().solve(r);
+        Sc = e.pose.R * stereo_cov(e.pose.R.transpose() * (x0 - e.pose.t), model) * e.pose.R.transpose();
+        S = stereo_cov(x0, model) + Sc;
+      }
       const Mat3d W = S.inverse();
       const double d2 = r.dot(W * r);
       if (!std::isfinite(d2)) continue;
       const double d = std::sqrt(d2);
       const double hw = d <= huber_k ? 1.0 : huber_k / d;
+      // Rotation Jacobian at the fused point X = (R c + t) + Sc W r (the maximum-likelihood position of the
+      // landmark given both measurements), not at the noisy R c: with anisotropic covariances whose axes
+      // differ between the frames, skew(R c) is correlated with r and the stationary point is biased
+      // (errors in variables; on the Mars yard +0.004 deg per step about x from unbiased noise). With X
+      // the gradient is that of the likelihood with the landmark eliminated (envelope theorem).
+      const Vec3d x_lin = model.fused_linearisation ? Vec3d(rc + e.pose.t + Sc * (W * r)) : Vec3d(rc + e.pose.t);
       Eigen::Matrix<double, 3, 6> J;
-      J.leftCols<3>() = skew(rc);
+      J.leftCols<3>() = skew(x_lin - e.pose.t);
       J.rightCols<3>() = -Mat3d::Identity();
       H += hw * J.transpose() * W * J;
       g += hw * J.transpose() * W * r;

@@ -61,10 +61,19 @@ struct StereoPointModel {
   double ray_sigma_per_z2 = 0.0;     // [1/m]
   double lateral_sigma_per_z = 0.0;  // [-]
   double min_sigma_m = 1e-4;         // floor of both sigmas
+  // Linearise (and evaluate the covariances) at the fused landmark (true, the default: unbiased when the
+  // two ends are one physical point measured with this model's noise) or at the measurements (false:
+  // the plain Gauss-Newton). StereoVo uses false for pairs of two independent Harris detections, which
+  // the model does not describe (their association error made the fused form worse: docs/vo.md).
+  bool fused_linearisation = true;
 };
 
 // Gauss-Newton refinement of a 6D motion with the anisotropic stereo covariance of each pair
-// (Sigma_i = Sigma(p_i) + R Sigma(c_i) R^T), Huber weights on the Mahalanobis distance (huber_k sigmas),
+// (Sigma_i = Sigma(X_i) + R Sigma(R^T (X_i - t)) R^T, evaluated at the fused landmark X_i, the
+// maximum-likelihood point given both measurements; the rotation Jacobian is taken at X_i too, which
+// makes the gradient that of the likelihood with the landmark eliminated: linearising at the noisy
+// measurements biased the rotation, test Rigid6dStereo.IsUnbiasedUnderAnisotropicStereoNoise),
+// Huber weights on the Mahalanobis distance (huber_k sigmas),
 // fixed iterations (<= 20). Covariance = (J^T W J)^-1 scaled by max(1, chi2 / dof), rotation left-perturbed
 // as for estimate_rigid_6d. rms_residual_m is the plain rms. O(iterations * n), no heap. Errors:
 // kInvalidArgument (sizes, NaN, model), kDegenerate (< 3 points, singular normal equations).

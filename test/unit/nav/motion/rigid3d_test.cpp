@@ -121,6 +121,90 @@ TEST(Rigid6d, CovarianceAgreesWithMonteCarloSpread) {
   }
 }
 
+// Stereo points on a ground plane seen obliquely (the Mars bench: 0.8 m high, 70 deg down), a forward
+// step of 0.2 m, noise drawn from the anisotropic stereo model itself (depth along the ray, lateral
+// across) on both ends.
+struct StereoTrial {
+  std::vector<Vec3d> prev, cur;
+};
+StereoTrial stereo_trial(const Pose3& truth, const StereoPointModel& m, std::size_t n, std::mt19937& rng) {
+  std::uniform_real_distribution<double> uu(-0.45, 0.45), uv(-0.35, 0.35);
+  std::normal_distribution<double> nn(0.0, 1.0);
+  const double tilt = 70.0 * M_PI / 180.0;
+  auto noisy = [&](const Vec3d& p) {
+    const Vec3d ray = p.normalized();
+    const Vec3d e1 = ray.unitOrthogonal(), e2 = ray.cross(e1);
+    const double z = p.z();
+    return Vec3d(p + ray * nn(rng) * m.ray_sigma_per_z2 * z * z + (e1 * nn(rng) + e2 * nn(rng)) * m.lateral_sigma_per_z * z);
+  };
+  StereoTrial t;
+  while (t.cur.size() < n) {
+    // Ray through a random pixel of the current camera onto the ground plane 0.8 m below the camera.
+    const Vec3d dir(uu(rng), uv(rng), 1.0);
+    const Vec3d down(0.0, std::sin(tilt), std::cos(tilt));  // world down in the camera frame
+    const double lam = 0.8 / dir.dot(down);
+    if (!(lam > 0.0) || lam * dir.z() > 3.0) continue;
+    const Vec3d c = lam * dir;
+    t.cur.push_back(noisy(c));
+    t.prev.push_back(noisy(truth.apply(c)));
+  }
+  return t;
+}
+
+TEST(Rigid6dStereo, IsUnbiasedUnderAnisotropicStereoNoise) {
+  // Errors in variables: linearising the rotation at the noisy R c instead of the fused landmark gives
+  // a stationary point biased by E[skew(R n) W R n] != 0 when the covariances of the two ends have
+  // different axes (a forward step changes every viewing ray), and covariances evaluated at the noisy
+  // measurements are correlated with the residual. The bias grows with sigma^2, the spread with sigma,
+  // so the noise here is 3x the Mars bench's to make a bias stand out of the spread.
+  StereoPointModel m;
+  const double f = 333.3, b = 0.05;
+  m.ray_sigma_per_z2 = 0.45 / (f * b);  // disparity 0.45 px
+  m.lateral_sigma_per_z = 0.3 / f;       // 0.3 px
+  const Pose3 truth{rotation_from_rpy(0.004, -0.006, 0.01), Vec3d(0.0, -0.068, 0.188)};
+  std::mt19937 rng(11);
+  const int trials = 300;
+  Vec3d sum = Vec3d::Zero(), sum2 = Vec3d::Zero();
+  for (int k = 0; k < trials; ++k) {
+    const StereoTrial t = stereo_trial(truth, m, 150, rng);
+    Result<RigidEstimate> r0 = estimate_rigid_6d(sp(t.prev), sp(t.cur), {});
+    ASSERT_TRUE(r0.is_ok());
+    Result<RigidEstimate> r = refine_rigid_6d_stereo(sp(t.prev), sp(t.cur), r0.value(), m);
+    ASSERT_TRUE(r.is_ok());
+    const Vec3d e = rotation_log(truth.R.transpose() * r->pose.R);
+    sum += e;
+    sum2 += e.cwiseAbs2();
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double mean = sum(i) / trials, rms = std::sqrt(sum2(i) / trials);
+    const double se = rms / std::sqrt(static_cast<double>(trials));
+    // Linearised at R c with covariances at the measurements (the first version): +0.0092 deg about x
+    // at 300 trials (rms 0.040 deg, 4 se); at R c with covariances at the truth: +0.039 deg (16 se).
+    EXPECT_LT(std::fabs(mean), 3.5 * se) << "axis " << i << " mean " << mean * 180.0 / M_PI << " deg, rms "
+                                          << rms * 180.0 / M_PI << " deg";
+  }
+}
+
+TEST(Rigid6dStereo, RecoversExactMotionAndRejectsBadModels) {
+  StereoPointModel m;
+  m.ray_sigma_per_z2 = 0.15 / (333.3 * 0.05);
+  m.lateral_sigma_per_z = 0.1 / 333.3;
+  const Sets s = make_sets(kTruth, 50, 0.0, 3);
+  RigidEstimate start;  // identity: 11 deg and 0.2 m away from the truth
+  Result<RigidEstimate> r = refine_rigid_6d_stereo(sp(s.prev), sp(s.cur), start, m, 10);
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_LT(rotation_log(kTruth.R.transpose() * r->pose.R).norm(), 1e-9);
+  EXPECT_LT((r->pose.t - kTruth.t).norm(), 1e-9);
+  StereoPointModel bad = m;
+  bad.ray_sigma_per_z2 = std::nan("");
+  EXPECT_EQ(refine_rigid_6d_stereo(sp(s.prev), sp(s.cur), start, bad).status().code(), StatusCode::kInvalidArgument);
+  bad = m;
+  bad.min_sigma_m = 0.0;
+  EXPECT_EQ(refine_rigid_6d_stereo(sp(s.prev), sp(s.cur), start, bad).status().code(), StatusCode::kInvalidArgument);
+  const std::vector<Vec3d> two(s.prev.begin(), s.prev.begin() + 2), two_c(s.cur.begin(), s.cur.begin() + 2);
+  EXPECT_EQ(refine_rigid_6d_stereo(sp(two), sp(two_c), start, m).status().code(), StatusCode::kDegenerate);
+}
+
 TEST(Irls, DownweightsGrossOutliers) {
   Sets s = make_sets(kTruth, 60, 0.002, 7);
   for (std::size_t i = 0; i < 12; ++i) s.prev[i * 5] += Vec3d(0.08, -0.06, 0.05);  // 20% outliers, 11 cm off
