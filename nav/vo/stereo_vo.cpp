@@ -1,5 +1,6 @@
 #include "nav/vo/stereo_vo.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace qnav::vo {
@@ -7,7 +8,7 @@ namespace qnav::vo {
 const char* const StereoVo::kCounterNames[static_cast<std::size_t>(VoCounter::kCount)] = {
     "vo_bad_image",     "vo_bad_attitude", "vo_bad_prior",        "vo_few_corners",      "vo_few_stereo",
     "vo_few_matches",   "vo_high_residual", "vo_degenerate",      "vo_implausible_step", "vo_lost_frames",
-    "vo_attitude_filter_rejected"};
+    "vo_attitude_filter_rejected", "vo_track_align_failed", "vo_step_not_refined"};
 
 namespace {
 
@@ -37,7 +38,10 @@ std::size_t StereoVo::arena_bytes(const VoConfig& c) noexcept {
   const std::size_t n = static_cast<std::size_t>(c.max_corners);
   return vision::HarrisDetector::arena_bytes(harris_config(c)) + bytes_for<vision::Corner>(n) +
          bytes_for<vision::StereoPoint>(n) + 2 * bytes_for<match::Landmark3>(n) + 2 * bytes_for<Vec3d>(n) +
-         2 * bytes_for<double>(n) + 2 * bytes_for<std::int32_t>(n);
+         2 * bytes_for<double>(n) + 4 * bytes_for<std::int32_t>(n) + bytes_for<Vec3d>(n) + bytes_for<double>(n) +
+         (c.refine_tracks ? bytes_for<std::uint8_t>(static_cast<std::size_t>(c.max_width) *
+                                                    static_cast<std::size_t>(c.max_height))
+                          : 0);
 }
 
 Status StereoVo::init(const VoConfig& config, Arena& arena) noexcept {
@@ -46,12 +50,18 @@ Status StereoVo::init(const VoConfig& config, Arena& arena) noexcept {
       config.min_matches < 3 || !(config.max_rms_residual_m > 0.0) || !(config.max_step_m > 0.0) ||
       !(config.max_normalized_residual > 0.0) || config.icp_iterations < 0 || config.icp_iterations > 10 || !(config.lateral_sigma_px >= 0.0) || !(config.default_translation_sigma_m > 0.0) || !(config.max_depth_m > 0.0))
     return Status(StatusCode::kInvalidArgument, "VO config out of range");
-  config_ = config;
-  QNAV_RETURN_IF_ERROR(harris_.init(harris_config(config), arena));
-  QNAV_RETURN_IF_ERROR(stereo_.init(config.stereo, config.camera));
   if (!(config.frame_period_s > 0.0) || !std::isfinite(config.frame_period_s))
     return Status(StatusCode::kInvalidArgument, "VO frame_period_s must be > 0");
+  // Every check that needs no memory before the arena is touched.
+  if (config.refine_tracks || config.refine_disparity) {
+    QNAV_RETURN_IF_ERROR(refiner_.init(config.track_refine, config.camera));
+    if (!(config.refined_lateral_sigma_px > 0.0) || !std::isfinite(config.refined_lateral_sigma_px))
+      return Status(StatusCode::kInvalidArgument, "VO refined_lateral_sigma_px must be > 0");
+  }
+  QNAV_RETURN_IF_ERROR(stereo_.init(config.stereo, config.camera));
   QNAV_RETURN_IF_ERROR(att_filter_.init(config.attitude_bias));
+  config_ = config;
+  QNAV_RETURN_IF_ERROR(harris_.init(harris_config(config), arena));
   match::GeometricMatchConfig mc = config.match;
   mc.max_landmarks = static_cast<std::size_t>(config.max_corners);
   if (mc.max_matches > mc.max_landmarks) mc.max_matches = mc.max_landmarks;
@@ -69,7 +79,16 @@ Status StereoVo::init(const VoConfig& config, Arena& arena) noexcept {
   scratch_ = arena.allocate<double>(n);
   nn_prev_ = arena.allocate<std::int32_t>(n);
   nn_cur_ = arena.allocate<std::int32_t>(n);
-  if (nn_prev_.empty() || nn_cur_.empty() || cs.empty() || ps.empty() || l0.empty() || l1.empty() || mp_.empty() || mc_.empty() || w_.empty() || scratch_.empty())
+  pair_ref_ = arena.allocate<std::int32_t>(n);
+  pair_cur_ = arena.allocate<std::int32_t>(n);
+  refined_ = arena.allocate<Vec3d>(n);
+  refined_s2_ = arena.allocate<double>(n);
+  if (config.refine_tracks) {
+    ref_pixels_ = arena.allocate<std::uint8_t>(static_cast<std::size_t>(config.max_width) *
+                                               static_cast<std::size_t>(config.max_height));
+    if (ref_pixels_.empty()) return Status(StatusCode::kCapacityExceeded, "arena too small for the VO reference image");
+  }
+  if (pair_ref_.empty() || pair_cur_.empty() || refined_.empty() || refined_s2_.empty() || nn_prev_.empty() || nn_cur_.empty() || cs.empty() || ps.empty() || l0.empty() || l1.empty() || mp_.empty() || mc_.empty() || w_.empty() || scratch_.empty())
     return Status(StatusCode::kCapacityExceeded, "arena too small for VO buffers");
   corners_ = BoundedVector<vision::Corner>(cs);
   points_ = BoundedVector<vision::StereoPoint>(ps);
@@ -94,10 +113,35 @@ void StereoVo::reset(const Pose3& world_T_start) noexcept {
   filter_stamp_ns_ = 0;
   frames_since_filter_ = 0;
   filter_ref_R_ = Mat3d::Identity();
+  ref_left_ = ConstImageViewU8();
+}
+
+void StereoVo::keep_reference_image(ConstImageViewU8 left) noexcept {
+  if (!config_.refine_tracks || ref_pixels_.empty()) return;
+  const int w = left.width(), h = left.height();
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* src = left.row(y);
+    std::uint8_t* dst = ref_pixels_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+    for (int x = 0; x < w; ++x) dst[x] = src[x];
+  }
+  ref_left_ = ConstImageViewU8::unchecked(ref_pixels_.data(), w, h, w);
 }
 
 const Mat3d* StereoVo::sensor_attitude(const VoInput& in) const noexcept {
   return (config_.mode == VmeMode::k3D && in.has_absolute_attitude) ? &in.world_R_cam : nullptr;
+}
+
+motion::StereoPointModel StereoVo::stereo_point_model(bool refined) const noexcept {
+  motion::StereoPointModel pm;
+  const double fb = config_.camera.focal_px * config_.camera.baseline_m;
+  const double lat = refined ? config_.refined_lateral_sigma_px : config_.lateral_sigma_px;
+  pm.ray_sigma_per_z2 = fb > 0.0 ? static_cast<double>(config_.stereo.disparity_sigma_px) / fb : 0.0;
+  pm.lateral_sigma_per_z = config_.camera.focal_px > 0.0 ? lat / config_.camera.focal_px : 0.0;
+  // Unrefined pairs are two Harris detections associated by proximity, not one point with the model's
+  // noise: the plain linearisation (seeds 3-10, 27 m: step rotation mean -0.03 deg about x with the
+  // fused form, docs/vo.md).
+  pm.fused_linearisation = refined;
+  return pm;
 }
 
 bool StereoVo::filter_active(const VoInput& in) const noexcept {
@@ -122,10 +166,13 @@ const Mat3d* StereoVo::filter_frame(const VoInput& in, bool has_vo, const Mat3d&
   return &filter_out_R_;
 }
 
-void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
+void StereoVo::build_landmarks(const VoInput& in, BoundedVector<match::Landmark3>& out) noexcept {
   out.clear();
   const double f = config_.camera.focal_px;
-  for (const vision::StereoPoint& p : points_) {
+  for (vision::StereoPoint& p : points_) {
+    // Row alignment of the left patch into the right image from the parabola's disparity (a point that
+    // does not align keeps the parabola's).
+    if (config_.refine_disparity) (void)refiner_.refine_disparity(in.left, in.right, config_.stereo.disparity_sigma_px, p);
     const Vec3d pos = p.p_m.cast<double>();
     if (!pos.allFinite() || !(pos.z() > 0.0) || pos.z() > config_.max_depth_m || !std::isfinite(p.sigma_z_m)) continue;
     match::Landmark3* l = out.emplace_back();
@@ -138,7 +185,38 @@ void StereoVo::build_landmarks(BoundedVector<match::Landmark3>& out) noexcept {
     l->score = ci < corners_.size() ? static_cast<double>(corners_[ci].score) : 0.0;
     l->u_px = p.x_px;
     l->v_px = p.y_px;
+    l->has_appearance = config_.match.appearance_weight > 0.0 && fill_appearance(in.left, p.x_px, p.y_px, *l);
   }
+}
+
+bool StereoVo::fill_appearance(ConstImageViewU8 img, float x_px, float y_px, match::Landmark3& l) noexcept {
+  // The fc appearance term's descriptor (match::kAppearanceDims = 9): the 3x3 grid of 3x3-pixel block means
+  // around the corner (a 9x9 pixel support), zero-mean and unit-norm, so the matcher's dot product is a
+  // normalised cross-correlation of coarse appearance.
+  static_assert(match::kAppearanceDims == 9, "a 3x3 grid of block means");
+  const int cx = static_cast<int>(std::lround(x_px)), cy = static_cast<int>(std::lround(y_px));
+  if (cx < 4 || cy < 4 || cx + 4 >= img.width() || cy + 4 >= img.height()) return false;
+  float mean = 0.0f;
+  for (int gy = 0; gy < 3; ++gy)
+    for (int gx = 0; gx < 3; ++gx) {
+      int sum = 0;
+      for (int j = -1; j <= 1; ++j) {
+        const std::uint8_t* row = img.row(cy + 3 * (gy - 1) + j) + cx + 3 * (gx - 1);
+        sum += row[-1] + row[0] + row[1];
+      }
+      l.appearance[gy * 3 + gx] = static_cast<float>(sum) / 9.0f;
+      mean += l.appearance[gy * 3 + gx];
+    }
+  mean /= 9.0f;
+  float ss = 0.0f;
+  for (float& v : l.appearance) {
+    v -= mean;
+    ss += v * v;
+  }
+  if (!(ss > 1.0f)) return false;  // a flat neighbourhood: no appearance evidence
+  const float inv = 1.0f / std::sqrt(ss);
+  for (float& v : l.appearance) v *= inv;
+  return true;
 }
 
 void StereoVo::finish_lost(VoStep& step, std::uint32_t why, const Mat3d* att) noexcept {
@@ -158,13 +236,17 @@ void StereoVo::finish_lost(VoStep& step, std::uint32_t why, const Mat3d* att) no
 std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
                                     const BoundedVector<match::Landmark3>& cur, const Pose3& est) noexcept {
   const double ns = config_.match.n_sigma;
-  for (std::size_t j = 0; j < cur.size(); ++j) nn_cur_[j] = -1;
+  // The current landmarks in the reference frame, once (refined_ is free until refine_pairs).
+  for (std::size_t j = 0; j < cur.size(); ++j) {
+    nn_cur_[j] = -1;
+    refined_[j] = est.apply(cur[j].position_m);
+  }
   // Nearest cur for each prev (O(n_p n_c)), and nearest prev for each cur, both within the gate.
   for (std::size_t i = 0; i < ref.size(); ++i) {
     nn_prev_[i] = -1;
     double best = 0.0;
     for (std::size_t j = 0; j < cur.size(); ++j) {
-      const double d2 = (ref[i].position_m - est.apply(cur[j].position_m)).squaredNorm();
+      const double d2 = (ref[i].position_m - refined_[j]).squaredNorm();
       const double g2 = ns * ns * (ref[i].sigma_m * ref[i].sigma_m + cur[j].sigma_m * cur[j].sigma_m);
       if (d2 >= g2 || (nn_prev_[i] >= 0 && d2 >= best)) continue;
       nn_prev_[i] = static_cast<std::int32_t>(j);
@@ -175,7 +257,7 @@ std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
     double best = 0.0;
     for (std::size_t i = 0; i < ref.size(); ++i) {
       if (nn_prev_[i] != static_cast<std::int32_t>(j)) continue;
-      const double d2 = (ref[i].position_m - est.apply(cur[j].position_m)).squaredNorm();
+      const double d2 = (ref[i].position_m - refined_[j]).squaredNorm();
       if (nn_cur_[j] >= 0 && d2 >= best) continue;
       nn_cur_[j] = static_cast<std::int32_t>(i);
       best = d2;
@@ -188,11 +270,75 @@ std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
     const match::Landmark3& b = cur[j];
     mp_[n] = a.position_m;
     mc_[n] = b.position_m;
-    const double s2 = a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m;
-    w_[n] = config_.weighted ? (s2 > 1e-12 ? 1e-4 / s2 : 1e8) : 1.0;
+    w_[n] = weight_for(a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m);
+    pair_ref_[n] = nn_cur_[j];
+    pair_cur_[n] = static_cast<std::int32_t>(j);
     ++n;
   }
   return n;
+}
+
+Result<motion::RigidEstimate> StereoVo::solve_pairs(std::size_t n) noexcept {
+  const Span<const Vec3d> P(mp_.data(), n), C(mc_.data(), n);
+  const Span<const double> W(w_.data(), n);
+  const Span<double> scratch(scratch_.data(), n);
+  if (config_.mode == VmeMode::k6D) {
+    Result<motion::RigidEstimate> r = motion::estimate_rigid_6d(P, C, W);
+    if (r && config_.irls) r = motion::refine_irls_6d(P, C, r.value(), config_.irls_config, scratch, W);
+    return r;
+  }
+  Result<motion::RigidEstimate> r = motion::estimate_translation_3d(P, C, chain_R_, W);
+  if (r && config_.irls) r = motion::refine_irls_3d(P, C, r.value(), config_.irls_config, scratch, W);
+  return r;
+}
+
+std::size_t StereoVo::refine_pairs(const VoInput& in, const BoundedVector<match::Landmark3>& ref,
+                                  const BoundedVector<match::Landmark3>& cur, std::size_t n,
+                                  const Pose3& prev_T_cur) noexcept {
+  if (ref_left_.empty() || ref_left_.width() != in.left.width() || ref_left_.height() != in.left.height()) return 0;
+  const double f = config_.camera.focal_px;
+  const double lat = config_.refined_lateral_sigma_px;
+  const double lat_old = config_.lateral_sigma_px;
+  // Depth variance of a landmark (its isotropic sigma minus the lateral term build_landmarks added).
+  auto depth_var = [&](const match::Landmark3& l) {
+    const double sxy = l.position_m.z() / f * lat_old;
+    return std::max(0.0, l.sigma_m * l.sigma_m - sxy * sxy);
+  };
+  std::size_t good = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    refined_s2_[k] = -1.0;  // not aligned
+    const std::size_t ia = static_cast<std::size_t>(pair_ref_[k]);
+    const match::Landmark3& a = ref[ia];
+    const match::Landmark3& b = cur[static_cast<std::size_t>(pair_cur_[k])];
+    Vec3d qd;
+    if (!refiner_.refine(ref_left_, Span<const match::Landmark3>(ref.data(), ref.size()), ia, in.left, in.right, b,
+                         prev_T_cur, qd)
+             .is_ok()) {
+      counters_.increment(VoCounter::kTrackAlignFailed);
+      continue;
+    }
+    const double sz = static_cast<double>(
+        vision::depth_sigma_m(config_.camera, static_cast<float>(qd.z()), config_.stereo.disparity_sigma_px));
+    const double sa = a.position_m.z() / f * lat, sb = qd.z() / f * lat;
+    refined_[k] = qd;
+    refined_s2_[k] = depth_var(a) + sa * sa + sz * sz + sb * sb;
+    ++good;
+  }
+  if (good < config_.min_matches) {
+    counters_.increment(VoCounter::kStepNotRefined);
+    return 0;
+  }
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (refined_s2_[k] < 0.0) continue;
+    mp_[m] = mp_[k];
+    mc_[m] = refined_[k];
+    w_[m] = weight_for(refined_s2_[k]);
+    pair_ref_[m] = pair_ref_[k];
+    pair_cur_[m] = pair_cur_[k];
+    ++m;
+  }
+  return m;
 }
 
 Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
@@ -245,7 +391,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   step.corners = hs.is_ok() ? corners_.size() : 0;
   if (hs.is_ok()) {
     const Status ss = stereo_.match(in.left, in.right, Span<const vision::Corner>(corners_.data(), corners_.size()), points_);
-    if (ss.is_ok() || ss.code() == StatusCode::kCapacityExceeded) build_landmarks(lms);
+    if (ss.is_ok() || ss.code() == StatusCode::kCapacityExceeded) build_landmarks(in, lms);
   }
   step.stereo_points = points_.size();
   step.landmarks = lms.size();
@@ -273,6 +419,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
       integrator_.reset(p);
     }
     filter_ref_R_ = att != nullptr ? *att : Mat3d::Identity();
+    keep_reference_image(in.left);
     cur_ = next;
     have_prev_ = true;
     chain_R_ = Mat3d::Identity();
@@ -315,34 +462,18 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
         const match::Landmark3& b = lms[matches[k].cur];
         mp_[k] = a.position_m;
         mc_[k] = b.position_m;
-        const double s2 = a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m;
-        w_[k] = config_.weighted ? (s2 > 1e-12 ? 1e-4 / s2 : 1e8) : 1.0;  // scaled to ~1 for 1 cm sigmas
+        w_[k] = weight_for(a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m);
+        pair_ref_[k] = static_cast<std::int32_t>(matches[k].prev);
+        pair_cur_[k] = static_cast<std::int32_t>(matches[k].cur);
       }
-      const Span<const Vec3d> P(mp_.data(), n), C(mc_.data(), n);
-      const Span<const double> W(w_.data(), n);
       std::size_t n_final = n;
       std::size_t n_buf = n;
-      Result<motion::RigidEstimate> r = config_.mode == VmeMode::k6D ? motion::estimate_rigid_6d(P, C, W)
-                                                                    : motion::estimate_translation_3d(P, C, chain_R_, W);
-      if (r && config_.irls) {
-        r = config_.mode == VmeMode::k6D
-                ? motion::refine_irls_6d(P, C, r.value(), config_.irls_config, Span<double>(scratch_.data(), n), W)
-                : motion::refine_irls_3d(P, C, r.value(), config_.irls_config, Span<double>(scratch_.data(), n), W);
-      }
+      Result<motion::RigidEstimate> r = solve_pairs(n);
       for (int it = 0; r && it < config_.icp_iterations; ++it) {
         const std::size_t m = icp_associate(ref, lms, r->pose);
         n_buf = m;
         if (m < config_.min_matches) break;
-        const Span<const Vec3d> P2(mp_.data(), m), C2(mc_.data(), m);
-        const Span<const double> W2(w_.data(), m);
-        Result<motion::RigidEstimate> r2 = config_.mode == VmeMode::k6D
-                                               ? motion::estimate_rigid_6d(P2, C2, W2)
-                                               : motion::estimate_translation_3d(P2, C2, chain_R_, W2);
-        if (r2 && config_.irls) {
-          r2 = config_.mode == VmeMode::k6D
-                   ? motion::refine_irls_6d(P2, C2, r2.value(), config_.irls_config, Span<double>(scratch_.data(), m), W2)
-                   : motion::refine_irls_3d(P2, C2, r2.value(), config_.irls_config, Span<double>(scratch_.data(), m), W2);
-        }
+        Result<motion::RigidEstimate> r2 = solve_pairs(m);
         if (!r2) break;
         r = r2;
         step.matches = m;
@@ -376,23 +507,41 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   if (why != 0) {
     finish_lost(step, why, filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step));
   } else {
+    // Track refinement: the final pairs re-measured by patch alignment, the step re-estimated on them.
+    std::size_t n_pairs = n_final_pairs;
+    bool refined = false;
+    if (config_.refine_tracks && n_final_pairs > 0) {
+      const std::size_t m = refine_pairs(in, ref, lms, n_final_pairs, est.pose);
+      if (m > 0) {
+        n_pairs = m;  // the buffers now hold the aligned pairs
+        Result<motion::RigidEstimate> rr = solve_pairs(m);
+        if (rr && config_.mode == VmeMode::k6D && config_.anisotropic_vo_rotation) {
+          const Span<const Vec3d> P(mp_.data(), m), C(mc_.data(), m);
+          Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, rr.value(), stereo_point_model(true));
+          if (ra) rr = ra;
+        }
+        if (rr && rr->pose.is_finite() && rr->pose.t.norm() <= config_.max_step_m &&
+            rotation_angle_rad(rr->pose.R) <= config_.max_step_rotation_rad) {
+          est.pose = rr->pose;
+          est.covariance = rr->covariance;
+          refined = true;
+          step.refined_pairs = m;
+        }
+      }
+    }
     const Mat3d* att = sensor_attitude(in);
     if (filter_active(in)) {
       // 6D-VME on the final pairs gives this step's visual rotation for the attitude filter.
-      const Span<const Vec3d> P(mp_.data(), n_final_pairs), C(mc_.data(), n_final_pairs);
-      const Span<const double> W(w_.data(), n_final_pairs);
+      const Span<const Vec3d> P(mp_.data(), n_pairs), C(mc_.data(), n_pairs);
+      const Span<const double> W(w_.data(), n_pairs);
       Result<motion::RigidEstimate> r6 = motion::estimate_rigid_6d(P, C, W);
       if (r6 && config_.irls)
-        r6 = motion::refine_irls_6d(P, C, r6.value(), config_.irls_config, Span<double>(scratch_.data(), n_final_pairs), W);
+        r6 = motion::refine_irls_6d(P, C, r6.value(), config_.irls_config, Span<double>(scratch_.data(), n_pairs), W);
       if (r6 && config_.anisotropic_vo_rotation) {
-        motion::StereoPointModel pm;
-        const double fb = config_.camera.focal_px * config_.camera.baseline_m;
-        pm.ray_sigma_per_z2 = fb > 0.0 ? static_cast<double>(config_.stereo.disparity_sigma_px) / fb : 0.0;
-        pm.lateral_sigma_per_z = config_.camera.focal_px > 0.0 ? config_.lateral_sigma_px / config_.camera.focal_px : 0.0;
-        Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, r6.value(), pm);
+        Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, r6.value(), stereo_point_model(refined));
         if (ra) r6 = ra;
       }
-      const bool vo_ok = n_final_pairs >= config_.min_matches && r6 && r6->pose.is_finite() && rotation_angle_rad(r6->pose.R) <= config_.max_step_rotation_rad;
+      const bool vo_ok = n_pairs >= config_.min_matches && r6 && r6->pose.is_finite() && rotation_angle_rad(r6->pose.R) <= config_.max_step_rotation_rad;
       const Mat3d R6 = vo_ok ? r6->pose.R : Mat3d::Identity();
       const Mat3d cov_right = vo_ok ? Mat3d(R6.transpose() * r6->covariance.topLeftCorner<3, 3>() * R6) : Mat3d::Zero();
       step.has_vo_rotation = vo_ok;
@@ -406,7 +555,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
         const Mat3d R_step = ref_R.transpose() * (*att);
         Result<motion::RigidEstimate> r3 = motion::estimate_translation_3d(P, C, R_step, W);
         if (r3 && config_.irls)
-          r3 = motion::refine_irls_3d(P, C, r3.value(), config_.irls_config, Span<double>(scratch_.data(), n_final_pairs), W);
+          r3 = motion::refine_irls_3d(P, C, r3.value(), config_.irls_config, Span<double>(scratch_.data(), n_pairs), W);
         if (r3 && r3->pose.is_finite() && r3->pose.t.norm() <= config_.max_step_m) {
           est.pose = r3->pose;
           est.covariance = r3->covariance;
@@ -425,6 +574,7 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   filter_ref_R_ = (step.attitude_corrected ? (config_.use_filtered_orientation ? att_filter_.corrected() : filter_out_R_)
                                            : (in.has_absolute_attitude ? in.world_R_cam : Mat3d::Identity()));
   // This frame becomes the reference (it has enough landmarks), so the next good frame recovers.
+  keep_reference_image(in.left);
   cur_ = next;
   chain_R_ = Mat3d::Identity();
   chain_t_ = Vec3d::Zero();

@@ -39,6 +39,7 @@
 #include "nav/motion/rigid3d.hpp"
 #include "nav/vision/harris.hpp"
 #include "nav/vision/stereo.hpp"
+#include "nav/vo/track_refiner.hpp"
 
 namespace qnav::vo {
 
@@ -85,6 +86,21 @@ struct VoConfig {
   // covariance (depth sigma along the ray, lateral_sigma_px across; motion::refine_rigid_6d_stereo).
   bool anisotropic_vo_rotation = true;
   motion::AttitudeBiasConfig attitude_bias;
+  // Track refinement (beyond the paper). A Harris corner is re-detected in the next frame with a jitter
+  // of a few tenths of a pixel, and that jitter -- not the stereo depth -- limits the rotation a step
+  // measures. With refine_tracks the final pairs are re-measured once the step is accepted (TrackRefiner:
+  // the reference frame's left patch around each reference corner, warped by the step estimate through
+  // the landmark's local plane, aligned into the current left image, and the disparity measured again at
+  // the aligned point), and the step (6D-VME, or 3D-VME's translation and the attitude filter's rotation)
+  // is re-estimated on those pairs with the lateral sigma refined_lateral_sigma_px. Pairs that do not align are dropped;
+  // with fewer than min_matches left the unrefined estimate stands (counted). Costs one stored left
+  // image (max_width x max_height bytes) and O(pairs * iterations * patch) per frame.
+  bool refine_tracks = true;
+  // Sub-pixel disparity of every landmark by aligning its left patch along the row into the right image
+  // (instead of the ZNCC parabola at the rounded column); a point that does not align keeps the parabola.
+  bool refine_disparity = true;
+  TrackRefineConfig track_refine;
+  double refined_lateral_sigma_px = 0.1;
   double frame_period_s = 10.0;  // filter dt when stamp_ns is missing (0) or not increasing
 };
 
@@ -126,6 +142,7 @@ struct VoStep {
   std::size_t landmarks = 0;
   std::size_t matches = 0;
   std::size_t inliers = 0;
+  std::size_t refined_pairs = 0;  // pairs the step was re-estimated on (0: not refined)
   double rms_residual_m = 0.0;
   double normalized_residual = 0.0;
   bool attitude_corrected = false;  // world_T_cur.R is the attitude filter's estimate, not the raw sensor
@@ -148,6 +165,8 @@ enum class VoCounter : std::uint8_t {
   kImplausibleStep,
   kLostFrames,
   kAttitudeFilterRejected,  // sample or VO step refused by the attitude filter (its own counters say why)
+  kTrackAlignFailed,        // a final pair whose patch did not align (dropped from the refined step)
+  kStepNotRefined,          // fewer than min_matches pairs aligned: the unrefined step stands
   kCount
 };
 
@@ -179,7 +198,9 @@ class StereoVo {
   static const char* const kCounterNames[static_cast<std::size_t>(VoCounter::kCount)];
 
  private:
-  void build_landmarks(BoundedVector<match::Landmark3>& out) noexcept;
+  void build_landmarks(const VoInput& in, BoundedVector<match::Landmark3>& out) noexcept;
+  // The appearance descriptor of a landmark for fc-matching's optional term (match.appearance_weight > 0).
+  static bool fill_appearance(ConstImageViewU8 img, float x_px, float y_px, match::Landmark3& l) noexcept;
   // Flags the step lost and dead-reckons it on the chained prior, integrated with att (3D mode: the
   // attitude this frame integrates with; nullptr in 6D mode or without an absolute attitude).
   void finish_lost(VoStep& step, std::uint32_t why, const Mat3d* att) noexcept;
@@ -194,6 +215,21 @@ class StereoVo {
   // to mp_/mc_/w_.
   std::size_t icp_associate(const BoundedVector<match::Landmark3>& ref, const BoundedVector<match::Landmark3>& cur,
                             const Pose3& est) noexcept;
+  // Re-measures the n final pairs (mp_/mc_/w_, pair_ref_/pair_cur_) by patch alignment (refine_tracks);
+  // on success compacts the aligned pairs into the same buffers and returns their count, else 0 and the
+  // buffers are unchanged.
+  std::size_t refine_pairs(const VoInput& in, const BoundedVector<match::Landmark3>& ref,
+                           const BoundedVector<match::Landmark3>& cur, std::size_t n, const Pose3& prev_T_cur) noexcept;
+  // 6D-VME (mode k6D) or 3D-VME with the chained rotation, then IRLS when configured, on the first n pairs
+  // of mp_ / mc_ / w_.
+  Result<motion::RigidEstimate> solve_pairs(std::size_t n) noexcept;
+  // Keeps a copy of this frame's left image as the reference for refine_tracks.
+  void keep_reference_image(ConstImageViewU8 left) noexcept;
+  // Per-point stereo error model for the anisotropic 6D refinement (lateral sigma of refined pairs or not).
+  motion::StereoPointModel stereo_point_model(bool refined) const noexcept;
+  double weight_for(double sigma2_m2) const noexcept {
+    return config_.weighted ? (sigma2_m2 > 1e-12 ? 1e-4 / sigma2_m2 : 1e8) : 1.0;  // ~1 for 1 cm sigmas
+  }
 
   VoConfig config_;
   bool ready_ = false;
@@ -210,6 +246,13 @@ class StereoVo {
   Span<double> scratch_;
   Span<std::int32_t> nn_prev_;  // nearest cur of each prev landmark (ICP)
   Span<std::int32_t> nn_cur_;   // nearest prev of each cur landmark (ICP)
+  Span<std::int32_t> pair_ref_;  // landmark indices of the pairs in mp_ / mc_
+  Span<std::int32_t> pair_cur_;
+  Span<Vec3d> refined_;          // aligned current points (refine_pairs)
+  Span<double> refined_s2_;
+  Span<std::uint8_t> ref_pixels_;  // the reference frame's left image (refine_tracks)
+  ConstImageViewU8 ref_left_;
+  TrackRefiner refiner_;
   int cur_ = 0;
   bool have_prev_ = false;
   // Prior chained since the reference frame (across bad-input frames).

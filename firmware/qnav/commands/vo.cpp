@@ -6,12 +6,15 @@
 //                tuning knobs: [--nt X] [--sigma-m-deg D] [--dsig PX] [--nsig N] [--app W] [--lat-px PX]
 //                attitude filter knobs: [--att-vo-scale X] [--att-rate-scale X] [--att-no-step-rot] [--att-iso]
 //                [--att-filtered]
+//                track refinement knobs: [--no-refine] [--no-refine-disparity] [--ref-lat-px PX] [--track-radius R]
 //       Synthetic evaluation with exact ground truth: a 27 m run (attitude drifting, no recalibration)
 //       and a 100 m run (attitude recalibrated every 2 m), paper's noise model (n_t = 10 %, small
 //       attitude noise), frames rendered once and fed to every configuration. Prints one JSON object
 //       (--json) or a table. --quick: 6 m and 10 m (for the demo). --traj-dir writes per-config CSVs
 //       (path_m, err_m, primary seed) for scripts/vo_plot.py. --seeds runs every seed (the first is the
-//       primary: rel_error_pct_27m / _100m), and reports per-seed lists, max and mean.
+//       primary: rel_error_pct_27m / _100m), and reports per-seed lists, max and mean, and per
+//       configuration the visual step rotation's error over the 27 m runs (step_rot_rms_deg /
+//       step_rot_mean_deg per camera axis; 6D modes and 3D with the attitude filter).
 //       Configurations: main = 3D-fc-fast-att (3D-VME with the attitude drift filter, the default),
 //       3D-fc-fast (the paper's 3D-VME), 6D-fc-fast; att = the first only; all = + full fc / fb.
 //   qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE] [--weighted] [--max-depth M]
@@ -49,6 +52,8 @@ bool g_verbose = false;
 double g_dsig = 0.15, g_nsig = 3.0, g_app = 0.0;
 double g_att_vo_scale = tools::kVoRotationSigmaScale, g_att_rate_scale = 1.0, g_lat_px = -1.0;
 bool g_att_step_rot = true, g_att_aniso = true, g_att_filtered = false;
+bool g_refine = true, g_refine_disp = true;
+double g_ref_lat_px = -1.0, g_track_radius = 0.0;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -108,6 +113,10 @@ struct RunResult {
   std::vector<double> step_ms;
   std::size_t frames = 0, lost = 0;
   std::vector<double> trace_path, trace_err;
+  // Error of the visual step rotation per axis (camera frame, deg): the attitude filter's 6D rotation in
+  // 3D-att mode, the integrated step in 6D mode (3D mode without the filter has none).
+  Vec3d rot_sum_deg = Vec3d::Zero(), rot_sum2_deg = Vec3d::Zero();
+  std::size_t rot_n = 0;
 };
 
 struct Scenario {
@@ -146,6 +155,10 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     c.anisotropic_vo_rotation = g_att_aniso;
     c.use_filtered_orientation = g_att_filtered;
     if (g_lat_px > 0.0) c.lateral_sigma_px = g_lat_px;
+    c.refine_tracks = g_refine;
+    c.refine_disparity = g_refine_disp;
+    if (g_ref_lat_px > 0.0) c.refined_lateral_sigma_px = g_ref_lat_px;
+    if (g_track_radius > 0.0) c.track_refine.align.radius = static_cast<int>(g_track_radius);
     std::unique_ptr<VoBox> b(new VoBox);
     if (!b->init(c)) return false;
     vos.push_back(std::move(b));
@@ -203,7 +216,7 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
         const Vec3d att_err = motion::rotation_log(cam.R.transpose() * vos[k]->vo.pose().R);
         std::printf("%s f%zu %s corners %zu stereo %zu matches %zu rms %.4f step %.4f err %+.4f %+.4f %+.4f flags 0x%x  "
                     "step_rot_err %+.4f %+.4f %+.4f deg pred_sigma %.4f %.4f %.4f deg  att_err %+.4f %+.4f %+.4f deg "
-                    "drift %+.4f %+.4f %+.4f est %+.4f %+.4f %+.4f deg\n",
+                    "drift %+.4f %+.4f %+.4f est %+.4f %+.4f %+.4f deg true_rot %+.4f %+.4f %+.4f\n",
                     cfgs[k].name, frame, sc.name, r->corners, r->stereo_points, r->matches, r->rms_residual_m,
                     ts.t.norm(), d.x(), d.y(), d.z(), r->flags, rad_to_deg(rot_err.x()), rad_to_deg(rot_err.y()),
                     rad_to_deg(rot_err.z()), rad_to_deg(std::sqrt(std::max(0.0, rc(0, 0)))),
@@ -211,9 +224,18 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
                     rad_to_deg(att_err.x()), rad_to_deg(att_err.y()), rad_to_deg(att_err.z()),
                     rad_to_deg(noise.drift_rad().x()), rad_to_deg(noise.drift_rad().y()),
                     rad_to_deg(noise.drift_rad().z()), rad_to_deg(r->attitude_drift_rad.x()),
-                    rad_to_deg(r->attitude_drift_rad.y()), rad_to_deg(r->attitude_drift_rad.z()));
+                    rad_to_deg(r->attitude_drift_rad.y()), rad_to_deg(r->attitude_drift_rad.z()),
+                    rad_to_deg(motion::rotation_log(ts.R).x()), rad_to_deg(motion::rotation_log(ts.R).y()),
+                    rad_to_deg(motion::rotation_log(ts.R).z()));
       }
       if (!r || (frame > 0 && !r->visual)) ++rr.lost;
+      if (r && frame > 0 && r->visual && (r->has_vo_rotation || cfgs[k].mode == vo::VmeMode::k6D)) {
+        const Mat3d& Rv = r->has_vo_rotation ? r->vo_R_prev_cur : r->prev_T_cur.R;
+        const Vec3d e = motion::rotation_log(prev_cam.inverse().compose(cam).R.transpose() * Rv) * (180.0 / M_PI);
+        rr.rot_sum_deg += e;
+        rr.rot_sum2_deg += e.cwiseAbs2();
+        ++rr.rot_n;
+      }
       const double err = (vos[k]->vo.pose().t - cam.t).norm();
       rr.max_error_m = std::max(rr.max_error_m, err);
       rr.end_error_m = err;
@@ -223,6 +245,18 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     }
     prev_cam = cam;
     prev_meas = meas;
+  }
+  if (g_verbose) {
+    for (std::size_t k = 0; k < vos.size(); ++k) {
+      std::printf("%s %s counters:", cfgs[k].name, sc.name);
+      const auto& vc = vos[k]->vo.counters();
+      for (std::size_t i = 0; i < vc.size(); ++i)
+        if (vc.count_at(i) != 0) std::printf(" %s=%u", vc.name_at(i), vc.count_at(i));
+      const auto& ac = vos[k]->vo.attitude_filter().counters();
+      for (std::size_t i = 0; i < ac.size(); ++i)
+        if (ac.count_at(i) != 0) std::printf(" %s=%u", ac.name_at(i), ac.count_at(i));
+      std::printf("\n");
+    }
   }
   return true;
 }
@@ -252,8 +286,11 @@ int run_eval(int argc, char** argv) {
   if (!cli::option_double(argc, argv, "--dsig", g_dsig) || !cli::option_double(argc, argv, "--nsig", g_nsig) ||
       !cli::option_double(argc, argv, "--app", g_app) || !cli::option_double(argc, argv, "--att-vo-scale", g_att_vo_scale) ||
       !cli::option_double(argc, argv, "--att-rate-scale", g_att_rate_scale) ||
-      !cli::option_double(argc, argv, "--lat-px", g_lat_px))
+      !cli::option_double(argc, argv, "--lat-px", g_lat_px) || !cli::option_double(argc, argv, "--ref-lat-px", g_ref_lat_px) ||
+      !cli::option_double(argc, argv, "--track-radius", g_track_radius))
     return 2;
+  g_refine = !cli::flag(argc, argv, "--no-refine");
+  g_refine_disp = !cli::flag(argc, argv, "--no-refine-disparity");
   g_att_step_rot = !cli::flag(argc, argv, "--att-no-step-rot");
   g_att_aniso = !cli::flag(argc, argv, "--att-iso");
   g_att_filtered = cli::flag(argc, argv, "--att-filtered");
@@ -376,9 +413,22 @@ int run_eval(int argc, char** argv) {
                 s100.max(), s100.mean(), median(ms_of(0)), res[0][0][0].path_m, res[0][1][0].path_m);
     for (std::size_t k = 0; k < cfgs.size(); ++k) {
       const Stats a = collect(k, 0), b = collect(k, 1);
-      std::printf("%s{\"name\":\"%s\",\"rel_error_pct_27m\":%.3f,\"max_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
+      // Step rotation error over every seed's 27 m run.
+      Vec3d rs = Vec3d::Zero(), rs2 = Vec3d::Zero();
+      std::size_t rn = 0;
+      for (std::size_t si = 0; si < seeds.size(); ++si) {
+        rs += res[si][0][k].rot_sum_deg;
+        rs2 += res[si][0][k].rot_sum2_deg;
+        rn += res[si][0][k].rot_n;
+      }
+      const double nn = rn > 0 ? static_cast<double>(rn) : 1.0;
+      std::printf("%s{\"name\":\"%s\",\"step_rot_steps\":%zu,\"step_rot_rms_deg\":[%.4f,%.4f,%.4f],"
+                  "\"step_rot_mean_deg\":[%.4f,%.4f,%.4f],",
+                  k ? "," : "", cfgs[k].name, rn, std::sqrt(rs2.x() / nn), std::sqrt(rs2.y() / nn), std::sqrt(rs2.z() / nn),
+                  rs.x() / nn, rs.y() / nn, rs.z() / nn);
+      std::printf("\"rel_error_pct_27m\":%.3f,\"max_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
                   "\"max_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
-                  k ? "," : "", cfgs[k].name, pct(res[0][0][k]), max_pct(res[0][0][k]), pct(res[0][1][k]),
+                  pct(res[0][0][k]), max_pct(res[0][0][k]), pct(res[0][1][k]),
                   max_pct(res[0][1][k]));
       print_list(a);
       std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", a.max(),

@@ -1,0 +1,135 @@
+#include "nav/vo/track_refiner.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+namespace qnav::vo {
+
+Status TrackRefiner::init(const TrackRefineConfig& config, const vision::StereoCamera& camera) noexcept {
+  ready_ = false;
+  if (config.normal_neighbours < 3 || config.normal_neighbours > kMaxNeighbours || !(config.max_planarity > 0.0) ||
+      !(config.max_planarity <= 1.0) || !(config.max_disparity_change_px > 0.0f))
+    return Status(StatusCode::kInvalidArgument, "track refine config out of range");
+  if (!(camera.focal_px > 0.0) || !(camera.baseline_m > 0.0) || !std::isfinite(camera.focal_px) ||
+      !std::isfinite(camera.baseline_m) || !std::isfinite(camera.cu_px) || !std::isfinite(camera.cv_px))
+    return Status(StatusCode::kInvalidArgument, "track refine: invalid stereo camera");
+  QNAV_RETURN_IF_ERROR(aligner_.configure(config.align));
+  config_ = config;
+  camera_ = camera;
+  ready_ = true;
+  return Status::ok();
+}
+
+Vec3d TrackRefiner::local_normal(Span<const match::Landmark3> ref, std::size_t index) const noexcept {
+  const Vec3d& p = ref[index].position_m;
+  const Vec3d facing = -p.normalized();  // fallback: a plane facing the camera (scale change only)
+  // The K nearest reference landmarks (insertion into a sorted fixed array; K <= kMaxNeighbours).
+  const int k_max = config_.normal_neighbours;
+  double d2[kMaxNeighbours];
+  std::size_t idx[kMaxNeighbours];
+  int k = 0;
+  for (std::size_t j = 0; j < ref.size(); ++j) {
+    const double d = (ref[j].position_m - p).squaredNorm();
+    if (k == k_max && d >= d2[k - 1]) continue;
+    int pos = k < k_max ? k++ : k - 1;
+    while (pos > 0 && d2[pos - 1] > d) {
+      d2[pos] = d2[pos - 1];
+      idx[pos] = idx[pos - 1];
+      --pos;
+    }
+    d2[pos] = d;
+    idx[pos] = j;
+  }
+  if (k < 3) return facing;
+  Vec3d mean = Vec3d::Zero();
+  for (int i = 0; i < k; ++i) mean += ref[idx[i]].position_m;
+  mean /= static_cast<double>(k);
+  Mat3d cov = Mat3d::Zero();
+  for (int i = 0; i < k; ++i) {
+    const Vec3d d = ref[idx[i]].position_m - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3d> es(cov);
+  if (es.info() != Eigen::Success) return facing;
+  const Vec3d ev = es.eigenvalues();  // increasing
+  if (!(ev(1) > 0.0) || !(ev(0) <= config_.max_planarity * ev(1))) return facing;
+  Vec3d n = es.eigenvectors().col(0);
+  if (n.dot(p) > 0.0) n = -n;  // towards the camera
+  return n.allFinite() ? n : facing;
+}
+
+bool TrackRefiner::plane_affine(const Vec3d& point_ref_m, const Vec3d& normal_ref, const Pose3& prev_T_cur, double u_px,
+                                double v_px, float (&affine)[4]) const noexcept {
+  const double f = camera_.focal_px;
+  const double dp = normal_ref.dot(point_ref_m);
+  const double nt = normal_ref.dot(prev_T_cur.t);
+  // Current pixel -> ray in the reference frame -> plane -> reference pixel.
+  auto map = [&](double u, double v, double& uo, double& vo) {
+    const Vec3d dir = prev_T_cur.R * Vec3d((u - camera_.cu_px) / f, (v - camera_.cv_px) / f, 1.0);
+    const double den = normal_ref.dot(dir);
+    if (!(std::fabs(den) > 1e-6)) return false;
+    const Vec3d x = prev_T_cur.t + ((dp - nt) / den) * dir;
+    if (!(x.z() > 1e-6)) return false;
+    uo = f * x.x() / x.z();
+    vo = f * x.y() / x.z();
+    return std::isfinite(uo) && std::isfinite(vo);
+  };
+  double u1 = 0.0, v1 = 0.0, u2 = 0.0, v2 = 0.0, u3 = 0.0, v3 = 0.0, u4 = 0.0, v4 = 0.0;
+  if (!map(u_px + 0.5, v_px, u1, v1) || !map(u_px - 0.5, v_px, u2, v2) || !map(u_px, v_px + 0.5, u3, v3) ||
+      !map(u_px, v_px - 0.5, u4, v4))
+    return false;
+  affine[0] = static_cast<float>(u1 - u2);
+  affine[1] = static_cast<float>(u3 - u4);
+  affine[2] = static_cast<float>(v1 - v2);
+  affine[3] = static_cast<float>(v3 - v4);
+  return true;
+}
+
+Status TrackRefiner::refine(ConstImageViewU8 ref_left, Span<const match::Landmark3> ref, std::size_t ref_index,
+                            ConstImageViewU8 left, ConstImageViewU8 right, const match::Landmark3& cur,
+                            const Pose3& prev_T_cur, Vec3d& cur_point_m) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "TrackRefiner::refine before init");
+  if (ref_index >= ref.size()) return Status(StatusCode::kOutOfRange, "track refine: reference index");
+  const match::Landmark3& a = ref[ref_index];
+  float warp[4] = {1.0f, 0.0f, 0.0f, 1.0f};
+  const Vec3d n = local_normal(ref, ref_index);
+  if (!plane_affine(a.position_m, n, prev_T_cur, static_cast<double>(cur.u_px), static_cast<double>(cur.v_px), warp)) {
+    warp[0] = 1.0f;
+    warp[1] = 0.0f;
+    warp[2] = 0.0f;
+    warp[3] = 1.0f;
+  }
+  vision::PatchAlignResult rl, rr;
+  Status s = aligner_.align_warped(ref_left, a.u_px, a.v_px, warp, left, cur.u_px, cur.v_px, false, rl);
+  if (!s.is_ok() && s.code() == StatusCode::kInvalidArgument)  // an extreme warp: try without it
+    s = aligner_.align(ref_left, a.u_px, a.v_px, left, cur.u_px, cur.v_px, false, rl);
+  if (!s.is_ok()) return Status(StatusCode::kNotFound, "track refine: left patch did not align");
+  const double z = cur.position_m.z();
+  const float d0 = z > 0.0 ? static_cast<float>(camera_.baseline_m * camera_.focal_px / z) : 0.0f;
+  if (!aligner_.align(left, rl.x_px, rl.y_px, right, rl.x_px - d0, rl.y_px, true, rr).is_ok())
+    return Status(StatusCode::kNotFound, "track refine: disparity did not align");
+  Vec3f q;
+  if (!vision::triangulate(camera_, rl.x_px, rl.y_px, rl.x_px - rr.x_px, q) || !q.allFinite())
+    return Status(StatusCode::kNotFound, "track refine: no positive disparity");
+  cur_point_m = q.cast<double>();
+  return Status::ok();
+}
+
+Status TrackRefiner::refine_disparity(ConstImageViewU8 left, ConstImageViewU8 right, float disparity_sigma_px,
+                                      vision::StereoPoint& p) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "TrackRefiner::refine_disparity before init");
+  vision::PatchAlignResult ra;
+  if (!aligner_.align(left, p.x_px, p.y_px, right, p.x_px - p.disparity_px, p.y_px, true, ra).is_ok())
+    return Status(StatusCode::kNotFound, "track refine: disparity did not align");
+  const float d = p.x_px - ra.x_px;
+  Vec3f q;
+  if (!(std::fabs(d - p.disparity_px) <= config_.max_disparity_change_px) ||
+      !vision::triangulate(camera_, p.x_px, p.y_px, d, q))
+    return Status(StatusCode::kNotFound, "track refine: aligned disparity implausible");
+  p.disparity_px = d;
+  p.p_m = q;
+  p.sigma_z_m = vision::depth_sigma_m(camera_, q.z(), disparity_sigma_px);
+  return Status::ok();
+}
+
+}  // namespace qnav::vo
