@@ -49,7 +49,7 @@ def main():
     ax[1].set_ylim(0, 105)
     ax[1].axhline(95, color="gray", lw=0.5)
     ax[1].legend(fontsize=7)
-    ax[1].set_title("route side (decided: tracking, dead-reckoned or route end)")
+    ax[1].set_title("route side (decided: a side reported, not unknown)")
     fig.tight_layout()
     fig.savefig(out + "/route_offsets.png", dpi=90)
 
@@ -77,17 +77,20 @@ def main():
         ax.plot(ne, nn, "ks", ms=5)
         ax.plot(te, tn, "bo", ms=6)
         ax.annotate(x["sensed"], (te, tn), fontsize=8, xytext=(4, 4), textcoords="offset points")
-        if x["status"] == "tracking":
-            # Arrow from the vehicle towards the route, |cross-track| long, on the reported side.
+        if x["side"] != "unknown":
+            # Arrow from the vehicle towards the route, |cross-track| long, on the reported side
+            # (dashed: the filter was not yet confident, the side came from a strong registration).
             dn, de = nn - tn, ne - te
             d = max((dn * dn + de * de) ** 0.5, 1e-6)
             L = abs(float(x["cross_track_m"]))
             ok = x["side"] == x["true_side"]
             ax.annotate("", xy=(te + L * de / d, tn + L * dn / d), xytext=(te, tn),
-                        arrowprops=dict(arrowstyle="->", color="g" if ok else "r", lw=1.5))
+                        arrowprops=dict(arrowstyle="->", color="g" if ok else "r", lw=1.5,
+                                        ls="-" if x["status"] != "hold_course" else "--"))
     ax.plot([], [], "ks", label="estimated node (true position of its tile)")
     ax.plot([], [], "bo", label="true vehicle position at the sensed tile")
-    ax.plot([], [], "g-", label="steer towards the route (tracking, side correct)")
+    ax.plot([], [], "g-", label="side reported and correct, steering (tracking)")
+    ax.plot([], [], "g--", label="side reported and correct, holding course")
     ax.set_xlabel("east, m")
     ax.set_ylabel("north, m")
     ax.legend(fontsize=7, loc="lower right")

@@ -44,7 +44,7 @@ Result<double> CameraTileProjector::project(ConstImageViewU8 image, const Camera
   geometry.resolution_m = res;
   geometry.origin_north_m = cn + 0.5 * H * res;
   geometry.origin_east_m = ce - 0.5 * W * res;
-  geometry.pose = Pose2{cn, ce, heading_rad};
+  geometry.pose = Pose2{ned_T_cam.t.x(), ned_T_cam.t.y(), heading_rad};  // the nadir: the vehicle's position
   // Camera coordinates of a ground point G: R^T (G - t), linear in the raster's (c, r).
   const Mat3d Rt = ned_T_cam.R.transpose();
   const Vec3d p00 = Rt * (Vec3d(geometry.origin_north_m - 0.5 * res, geometry.origin_east_m + 0.5 * res, ground_down_m) - ned_T_cam.t);

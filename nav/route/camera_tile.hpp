@@ -9,7 +9,10 @@
 // camera coordinates (x right, y down in the image, z along the optical axis) to NED. Tile raster:
 // the same convention as nav/sonar's SonarTile (row 0 north, columns east, pixel (c, r) centre at
 // north = origin_north_m - (r + 0.5) res, east = origin_east_m + (c + 0.5) res), centred on the ground
-// point of the optical axis; the tile pose is that point with the vehicle's compass heading.
+// point of the optical axis; the tile pose is the camera's nadir (the vehicle's position, as a sonar
+// tile's pose is, so guidance's cross-track and side are the vehicle's and not where a rolled or
+// pitched camera happens to look: 2 deg of roll at 0.8 m moves the optical axis 2.8 cm) with the
+// vehicle's compass heading.
 // A raster pixel is covered when its ground point projects inside the image (bilinear sample) and lies
 // in front of the camera; the rest is coverage 0 and TileFeatureExtractor ignores it.
 // Flat-ground assumption: relief of height h seen from range Z shifts by h/Z of its offset from the
@@ -54,7 +57,7 @@ class CameraTileProjector {
   // outside (0, 90) deg).
   Status init(const CameraTileConfig& config) noexcept;
   // Fills out (width_px x height_px of the config; a larger view is used from its top-left) and coverage
-  // (same size), and geometry (resolution, origin, pose = optical-axis ground point + heading_rad).
+  // (same size), and geometry (resolution, origin, pose = camera nadir + heading_rad).
   // Returns the covered fraction of the raster.
   Result<double> project(ConstImageViewU8 image, const CameraIntrinsics& k, const Pose3& ned_T_cam, double ground_down_m,
                          double heading_rad, ImageViewF32 out, ImageViewU8 coverage, TileGeometry& geometry) noexcept;

@@ -1,6 +1,7 @@
 #include "nav/route/guidance.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace qnav::route {
 
@@ -17,9 +18,28 @@ const char* to_string(RouteSide s) noexcept {
   switch (s) {
     case RouteSide::kPort: return "port";
     case RouteSide::kStarboard: return "starboard";
-    case RouteSide::kOnRoute: break;
+    case RouteSide::kOnRoute: return "on_route";
+    case RouteSide::kUnknown: break;
   }
-  return "on_route";
+  return "unknown";
+}
+
+RouteSide Guidance::decide_side(double cross_track_m, double sigma_m) const noexcept {
+  if (!std::isfinite(cross_track_m) || !std::isfinite(sigma_m)) return RouteSide::kUnknown;
+  const double margin = config_.side_n_sigma * sigma_m;
+  if (cross_track_m > config_.side_deadband_m + margin) return RouteSide::kStarboard;
+  if (cross_track_m < -(config_.side_deadband_m + margin)) return RouteSide::kPort;
+  if (std::abs(cross_track_m) + margin <= config_.side_deadband_m) return RouteSide::kOnRoute;
+  return RouteSide::kUnknown;
+}
+
+const char* to_string(OffsetSource s) noexcept {
+  switch (s) {
+    case OffsetSource::kRegistration: return "registration";
+    case OffsetSource::kDeadReckoning: return "dead_reckoning";
+    case OffsetSource::kNone: break;
+  }
+  return "none";
 }
 
 GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const NodeMeta& node, const NodeMeta& ahead,
@@ -27,27 +47,50 @@ GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const
   GuidanceOutput g;
   g.node = node.index;
   const bool finite_heading = std::isfinite(vehicle_heading_rad);
-  const bool registered = reg.ok && reg.inliers >= config_.min_inliers && reg.sensed_to_node.is_finite();
+  const bool reg_usable = reg.ok && reg.sensed_to_node.is_finite();
+  const bool registered = reg_usable && reg.inliers >= config_.min_inliers;
   const bool nav_ok = sensed_nav_pose.is_finite();
-  bool dead_reckon = false;
-  if (confident && !registered && finite_heading && have_fix_ && nav_ok && config_.dead_reckon_max_m > 0.0) {
-    const double travelled = (sensed_nav_pose.translation() - fix_nav_.translation()).norm();
-    dead_reckon = travelled <= config_.dead_reckon_max_m;
-  }
-  if (!confident || !finite_heading || (!registered && !dead_reckon)) {
+  // Dead reckoning from the last fix (the node estimate must be trusted: confident filter).
+  const bool can_dead_reckon = confident && !registered && have_fix_ && nav_ok;
+  const double travelled = can_dead_reckon ? (sensed_nav_pose.translation() - fix_nav_.translation()).norm() : 0.0;
+  const bool dead_reckon = can_dead_reckon && finite_heading && config_.dead_reckon_max_m > 0.0 && travelled <= config_.dead_reckon_max_m;
+  const bool steer = confident && finite_heading && (registered || dead_reckon);
+  // Not steered on, but enough to say which side of the route the vehicle is on: a strong
+  // registration while the filter is not yet confident, or dead reckoning a little further.
+  const bool strong_reg = reg_usable && config_.unconfident_min_inliers > 0 && reg.inliers >= config_.unconfident_min_inliers;
+  const bool side_reg = !steer && strong_reg;
+  const bool side_dr = !steer && !side_reg && can_dead_reckon && travelled <= config_.dead_reckon_side_max_m;
+  const double held = have_command_ ? last_command_rad_ : (finite_heading ? wrap_angle_rad(vehicle_heading_rad) : 0.0);
+  if (!steer && !side_reg && !side_dr) {
     g.status = GuidanceStatus::kHoldCourse;
-    g.commanded_heading_rad = have_command_ ? last_command_rad_ : (finite_heading ? wrap_angle_rad(vehicle_heading_rad) : 0.0);
+    g.commanded_heading_rad = held;
     return g;
   }
   // Vehicle pose in the route frame: from the registration, or carried from the last fix.
-  const Pose2 vehicle = registered ? node.pose.compose(reg.sensed_to_node) : fix_route_.compose(fix_nav_.inverse().compose(sensed_nav_pose));
+  const bool from_reg = registered || side_reg;
+  g.offsets = from_reg ? OffsetSource::kRegistration : OffsetSource::kDeadReckoning;
+  const Pose2 vehicle = from_reg ? node.pose.compose(reg.sensed_to_node) : fix_route_.compose(fix_nav_.inverse().compose(sensed_nav_pose));
   const Pose2 in_node = node.pose.inverse().compose(vehicle);
   const double sign = direction == RouteDirection::kForward ? 1.0 : -1.0;
   g.along_track_m = sign * in_node.x_m;
   g.cross_track_m = sign * in_node.y_m;
-  g.side = g.cross_track_m > config_.side_deadband_m ? RouteSide::kStarboard
-           : (g.cross_track_m < -config_.side_deadband_m ? RouteSide::kPort : RouteSide::kOnRoute);
+  // in_node's translation is the registration's: its y variance is the cross-track variance.
+  const double var = reg.covariance(1, 1);
+  const double reg_sigma = std::isfinite(var) ? std::sqrt(var > 0.0 ? var : 0.0) : std::numeric_limits<double>::infinity();
+  g.cross_track_sigma_m = from_reg ? reg_sigma : fix_sigma_m_ + config_.dead_reckon_heading_sigma_rad * travelled;
+  g.side = decide_side(g.cross_track_m, g.cross_track_sigma_m);
   g.heading_error_rad = wrap_angle_rad(in_node.heading_rad + (direction == RouteDirection::kForward ? 0.0 : kPi));
+  if (from_reg && nav_ok && std::isfinite(g.cross_track_sigma_m)) {
+    have_fix_ = true;
+    fix_route_ = vehicle;
+    fix_nav_ = sensed_nav_pose;
+    fix_sigma_m_ = g.cross_track_sigma_m;
+  }
+  if (!steer) {
+    g.status = GuidanceStatus::kHoldCourse;
+    g.commanded_heading_rad = held;
+    return g;
+  }
   g.waypoint_ne = ahead.pose.translation();
   const Vec2d rel = vehicle.inverse().apply(g.waypoint_ne);
   g.waypoint_bearing_rad = std::atan2(rel.y(), rel.x());
@@ -57,11 +100,6 @@ GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const
     g.status = GuidanceStatus::kRouteEnd;
     g.waypoint_bearing_rad = 0.0;
     g.commanded_heading_rad = wrap_angle_rad(vehicle_heading_rad);
-  }
-  if (registered && nav_ok) {
-    have_fix_ = true;
-    fix_route_ = vehicle;
-    fix_nav_ = sensed_nav_pose;
   }
   have_command_ = true;
   last_command_rad_ = g.commanded_heading_rad;

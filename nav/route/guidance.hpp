@@ -3,7 +3,9 @@
 //    the sensed tile's origin is the vehicle's position at the tile centre): along-track offset and
 //    cross-track offset, signed in the direction of travel (reverse passes flip both);
 //  - side: which side of the route the vehicle lies on (starboard / port of the route's direction
-//    of travel, on_route inside the dead band) -- the paper's Fig. 10 determination;
+//    of travel, on_route inside the dead band) -- the paper's Fig. 10 determination -- decided only
+//    when the cross-track offset is clear of the dead band by side_n_sigma of its uncertainty
+//    (cross_track_sigma_m); otherwise kUnknown;
 //  - heading error: vehicle heading minus the route's heading in the direction of travel;
 //  - steering: a look-ahead waypoint lookahead_nodes ahead on the route (the paper's future-work
 //    control strategy) expressed as a bearing relative to the vehicle heading and a commanded
@@ -18,8 +20,16 @@
 // (the look-ahead node is the estimated node and the vehicle is ahead of it): offsets and side are
 // reported, the commanded heading is the current heading (no turn back to the last waypoint).
 // Otherwise the paper's default strategy: hold course (commanded heading = last good command, or the
-// current heading), status kHoldCourse. Pure function of its inputs + the held command and fix;
-// O(1), no heap.
+// current heading), status kHoldCourse, side kUnknown -- except that a registration with at least
+// unconfident_min_inliers inliers (0 = off) still gives the offsets and the side while the filter is
+// not yet confident (the status stays kHoldCourse and nothing is steered on it, but the operator
+// learns which side of the route the vehicle is on; that registration is also a fix for dead
+// reckoning), and that a confident filter beyond dead_reckon_max_m of travel from the last fix but
+// within dead_reckon_side_max_m still reports the dead-reckoned offsets and side (status kHoldCourse:
+// too far to steer on, not too far to know the side when the offset is large). Cross-track uncertainty: from the registration's covariance; dead-reckoned, the fix's
+// plus dead_reckon_heading_sigma_rad x the distance travelled since the fix (the heading error of
+// the dead reckoning turns travel into cross-track error). Pure function of its inputs + the held
+// command and fix; O(1), no heap.
 #pragma once
 
 #include <cstdint>
@@ -33,15 +43,21 @@
 namespace qnav::route {
 
 enum class GuidanceStatus : std::uint8_t { kTracking, kHoldCourse, kDeadReckoned, kRouteEnd };
-enum class RouteSide : std::int8_t { kPort = -1, kOnRoute = 0, kStarboard = 1 };
+enum class RouteSide : std::int8_t { kPort = -1, kOnRoute = 0, kStarboard = 1, kUnknown = 2 };
+enum class OffsetSource : std::uint8_t { kNone, kRegistration, kDeadReckoning };  // where the offsets came from
 const char* to_string(GuidanceStatus s) noexcept;
 const char* to_string(RouteSide s) noexcept;
+const char* to_string(OffsetSource s) noexcept;
 
 struct GuidanceConfig {
   double lookahead_nodes = 2.0;
   double side_deadband_m = 0.5;
   std::uint32_t min_inliers = 0;  // a registration with fewer inliers is not steered on (hold course)
   double dead_reckon_max_m = 0.0;  // travel after the last fix still steered on dead reckoning; 0 = never
+  double dead_reckon_side_max_m = 0.0;  // ... over which, holding course, the dead-reckoned offsets and side are still reported
+  double dead_reckon_heading_sigma_rad = 0.01;  // heading error of the dead reckoning (cross-track sigma growth per metre)
+  std::uint32_t unconfident_min_inliers = 0;    // side from a registration this strong before the filter is confident; 0 = off
+  double side_n_sigma = 2.0;                    // side decided when |cross-track| is this many sigma clear of the dead band
 };
 
 struct GuidanceOutput {
@@ -49,7 +65,9 @@ struct GuidanceOutput {
   std::uint32_t node = 0;
   double along_track_m = 0.0;      // + ahead of the node in the direction of travel
   double cross_track_m = 0.0;      // + vehicle to starboard of the route
-  RouteSide side = RouteSide::kOnRoute;
+  double cross_track_sigma_m = 0.0;  // 1-sigma uncertainty of cross_track_m (0 when no offsets are reported)
+  OffsetSource offsets = OffsetSource::kNone;  // kNone: offsets, side and heading error not known (all 0 / kUnknown)
+  RouteSide side = RouteSide::kUnknown;
   double heading_error_rad = 0.0;  // vehicle heading - route heading (direction of travel)
   Vec2d waypoint_ne = Vec2d::Zero();  // look-ahead waypoint, route frame (north, east)
   double waypoint_bearing_rad = 0.0;  // relative to the vehicle heading, + to starboard
@@ -70,12 +88,14 @@ class Guidance {
   }
 
  private:
+  RouteSide decide_side(double cross_track_m, double sigma_m) const noexcept;
   GuidanceConfig config_;
   bool have_command_ = false;
   double last_command_rad_ = 0.0;
   bool have_fix_ = false;
-  Pose2 fix_route_{};  // vehicle pose in the route frame at the last kTracking output
+  Pose2 fix_route_{};  // vehicle pose in the route frame at the last registration used
   Pose2 fix_nav_{};    // the same instant in the pass's dead-reckoned frame
+  double fix_sigma_m_ = 0.0;  // cross-track sigma at the fix
 };
 
 }  // namespace qnav::route

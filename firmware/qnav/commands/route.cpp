@@ -133,7 +133,10 @@ route::LocaliserConfig localiser_config(route::RouteDirection d, std::size_t max
   c.filter.searching_registrations = 16;  // 2 belief + 14 wide while searching (update <= ~15 ms, 10,000 nodes)
   c.guidance.side_deadband_m = 1.0;
   c.guidance.min_inliers = 7;  // chance_inliers + 2: at 5-6 inliers the side was wrong on 8-30% of tiles
-  c.guidance.dead_reckon_max_m = 150.0;  // ~2.5 nodes of travel on dead reckoning after the last fix
+  c.guidance.dead_reckon_max_m = 150.0;  // ~2.5 nodes of travel steered on dead reckoning after the last fix
+  c.guidance.dead_reckon_side_max_m = 450.0;  // ~7.5 nodes over which the dead-reckoned side is still reported
+  c.guidance.dead_reckon_heading_sigma_rad = 0.025;  // measured: dead-reckoned cross-track error vs travel, `route eval`
+  c.guidance.unconfident_min_inliers = 8;  // = lost_evidence_inliers: no registration this strong was wrong in `qnav route eval`
   return c;
 }
 
@@ -266,8 +269,17 @@ FILE* open_repeat_csv(int argc, char** argv) {
     std::fprintf(stderr, "qnav route repeat: cannot write %s\n", csv);
     return nullptr;
   }
-  std::fprintf(f, "tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,along_track_m,heading_error_rad,waypoint_bearing_rad\n");
+  std::fprintf(f, "tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,along_track_m,heading_error_rad,"
+                 "waypoint_bearing_rad,cross_track_sigma_m,offsets\n");
   return f;
+}
+
+// One row of that CSV (true_node -1 and true_side "unknown" when there is no truth).
+void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side) {
+  const route::GuidanceOutput& g = st.guidance;
+  std::fprintf(f, "%ld,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%.2f,%.4f,%.4f,%.2f,%s\n", tile, true_node, st.estimate, static_cast<double>(st.probability),
+               st.entropy, st.confident ? 1 : 0, st.best_inliers, route::to_string(g.status), route::to_string(g.side), true_side, g.cross_track_m,
+               g.along_track_m, g.heading_error_rad, g.waypoint_bearing_rad, g.cross_track_sigma_m, route::to_string(g.offsets));
 }
 
 // false (reported) if the data did not reach the file (disk full, I/O error).
@@ -387,10 +399,7 @@ int cmd_repeat(int argc, char** argv) {
     const double along_fwd = t.truth_along_m;
     const int tn = true_node(node_along, along_fwd);
     ok1 += std::abs(static_cast<int>(st.estimate) - tn) <= 1;
-    std::fprintf(f, "%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%.2f,%.4f,%.4f\n", tiles, tn, st.estimate, static_cast<double>(st.probability),
-                 st.entropy, st.confident ? 1 : 0, st.best_inliers, route::to_string(st.guidance.status), route::to_string(st.guidance.side),
-                 route::to_string(expected_side(lateral, reverse, lc.guidance.side_deadband_m)), st.guidance.cross_track_m, st.guidance.along_track_m,
-                 st.guidance.heading_error_rad, st.guidance.waypoint_bearing_rad);
+    write_repeat_row(f, tiles, tn, st, route::to_string(expected_side(lateral, reverse, lc.guidance.side_deadband_m)));
     ++tiles;
     return true;
   });
@@ -438,6 +447,7 @@ struct TileRecord {
   int truth = -1;
   route::LocaliserStep st;
   route::RouteSide want = route::RouteSide::kOnRoute;
+  double true_cross_track_m = 0.0;  // the pass's offset, signed like GuidanceOutput::cross_track_m (exact on straight legs)
 };
 
 struct PassStats {
@@ -476,6 +486,7 @@ Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteT
     if (step_ms) step_ms->push_back(ms_since(t0));
     r.truth = true_node(node_along, tiles[k].truth_along_m);
     r.want = expected_side(lateral, reverse, deadband);
+    r.true_cross_track_m = reverse ? -lateral : lateral;
     ++ps.tiles;
     ps.mean_entropy += r.st.entropy;
     if (static_cast<int>(k) >= kWarmupTiles) {
@@ -484,11 +495,9 @@ Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteT
       ps.off_route += r.want != route::RouteSide::kOnRoute;
       ps.tracking += r.st.guidance.status == route::GuidanceStatus::kTracking;
       ps.dead_reckoned += r.st.guidance.status == route::GuidanceStatus::kDeadReckoned;
-      if (r.st.guidance.status != route::GuidanceStatus::kHoldCourse) {
-        if (r.want != route::RouteSide::kOnRoute) {
-          ++ps.side_n;
-          ps.side_ok += r.st.guidance.side == r.want;
-        }
+      if (r.want != route::RouteSide::kOnRoute && r.st.guidance.side != route::RouteSide::kUnknown) {  // a side was given
+        ++ps.side_n;
+        ps.side_ok += r.st.guidance.side == r.want;
       }
     }
     if (records) records->push_back(r);
@@ -871,7 +880,7 @@ int cmd_eval(int argc, char** argv) {
         const int truth = true_node(sub_along, sensed[k].truth_along_m);
         const route::RouteSide want = expected_side(lateral, false, lc.guidance.side_deadband_m);
         paper_localised += std::abs(static_cast<int>(st.estimate) - truth) <= 0 ? 1 : 0;
-        paper_side += st.guidance.status != route::GuidanceStatus::kHoldCourse && st.guidance.side == want;
+        paper_side += st.guidance.side == want;
         std::fprintf(t1, "%zu,%u,%d,%.3f,%s,%s,%u\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
                      route::to_string(want), st.best_inliers);
         std::fprintf(log, "  %6zu  %8u  %5d  %7.2f  %-9s  %s\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
@@ -926,14 +935,23 @@ int cmd_eval(int argc, char** argv) {
     std::fclose(f);
   }
   if (FILE* f = std::fopen((out_dir + "/route_eval_tiles.csv").c_str(), "w")) {
-    std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,seabed\n");
+    std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,seabed,"
+                    "cross_track_sigma_m,offsets,true_cross_track_m\n");
     for (const TileRecord& r : records)
-      std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%d\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth, r.st.estimate,
-                   static_cast<double>(r.st.probability), r.st.entropy, r.st.confident ? 1 : 0, r.st.best_inliers,
+      std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%d,%.2f,%s,%.2f\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth,
+                   r.st.estimate, static_cast<double>(r.st.probability), r.st.entropy, r.st.confident ? 1 : 0, r.st.best_inliers,
                    route::to_string(r.st.guidance.status), route::to_string(r.st.guidance.side), route::to_string(r.want), r.st.guidance.cross_track_m,
-                   r.seabed);
+                   r.seabed, r.st.guidance.cross_track_sigma_m, route::to_string(r.st.guidance.offsets), r.true_cross_track_m);
     std::fclose(f);
   }
+  // Is the dead-reckoned cross-track sigma honest? Off-route scored tiles whose offsets came from
+  // dead reckoning: the share within 2 sigma of the pass's offset (~95% if sigma is right).
+  int dr_n = 0, dr_in = 0;
+  for (const TileRecord& r : records)
+    if (r.tile >= kWarmupTiles && r.pct > 5 && r.st.guidance.offsets == route::OffsetSource::kDeadReckoning) {
+      ++dr_n;
+      dr_in += std::abs(r.st.guidance.cross_track_m - r.true_cross_track_m) <= 2.0 * r.st.guidance.cross_track_sigma_m;
+    }
   const double within_pct = scored ? 100.0 * within / scored : 0.0;
   const double side_pct = side_n ? 100.0 * side_ok / side_n : 0.0;
   const double tracking_pct = scored ? 100.0 * tracking / scored : 0.0;
@@ -951,7 +969,8 @@ int cmd_eval(int argc, char** argv) {
                 "\"node_within_1_pct_per_seabed\": [",
                 off_route ? 100.0 * side_ok / off_route : 0.0, off_route, scored ? 100.0 * dead_reckoned / scored : 0.0, seabeds);
     for (std::size_t i = 0; i < seed_within.size(); ++i) std::printf("%s%.2f", i ? ", " : "", seed_within[i]);
-    std::printf("], \"warmup_tiles\": %d, \"seconds\": %.1f}\n", kWarmupTiles, ms_since(t_all) / 1000.0);
+    std::printf("], \"dead_reckoned_offset_tiles\": %d, \"dead_reckoned_cross_track_within_2sigma_pct\": %.2f, \"warmup_tiles\": %d, \"seconds\": %.1f}\n",
+                dr_n, dr_n ? 100.0 * dr_in / dr_n : 0.0, kWarmupTiles, ms_since(t_all) / 1000.0);
   } else {
     std::printf("node within +/-1: %.1f%% of %d tiles; side correct %.1f%% of %d decided tiles (tracking %.1f%%); re-localised after %d tiles; "
                 "update %.2f ms wall / %.2f ms CPU (10,000 nodes); predict %.3f ms wall / %.3f ms CPU (100,000 nodes); eq. 5 model at 20%%: %.1f%%; %.1f s\n",
@@ -1050,6 +1069,7 @@ Status file_tiles(tools::RouteTilePipeline& pipe, const FilePass& fp, long a, lo
 route::LocaliserConfig file_localiser_config(route::RouteDirection d, std::size_t max_nodes, std::size_t nodes, double spacing_m) {
   route::LocaliserConfig lc = localiser_config(d, max_nodes);
   lc.guidance.dead_reckon_max_m = 2.5 * spacing_m;  // as in the simulator: ~2.5 nodes after the last fix
+  lc.guidance.dead_reckon_side_max_m = 7.5 * spacing_m;  // ... and ~7.5 nodes for the side
   lc.filter.belief_registrations = static_cast<std::uint32_t>(std::max<std::size_t>(1, std::min<std::size_t>(nodes, 8)));
   lc.registration.robust.inlier_threshold_m = 0.75;
   lc.registration.fc.sigma_dist_m = 0.5;
@@ -1231,9 +1251,7 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
     s = loc->step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, st);
     if (!s) break;
     tracking += st.guidance.status == route::GuidanceStatus::kTracking;
-    std::fprintf(f, "%zu,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%.2f,%.4f,%.4f\n", k, -1, st.estimate, static_cast<double>(st.probability), st.entropy,
-                 st.confident ? 1 : 0, st.best_inliers, route::to_string(st.guidance.status), route::to_string(st.guidance.side), "unknown",
-                 st.guidance.cross_track_m, st.guidance.along_track_m, st.guidance.heading_error_rad, st.guidance.waypoint_bearing_rad);
+    write_repeat_row(f, static_cast<long>(k), -1, st, "unknown");
   }
   const bool written = close_csv(f);
   if (s && !written) return 1;
@@ -1432,7 +1450,7 @@ int cmd_camera(int argc, char** argv) {
         p_within += std::abs(static_cast<int>(st.estimate) - truth) <= 1;
         if (want != route::RouteSide::kOnRoute) {
           ++p_off;
-          const bool decided = st.guidance.side == route::RouteSide::kPort || st.guidance.side == route::RouteSide::kStarboard;
+          const bool decided = st.guidance.side != route::RouteSide::kUnknown;
           p_side_n += decided;
           p_side_ok += decided && st.guidance.side == want;
         }

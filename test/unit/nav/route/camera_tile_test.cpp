@@ -80,10 +80,15 @@ TEST(CameraTile, ABrightSpotLandsOnItsGroundPointWhateverTheAttitude) {
     const Vec3d want = ground_of_pixel(cam, u0, v0);
     EXPECT_NEAR(north, want.x(), 0.01) << "heading " << h;
     EXPECT_NEAR(east, want.y(), 0.01) << "heading " << h;
-    // The tile pose: the optical axis on the ground (the image centre's ray), with the given heading.
+    // The raster is centred on the optical axis's ground point (the image centre's ray); the tile
+    // pose is the camera's nadir (the vehicle's position; roll 5 deg and pitch -3 deg at 2 m put the
+    // two ~0.2 m apart), with the given heading.
     const Vec3d centre = ground_of_pixel(cam, kK.cu_px, kK.cv_px);
-    EXPECT_NEAR(g.pose.x_m, centre.x(), 1e-9);
-    EXPECT_NEAR(g.pose.y_m, centre.y(), 1e-9);
+    EXPECT_NEAR(g.origin_north_m - 0.5 * 256 * g.resolution_m, centre.x(), 1e-9);
+    EXPECT_NEAR(g.origin_east_m + 0.5 * 256 * g.resolution_m, centre.y(), 1e-9);
+    EXPECT_NEAR(g.pose.x_m, cam.t.x(), 1e-12);
+    EXPECT_NEAR(g.pose.y_m, cam.t.y(), 1e-12);
+    EXPECT_GT(std::hypot(centre.x() - cam.t.x(), centre.y() - cam.t.y()), 0.15);
     EXPECT_EQ(g.pose.heading_rad, h);
     // North is up in the raster: forward (heading 0) is towards row 0.
     if (h == 0.0) {

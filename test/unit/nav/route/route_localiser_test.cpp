@@ -174,17 +174,124 @@ TEST(Guidance, HoldsCourseOnARegistrationWithTooFewInliers) {
   r.ok = true;
   r.inliers = 6;
   r.sensed_to_node = Pose2{2.0, 12.0, 0.01};
+  r.covariance(1, 1) = 0.09;  // cross-track sigma 0.3 m
   GuidanceOutput out = g.compute(true, RouteDirection::kForward, node, ahead, r, 0.0);
   EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
-  EXPECT_EQ(out.side, RouteSide::kOnRoute);
+  EXPECT_EQ(out.side, RouteSide::kUnknown);  // holding course says nothing about the side
+  EXPECT_EQ(out.offsets, OffsetSource::kNone);
+  EXPECT_NEAR(out.commanded_heading_rad, 0.0, 1e-12);
   r.inliers = 7;
   out = g.compute(true, RouteDirection::kForward, node, ahead, r, 0.0);
   EXPECT_EQ(out.status, GuidanceStatus::kTracking);
   EXPECT_EQ(out.side, RouteSide::kStarboard);
   EXPECT_NEAR(out.cross_track_m, 12.0, 1e-9);
-  // Not confident: hold course whatever the registration, with the last command.
+  EXPECT_NEAR(out.cross_track_sigma_m, 0.3, 1e-9);
+  const double steered = out.commanded_heading_rad;
+  EXPECT_LT(steered, -0.05);  // back to port, towards the look-ahead waypoint
+  // Not confident: hold course whatever the registration, with the last command (the unconfident
+  // side is off by default).
   out = g.compute(false, RouteDirection::kForward, node, ahead, r, 0.3);
   EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+  EXPECT_EQ(out.side, RouteSide::kUnknown);
+  EXPECT_NEAR(out.commanded_heading_rad, steered, 1e-12);
+}
+
+TEST(Guidance, AStrongRegistrationGivesTheSideBeforeTheFilterIsConfident) {
+  GuidanceConfig gc;
+  gc.min_inliers = 7;
+  gc.unconfident_min_inliers = 9;
+  gc.side_deadband_m = 1.0;
+  Guidance g(gc);
+  NodeMeta node, ahead;
+  ahead.pose = Pose2{100.0, 0.0, 0.0};
+  ahead.index = 2;
+  RegistrationResult r;
+  r.ok = true;
+  r.inliers = 8;
+  r.sensed_to_node = Pose2{-3.0, -9.0, 0.02};  // 9 m to port
+  r.covariance(1, 1) = 0.04;
+  GuidanceOutput out = g.compute(false, RouteDirection::kForward, node, ahead, r, 0.4);
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+  EXPECT_EQ(out.side, RouteSide::kUnknown);
+  r.inliers = 9;
+  out = g.compute(false, RouteDirection::kForward, node, ahead, r, 0.4);
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);  // not steered on: the node may still be wrong
+  EXPECT_EQ(out.side, RouteSide::kPort);
+  EXPECT_EQ(out.offsets, OffsetSource::kRegistration);
+  EXPECT_NEAR(out.cross_track_m, -9.0, 1e-9);
+  EXPECT_NEAR(out.cross_track_sigma_m, 0.2, 1e-9);
+  EXPECT_NEAR(out.commanded_heading_rad, 0.4, 1e-12);  // the current heading: no command yet
+  // In reverse the same offset is to starboard of the direction of travel.
+  Guidance rev(gc);
+  NodeMeta back = ahead;
+  back.index = 0;
+  out = rev.compute(false, RouteDirection::kReverse, ahead, back, r, 0.4);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+  // A non-finite or garbage registration gives no side.
+  r.sensed_to_node.y_m = std::nan("");
+  EXPECT_EQ(g.compute(false, RouteDirection::kForward, node, ahead, r, 0.4).side, RouteSide::kUnknown);
+}
+
+TEST(Guidance, ADeadReckonedSideIsReportedOnlyWhileItIsSignificant) {
+  GuidanceConfig gc;
+  gc.min_inliers = 7;
+  gc.dead_reckon_max_m = 50.0;
+  gc.dead_reckon_side_max_m = 500.0;
+  gc.dead_reckon_heading_sigma_rad = 0.01;
+  gc.side_deadband_m = 1.0;
+  gc.side_n_sigma = 2.0;
+  Guidance g(gc);
+  NodeMeta node, ahead;
+  ahead.pose = Pose2{500.0, 0.0, 0.0};
+  ahead.index = 5;
+  RegistrationResult fix;
+  fix.ok = true;
+  fix.inliers = 12;
+  fix.sensed_to_node = Pose2{0.0, 2.0, 0.0};  // 2 m to starboard, 1 m clear of the dead band
+  fix.covariance(1, 1) = 0.01;                 // sigma 0.1 m
+  GuidanceOutput out = g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.0, Pose2{0.0, 0.0, 0.0});
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+  RegistrationResult none;
+  // 20 m on: sigma 0.1 + 0.2 m, 2 sigma = 0.6 m < 1 m clear: still starboard.
+  out = g.compute(true, RouteDirection::kForward, node, ahead, none, 0.0, Pose2{20.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kDeadReckoned);
+  EXPECT_NEAR(out.cross_track_sigma_m, 0.3, 1e-9);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+  const double steered = out.commanded_heading_rad;
+  // 80 m on: too far to steer on (hold course with the last command); sigma 0.9 m, 2 sigma = 1.8 m
+  // > 1 m clear: the side is no longer known either.
+  out = g.compute(true, RouteDirection::kForward, node, ahead, none, 0.0, Pose2{80.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+  EXPECT_NEAR(out.commanded_heading_rad, steered, 1e-12);
+  EXPECT_NEAR(out.cross_track_sigma_m, 0.9, 1e-9);
+  EXPECT_EQ(out.side, RouteSide::kUnknown);
+  // A large offset stays known for longer: 10 m to starboard, 200 m on, sigma 2.1 m, 10 > 1 + 4.2.
+  fix.sensed_to_node = Pose2{0.0, 10.0, 0.0};
+  ASSERT_EQ(g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.0, Pose2{0.0, 0.0, 0.0}).side, RouteSide::kStarboard);
+  out = g.compute(true, RouteDirection::kForward, node, ahead, none, 0.0, Pose2{200.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+  EXPECT_NEAR(out.cross_track_sigma_m, 2.1, 1e-9);
+  EXPECT_NEAR(out.cross_track_m, 10.0, 1e-9);
+  EXPECT_EQ(out.offsets, OffsetSource::kDeadReckoning);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+  // Beyond dead_reckon_side_max_m: nothing is known.
+  out = g.compute(true, RouteDirection::kForward, node, ahead, none, 0.0, Pose2{501.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
+  EXPECT_EQ(out.side, RouteSide::kUnknown);
+  EXPECT_EQ(out.cross_track_sigma_m, 0.0);
+  // Not confident: the node may be wrong, so no dead-reckoned side.
+  EXPECT_EQ(g.compute(false, RouteDirection::kForward, node, ahead, none, 0.0, Pose2{100.0, 0.0, 0.0}).side, RouteSide::kUnknown);
+  // On the route: on_route only when the whole 2-sigma interval lies inside the dead band.
+  fix.sensed_to_node = Pose2{0.0, 0.2, 0.0};
+  out = g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.0, Pose2{100.0, 0.0, 0.0});
+  EXPECT_EQ(out.side, RouteSide::kOnRoute);
+  fix.covariance(1, 1) = 0.25;  // sigma 0.5 m: 0.2 + 1.0 > 1.0
+  out = g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.0, Pose2{100.0, 0.0, 0.0});
+  EXPECT_EQ(out.side, RouteSide::kUnknown);
+  fix.covariance(1, 1) = std::nan("");  // a broken covariance never decides a side
+  out = g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.0, Pose2{100.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kTracking);
+  EXPECT_EQ(out.side, RouteSide::kUnknown);
 }
 
 TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
@@ -213,6 +320,7 @@ TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
   EXPECT_EQ(out.side, RouteSide::kStarboard);
   EXPECT_NEAR(out.cross_track_m, 18.0, 1e-6);
   EXPECT_NEAR(out.along_track_m, 5.0, 1e-6);
+  EXPECT_NEAR(out.cross_track_sigma_m, gc.dead_reckon_heading_sigma_rad * std::hypot(60.0, 2.0), 1e-9);  // the fix's sigma is 0 here
   // Beyond dead_reckon_max_m from the fix: hold course.
   const Pose2 nav2 = nav0.compose(Pose2{120.0, 0.0, 0.0});
   EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav2).status, GuidanceStatus::kHoldCourse);
