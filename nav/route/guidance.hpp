@@ -26,9 +26,10 @@
 // learns which side of the route the vehicle is on; that registration is also a fix for dead
 // reckoning), and that a confident filter beyond dead_reckon_max_m of travel from the last fix but
 // within dead_reckon_side_max_m still reports the dead-reckoned offsets and side (status kHoldCourse:
-// too far to steer on, not too far to know the side when the offset is large). Cross-track uncertainty: from the registration's covariance; dead-reckoned, the fix's
-// plus dead_reckon_heading_sigma_rad x the distance travelled since the fix (the heading error of
-// the dead reckoning turns travel into cross-track error). Pure function of its inputs + the held
+// too far to steer on, not too far to know the side when the offset is large).
+// Cross-track uncertainty: from the registration's covariance; dead-reckoned, the fix's plus
+// dead_reckon_heading_sigma_rad x the distance travelled since the fix (the heading error of the
+// dead reckoning turns travel into cross-track error). Pure function of its inputs + the held
 // command and fix; O(1), no heap.
 #pragma once
 
