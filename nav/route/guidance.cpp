@@ -74,10 +74,12 @@ GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const
   const double sign = direction == RouteDirection::kForward ? 1.0 : -1.0;
   g.along_track_m = sign * in_node.x_m;
   g.cross_track_m = sign * in_node.y_m;
-  // in_node's translation is the registration's: its y variance is the cross-track variance.
+  // From a registration, in_node's translation is the registration's: its y variance is the
+  // cross-track variance (a broken covariance gives an infinite sigma: no side, no fix).
   const double var = reg.covariance(1, 1);
-  const double reg_sigma = std::isfinite(var) ? std::sqrt(var > 0.0 ? var : 0.0) : std::numeric_limits<double>::infinity();
-  g.cross_track_sigma_m = from_reg ? reg_sigma : fix_sigma_m_ + config_.dead_reckon_heading_sigma_rad * travelled;
+  g.cross_track_sigma_m = !from_reg           ? fix_sigma_m_ + config_.dead_reckon_heading_sigma_rad * travelled
+                          : std::isfinite(var) ? std::sqrt(var > 0.0 ? var : 0.0)
+                                               : std::numeric_limits<double>::infinity();
   g.side = decide_side(g.cross_track_m, g.cross_track_sigma_m);
   g.heading_error_rad = wrap_angle_rad(in_node.heading_rad + (direction == RouteDirection::kForward ? 0.0 : kPi));
   if (from_reg && nav_ok && std::isfinite(g.cross_track_sigma_m)) {

@@ -123,11 +123,7 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
       out.registration.sensed_to_node = est_from_nb.compose(results_[best].sensed_to_node);
       // The translation's covariance turns with it (heading variance and cross terms likewise).
       Mat3d j = Mat3d::Identity();
-      const double c = std::cos(est_from_nb.heading_rad), s = std::sin(est_from_nb.heading_rad);
-      j(0, 0) = c;
-      j(0, 1) = -s;
-      j(1, 0) = s;
-      j(1, 1) = c;
+      j.topLeftCorner<2, 2>() = est_from_nb.rotation();
       out.registration.covariance = j * results_[best].covariance * j.transpose();
       out.via_neighbour = true;
     }

@@ -163,18 +163,31 @@ TEST(RouteLocaliser, SensorMismatchOneNodeRouteAndDamagedRecordAreClearErrors) {
   EXPECT_EQ(loc->counters().get(LocaliserCounter::kBadSensedTile), 1u);
 }
 
+// A successful registration: the sensed tile at `sensed_to_node` in the node's frame, with the given
+// cross-track (y) variance.
+RegistrationResult registration(std::uint32_t inliers, const Pose2& sensed_to_node, double cross_track_var = 0.0) {
+  RegistrationResult r;
+  r.ok = true;
+  r.inliers = inliers;
+  r.sensed_to_node = sensed_to_node;
+  r.covariance(1, 1) = cross_track_var;
+  return r;
+}
+
+// A route node due north of the origin (the route runs north).
+NodeMeta node_at(double north_m, std::uint32_t index) {
+  NodeMeta m;
+  m.pose = Pose2{north_m, 0.0, 0.0};
+  m.index = index;
+  return m;
+}
+
 TEST(Guidance, HoldsCourseOnARegistrationWithTooFewInliers) {
   GuidanceConfig gc;
   gc.min_inliers = 7;
   Guidance g(gc);
-  NodeMeta node, ahead;
-  ahead.pose = Pose2{100.0, 0.0, 0.0};
-  ahead.index = 2;
-  RegistrationResult r;
-  r.ok = true;
-  r.inliers = 6;
-  r.sensed_to_node = Pose2{2.0, 12.0, 0.01};
-  r.covariance(1, 1) = 0.09;  // cross-track sigma 0.3 m
+  const NodeMeta node = node_at(0.0, 0), ahead = node_at(100.0, 2);
+  RegistrationResult r = registration(6, Pose2{2.0, 12.0, 0.01}, 0.09);  // cross-track sigma 0.3 m
   GuidanceOutput out = g.compute(true, RouteDirection::kForward, node, ahead, r, 0.0);
   EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
   EXPECT_EQ(out.side, RouteSide::kUnknown);  // holding course says nothing about the side
@@ -202,14 +215,8 @@ TEST(Guidance, AStrongRegistrationGivesTheSideBeforeTheFilterIsConfident) {
   gc.unconfident_min_inliers = 9;
   gc.side_deadband_m = 1.0;
   Guidance g(gc);
-  NodeMeta node, ahead;
-  ahead.pose = Pose2{100.0, 0.0, 0.0};
-  ahead.index = 2;
-  RegistrationResult r;
-  r.ok = true;
-  r.inliers = 8;
-  r.sensed_to_node = Pose2{-3.0, -9.0, 0.02};  // 9 m to port
-  r.covariance(1, 1) = 0.04;
+  const NodeMeta node = node_at(0.0, 0), ahead = node_at(100.0, 2);
+  RegistrationResult r = registration(8, Pose2{-3.0, -9.0, 0.02}, 0.04);  // 9 m to port
   GuidanceOutput out = g.compute(false, RouteDirection::kForward, node, ahead, r, 0.4);
   EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
   EXPECT_EQ(out.side, RouteSide::kUnknown);
@@ -223,9 +230,7 @@ TEST(Guidance, AStrongRegistrationGivesTheSideBeforeTheFilterIsConfident) {
   EXPECT_NEAR(out.commanded_heading_rad, 0.4, 1e-12);  // the current heading: no command yet
   // In reverse the same offset is to starboard of the direction of travel.
   Guidance rev(gc);
-  NodeMeta back = ahead;
-  back.index = 0;
-  out = rev.compute(false, RouteDirection::kReverse, ahead, back, r, 0.4);
+  out = rev.compute(false, RouteDirection::kReverse, ahead, node, r, 0.4);
   EXPECT_EQ(out.side, RouteSide::kStarboard);
   // A non-finite or garbage registration gives no side.
   r.sensed_to_node.y_m = std::nan("");
@@ -241,14 +246,9 @@ TEST(Guidance, ADeadReckonedSideIsReportedOnlyWhileItIsSignificant) {
   gc.side_deadband_m = 1.0;
   gc.side_n_sigma = 2.0;
   Guidance g(gc);
-  NodeMeta node, ahead;
-  ahead.pose = Pose2{500.0, 0.0, 0.0};
-  ahead.index = 5;
-  RegistrationResult fix;
-  fix.ok = true;
-  fix.inliers = 12;
-  fix.sensed_to_node = Pose2{0.0, 2.0, 0.0};  // 2 m to starboard, 1 m clear of the dead band
-  fix.covariance(1, 1) = 0.01;                 // sigma 0.1 m
+  const NodeMeta node = node_at(0.0, 0), ahead = node_at(500.0, 5);
+  // 2 m to starboard, 1 m clear of the dead band; sigma 0.1 m.
+  RegistrationResult fix = registration(12, Pose2{0.0, 2.0, 0.0}, 0.01);
   GuidanceOutput out = g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.0, Pose2{0.0, 0.0, 0.0});
   EXPECT_EQ(out.side, RouteSide::kStarboard);
   RegistrationResult none;
@@ -299,16 +299,8 @@ TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
   gc.min_inliers = 7;
   gc.dead_reckon_max_m = 100.0;
   Guidance g(gc);
-  NodeMeta node, next, ahead;
-  node.pose = Pose2{0.0, 0.0, 0.0};  // route runs north
-  next.pose = Pose2{60.0, 0.0, 0.0};
-  next.index = 1;
-  ahead.pose = Pose2{180.0, 0.0, 0.0};
-  ahead.index = 3;
-  RegistrationResult fix;
-  fix.ok = true;
-  fix.inliers = 12;
-  fix.sensed_to_node = Pose2{5.0, 20.0, 0.0};  // 20 m to starboard (east)
+  const NodeMeta node = node_at(0.0, 0), next = node_at(60.0, 1), ahead = node_at(180.0, 3);
+  const RegistrationResult fix = registration(12, Pose2{5.0, 20.0, 0.0});  // 20 m to starboard (east)
   // The pass's dead-reckoned frame differs from the route frame by a shift and a rotation.
   const Pose2 nav0{1000.0, -300.0, 0.5};
   ASSERT_EQ(g.compute(true, RouteDirection::kForward, node, ahead, fix, 0.5, nav0).status, GuidanceStatus::kTracking);
