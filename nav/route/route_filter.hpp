@@ -113,6 +113,12 @@ class RouteFilter {
   bool confident() const noexcept { return mass_pm1_ >= config_.confident_mass; }
   bool lost() const noexcept { return lost_; }
   const RouteFilterConfig& config() const noexcept { return config_; }
+  // Direction and motion model can change between updates (a repeat pass in reverse; the paper's
+  // eq. 5 model while the odometry source is lost). O(1); sizes are unchanged.
+  void set_motion(RouteDirection direction, MotionModel motion) noexcept {
+    config_.direction = direction;
+    config_.motion = motion;
+  }
   const CounterSet<FilterCounter>& counters() const noexcept { return counters_; }
   std::uint32_t updates() const noexcept { return updates_; }
 

@@ -62,6 +62,12 @@ class RouteLocaliser {
   // distance_m: distance travelled since the previous tile (DVL/INS).
   Status step(const RouteNode& sensed, double distance_m, LocaliserStep& out) noexcept;
 
+  // See RouteFilter::set_motion (guidance follows the direction too). O(1), no heap.
+  void set_motion(RouteDirection direction, MotionModel motion) noexcept {
+    config_.filter.direction = direction;
+    config_.filter.motion = motion;
+    filter_.set_motion(direction, motion);
+  }
   const RouteFilter& filter() const noexcept { return filter_; }
   const NodeWindow& window() const noexcept { return window_; }
   const Registrar& registrar() const noexcept { return registrar_; }

@@ -25,7 +25,10 @@
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/route_file.hpp"
-#include "firmware/tools/route_tiles.hpp"
+#include "firmware/pipeline/route_defaults.hpp"
+#include "firmware/pipeline/route_repeater.hpp"
+#include "firmware/pipeline/route_tile_pipeline.hpp"
+#include "firmware/pipeline/sim_survey.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "drivers/sidescan/byte_source.hpp"
 #include "drivers/sidescan/xtf_reader.hpp"
@@ -50,100 +53,10 @@ double cpu_ms() {
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
 }
 
-// The simulated survey: a 2 km route with two gentle bends over a seeded procedural seabed.
-struct SimWorld {
-  sidescan::Seabed seabed;
-  sidescan::SideScanSimConfig sonar = tools::default_route_sonar_config();
-  sidescan::TrajectoryConfig route;
-  double swath_m = 0.0;  // full ground swath, both sides
-  Status init(double length_m, std::uint64_t seed) {
-    QNAV_RETURN_IF_ERROR(seabed.init(tools::default_route_seabed_config(seed)));
-    const double l = length_m;
-    route.waypoints_ne.clear();
-    QNAV_RETURN_IF_ERROR(route.waypoints_ne.push_back(Vec2d(0.0, 0.0)));
-    QNAV_RETURN_IF_ERROR(route.waypoints_ne.push_back(Vec2d(0.35 * l, 0.08 * l)));
-    QNAV_RETURN_IF_ERROR(route.waypoints_ne.push_back(Vec2d(0.68 * l, 0.05 * l)));
-    QNAV_RETURN_IF_ERROR(route.waypoints_ne.push_back(Vec2d(0.98 * l, 0.22 * l)));
-    route.speed_mps = 1.5;
-    route.ping_rate_hz = 5.0;
-    route.altitude_m = 8.0;
-    route.seed = seed * 7 + 1;
-    // Dead reckoning as a DVL + compass would give it.
-    route.heading_bias_rad = 0.004;
-    route.heading_noise_rad = 0.002;
-    route.speed_scale_error = 0.005;
-    route.speed_noise_mps = 0.01;
-    route.yaw_walk_rad_per_sqrt_s = 0.002;
-    route.max_yaw_rad = 0.03;
-    const double r = static_cast<double>(sonar.slant_range_m);
-    const double g = std::sqrt(r * r - route.altitude_m * route.altitude_m);
-    swath_m = 2.0 * g;
-    return Status::ok();
-  }
-  // Each pass gets its own speckle (the simulator's speckle is a function of seed and ping index, so
-  // two passes with one seed would share vehicle-fixed speckle "features").
-  sidescan::SideScanSimConfig sonar_for(std::uint64_t seed) const {
-    sidescan::SideScanSimConfig s = sonar;
-    s.seed = 0x9E3779B9ull * (seed + 1);
-    return s;
-  }
-  sidescan::TrajectoryConfig pass(double lateral_m, bool reverse, std::uint64_t seed) const {
-    sidescan::TrajectoryConfig t = route;
-    t.lateral_offset_m = lateral_m;
-    t.reverse = reverse;
-    t.seed = seed;
-    t.heading_bias_rad = reverse ? -0.003 : 0.004;
-    return t;
-  }
-};
-
-route::RouteParams route_params(const tools::RouteTileConfig& c, double spacing_m, double swath_m) {
-  route::RouteParams p;
-  p.sensor = route::SensorKind::kSideScan;
-  p.depth_m = 0.0f;
-  p.node_spacing_m = static_cast<float>(spacing_m);
-  p.tile_length_m = static_cast<float>(spacing_m);
-  p.tile_width_m = static_cast<float>(swath_m);
-  p.pixel_m = static_cast<float>(c.tiles.resolution_m);
-  p.max_keypoints = static_cast<std::uint16_t>(c.features.max_keypoints);
-  p.harris_window_px = static_cast<std::uint16_t>(2 * c.features.harris_block_radius + 1);
-  p.keypoint_min_distance_px = static_cast<std::uint16_t>(c.features.harris_nms_radius);
-  return p;
-}
-
-route::LocaliserConfig localiser_config(route::RouteDirection d, std::size_t max_nodes) {
-  route::LocaliserConfig c;
-  c.filter.max_nodes = max_nodes;
-  c.filter.direction = d;
-  c.filter.motion = route::MotionModel::kOdometry;
-  c.filter.kidnap_floor = 0.01;
-  c.filter.lost_after_updates = 1;       // one update with strong similarity elsewhere and none near the estimate
-  c.filter.lost_evidence_inliers = 8.0f;  // "strong": no registration with >= 8 inliers was wrong in `qnav route eval`
-  c.filter.lost_reset_mass = 0.9;
-  c.filter.chance_inliers = 5.0f;  // = min_inliers: a bare-minimum consensus carries no evidence
-  c.registration.robust.inlier_threshold_m = 1.5;
-  c.registration.robust.min_inliers = 5;
-  c.registration.fc.sigma_dist_m = 1.0;
-  c.registration.fc.sigma_dir_rad = 0.02;  // compass between passes: bias 0.003-0.004 rad + 0.002 rad noise
-  c.registration.fc.max_points = 128;
-  c.registration.fc.max_candidates_per_point = 3;
-  c.registration.fc.min_appearance = 0.35f;
-  c.filter.belief_registrations = 4;
-  c.filter.wide_search_registrations = 6;
-  c.filter.searching_registrations = 16;  // 2 belief + 14 wide while searching (update <= ~15 ms, 10,000 nodes)
-  c.guidance.side_deadband_m = 1.0;
-  c.guidance.min_inliers = 7;  // chance_inliers + 2: at 5-6 inliers the side was wrong on 8-30% of tiles
-  c.guidance.dead_reckon_max_m = 150.0;  // ~2.5 nodes of travel steered on dead reckoning after the last fix
-  c.guidance.dead_reckon_side_max_m = 450.0;  // ~7.5 nodes over which the dead-reckoned side is still reported
-  c.guidance.dead_reckon_heading_sigma_rad = 0.025;  // measured: dead-reckoned cross-track error vs travel, `route eval`
-  c.guidance.unconfident_min_inliers = 8;  // = lost_evidence_inliers: no registration this strong was wrong in `qnav route eval`
-  return c;
-}
-
 // Collects the tiles of one simulated pass.
-Status fly(tools::RouteTilePipeline& pipe, const SimWorld& w, const sidescan::TrajectoryConfig& t, std::vector<tools::RouteTile>& out) {
+Status fly(pipeline::RouteTilePipeline& pipe, const pipeline::SimSurvey& w, const sidescan::TrajectoryConfig& t, std::vector<pipeline::RouteTile>& out) {
   out.clear();
-  return pipe.run_sim_pass(w.seabed, w.sonar_for(t.seed), t, [&out](const tools::RouteTile& tile) {
+  return pipe.run_sim_pass(w.seabed, w.sonar_for(t.seed), t, [&out](const pipeline::RouteTile& tile) {
     out.push_back(tile);
     return true;
   });
@@ -166,7 +79,7 @@ class VectorNodeSource final : public route::NodeSource {
  private:
   const std::vector<Taught>* taught_;
 };
-using TileSource = VectorNodeSource<tools::RouteTile>;
+using TileSource = VectorNodeSource<pipeline::RouteTile>;
 
 int usage() {
   std::fprintf(stderr,
@@ -196,10 +109,10 @@ int cmd_train(int argc, char** argv) {
     std::fprintf(stderr, "qnav route train: give --sim or --sonar FILE (XTF or JSF)\n");
     return 2;
   }
-  SimWorld w;
-  tools::RouteTilePipeline pipe;
+  pipeline::SimSurvey w;
+  pipeline::RouteTilePipeline pipe;
   Status s = w.init(length_m, static_cast<std::uint64_t>(seed));
-  if (s) s = pipe.init(tools::default_route_tile_config());
+  if (s) s = pipe.init(pipeline::default_route_tile_config());
   if (!s) {
     std::fprintf(stderr, "qnav route train: %s\n", s.message());
     return 1;
@@ -209,7 +122,7 @@ int cmd_train(int argc, char** argv) {
   tools::RouteFileWriter writer;
   tools::RouteWriterOptions o;
   o.overwrite = cli::flag(argc, argv, "--force");
-  s = writer.create(out, route_params(tc, spacing, w.swath_m), o);
+  s = writer.create(out, pipeline::side_scan_route_params(tc, spacing, w.swath_m), o);
   if (!s) {
     std::fprintf(stderr, "qnav route train: %s: %s\n", out, s.message());
     return 1;
@@ -217,8 +130,8 @@ int cmd_train(int argc, char** argv) {
   const auto t0 = Clock::now();
   std::size_t kps = 0;
   Status ws;
-  const sidescan::TrajectoryConfig tc0 = w.pass(0.0, false, static_cast<std::uint64_t>(seed) * 7 + 1);
-  s = pipe.run_sim_pass(w.seabed, w.sonar_for(tc0.seed), tc0, [&](const tools::RouteTile& t) {
+  const sidescan::TrajectoryConfig tc0 = w.pass(0.0, false, pipeline::teach_pass_seed(static_cast<std::uint64_t>(seed)));
+  s = pipe.run_sim_pass(w.seabed, w.sonar_for(tc0.seed), tc0, [&](const pipeline::RouteTile& t) {
     ws = writer.append(t.node);
     kps += t.node.keypoints.size();
     return ws.is_ok();
@@ -333,14 +246,13 @@ int cmd_repeat(int argc, char** argv) {
     return 1;
   }
   const bool reverse = cli::flag(argc, argv, "--reverse");
-  SimWorld w;
-  tools::RouteTilePipeline pipe;
+  pipeline::SimSurvey w;
+  pipeline::RouteTilePipeline pipe;
   s = w.init(length_m, static_cast<std::uint64_t>(seed));
-  if (s) s = pipe.init(tools::default_route_tile_config());
-  route::LocaliserConfig lc = localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
-  ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-  auto loc = std::make_unique<route::RouteLocaliser>();
-  if (s) s = loc->init(lc, arena);
+  if (s) s = pipe.init(pipeline::default_route_tile_config());
+  route::LocaliserConfig lc = pipeline::default_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
+  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  if (s) s = loc->init(lc);
   if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
@@ -361,9 +273,9 @@ int cmd_repeat(int argc, char** argv) {
   if (diag) diag_reg->init(lc.registration, diag_arena).ignore();
   long dump = -1;
   if (!cli::option_long(argc, argv, "--dump-tile", dump)) return usage();
-  const sidescan::TrajectoryConfig tcr = w.pass(lateral, reverse, static_cast<std::uint64_t>(seed) * 13 + 5);
+  const sidescan::TrajectoryConfig tcr = w.pass(lateral, reverse, pipeline::repeat_pass_seed(static_cast<std::uint64_t>(seed)));
   Status step_status;
-  s = pipe.run_sim_pass(w.seabed, w.sonar_for(tcr.seed), tcr, [&](const tools::RouteTile& t) {
+  s = pipe.run_sim_pass(w.seabed, w.sonar_for(tcr.seed), tcr, [&](const pipeline::RouteTile& t) {
     if (tiles == dump) {  // debug: the tile raster and its keypoints
       const sonar::SonarTile& raw = pipe.last_tile();
       tools::write_png_gray8("route_dump_tile.png", raw.intensity_u8).ignore();
@@ -468,7 +380,7 @@ struct PassStats {
 
 constexpr int kWarmupTiles = 2;  // tiles before scoring (uniform start; the paper's first tile copies eq. 9)
 
-Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteTile>& tiles, const std::vector<double>& node_along,
+Status run_localiser(pipeline::RouteRepeater& loc, const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along,
                      int pct, bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps,
                      std::vector<double>* step_ms, std::vector<double>* step_cpu_ms = nullptr) {
   ps.pct = pct;
@@ -510,7 +422,7 @@ Status run_localiser(route::RouteLocaliser& loc, const std::vector<tools::RouteT
 // away (a chance consensus there is what the measurement floor must absorb). With the simulator's
 // true poses also: keypoints that repeat (a node keypoint within 1.5 m of the same seabed spot) and
 // whether the registered transform is right (tile origin within 5 m of where the truth puts it).
-void registration_at_truth(const route::RegistrationConfig& rc, const std::vector<tools::RouteTile>& train, const std::vector<tools::RouteTile>& tiles,
+void registration_at_truth(const route::RegistrationConfig& rc, const std::vector<pipeline::RouteTile>& train, const std::vector<pipeline::RouteTile>& tiles,
                            const std::vector<double>& node_along, PassStats& ps) {
   ArenaStorage arena(route::Registrar::arena_bytes(rc));
   auto reg = std::make_unique<route::Registrar>();
@@ -518,10 +430,10 @@ void registration_at_truth(const route::RegistrationConfig& rc, const std::vecto
   const int n = static_cast<int>(train.size());
   const double chance = static_cast<double>(rc.robust.min_inliers);
   double sum = 0.0, rep = 0.0;
-  for (const tools::RouteTile& t : tiles) {
+  for (const pipeline::RouteTile& t : tiles) {
     const int tn = true_node(node_along, t.truth_along_m);
     if (tn < 0 || tn >= n) continue;
-    const tools::RouteTile& node = train[static_cast<std::size_t>(tn)];
+    const pipeline::RouteTile& node = train[static_cast<std::size_t>(tn)];
     route::RegistrationResult r;
     if (reg->register_tile(t.node, node.node, r)) {
       sum += r.inliers;
@@ -548,9 +460,9 @@ void registration_at_truth(const route::RegistrationConfig& rc, const std::vecto
 }
 
 struct SweepInputs {
-  tools::RouteTilePipeline* pipe;
-  const SimWorld* world;
-  const std::vector<tools::RouteTile>* train;
+  pipeline::RouteTilePipeline* pipe;
+  const pipeline::SimSurvey* world;
+  const std::vector<pipeline::RouteTile>* train;
   route::NodeSource* source;
   const route::RouteParams* params;
   Span<const route::NodeMeta> meta;
@@ -563,18 +475,17 @@ struct SweepInputs {
 // Repeat passes at every offset, forwards and in reverse, over one taught route. kidnap_src (if
 // given) receives the 20% forward pass's tiles; eq5_within the paper's motion model on that pass.
 Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecord>& records, std::vector<PassStats>& stats,
-                    std::vector<tools::RouteTile>* kidnap_src, double* eq5_within) {
-  std::vector<tools::RouteTile> tiles;
+                    std::vector<pipeline::RouteTile>* kidnap_src, double* eq5_within) {
+  std::vector<pipeline::RouteTile> tiles;
   const std::size_t nodes = in.meta.size();
   for (int pct : *in.pcts) {
     for (bool rev : {false, true}) {
       const double lateral = pct / 100.0 * in.world->swath_m;
       const auto t0 = Clock::now();
       QNAV_RETURN_IF_ERROR(fly(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), tiles));
-      route::LocaliserConfig lc = localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
-      ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-      auto loc = std::make_unique<route::RouteLocaliser>();
-      QNAV_RETURN_IF_ERROR(loc->init(lc, arena));
+      route::LocaliserConfig lc = pipeline::default_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
+      auto loc = std::make_unique<pipeline::RouteRepeater>();
+      QNAV_RETURN_IF_ERROR(loc->init(lc));
       QNAV_RETURN_IF_ERROR(loc->start(*in.params, in.meta, *in.source));
       PassStats ps;
       ps.seabed = in.seabed;
@@ -595,10 +506,9 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
         // The paper's motion model (eq. 5) on the same tiles, for comparison.
         route::LocaliserConfig lc5 = lc;
         lc5.filter.motion = route::MotionModel::kPaperEq5;
-        ArenaStorage a5(route::RouteLocaliser::arena_bytes(lc5));
-        auto l5 = std::make_unique<route::RouteLocaliser>();
+        auto l5 = std::make_unique<pipeline::RouteRepeater>();
         PassStats p5;
-        if (l5->init(lc5, a5) && l5->start(*in.params, in.meta, *in.source) &&
+        if (l5->init(lc5) && l5->start(*in.params, in.meta, *in.source) &&
             run_localiser(*l5, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, nullptr, p5, nullptr))
           *eq5_within = p5.scored ? 100.0 * p5.within1 / p5.scored : 0.0;
       }
@@ -631,16 +541,16 @@ int cmd_eval(int argc, char** argv) {
   }
   FILE* log = json ? stderr : stdout;
   const auto t_all = Clock::now();
-  SimWorld w;
-  tools::RouteTilePipeline pipe;
+  pipeline::SimSurvey w;
+  pipeline::RouteTilePipeline pipe;
   Status s = w.init(length_m, 1);
-  if (s) s = pipe.init(tools::default_route_tile_config());
+  if (s) s = pipe.init(pipeline::default_route_tile_config());
   if (!s) {
     std::fprintf(stderr, "qnav route eval: %s\n", s.message());
     return 1;
   }
   // 1. Teach: a forward pass on the route, written durably node by node.
-  std::vector<tools::RouteTile> train;
+  std::vector<pipeline::RouteTile> train;
   auto t0 = Clock::now();
   s = fly(pipe, w, w.pass(0.0, false, 11), train);
   if (!s || train.size() < 2) {
@@ -653,9 +563,9 @@ int cmd_eval(int argc, char** argv) {
   tools::RouteFileWriter writer;
   tools::RouteWriterOptions wo;
   wo.overwrite = true;
-  s = writer.create(route_path.c_str(), route_params(pipe.config(), spacing, w.swath_m), wo);
+  s = writer.create(route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), wo);
   t0 = Clock::now();
-  for (const tools::RouteTile& t : train)
+  for (const pipeline::RouteTile& t : train)
     if (s) s = writer.append(t.node);
   const double append_ms = ms_since(t0) / static_cast<double>(train.size());
   if (s) s = writer.close();
@@ -670,7 +580,7 @@ int cmd_eval(int argc, char** argv) {
   }
   std::vector<double> node_along;
   double kp_mean = 0.0;
-  for (const tools::RouteTile& t : train) {
+  for (const pipeline::RouteTile& t : train) {
     node_along.push_back(t.truth_along_m);
     kp_mean += static_cast<double>(t.node.keypoints.size());
   }
@@ -683,7 +593,7 @@ int cmd_eval(int argc, char** argv) {
   std::vector<int> pcts = quick ? std::vector<int>{0, 20, 40} : std::vector<int>{0, 10, 20, 30, 40, 50};
   std::vector<TileRecord> records;
   std::vector<PassStats> stats;
-  std::vector<tools::RouteTile> kidnap_src;
+  std::vector<pipeline::RouteTile> kidnap_src;
   const std::size_t nodes = meta.size();
   double eq5_within = -1.0;
   int pass_seed = 100;
@@ -691,13 +601,13 @@ int cmd_eval(int argc, char** argv) {
   s = offset_sweep(in, pass_seed, records, stats, &kidnap_src, &eq5_within);
   std::vector<double> seed_within;
   for (long sb = 2; s && sb <= seabeds; ++sb) {
-    SimWorld w2;
-    std::vector<tools::RouteTile> train2;
+    pipeline::SimSurvey w2;
+    std::vector<pipeline::RouteTile> train2;
     s = w2.init(length_m, static_cast<std::uint64_t>(sb));
     if (s) s = fly(pipe, w2, w2.pass(0.0, false, 11 + 1000 * static_cast<std::uint64_t>(sb)), train2);
     if (!s || train2.size() < 2) break;
     const double sp2 = (train2.back().node.meta.along_m - train2.front().node.meta.along_m) / static_cast<double>(train2.size() - 1);
-    const route::RouteParams p2 = route_params(pipe.config(), sp2, w2.swath_m);
+    const route::RouteParams p2 = pipeline::side_scan_route_params(pipe.config(), sp2, w2.swath_m);
     std::vector<route::NodeMeta> meta2;
     std::vector<double> along2;
     for (std::size_t i = 0; i < train2.size(); ++i) {
@@ -741,14 +651,13 @@ int cmd_eval(int argc, char** argv) {
   int relocalised = -1;
   {
     const std::size_t jump_from = 8, jump_to = 8 + kidnap_src.size() / 3;
-    std::vector<tools::RouteTile> seq(kidnap_src.begin(), kidnap_src.begin() + static_cast<long>(std::min(jump_from, kidnap_src.size())));
+    std::vector<pipeline::RouteTile> seq(kidnap_src.begin(), kidnap_src.begin() + static_cast<long>(std::min(jump_from, kidnap_src.size())));
     for (std::size_t i = jump_to; i < kidnap_src.size(); ++i) seq.push_back(kidnap_src[i]);
-    route::LocaliserConfig lc = localiser_config(route::RouteDirection::kForward, nodes);
-    ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-    auto loc = std::make_unique<route::RouteLocaliser>();
+    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, nodes);
+    auto loc = std::make_unique<pipeline::RouteRepeater>();
     PassStats ps;
     std::vector<TileRecord> rec;
-    if (loc->init(lc, arena) && loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader) &&
+    if (loc->init(lc) && loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader) &&
         run_localiser(*loc, seq, node_along, 20, false, 0.2 * w.swath_m, lc.guidance.side_deadband_m, &rec, ps, nullptr)) {
       if (std::getenv("QNAV_ROUTE_DIAG"))
         for (const TileRecord& r : rec)
@@ -774,7 +683,7 @@ int cmd_eval(int argc, char** argv) {
     tools::RouteWriterOptions o;
     o.overwrite = true;
     o.sync_each_node = false;
-    Status bs = bw.create(big.c_str(), route_params(pipe.config(), spacing, w.swath_m), o);
+    Status bs = bw.create(big.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), o);
     const double block_m = node_along.back() + spacing;
     for (std::uint32_t i = 0; i < 10000 && bs; ++i) {
       route::RouteNode n = train[i % train.size()].node;
@@ -788,12 +697,10 @@ int cmd_eval(int argc, char** argv) {
     std::vector<route::NodeMeta> bmeta;
     if (bs) bs = br.open(big.c_str());
     if (bs) bs = br.read_all_meta(bmeta, nullptr);
-    route::LocaliserConfig lc = localiser_config(route::RouteDirection::kForward, 10000);
-    const std::size_t bytes = route::RouteLocaliser::arena_bytes(lc);
-    window_mb = static_cast<double>(bytes) / 1e6;
-    ArenaStorage arena(bytes);
-    auto loc = std::make_unique<route::RouteLocaliser>();
-    if (bs) bs = loc->init(lc, arena);
+    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
+    auto loc = std::make_unique<pipeline::RouteRepeater>();
+    window_mb = static_cast<double>(route::RouteLocaliser::arena_bytes(lc)) / 1e6;
+    if (bs) bs = loc->init(lc);
     if (bs) bs = loc->start(br.params(), Span<const route::NodeMeta>(bmeta.data(), bmeta.size()), br);
     std::vector<double> ms, cms;
     PassStats ps;
@@ -840,7 +747,7 @@ int cmd_eval(int argc, char** argv) {
   {
     const std::size_t a = train.size() / 3;
     const std::size_t n15 = std::min<std::size_t>(15, train.size() - a);
-    std::vector<tools::RouteTile> sub(train.begin() + static_cast<long>(a), train.begin() + static_cast<long>(a + n15));
+    std::vector<pipeline::RouteTile> sub(train.begin() + static_cast<long>(a), train.begin() + static_cast<long>(a + n15));
     std::vector<route::NodeMeta> sub_meta;
     std::vector<double> sub_along;
     for (std::size_t i = 0; i < sub.size(); ++i) {
@@ -850,22 +757,21 @@ int cmd_eval(int argc, char** argv) {
       sub_along.push_back(sub[i].truth_along_m);
     }
     const double lateral = 0.25 * w.swath_m;
-    std::vector<tools::RouteTile> pass;
+    std::vector<pipeline::RouteTile> pass;
     s = fly(pipe, w, w.pass(lateral, false, 999), pass);
-    std::vector<tools::RouteTile> sensed;
-    for (const tools::RouteTile& t : pass)
+    std::vector<pipeline::RouteTile> sensed;
+    for (const pipeline::RouteTile& t : pass)
       if (t.truth_along_m >= sub_along[std::min<std::size_t>(5, sub_along.size() - 1)] - 0.5 * spacing && sensed.size() < 8) sensed.push_back(t);
     TileSource src(&sub);
-    route::LocaliserConfig lc = localiser_config(route::RouteDirection::kForward, 64);
+    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 64);
     lc.filter.belief_registrations = static_cast<std::uint32_t>(sub.size());
     lc.filter.wide_search_registrations = 0;
-    ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-    auto loc = std::make_unique<route::RouteLocaliser>();
+    auto loc = std::make_unique<pipeline::RouteRepeater>();
     FILE* t1 = std::fopen((out_dir + "/route_table1.csv").c_str(), "w");
     FILE* f5 = std::fopen((out_dir + "/route_fig5.csv").c_str(), "w");
     FILE* f7 = std::fopen((out_dir + "/route_fig7.csv").c_str(), "w");
     FILE* f9 = std::fopen((out_dir + "/route_fig9.csv").c_str(), "w");
-    if (s && t1 && f5 && f7 && f9 && loc->init(lc, arena) &&
+    if (s && t1 && f5 && f7 && f9 && loc->init(lc) &&
         loc->start(reader.params(), Span<const route::NodeMeta>(sub_meta.data(), sub_meta.size()), src)) {
       std::fprintf(t1, "sensed,estimate,truth,entropy,side,true_side,inliers\n");
       std::fprintf(f9, "sensed,true_north,true_east,node_north,node_east,cross_track_m,side,true_side,entropy,status\n");
@@ -885,10 +791,10 @@ int cmd_eval(int argc, char** argv) {
                      route::to_string(want), st.best_inliers);
         std::fprintf(log, "  %6zu  %8u  %5d  %7.2f  %-9s  %s\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
                      route::to_string(want));
-        loc->filter().measurement_probability(Span<float>(mp.data(), mp.size())).ignore();
+        loc->localiser().filter().measurement_probability(Span<float>(mp.data(), mp.size())).ignore();
         for (std::size_t i = 0; i < sub.size(); ++i) {
           std::fprintf(f5, "%s%.5f", i ? "," : "", static_cast<double>(mp[i]));
-          std::fprintf(f7, "%s%.5f", i ? "," : "", static_cast<double>(loc->filter().belief()[i]));
+          std::fprintf(f7, "%s%.5f", i ? "," : "", static_cast<double>(loc->localiser().filter().belief()[i]));
         }
         std::fprintf(f5, "\n");
         std::fprintf(f7, "\n");
@@ -992,7 +898,7 @@ namespace {
 struct FilePass {
   tools::FileData fd;
   tools::NavTrack track;
-  tools::RouteTileConfig tiles;
+  pipeline::RouteTileConfig tiles;
   double swath_m = 0.0;
 };
 
@@ -1023,28 +929,13 @@ int open_file_pass(const char* path, int argc, char** argv, FilePass& out) {
   }
   std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
   const double range = static_cast<double>(ranges[ranges.size() / 2]);
-  const double bin = std::max(0.02, range / 300.0);
-  tools::RouteTileConfig& tc = out.tiles;
-  tc = tools::default_route_tile_config();
-  tc.corrector.ground_bins_per_side = 300;
-  tc.corrector.ground_bin_m = static_cast<float>(bin);
-  tc.corrector.nadir_gap_m = static_cast<float>(std::max(0.5, range / 30.0));
-  tc.tiles.resolution_m = bin;
-  tc.tiles.tile_width_px = 800;
-  tc.tiles.tile_height_px = 800;
-  tc.tiles.max_bins_per_side = 300;
-  tc.tiles.scanlines_per_tile = static_cast<int>(lines);
-  tc.tiles.scanline_stride = static_cast<int>(stride);
-  tc.features.max_width = 800;
-  tc.features.max_height = 800;
-  tc.features.downsample = 3;
-  tc.features.blur_radius_px = 1;
+  out.tiles = pipeline::file_route_tile_config(range, static_cast<int>(lines), static_cast<int>(stride));
   out.swath_m = 2.0 * range;
   return 0;
 }
 
 // Tiles of pings [a, b) of a file. centre_ping (optional) receives each tile's centre ping index.
-Status file_tiles(tools::RouteTilePipeline& pipe, const FilePass& fp, long a, long b, std::vector<tools::RouteTile>& out,
+Status file_tiles(pipeline::RouteTilePipeline& pipe, const FilePass& fp, long a, long b, std::vector<pipeline::RouteTile>& out,
                   std::vector<double>* centre_ping) {
   pipe.reset_pass();
   out.clear();
@@ -1056,24 +947,13 @@ Status file_tiles(tools::RouteTilePipeline& pipe, const FilePass& fp, long a, lo
     if (!fp.track.ok[k]) continue;
     sonar::SonarPing ping = tools::as_ping(fp.fd.pings[k], false);
     ping.ping_number = static_cast<std::uint32_t>(i - a);
-    QNAV_RETURN_IF_ERROR(pipe.push_ping(ping, fp.track.pose[k], [&](const tools::RouteTile& t) {
+    QNAV_RETURN_IF_ERROR(pipe.push_ping(ping, fp.track.pose[k], [&](const pipeline::RouteTile& t) {
       out.push_back(t);
       if (centre_ping) centre_ping->push_back(static_cast<double>(i) - half);  // the tile is the last scanlines_per_tile pings
       return true;
     }, &stop));
   }
   return Status::ok();
-}
-
-// Registration on real tiles at 0.1 m: tighter positions than the simulator's 0.6 m feature pixels.
-route::LocaliserConfig file_localiser_config(route::RouteDirection d, std::size_t max_nodes, std::size_t nodes, double spacing_m) {
-  route::LocaliserConfig lc = localiser_config(d, max_nodes);
-  lc.guidance.dead_reckon_max_m = 2.5 * spacing_m;  // as in the simulator: ~2.5 nodes after the last fix
-  lc.guidance.dead_reckon_side_max_m = 7.5 * spacing_m;  // ... and ~7.5 nodes for the side
-  lc.filter.belief_registrations = static_cast<std::uint32_t>(std::max<std::size_t>(1, std::min<std::size_t>(nodes, 8)));
-  lc.registration.robust.inlier_threshold_m = 0.75;
-  lc.registration.fc.sigma_dist_m = 0.5;
-  return lc;
 }
 
 bool parse_range(const char* s, long& a, long& b) {
@@ -1100,14 +980,14 @@ int cmd_xtf(int argc, char** argv) {
   }
   tb = std::min<long>(tb, n);
   rb = std::min<long>(rb, n);
-  const tools::RouteTileConfig& tc = fp.tiles;
-  tools::RouteTilePipeline pipe;
+  const pipeline::RouteTileConfig& tc = fp.tiles;
+  pipeline::RouteTilePipeline pipe;
   Status s = pipe.init(tc);
   if (!s) {
     std::fprintf(stderr, "qnav route xtf: %s\n", s.message());
     return 1;
   }
-  std::vector<tools::RouteTile> train, rep;
+  std::vector<pipeline::RouteTile> train, rep;
   std::vector<double> train_c, rep_c;
   s = file_tiles(pipe, fp, ta, tb, train, &train_c);
   if (s) s = file_tiles(pipe, fp, ra, rb, rep, &rep_c);
@@ -1127,11 +1007,10 @@ int cmd_xtf(int argc, char** argv) {
     meta.push_back(m);
   }
   TileSource src(&train);
-  route::LocaliserConfig lc = file_localiser_config(route::RouteDirection::kForward, 64, train.size(), spacing);
-  ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-  auto loc = std::make_unique<route::RouteLocaliser>();
-  route::RouteParams params = route_params(tc, spacing, fp.swath_m);
-  s = loc->init(lc, arena);
+  route::LocaliserConfig lc = pipeline::file_localiser_config(route::RouteDirection::kForward, 64, train.size(), spacing);
+  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  route::RouteParams params = pipeline::side_scan_route_params(tc, spacing, fp.swath_m);
+  s = loc->init(lc);
   if (s) s = loc->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src);
   if (!s) {
     std::fprintf(stderr, "qnav route xtf: %s\n", s.message());
@@ -1141,7 +1020,7 @@ int cmd_xtf(int argc, char** argv) {
   FILE* f = csv ? std::fopen(csv, "w") : nullptr;
   if (f) std::fprintf(f, "tile,centre_ping,true_node,estimate,probability,entropy,inliers,status,cross_track_m,along_track_m\n");
   double kp = 0.0;
-  for (const tools::RouteTile& t : train) kp += static_cast<double>(t.node.keypoints.size());
+  for (const pipeline::RouteTile& t : train) kp += static_cast<double>(t.node.keypoints.size());
   std::printf("real XTF %s: %ld pings; taught pings %ld..%ld -> %zu nodes (spacing %.1f m, %.0f keypoints/node); repeat pings %ld..%ld -> %zu tiles\n",
               path, n, ta, tb - 1, train.size(), spacing, kp / static_cast<double>(train.size()), ra, rb - 1, rep.size());
   std::printf("  tile  centre ping  true node  estimate  p      entropy  inliers  status       cross-track m  along-track m\n");
@@ -1177,8 +1056,8 @@ int cmd_train_file(const char* path, int argc, char** argv) {
   FilePass fp;
   if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
   b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
-  tools::RouteTilePipeline pipe;
-  std::vector<tools::RouteTile> tiles;
+  pipeline::RouteTilePipeline pipe;
+  std::vector<pipeline::RouteTile> tiles;
   Status s = pipe.init(fp.tiles);
   if (s) s = file_tiles(pipe, fp, a, b, tiles, nullptr);
   if (s && tiles.size() < 2) s = Status(StatusCode::kInvalidArgument, "fewer than 2 tiles in the ping range: a route needs 2 nodes");
@@ -1190,10 +1069,10 @@ int cmd_train_file(const char* path, int argc, char** argv) {
   tools::RouteFileWriter writer;
   tools::RouteWriterOptions o;
   o.overwrite = cli::flag(argc, argv, "--force");
-  s = writer.create(out, route_params(fp.tiles, spacing, fp.swath_m), o);
+  s = writer.create(out, pipeline::side_scan_route_params(fp.tiles, spacing, fp.swath_m), o);
   const bool created = s.is_ok();
   std::size_t kps = 0;
-  for (const tools::RouteTile& t : tiles) {
+  for (const pipeline::RouteTile& t : tiles) {
     if (!s) break;
     s = writer.append(t.node);
     kps += t.node.keypoints.size();
@@ -1226,14 +1105,13 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
   if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
   b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
   const bool reverse = cli::flag(argc, argv, "--reverse");
-  route::LocaliserConfig lc = file_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8,
+  route::LocaliserConfig lc = pipeline::file_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8,
                                                     meta.size(), static_cast<double>(reader.params().node_spacing_m));
-  ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-  auto loc = std::make_unique<route::RouteLocaliser>();
-  tools::RouteTilePipeline pipe;
-  std::vector<tools::RouteTile> tiles;
+  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  pipeline::RouteTilePipeline pipe;
+  std::vector<pipeline::RouteTile> tiles;
   std::vector<double> centre;
-  s = loc->init(lc, arena);
+  s = loc->init(lc);
   if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
   if (s) s = pipe.init(fp.tiles);
   if (s) s = file_tiles(pipe, fp, a, b, tiles, &centre);
@@ -1419,16 +1297,15 @@ int cmd_camera(int argc, char** argv) {
       s = rev ? camera_pass(w, proj, fx, length_m - half, 0.0, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2 + 1, rep)
               : camera_pass(w, proj, fx, half, length_m, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2, rep);
       // The recorded-file configuration with its metric settings scaled from 0.3 m feature pixels to 4 mm.
-      route::LocaliserConfig lc = file_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
+      route::LocaliserConfig lc = pipeline::file_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
                                                         taught.size() + 8, taught.size(), spacing_m);
       lc.sensor = route::SensorKind::kCamera;
       lc.registration.robust.inlier_threshold_m = 0.02;
       lc.registration.fc.sigma_dist_m = 0.013;
       lc.guidance.side_deadband_m = 0.02;
-      ArenaStorage arena(route::RouteLocaliser::arena_bytes(lc));
-      auto loc = std::make_unique<route::RouteLocaliser>();
+      auto loc = std::make_unique<pipeline::RouteRepeater>();
       VectorNodeSource<CameraPassFrame> src(&taught);
-      if (s) s = loc->init(lc, arena);
+      if (s) s = loc->init(lc);
       if (s) s = loc->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src);
       if (!s) {
         std::fprintf(stderr, "qnav route camera: %s\n", s.message());

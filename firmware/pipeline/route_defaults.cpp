@@ -1,0 +1,117 @@
+#include "firmware/pipeline/route_defaults.hpp"
+
+#include <algorithm>
+
+namespace qnav::pipeline {
+
+RouteTileConfig default_route_tile_config() {
+  RouteTileConfig c;
+  c.corrector.max_samples_per_side = 1024;
+  c.corrector.ground_bins_per_side = 256;
+  c.corrector.ground_bin_m = 0.2f;
+  c.corrector.nadir_gap_m = 2.0f;
+  c.tiles.resolution_m = 0.2;
+  c.tiles.tile_width_px = 704;
+  c.tiles.tile_height_px = 704;
+  c.tiles.scanlines_per_tile = 300;  // 90 m of track: tiles overlap their neighbours by half a node
+  c.tiles.scanline_stride = 200;
+  c.tiles.max_bins_per_side = 256;
+  c.features.max_width = 704;
+  c.features.max_height = 704;
+  c.features.max_keypoints = 128;     // = kMaxKeypointsPerNode: more keypoints, more of them repeat at large offsets
+  c.features.downsample = 3;          // 0.6 m pixels: sand ripples (0.9 m) and speckle average out
+  c.features.descriptor_step_px = 2;  // 1.2 m between descriptor samples: 8.4 m footprint
+  c.features.blur_radius_px = 2;      // 3 m box on 0.6 m pixels: corners of the seabed texture, not of speckle
+  c.features.harris_block_radius = 1;
+  c.features.harris_nms_radius = 3;
+  c.features.harris_norm_cell_px = 16;
+  return c;
+}
+
+RouteTileConfig file_route_tile_config(double range, int lines, int stride) {
+  const double bin = std::max(0.02, range / 300.0);
+  RouteTileConfig tc = default_route_tile_config();
+  tc.corrector.ground_bins_per_side = 300;
+  tc.corrector.ground_bin_m = static_cast<float>(bin);
+  tc.corrector.nadir_gap_m = static_cast<float>(std::max(0.5, range / 30.0));
+  tc.tiles.resolution_m = bin;
+  tc.tiles.tile_width_px = 800;
+  tc.tiles.tile_height_px = 800;
+  tc.tiles.max_bins_per_side = 300;
+  tc.tiles.scanlines_per_tile = lines;
+  tc.tiles.scanline_stride = stride;
+  tc.features.max_width = 800;
+  tc.features.max_height = 800;
+  tc.features.downsample = 3;
+  tc.features.blur_radius_px = 1;
+  return tc;
+}
+
+sidescan::SideScanSimConfig default_route_sonar_config() {
+  sidescan::SideScanSimConfig s;
+  s.samples_per_side = 512;
+  s.slant_range_m = 50.0f;
+  return s;
+}
+
+sidescan::SeabedConfig default_route_seabed_config(std::uint64_t seed) {
+  sidescan::SeabedConfig c;
+  c.seed = seed;
+  return c;
+}
+
+route::LocaliserConfig default_localiser_config(route::RouteDirection d, std::size_t max_nodes) {
+  route::LocaliserConfig c;
+  c.filter.max_nodes = max_nodes;
+  c.filter.direction = d;
+  c.filter.motion = route::MotionModel::kOdometry;
+  c.filter.kidnap_floor = 0.01;
+  c.filter.lost_after_updates = 1;       // one update with strong similarity elsewhere and none near the estimate
+  c.filter.lost_evidence_inliers = 8.0f;  // "strong": no registration with >= 8 inliers was wrong in `qnav route eval`
+  c.filter.lost_reset_mass = 0.9;
+  c.filter.chance_inliers = 5.0f;  // = min_inliers: a bare-minimum consensus carries no evidence
+  c.registration.robust.inlier_threshold_m = 1.5;
+  c.registration.robust.min_inliers = 5;
+  c.registration.fc.sigma_dist_m = 1.0;
+  c.registration.fc.sigma_dir_rad = 0.02;  // compass between passes: bias 0.003-0.004 rad + 0.002 rad noise
+  c.registration.fc.max_points = 128;
+  c.registration.fc.max_candidates_per_point = 3;
+  c.registration.fc.min_appearance = 0.35f;
+  c.filter.belief_registrations = 4;
+  c.filter.wide_search_registrations = 6;
+  c.filter.searching_registrations = 16;  // 2 belief + 14 wide while searching (update <= ~15 ms, 10,000 nodes)
+  c.guidance.side_deadband_m = 1.0;
+  c.guidance.min_inliers = 7;  // chance_inliers + 2: at 5-6 inliers the side was wrong on 8-30% of tiles
+  c.guidance.dead_reckon_max_m = 150.0;  // ~2.5 nodes of travel steered on dead reckoning after the last fix
+  c.guidance.dead_reckon_side_max_m = 450.0;  // ~7.5 nodes over which the dead-reckoned side is still reported
+  c.guidance.dead_reckon_heading_sigma_rad = 0.025;  // measured: dead-reckoned cross-track error vs travel, `route eval`
+  c.guidance.unconfident_min_inliers = 8;  // = lost_evidence_inliers: no registration this strong was wrong in `qnav route eval`
+  return c;
+}
+
+// Registration on real tiles at 0.1 m: tighter positions than the simulator's 0.6 m feature pixels.
+route::LocaliserConfig file_localiser_config(route::RouteDirection d, std::size_t max_nodes, std::size_t nodes, double spacing_m) {
+  route::LocaliserConfig lc = default_localiser_config(d, max_nodes);
+  lc.guidance.dead_reckon_max_m = 2.5 * spacing_m;  // as in the simulator: ~2.5 nodes after the last fix
+  lc.guidance.dead_reckon_side_max_m = 7.5 * spacing_m;  // ... and ~7.5 nodes for the side
+  lc.filter.belief_registrations = static_cast<std::uint32_t>(std::max<std::size_t>(1, std::min<std::size_t>(nodes, 8)));
+  lc.registration.robust.inlier_threshold_m = 0.75;
+  lc.registration.fc.sigma_dist_m = 0.5;
+  return lc;
+}
+
+route::RouteParams side_scan_route_params(const RouteTileConfig& c, double spacing_m, double swath_m) {
+  route::RouteParams p;
+  p.sensor = route::SensorKind::kSideScan;
+  p.depth_m = 0.0f;
+  p.node_spacing_m = static_cast<float>(spacing_m);
+  p.tile_length_m = static_cast<float>(spacing_m);
+  p.tile_width_m = static_cast<float>(swath_m);
+  p.pixel_m = static_cast<float>(c.tiles.resolution_m);
+  p.max_keypoints = static_cast<std::uint16_t>(c.features.max_keypoints);
+  p.harris_window_px = static_cast<std::uint16_t>(2 * c.features.harris_block_radius + 1);
+  p.keypoint_min_distance_px = static_cast<std::uint16_t>(c.features.harris_nms_radius);
+  return p;
+}
+
+}  // namespace qnav::pipeline

@@ -1,0 +1,51 @@
+// RouteRepeater: a RouteLocaliser with the arena it runs in. init() sizes and allocates the arena
+// from the configuration (RouteLocaliser::arena_bytes) and is the only call that allocates; start()
+// binds a route (header params, every node's metadata, the node source) and step() is one
+// repeat-mode update per sensed tile (bounded by the localiser's registrations per update). The one
+// place the daemon's repeat mode and every `qnav route` command set a localiser up.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+
+#include "nav/core/arena.hpp"
+#include "nav/core/status.hpp"
+#include "nav/route/route_localiser.hpp"
+
+namespace qnav::pipeline {
+
+class RouteRepeater {
+ public:
+  Status init(const route::LocaliserConfig& config) {
+    config_ = config;
+    bytes_ = route::RouteLocaliser::arena_bytes(config);
+    arena_ = std::make_unique<ArenaStorage>(bytes_);
+    if (!arena_->valid()) return Status(StatusCode::kCapacityExceeded, "route repeater: cannot allocate the localiser arena");
+    localiser_ = std::make_unique<route::RouteLocaliser>();
+    return localiser_->init(config, *arena_);
+  }
+  Status start(const route::RouteParams& params, Span<const route::NodeMeta> meta, route::NodeSource& source) noexcept {
+    if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: start() before init()");
+    return localiser_->start(params, meta, source);
+  }
+  Status step(const route::RouteNode& sensed, double distance_m, route::LocaliserStep& out) noexcept {
+    if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: step() before init()");
+    return localiser_->step(sensed, distance_m, out);
+  }
+  void set_motion(route::RouteDirection direction, route::MotionModel motion) noexcept {
+    if (localiser_) localiser_->set_motion(direction, motion);
+    config_.filter.direction = direction;
+    config_.filter.motion = motion;
+  }
+  const route::RouteLocaliser& localiser() const noexcept { return *localiser_; }
+  const route::LocaliserConfig& config() const noexcept { return config_; }
+  std::size_t arena_bytes() const noexcept { return bytes_; }
+
+ private:
+  route::LocaliserConfig config_{};
+  std::size_t bytes_ = 0;
+  std::unique_ptr<ArenaStorage> arena_;
+  std::unique_ptr<route::RouteLocaliser> localiser_;
+};
+
+}  // namespace qnav::pipeline

@@ -1,0 +1,131 @@
+#include "firmware/pipeline/route_tile_pipeline.hpp"
+
+#include <algorithm>
+
+namespace qnav::pipeline {
+
+Status RouteTilePipeline::init(const RouteTileConfig& config) {
+  cfg_ = config;
+  const std::size_t bytes = sonar::ScanlineCorrector::arena_bytes(config.corrector) + sonar::TileBuilder::arena_bytes(config.tiles) +
+                            route::TileFeatureExtractor::arena_bytes(config.features) + 4096;
+  arena_ = std::make_unique<ArenaStorage>(bytes);
+  if (!arena_->valid()) return Status(StatusCode::kCapacityExceeded, "route tiles: cannot allocate arena");
+  corrector_ = std::make_unique<sonar::ScanlineCorrector>();
+  builder_ = std::make_unique<sonar::TileBuilder>();
+  features_ = std::make_unique<route::TileFeatureExtractor>();
+  tile_ = std::make_unique<RouteTile>();
+  QNAV_RETURN_IF_ERROR(corrector_->init(config.corrector, *arena_));
+  QNAV_RETURN_IF_ERROR(builder_->init(config.tiles, *arena_));
+  QNAV_RETURN_IF_ERROR(features_->init(config.features, *arena_));
+  std::size_t ring = 1;
+  while (ring < 2 * static_cast<std::size_t>(std::max(1, config.tiles.scanlines_per_tile))) ring <<= 1;
+  ring_.assign(ring, PingRecord{});
+  ring_mask_ = ring - 1;
+  reset_pass();
+  return Status::ok();
+}
+
+void RouteTilePipeline::reset_pass() {
+  if (builder_) builder_->reset();
+  for (PingRecord& r : ring_) r = PingRecord{};
+  last_tile_nav_m_ = 0.0;
+  have_prev_nav_ = false;
+  nav_dist_m_ = 0.0;
+  truth_lateral_m_ = 0.0;
+}
+
+Status RouteTilePipeline::emit(const RouteTileSink& sink, bool* stop) {
+  const sonar::SonarTile& t = builder_->tile();
+  RouteTile& out = *tile_;
+  route::TileGeometry g;
+  g.resolution_m = t.resolution_m;
+  g.origin_north_m = t.origin_north_m;
+  g.origin_east_m = t.origin_east_m;
+  g.pose = t.pose;
+  const Status s = features_->extract(t.intensity, t.coverage, g, out.node);
+  if (!s && s.code() != StatusCode::kEmpty) return s;
+  const std::uint32_t mid = (t.first_ping + t.last_ping) / 2;
+  out.node.meta.stamp_ns = (t.first_stamp_ns + t.last_stamp_ns) / 2;
+  const PingRecord* mid_rec = record(mid);
+  out.node.meta.along_m = mid_rec ? mid_rec->nav_dist_m : nav_dist_m_;
+  out.nav_step_m = out.node.meta.along_m - last_tile_nav_m_;
+  last_tile_nav_m_ = out.node.meta.along_m;
+  out.truth_along_m = mid_rec && mid_rec->has_truth ? mid_rec->truth_along_m : -1.0;
+  out.truth_lateral_m = truth_lateral_m_;
+  const std::uint32_t pose_ping = t.first_ping + (t.last_ping - t.first_ping + 1) / 2;  // the builder's pose slot
+  const PingRecord* pose_rec = record(pose_ping);
+  out.has_truth_pose = pose_rec != nullptr && pose_rec->has_truth;
+  out.truth_pose = out.has_truth_pose ? pose_rec->truth_pose : Pose2{};
+  out.coverage_fraction = t.coverage_fraction;
+  out.tile_index = t.index;
+  if (!sink(out) && stop != nullptr) *stop = true;
+  return Status::ok();
+}
+
+const RouteTilePipeline::PingRecord* RouteTilePipeline::record(std::uint32_t ping_number) const noexcept {
+  const PingRecord& r = ring_[ping_number & ring_mask_];
+  return r.used && r.ping_number == ping_number ? &r : nullptr;
+}
+
+Status RouteTilePipeline::push_ping(const sonar::SonarPing& ping, const Pose2& nav, const RouteTileSink& sink, bool* stop) {
+  return push(ping, nav, nullptr, sink, stop);
+}
+
+Status RouteTilePipeline::push_ping(const sonar::SonarPing& ping, const Pose2& nav, const PingTruth& truth, const RouteTileSink& sink,
+                                    bool* stop) {
+  return push(ping, nav, &truth, sink, stop);
+}
+
+Status RouteTilePipeline::push(const sonar::SonarPing& ping, const Pose2& nav, const PingTruth* truth, const RouteTileSink& sink, bool* stop) {
+  if (have_prev_nav_) nav_dist_m_ += std::hypot(nav.x_m - prev_nav_.x_m, nav.y_m - prev_nav_.y_m);
+  prev_nav_ = nav;
+  have_prev_nav_ = true;
+  PingRecord& rec = ring_[ping.ping_number & ring_mask_];
+  rec.ping_number = ping.ping_number;
+  rec.used = true;
+  rec.nav_dist_m = nav_dist_m_;
+  rec.has_truth = truth != nullptr;
+  rec.truth_along_m = truth ? truth->along_m : -1.0;
+  rec.truth_pose = truth ? truth->pose : Pose2{};
+  if (truth) truth_lateral_m_ = truth->lateral_m;
+  sonar::CorrectedScanline line;
+  const Status cs = corrector_->correct(ping, line);
+  if (!cs) return Status::ok();  // counted by the corrector; the ping is skipped
+  Result<bool> built = builder_->push(line, nav);
+  if (!built) return Status::ok();  // counted by the builder
+  if (*built) return emit(sink, stop);
+  return Status::ok();
+}
+
+Status RouteTilePipeline::flush(const RouteTileSink& sink) {
+  Result<bool> built = builder_->flush(builder_->config().scanlines_per_tile / 2);
+  if (built && *built) return emit(sink, nullptr);
+  return Status::ok();
+}
+
+Status RouteTilePipeline::run_sim_pass(const sidescan::Seabed& seabed, const sidescan::SideScanSimConfig& sonar_cfg,
+                                       const sidescan::TrajectoryConfig& trajectory, const RouteTileSink& sink) {
+  reset_pass();
+  truth_lateral_m_ = trajectory.lateral_offset_m;
+  sidescan::Trajectory traj;
+  QNAV_RETURN_IF_ERROR(traj.init(trajectory));
+  auto sim = std::make_unique<sidescan::SideScanSimulator>();
+  QNAV_RETURN_IF_ERROR(sim->init(sonar_cfg, &seabed));
+  sidescan::TrajectorySample s;
+  bool stop = false;
+  while (!stop && traj.next(s)) {
+    Result<sonar::SonarPing> p = sim->ping(s.truth, s.altitude_m, s.index, s.stamp_ns);
+    if (!p) return p.status();
+    sonar::SonarPing ping = *p;
+    ping.ping_number = s.index;
+    ping.altitude_m = s.altitude_m;
+    PingTruth truth;
+    truth.along_m = s.along_route_m;
+    truth.pose = s.truth;
+    truth.lateral_m = trajectory.lateral_offset_m;
+    QNAV_RETURN_IF_ERROR(push_ping(ping, s.nav, truth, sink, &stop));
+  }
+  return Status::ok();
+}
+
+}  // namespace qnav::pipeline

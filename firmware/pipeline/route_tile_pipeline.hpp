@@ -1,0 +1,100 @@
+// RouteTilePipeline: the per-ping wiring of route teach and repeat, shared by qnavd and the qnav tool:
+// side-scan ping (at its causal nav pose) -> ScanlineCorrector -> TileBuilder (north-up tiles on the
+// nav pose) -> TileFeatureExtractor -> a route node (keypoints in the tile frame, tile pose in the
+// pass's dead-reckoned frame), plus the ground truth when the pass is simulated.
+// Memory: one arena sized by init() from the config (corrector + builder + features) and a ring of
+// per-ping records (2 x scanlines_per_tile, rounded up to a power of two); nothing grows with the
+// length of a pass, and push_ping() allocates nothing (run_sim_pass() allocates its simulator).
+// Time: one ping is O(samples); a finished tile adds one feature extraction (docs/budgets.md).
+// Sinks are called synchronously; a sink that is a std::function built once allocates nothing.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "firmware/pipeline/route_defaults.hpp"
+
+#include "drivers/sidescan/sim_seabed.hpp"
+#include "drivers/sidescan/sim_sidescan.hpp"
+#include "drivers/sidescan/sim_trajectory.hpp"
+#include "nav/core/arena.hpp"
+#include "nav/core/status.hpp"
+#include "nav/route/route_types.hpp"
+#include "nav/route/tile_features.hpp"
+#include "nav/sonar/scanline_corrector.hpp"
+#include "nav/sonar/tile_builder.hpp"
+
+namespace qnav::pipeline {
+
+struct RouteTile {
+  route::RouteNode node;           // keypoints + meta (pose = nav pose of the tile, along_m = nav distance)
+  double nav_step_m = 0.0;         // nav distance travelled since the previous tile of the pass
+  double truth_along_m = -1.0;     // simulated passes: along-route distance of the tile centre
+  double truth_lateral_m = 0.0;    // simulated passes: offset right of the route's forward direction
+  Pose2 truth_pose{};              // simulated passes: true pose at the tile's pose ping (keypoint
+                                   // truth position ~ truth_pose.apply(keypoint), dead-reckoning drift aside)
+  bool has_truth_pose = false;
+  float coverage_fraction = 0.0f;
+  std::uint32_t tile_index = 0;
+};
+
+using RouteTileSink = std::function<bool(const RouteTile&)>;  // return false to stop the pass
+
+// Simulator truth travelling with a ping (simulated passes only).
+struct PingTruth {
+  double along_m = -1.0;  // along-route distance of the ping from the route's first waypoint
+  Pose2 pose{};
+  double lateral_m = 0.0;
+};
+
+class RouteTilePipeline {
+ public:
+  Status init(const RouteTileConfig& config);
+  // Flies a simulated pass over the seabed; calls sink for every tile.
+  Status run_sim_pass(const sidescan::Seabed& seabed, const sidescan::SideScanSimConfig& sonar,
+                      const sidescan::TrajectoryConfig& trajectory, const RouteTileSink& sink);
+  // Feeds one raw ping at its nav pose (XTF replay); emits finished tiles to sink.
+  Status push_ping(const sonar::SonarPing& ping, const Pose2& nav_pose, const RouteTileSink& sink, bool* stop);
+  // The same with the simulator's truth for this ping (ping.ping_number indexes the pass).
+  Status push_ping(const sonar::SonarPing& ping, const Pose2& nav_pose, const PingTruth& truth, const RouteTileSink& sink, bool* stop);
+  Status flush(const RouteTileSink& sink);
+  void reset_pass();
+  const RouteTileConfig& config() const noexcept { return cfg_; }
+  const sonar::TileBuilder& builder() const noexcept { return *builder_; }
+  const route::TileFeatureExtractor& features() const noexcept { return *features_; }
+  // The last tile's raster (for debug images).
+  const sonar::SonarTile& last_tile() const noexcept { return builder_->tile(); }
+
+ private:
+  Status emit(const RouteTileSink& sink, bool* stop);
+  RouteTileConfig cfg_{};
+  std::unique_ptr<ArenaStorage> arena_;
+  std::unique_ptr<sonar::ScanlineCorrector> corrector_;
+  std::unique_ptr<sonar::TileBuilder> builder_;
+  std::unique_ptr<route::TileFeatureExtractor> features_;
+  std::unique_ptr<RouteTile> tile_;
+  // Per-ping records of the pings a tile can still span: a ring of ring_mask_ + 1 >= 2 x
+  // scanlines_per_tile slots keyed by ping_number (fixed at init; no growth with pass length).
+  struct PingRecord {
+    std::uint32_t ping_number = 0;
+    bool used = false;
+    bool has_truth = false;
+    double nav_dist_m = 0.0;
+    double truth_along_m = -1.0;
+    Pose2 truth_pose{};
+  };
+  const PingRecord* record(std::uint32_t ping_number) const noexcept;
+  Status push(const sonar::SonarPing& ping, const Pose2& nav, const PingTruth* truth, const RouteTileSink& sink, bool* stop);
+  std::vector<PingRecord> ring_;
+  std::size_t ring_mask_ = 0;
+  double truth_lateral_m_ = 0.0;
+  double last_tile_nav_m_ = 0.0;
+  bool have_prev_nav_ = false;
+  Pose2 prev_nav_{};
+  double nav_dist_m_ = 0.0;
+};
+
+}  // namespace qnav::pipeline
