@@ -31,6 +31,7 @@ constexpr SignalDef kDepth[] = {
 constexpr SignalDef kModeCmd[] = {
     {"Mode", 0, 4, false, false, 1, 0, 0, 4, ""},
     {"ResetNav", 4, 1, false, false, 1, 0, 0, 1, ""},
+    {"Reverse", 5, 1, false, false, 1, 0, 0, 1, ""},
     {"RouteId", 8, 16, false, false, 1, 0, 0, 65535, ""},
     {"Counter", 24, 8, false, false, 1, 0, 0, 255, ""},
 };
@@ -39,8 +40,18 @@ constexpr SignalDef kNavStatus[] = {
     {"Localised", 4, 1, false, false, 1, 0, 0, 1, ""},
     {"Confidence", 8, 8, false, false, 0.5, 0, 0, 100, "%"},
     {"NodeIndex", 16, 16, false, false, 1, 0, 0, 65535, ""},
-    {"FaultFlags", 32, 16, false, false, 1, 0, 0, 65535, ""},
+    {"FaultLeak", 32, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultSensorTimeout", 33, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultDeadlineMiss", 34, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultBusOff", 35, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultRouteDamaged", 36, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultSoftware", 37, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultSonarLost", 38, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultAttitudeLost", 39, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultDvlLost", 40, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultCameraLost", 41, 1, false, false, 1, 0, 0, 1, ""},
     {"Counter", 48, 8, false, false, 1, 0, 0, 255, ""},
+    {"ModeReject", 56, 4, false, false, 1, 0, 0, 6, ""},
 };
 constexpr SignalDef kGuidance[] = {
     {"CrossTrack", 0, 16, false, true, 0.01, 0, -327, 327, "m"},
@@ -55,8 +66,25 @@ constexpr SignalDef kVoStep[] = {
     {"Inliers", 48, 8, false, false, 1, 0, 0, 255, ""},
     {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
 };
+constexpr SignalDef kRouteStatus[] = {
+    {"GuidanceStatus", 0, 4, false, false, 1, 0, 0, 4, ""},
+    {"Side", 4, 3, false, false, 1, 0, 0, 3, ""},
+    {"CrossTrackSigma", 8, 16, false, false, 0.01, 0, 0, kCrossTrackSigmaMaxM, "m"},
+    {"EstimateNode", 24, 16, false, false, 1, 0, 0, 65535, ""},
+    {"TileSeq", 40, 16, false, false, 1, 0, 0, 65535, ""},
+    {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
+};
 constexpr SignalDef kHealth[] = {
-    {"FaultFlags", 0, 16, false, false, 1, 0, 0, 65535, ""},
+    {"FaultLeak", 0, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultSensorTimeout", 1, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultDeadlineMiss", 2, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultBusOff", 3, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultRouteDamaged", 4, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultSoftware", 5, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultSonarLost", 6, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultAttitudeLost", 7, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultDvlLost", 8, 1, false, false, 1, 0, 0, 1, ""},
+    {"FaultCameraLost", 9, 1, false, false, 1, 0, 0, 1, ""},
     {"RejectedInputs", 16, 16, false, false, 1, 0, 0, 65535, ""},
     {"DeadlineMisses", 32, 16, false, false, 1, 0, 0, 65535, ""},
     {"CpuLoad", 48, 8, false, false, 0.5, 0, 0, 100, "%"},
@@ -73,6 +101,7 @@ constexpr SignalDef kHeartbeat[] = {
 
 template <std::size_t N>
 constexpr Span<const SignalDef> sp(const SignalDef (&a)[N]) {
+  static_assert(N <= kMaxSignalsPerMessage, "raise kMaxSignalsPerMessage");
   return Span<const SignalDef>(a, N);
 }
 
@@ -84,11 +113,15 @@ const MessageDef kMessages[] = {
     {"QNAV_NAV_STATUS", kIdNavStatus, 8, "QNAV", sp(kNavStatus), 100},
     {"QNAV_ROUTE_GUIDANCE", kIdRouteGuidance, 8, "QNAV", sp(kGuidance), 100},
     {"QNAV_VO_STEP", kIdVoStep, 8, "QNAV", sp(kVoStep), 100},
+    {"QNAV_ROUTE_STATUS", kIdRouteStatus, 8, "QNAV", sp(kRouteStatus), 100},
     {"QNAV_HEALTH", kIdHealth, 8, "QNAV", sp(kHealth), 1000},
     {"QNAV_HEARTBEAT", kIdHeartbeat, 8, "QNAV", sp(kHeartbeat), 1000},
 };
 
-constexpr std::size_t kMaxSignals = 8;
+constexpr std::size_t kMaxSignals = kMaxSignalsPerMessage;
+
+// The fault word's signals sit in table order FaultLeak .. FaultCameraLost (bit 0 .. 9 of the word).
+static_assert(sizeof fault::kSignalNames / sizeof fault::kSignalNames[0] == fault::kBitCount, "one name per fault bit");
 
 // Decodes every signal of `id` into v[]; the first range failure is reported after all are decoded.
 Status decode_all(const hal::CanFrame& f, std::uint32_t id, double* v) noexcept {
@@ -120,7 +153,43 @@ Status encode_all(hal::CanFrame& f, std::uint32_t id, const double* v) noexcept 
 std::uint8_t u8(double v) noexcept { return static_cast<std::uint8_t>(std::lround(v)); }
 std::uint16_t u16(double v) noexcept { return static_cast<std::uint16_t>(std::lround(v)); }
 Mode mode_of(double v) noexcept { return static_cast<Mode>(u8(v)); }
+double flag(bool b) noexcept { return b ? 1.0 : 0.0; }
+
+// Fault word <-> its kBitCount one-bit signal values (v[0] = bit 0). Reserved bits are refused.
+Status faults_to_signals(std::uint16_t word, double* v) noexcept {
+  if ((word & static_cast<std::uint16_t>(~fault::kDefined)) != 0)
+    return Status(StatusCode::kOutOfRange, "fault word has a reserved bit (10..15) set");
+  for (int b = 0; b < fault::kBitCount; ++b) v[b] = flag(((word >> b) & 1u) != 0);
+  return Status::ok();
+}
+std::uint16_t faults_from_signals(const double* v) noexcept {
+  std::uint16_t word = 0;
+  for (int b = 0; b < fault::kBitCount; ++b)
+    if (v[b] > 0.5) word = static_cast<std::uint16_t>(word | (1u << b));
+  return word;
+}
 }  // namespace
+
+const char* to_string(GuidanceState s) noexcept {
+  switch (s) {
+    case GuidanceState::kTracking: return "Tracking";
+    case GuidanceState::kHoldCourse: return "HoldCourse";
+    case GuidanceState::kDeadReckoned: return "DeadReckoned";
+    case GuidanceState::kRouteEnd: return "RouteEnd";
+    case GuidanceState::kNotRepeating: return "NotRepeating";
+  }
+  return "?";
+}
+
+const char* to_string(SideOfRoute s) noexcept {
+  switch (s) {
+    case SideOfRoute::kOnRoute: return "OnRoute";
+    case SideOfRoute::kPort: return "Port";
+    case SideOfRoute::kStarboard: return "Starboard";
+    case SideOfRoute::kUnknown: return "Unknown";
+  }
+  return "?";
+}
 
 Span<const MessageDef> all_messages() noexcept { return Span<const MessageDef>(kMessages, sizeof kMessages / sizeof kMessages[0]); }
 
@@ -158,13 +227,18 @@ Status decode(const hal::CanFrame& f, DepthIn& o) noexcept {
 Status decode(const hal::CanFrame& f, ModeCmd& o) noexcept {
   double v[kMaxSignals];
   QNAV_RETURN_IF_ERROR(decode_all(f, kIdModeCmd, v));
-  o = ModeCmd{mode_of(v[0]), v[1] > 0.5, u16(v[2]), u8(v[3])};
+  o = ModeCmd{};
+  o.mode = mode_of(v[0]);
+  o.reset_nav = v[1] > 0.5;
+  o.reverse = v[2] > 0.5;
+  o.route_id = u16(v[3]);
+  o.counter = u8(v[4]);
   return Status::ok();
 }
 Status decode(const hal::CanFrame& f, NavStatus& o) noexcept {
   double v[kMaxSignals];
   QNAV_RETURN_IF_ERROR(decode_all(f, kIdNavStatus, v));
-  o = NavStatus{mode_of(v[0]), v[1] > 0.5, v[2], u16(v[3]), u16(v[4]), u8(v[5])};
+  o = NavStatus{mode_of(v[0]), v[1] > 0.5, v[2], u16(v[3]), faults_from_signals(v + 4), u8(v[4 + fault::kBitCount]), u8(v[5 + fault::kBitCount])};
   return Status::ok();
 }
 Status decode(const hal::CanFrame& f, RouteGuidance& o) noexcept {
@@ -179,10 +253,18 @@ Status decode(const hal::CanFrame& f, VoStep& o) noexcept {
   o = VoStep{v[0], v[1], v[2], u8(v[3]), u8(v[4])};
   return Status::ok();
 }
+Status decode(const hal::CanFrame& f, RouteStatus& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdRouteStatus, v));  // the ranges keep both enums in their values
+  o = RouteStatus{
+      static_cast<GuidanceState>(u8(v[0])), static_cast<SideOfRoute>(u8(v[1])), v[2], u16(v[3]), u16(v[4]), u8(v[5])};
+  return Status::ok();
+}
 Status decode(const hal::CanFrame& f, Health& o) noexcept {
   double v[kMaxSignals];
   QNAV_RETURN_IF_ERROR(decode_all(f, kIdHealth, v));
-  o = Health{u16(v[0]), u16(v[1]), u16(v[2]), v[3], v[4] > 0.5, v[5] > 0.5};
+  const double* w = v + fault::kBitCount;
+  o = Health{faults_from_signals(v), u16(w[0]), u16(w[1]), w[2], w[3] > 0.5, w[4] > 0.5};
   return Status::ok();
 }
 Status decode(const hal::CanFrame& f, Heartbeat& o) noexcept {
@@ -205,12 +287,18 @@ Status encode(const DepthIn& m, hal::CanFrame& f) noexcept {
   return encode_all(f, kIdDepthIn, v);
 }
 Status encode(const ModeCmd& m, hal::CanFrame& f) noexcept {
-  const double v[] = {double(static_cast<std::uint8_t>(m.mode)), m.reset_nav ? 1.0 : 0.0, double(m.route_id), double(m.counter)};
+  const double v[] = {double(static_cast<std::uint8_t>(m.mode)), flag(m.reset_nav), flag(m.reverse), double(m.route_id),
+                      double(m.counter)};
+  static_assert(sizeof v / sizeof v[0] == sizeof kModeCmd / sizeof kModeCmd[0], "one value per MODE_CMD signal");
   return encode_all(f, kIdModeCmd, v);
 }
 Status encode(const NavStatus& m, hal::CanFrame& f) noexcept {
-  const double v[] = {double(static_cast<std::uint8_t>(m.state)), m.localised ? 1.0 : 0.0, m.confidence_pct,
-                      double(m.node_index), double(m.fault_flags), double(m.counter)};
+  double v[4 + fault::kBitCount + 2] = {double(static_cast<std::uint8_t>(m.state)), flag(m.localised), m.confidence_pct,
+                                        double(m.node_index)};
+  QNAV_RETURN_IF_ERROR(faults_to_signals(m.fault_flags, v + 4));
+  v[4 + fault::kBitCount] = double(m.counter);
+  v[5 + fault::kBitCount] = double(m.mode_reject);
+  static_assert(sizeof v / sizeof v[0] == sizeof kNavStatus / sizeof kNavStatus[0], "one value per NAV_STATUS signal");
   return encode_all(f, kIdNavStatus, v);
 }
 Status encode(const RouteGuidance& m, hal::CanFrame& f) noexcept {
@@ -221,9 +309,29 @@ Status encode(const VoStep& m, hal::CanFrame& f) noexcept {
   const double v[] = {m.dx_m, m.dy_m, m.dyaw_rad, double(m.inliers), double(m.counter)};
   return encode_all(f, kIdVoStep, v);
 }
+Status encode(const RouteStatus& m, hal::CanFrame& f) noexcept {
+  // A sigma too large for the signal means "unknown": send the top of the range instead of failing.
+  const double sigma = m.cross_track_sigma_m > kCrossTrackSigmaMaxM ? kCrossTrackSigmaMaxM : m.cross_track_sigma_m;
+  const double v[] = {double(static_cast<std::uint8_t>(m.status)),
+                      double(static_cast<std::uint8_t>(m.side)),
+                      sigma,
+                      double(m.estimate_node),
+                      double(m.tile_seq),
+                      double(m.counter)};
+  static_assert(sizeof v / sizeof v[0] == sizeof kRouteStatus / sizeof kRouteStatus[0],
+                "one value per ROUTE_STATUS signal");
+  return encode_all(f, kIdRouteStatus, v);
+}
 Status encode(const Health& m, hal::CanFrame& f) noexcept {
-  const double v[] = {double(m.fault_flags), double(m.rejected_inputs), double(m.deadline_misses), m.cpu_load_pct,
-                      m.leak ? 1.0 : 0.0, m.bus_off ? 1.0 : 0.0};
+  double v[fault::kBitCount + 5] = {};
+  QNAV_RETURN_IF_ERROR(faults_to_signals(m.fault_flags, v));
+  double* w = v + fault::kBitCount;
+  w[0] = double(m.rejected_inputs);
+  w[1] = double(m.deadline_misses);
+  w[2] = m.cpu_load_pct;
+  w[3] = flag(m.leak);
+  w[4] = flag(m.bus_off);
+  static_assert(sizeof v / sizeof v[0] == sizeof kHealth / sizeof kHealth[0], "one value per HEALTH signal");
   return encode_all(f, kIdHealth, v);
 }
 Status encode(const Heartbeat& m, hal::CanFrame& f) noexcept {

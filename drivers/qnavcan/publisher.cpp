@@ -3,23 +3,30 @@
 namespace qnav::drivers::qnavcan {
 
 namespace {
-constexpr std::uint32_t kIds[] = {kIdNavStatus, kIdRouteGuidance, kIdVoStep, kIdHealth, kIdHeartbeat};
+// Indexed by QnavCanPublisher::Output.
+constexpr std::uint32_t kIds[] = {kIdNavStatus, kIdRouteGuidance, kIdRouteStatus, kIdVoStep, kIdHealth, kIdHeartbeat};
 }  // namespace
 
 Status QnavCanPublisher::encode_output(int i, hal::CanFrame& f) noexcept {
+  static_assert(sizeof kIds / sizeof kIds[0] == kOutputs, "one id per output slot");
   switch (i) {
-    case 0: {
+    case kNav: {
       NavStatus m = nav_;
       m.counter = counter_[i];
       return encode(m, f);
     }
-    case 1: return encode(guidance_, f);  // no Counter signal in ROUTE_GUIDANCE
-    case 2: {
+    case kGuidance: return encode(guidance_, f);  // no Counter signal in ROUTE_GUIDANCE
+    case kRouteStatus: {
+      RouteStatus m = route_status_;
+      m.counter = counter_[i];
+      return encode(m, f);
+    }
+    case kVo: {
       VoStep m = vo_;
       m.counter = counter_[i];
       return encode(m, f);
     }
-    case 3: return encode(health_, f);
+    case kHealth: return encode(health_, f);
     default: {
       Heartbeat m = heartbeat_;
       m.counter = counter_[i];

@@ -1,9 +1,10 @@
 // QnavCanPublisher: the output side of qnav's CAN interface. Holds the latest value of each output
-// message (NAV_STATUS, ROUTE_GUIDANCE, VO_STEP, HEALTH, HEARTBEAT), and poll(now_ns) sends each one
-// whose DBC period (GenMsgCycleTime) has elapsed, filling the rolling Counter itself. A full TX queue
+// message (NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, VO_STEP, HEALTH, HEARTBEAT), and poll(now_ns)
+// sends each one whose DBC period (GenMsgCycleTime) has elapsed, in that order (ROUTE_STATUS right
+// after its companion ROUTE_GUIDANCE), filling the rolling Counter itself. A full TX queue
 // (kCapacityExceeded from the bus) is counted as tx_busy and retried at the next poll; an encode
 // failure (a value outside the DBC range) is counted as encode_error and the message is not sent.
-// Messages never set are not sent. poll() is O(5 messages x signals); no heap.
+// Messages never set are not sent. poll() is O(6 messages x signals); no heap.
 #pragma once
 
 #include <cstdint>
@@ -21,22 +22,26 @@ class QnavCanPublisher {
  public:
   explicit QnavCanPublisher(hal::CanBus& bus) noexcept : bus_(bus) {}
 
-  void set(const NavStatus& m) noexcept { nav_ = m, has_[0] = true; }
-  void set(const RouteGuidance& m) noexcept { guidance_ = m, has_[1] = true; }
-  void set(const VoStep& m) noexcept { vo_ = m, has_[2] = true; }
-  void set(const Health& m) noexcept { health_ = m, has_[3] = true; }
-  void set(const Heartbeat& m) noexcept { heartbeat_ = m, has_[4] = true; }
+  void set(const NavStatus& m) noexcept { nav_ = m, has_[kNav] = true; }
+  void set(const RouteGuidance& m) noexcept { guidance_ = m, has_[kGuidance] = true; }
+  void set(const RouteStatus& m) noexcept { route_status_ = m, has_[kRouteStatus] = true; }
+  void set(const VoStep& m) noexcept { vo_ = m, has_[kVo] = true; }
+  void set(const Health& m) noexcept { health_ = m, has_[kHealth] = true; }
+  void set(const Heartbeat& m) noexcept { heartbeat_ = m, has_[kHeartbeat] = true; }
 
   // Sends what is due; returns the number of frames sent.
   int poll(std::int64_t now_ns) noexcept;
   const CounterSet<TxCounter>& counters() const noexcept { return counters_; }
 
  private:
-  static constexpr int kOutputs = 5;
+  // Output slots, in sending order.
+  enum Output : int { kNav, kGuidance, kRouteStatus, kVo, kHealth, kHeartbeat };
+  static constexpr int kOutputs = 6;
   Status encode_output(int i, hal::CanFrame& f) noexcept;
   hal::CanBus& bus_;
   NavStatus nav_;
   RouteGuidance guidance_;
+  RouteStatus route_status_;
   VoStep vo_;
   Health health_;
   Heartbeat heartbeat_;

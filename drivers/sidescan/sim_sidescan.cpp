@@ -31,8 +31,11 @@ Status SideScanSimulator::init(const SideScanSimConfig& c, const Seabed* seabed)
   if (!(c.gain > 0.0f) || !(c.noise_floor >= 0.0f) || !std::isfinite(c.spreading_db) || !(c.absorption_db_per_m >= 0.0f))
     return Status(StatusCode::kInvalidArgument, "bad gain, noise or loss");
   const std::size_t n = static_cast<std::size_t>(c.samples_per_side);
-  mem_.reset(new (std::nothrow) float[4 * n]);
-  if (!mem_) return Status(StatusCode::kCapacityExceeded, "out of memory for the simulator");
+  if (!mem_ || mem_samples_ != n) {  // a second init() of the same size (a new pass) reuses the buffers
+    mem_.reset(new (std::nothrow) float[4 * n]);
+    if (!mem_) return Status(StatusCode::kCapacityExceeded, "out of memory for the simulator");
+    mem_samples_ = n;
+  }
   energy_ = mem_.get();
   own_port_ = energy_ + n;
   own_stbd_ = own_port_ + n;

@@ -71,6 +71,7 @@ class SideScanSimulator {
   SideScanSimConfig cfg_{};
   const Seabed* seabed_ = nullptr;
   std::unique_ptr<float[]> mem_;  // energy accumulator + two output sides + loss table
+  std::size_t mem_samples_ = 0;   // samples per side mem_ was sized for (init() again with the same size allocates nothing)
   float* energy_ = nullptr;
   float* own_port_ = nullptr;
   float* own_stbd_ = nullptr;

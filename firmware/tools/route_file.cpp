@@ -40,10 +40,19 @@ Status read_all(int fd, std::uint8_t* p, std::size_t n, off_t at) {
 }
 // fsync the directory holding path, so a newly created file's name is durable too.
 void sync_parent(const char* path) {
-  std::string dir(path);
-  const std::size_t slash = dir.find_last_of('/');
-  dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : dir.substr(0, slash));
-  const int d = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  char dir[4096];
+  const char* slash = std::strrchr(path, '/');
+  const std::size_t n = slash == nullptr ? 0 : static_cast<std::size_t>(slash - path);
+  if (slash == nullptr) {
+    std::strcpy(dir, ".");
+  } else if (n == 0) {
+    std::strcpy(dir, "/");
+  } else {
+    if (n >= sizeof dir) return;
+    std::memcpy(dir, path, n);
+    dir[n] = '\0';
+  }
+  const int d = ::open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (d >= 0) {
     static_cast<void>(::fsync(d));
     ::close(d);
@@ -68,6 +77,7 @@ Status RouteFileWriter::create(const char* path, const route::RouteParams& param
     return s;
   }
   sync_parent(path);
+  std::strncpy(path_, path, sizeof path_ - 1);
   params_ = params;
   options_ = options;
   count_ = 0;
@@ -140,6 +150,15 @@ Status RouteFileWriter::close() {
   if (::close(fd_) != 0 && s) s = Status(StatusCode::kIoError, "route writer: close failed");
   fd_ = -1;
   return s;
+}
+
+Status RouteFileWriter::commit_as(const char* final_path) {
+  QNAV_RETURN_IF_ERROR(close());
+  if (path_[0] == '\0') return Status(StatusCode::kNotReady, "route writer: nothing to commit");
+  if (::rename(path_, final_path) != 0) return Status(StatusCode::kIoError, "route writer: rename to the final name failed");
+  sync_parent(final_path);
+  path_[0] = '\0';
+  return Status::ok();
 }
 
 RouteFileReader::~RouteFileReader() { close(); }

@@ -43,11 +43,17 @@ class RouteFileWriter {
   // Appends `node` as record node_count() (its meta.index is set to that).
   Status append(const route::RouteNode& node);
   Status close();
+  // Closes (fsync) and renames the file to final_path (atomically replacing a route there), then
+  // fsyncs the directory: a route taught under a temporary name becomes the route only when complete.
+  Status commit_as(const char* final_path);
+  // Capacity for records of up to `bytes` (create/open_append then allocate nothing).
+  void reserve(std::size_t bytes) { record_.reserve(bytes); }
   std::uint32_t node_count() const noexcept { return count_; }
   const route::RouteParams& params() const noexcept { return params_; }
 
  private:
   int fd_ = -1;
+  char path_[4096] = {};
   route::RouteParams params_{};
   RouteWriterOptions options_{};
   std::uint32_t count_ = 0;
@@ -63,6 +69,8 @@ class RouteFileReader final : public route::NodeSource {
 
   Status open(const char* path);
   void close();
+  // Capacity for records of up to `bytes` (open then allocates nothing).
+  void reserve(std::size_t bytes) { record_.reserve(bytes); }
   const route::RouteParams& params() const noexcept { return params_; }
   std::uint32_t node_count() const noexcept override { return count_; }
   std::uint64_t torn_bytes() const noexcept { return torn_bytes_; }

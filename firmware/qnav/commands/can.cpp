@@ -75,8 +75,8 @@ struct Decoder {
     }
     const Status s = qrx.on_frame(f);
     const qc::MessageDef* def = nullptr;
-    double values[8];
-    const Status g = printed < max_print ? qc::decode_generic(f.frame, def, values, 8) : Status(StatusCode::kEmpty, "");
+    double values[qc::kMaxSignalsPerMessage];
+    const Status g = printed < max_print ? qc::decode_generic(f.frame, def, values, qc::kMaxSignalsPerMessage) : Status(StatusCode::kEmpty, "");
     if (def != nullptr && (g.is_ok() || g == StatusCode::kOutOfRange)) {  // out of range: values decoded, shown
       ++printed;
       std::printf("%10.6f %s", t_s, def->name);

@@ -16,7 +16,7 @@ int qnav_fuzz_qnavcan(const std::uint8_t* data, std::size_t size) {
   }
   static drivers::qnavcan::QnavCanReceiver rx;
   hal::CanRxFrame f;
-  const std::uint32_t ids[] = {0x100, 0x101, 0x102, 0x110, 0x200, 0x201, 0x202, 0x210, 0x2FF, 0x123};
+  const std::uint32_t ids[] = {0x100, 0x101, 0x102, 0x110, 0x200, 0x201, 0x202, 0x203, 0x210, 0x2FF, 0x123};
   f.frame.id = ids[data[1] % 10];
   f.frame.len = static_cast<std::uint8_t>(data[2] % 9);
   const std::size_t n = size - 3 < f.frame.len ? size - 3 : f.frame.len;
@@ -24,8 +24,8 @@ int qnav_fuzz_qnavcan(const std::uint8_t* data, std::size_t size) {
   f.stamp.sample_ns = static_cast<std::int64_t>(data[0]) * 1000;
   rx.on_frame(f).ignore();
   const drivers::qnavcan::MessageDef* def = nullptr;
-  double v[8];
-  if (drivers::qnavcan::decode_generic(f.frame, def, v, 8).is_ok())
+  double v[drivers::qnavcan::kMaxSignalsPerMessage];
+  if (drivers::qnavcan::decode_generic(f.frame, def, v, drivers::qnavcan::kMaxSignalsPerMessage).is_ok())
     for (std::size_t i = 0; i < def->signals.size(); ++i)
       if (std::isnan(v[i])) __builtin_trap();
   return 0;

@@ -141,3 +141,216 @@ TEST(QnavCanCodec, SignedExtremesAndUnsignedTop) {
   EXPECT_EQ(f.data[0], 0x00);  // -32000 = 0x8300
   EXPECT_EQ(f.data[1], 0x83);
 }
+
+TEST(QnavCanCodec, ModeCmdReverseBitKnownAnswerAndRoundTrip) {
+  // Mode Repeat (2) in bits 0..3, ResetNav 0 (bit 4), Reverse 1 (bit 5) -> 0x22; RouteId 513 = 0x0201; Counter 5.
+  ModeCmd m;
+  ASSERT_TRUE(decode(frame("110#22010205"), m).is_ok());
+  EXPECT_EQ(m.mode, Mode::kRepeat);
+  EXPECT_FALSE(m.reset_nav);
+  EXPECT_TRUE(m.reverse);
+  EXPECT_EQ(m.route_id, 513);
+  EXPECT_EQ(m.counter, 5);
+  hal::CanFrame f;
+  ASSERT_TRUE(encode(m, f).is_ok());
+  expect_bytes(f, "110#22010205");
+  m.reverse = false;
+  m.reset_nav = true;
+  ASSERT_TRUE(encode(m, f).is_ok());
+  expect_bytes(f, "110#12010205");
+  ModeCmd back;
+  ASSERT_TRUE(decode(f, back).is_ok());
+  EXPECT_FALSE(back.reverse);
+  EXPECT_TRUE(back.reset_nav);
+  ModeCmd old_sender;  // a sender that predates the bit leaves it 0: forwards
+  ASSERT_TRUE(decode(frame("110#02010205"), old_sender).is_ok());
+  EXPECT_FALSE(old_sender.reverse);
+}
+
+TEST(QnavCanCodec, RouteStatusKnownAnswerAndRoundTrip) {
+  // GuidanceStatus DeadReckoned (2) bits 0..3, Side Starboard (2) bits 4..6 -> 0x22; sigma 1.23 m -> 123
+  // = 0x007B; EstimateNode 0x1234; TileSeq 0xFFFF; Counter 0x2A.
+  RouteStatus r;
+  QNAV_EXPECT_NO_ALLOC(ASSERT_TRUE(decode(frame("203#227B003412FFFF2A"), r).is_ok()));
+  EXPECT_EQ(r.status, GuidanceState::kDeadReckoned);
+  EXPECT_EQ(r.side, SideOfRoute::kStarboard);
+  EXPECT_NEAR(r.cross_track_sigma_m, 1.23, 1e-9);
+  EXPECT_EQ(r.estimate_node, 0x1234);
+  EXPECT_EQ(r.tile_seq, 0xFFFF);
+  EXPECT_EQ(r.counter, 0x2A);
+  hal::CanFrame f;
+  ASSERT_TRUE(encode(r, f).is_ok());
+  expect_bytes(f, "203#227B003412FFFF2A");
+  EXPECT_EQ(f.data[0] & 0x80, 0) << "bit 7 is unused";
+  const GuidanceState states[] = {GuidanceState::kTracking, GuidanceState::kHoldCourse, GuidanceState::kDeadReckoned,
+                                  GuidanceState::kRouteEnd, GuidanceState::kNotRepeating};
+  const SideOfRoute sides[] = {SideOfRoute::kOnRoute, SideOfRoute::kPort, SideOfRoute::kStarboard,
+                               SideOfRoute::kUnknown};
+  for (GuidanceState st : states)
+    for (SideOfRoute sd : sides) {
+      const RouteStatus m{st, sd, 12.34, 7, 65000, 200};
+      ASSERT_TRUE(encode(m, f).is_ok());
+      RouteStatus b;
+      ASSERT_TRUE(decode(f, b).is_ok());
+      EXPECT_EQ(b.status, st);
+      EXPECT_EQ(b.side, sd);
+      EXPECT_NEAR(b.cross_track_sigma_m, 12.34, 0.005 + 1e-12);
+      EXPECT_EQ(b.estimate_node, 7);
+      EXPECT_EQ(b.tile_seq, 65000);
+      EXPECT_EQ(b.counter, 200);
+    }
+  // Values outside the value tables are refused both ways.
+  EXPECT_EQ(decode(frame("203#057B003412FFFF2A"), r), StatusCode::kOutOfRange);  // GuidanceStatus 5
+  EXPECT_EQ(decode(frame("203#407B003412FFFF2A"), r), StatusCode::kOutOfRange);  // Side 4
+  EXPECT_EQ(decode(frame("203#227B003412FF"), r), StatusCode::kTruncated);
+  EXPECT_EQ(encode(RouteStatus{static_cast<GuidanceState>(5), SideOfRoute::kOnRoute, 0, 0, 0, 0}, f),
+            StatusCode::kOutOfRange);
+  EXPECT_EQ(encode(RouteStatus{GuidanceState::kTracking, static_cast<SideOfRoute>(4), 0, 0, 0, 0}, f),
+            StatusCode::kOutOfRange);
+}
+
+TEST(QnavCanCodec, RouteStatusDefaultSaysNotRepeatingAndUnknown) {
+  const RouteStatus r;
+  EXPECT_EQ(r.status, GuidanceState::kNotRepeating);
+  EXPECT_EQ(r.side, SideOfRoute::kUnknown);
+  EXPECT_DOUBLE_EQ(r.cross_track_sigma_m, kCrossTrackSigmaMaxM);
+}
+
+TEST(QnavCanCodec, CrossTrackSigmaSaturatesInsteadOfFailing) {
+  hal::CanFrame f;
+  RouteStatus back;
+  for (double huge : {655.35, 655.36, 1000.0, 1e12, std::numeric_limits<double>::infinity()}) {
+    SCOPED_TRACE(huge);
+    RouteStatus r{GuidanceState::kHoldCourse, SideOfRoute::kUnknown, huge, 1, 2, 3};
+    ASSERT_TRUE(encode(r, f).is_ok());
+    EXPECT_EQ(f.data[1], 0xFF);
+    EXPECT_EQ(f.data[2], 0xFF);
+    ASSERT_TRUE(decode(f, back).is_ok());
+    EXPECT_DOUBLE_EQ(back.cross_track_sigma_m, kCrossTrackSigmaMaxM);
+  }
+  RouteStatus neg{GuidanceState::kTracking, SideOfRoute::kOnRoute, -1.0, 0, 0, 0};
+  EXPECT_EQ(encode(neg, f), StatusCode::kOutOfRange);
+  RouteStatus nan{GuidanceState::kTracking, SideOfRoute::kOnRoute, std::numeric_limits<double>::quiet_NaN(), 0, 0, 0};
+  EXPECT_EQ(encode(nan, f), StatusCode::kInvalidArgument);
+}
+
+TEST(QnavCanCodec, GuidanceAndSideNamesAreTheDbcValueNames) {
+  EXPECT_STREQ(to_string(GuidanceState::kTracking), "Tracking");
+  EXPECT_STREQ(to_string(GuidanceState::kHoldCourse), "HoldCourse");
+  EXPECT_STREQ(to_string(GuidanceState::kDeadReckoned), "DeadReckoned");
+  EXPECT_STREQ(to_string(GuidanceState::kRouteEnd), "RouteEnd");
+  EXPECT_STREQ(to_string(GuidanceState::kNotRepeating), "NotRepeating");
+  EXPECT_STREQ(to_string(static_cast<GuidanceState>(9)), "?");
+  EXPECT_STREQ(to_string(SideOfRoute::kOnRoute), "OnRoute");
+  EXPECT_STREQ(to_string(SideOfRoute::kPort), "Port");
+  EXPECT_STREQ(to_string(SideOfRoute::kStarboard), "Starboard");
+  EXPECT_STREQ(to_string(SideOfRoute::kUnknown), "Unknown");
+  EXPECT_STREQ(to_string(static_cast<SideOfRoute>(9)), "?");
+}
+
+TEST(QnavCanCodec, FaultWordKeepsItsWireFormatAsPerBitSignals) {
+  // Leak (bit 0), AttitudeLost (7), CameraLost (9) = 0x0281: NAV_STATUS bytes 4..5, HEALTH bytes 0..1,
+  // little-endian, exactly where the 16-bit FaultFlags signal used to put them.
+  const std::uint16_t word = fault::kLeak | fault::kAttitudeLost | fault::kCameraLost;
+  ASSERT_EQ(word, 0x0281);
+  hal::CanFrame f;
+  ASSERT_TRUE(encode(NavStatus{Mode::kRepeat, true, 87.5, 0x04AF, word, 9}, f).is_ok());
+  expect_bytes(f, "200#12AFAF0481020900");
+  NavStatus ns;
+  ASSERT_TRUE(decode(f, ns).is_ok());
+  EXPECT_EQ(ns.fault_flags, word);
+  EXPECT_EQ(ns.counter, 9);
+  ASSERT_TRUE(encode(Health{word, 3, 4, 50.0, true, false}, f).is_ok());
+  expect_bytes(f, "210#8102030004006401");
+  Health h;
+  ASSERT_TRUE(decode(f, h).is_ok());
+  EXPECT_EQ(h.fault_flags, word);
+  EXPECT_EQ(h.rejected_inputs, 3);
+  EXPECT_EQ(h.deadline_misses, 4);
+  EXPECT_TRUE(h.leak);
+  // Every defined bit, alone and all together, round-trips.
+  for (int b = 0; b <= fault::kBitCount; ++b) {
+    const std::uint16_t w = b == fault::kBitCount ? fault::kDefined : static_cast<std::uint16_t>(1u << b);
+    ASSERT_TRUE(encode(NavStatus{Mode::kIdle, false, 0, 0, w, 0}, f).is_ok());
+    ASSERT_TRUE(decode(f, ns).is_ok());
+    EXPECT_EQ(ns.fault_flags, w);
+    ASSERT_TRUE(encode(Health{w, 0, 0, 0, false, false}, f).is_ok());
+    ASSERT_TRUE(decode(f, h).is_ok());
+    EXPECT_EQ(h.fault_flags, w);
+  }
+  EXPECT_EQ(fault::kDefined, 0x03FF);
+  EXPECT_EQ(fault::kSoftware, 1u << 5);
+  EXPECT_EQ(fault::kSonarLost, 1u << 6);
+  EXPECT_EQ(fault::kDvlLost, 1u << 8);
+}
+
+TEST(QnavCanCodec, ReservedFaultBitsAreRefusedOnEncodeAndIgnoredOnDecode) {
+  hal::CanFrame f;
+  f.id = 0x7FF;
+  for (int b = fault::kBitCount; b < 16; ++b) {
+    const std::uint16_t w = static_cast<std::uint16_t>(fault::kLeak | (1u << b));
+    EXPECT_EQ(encode(NavStatus{Mode::kIdle, false, 0, 0, w, 0}, f), StatusCode::kOutOfRange) << b;
+    EXPECT_EQ(encode(Health{w, 0, 0, 0, false, false}, f), StatusCode::kOutOfRange) << b;
+  }
+  EXPECT_EQ(f.id, 0x7FFu) << "a refused encode leaves the frame alone";
+  // A frame from a newer sender with bits 10..15 set: the defined bits are read, the rest ignored.
+  NavStatus ns;
+  ASSERT_TRUE(decode(frame("200#0000000001FC0000"), ns).is_ok());
+  EXPECT_EQ(ns.fault_flags, fault::kLeak);
+  Health h;
+  ASSERT_TRUE(decode(frame("210#02FC000000000000"), h).is_ok());
+  EXPECT_EQ(h.fault_flags, fault::kSensorTimeout);
+}
+
+TEST(QnavCanCodec, PerBitFaultSignalsDecodeGenericallyByName) {
+  const std::uint16_t word = fault::kSensorTimeout | fault::kSoftware | fault::kDvlLost;
+  struct Case {
+    hal::CanFrame f;
+    std::size_t first;  // index of FaultLeak in the message's signal table
+  };
+  Case cases[2];
+  ASSERT_TRUE(encode(NavStatus{Mode::kMap, true, 50, 3, word, 1}, cases[0].f).is_ok());
+  cases[0].first = 4;
+  ASSERT_TRUE(encode(Health{word, 1, 2, 10, false, true}, cases[1].f).is_ok());
+  cases[1].first = 0;
+  for (const Case& c : cases) {
+    const MessageDef* def = nullptr;
+    double values[kMaxSignalsPerMessage];
+    QNAV_EXPECT_NO_ALLOC(ASSERT_TRUE(decode_generic(c.f, def, values, kMaxSignalsPerMessage).is_ok()));
+    ASSERT_NE(def, nullptr);
+    SCOPED_TRACE(def->name);
+    EXPECT_EQ(def->signals.size(), 15u);
+    for (int b = 0; b < fault::kBitCount; ++b) {
+      const SignalDef& s = def->signals[c.first + static_cast<std::size_t>(b)];
+      EXPECT_STREQ(s.name, fault::kSignalNames[b]);
+      EXPECT_EQ(s.length, 1);
+      EXPECT_EQ(s.start_bit, def->signals[c.first].start_bit + b);
+      EXPECT_DOUBLE_EQ(values[c.first + static_cast<std::size_t>(b)], ((word >> b) & 1u) ? 1.0 : 0.0) << s.name;
+    }
+    // The old 8-value array is refused, never overrun.
+    double small[8];
+    EXPECT_EQ(decode_generic(c.f, def, small, 8), StatusCode::kCapacityExceeded);
+    EXPECT_NE(def, nullptr);
+  }
+  EXPECT_STREQ(fault::kSignalNames[0], "FaultLeak");
+  EXPECT_STREQ(fault::kSignalNames[5], "FaultSoftware");
+  EXPECT_STREQ(fault::kSignalNames[9], "FaultCameraLost");
+}
+
+TEST(QnavCanCodec, NoMessageHasMoreSignalsThanTheGenericArray) {
+  for (const MessageDef& m : all_messages()) EXPECT_LE(m.signals.size(), kMaxSignalsPerMessage) << m.name;
+  const MessageDef* rs = find_message(kIdRouteStatus);
+  ASSERT_NE(rs, nullptr);
+  EXPECT_STREQ(rs->name, "QNAV_ROUTE_STATUS");
+  EXPECT_EQ(rs->cycle_ms, 100u);
+  hal::CanFrame f;
+  ASSERT_TRUE(encode(RouteStatus{GuidanceState::kRouteEnd, SideOfRoute::kPort, 2.5, 40, 41, 42}, f).is_ok());
+  const MessageDef* def = nullptr;
+  double v[kMaxSignalsPerMessage];
+  ASSERT_TRUE(decode_generic(f, def, v, kMaxSignalsPerMessage).is_ok());
+  ASSERT_EQ(def, rs);
+  EXPECT_DOUBLE_EQ(v[0], 3.0);
+  EXPECT_DOUBLE_EQ(v[1], 1.0);
+  EXPECT_NEAR(v[2], 2.5, 1e-9);
+  EXPECT_DOUBLE_EQ(v[5], 42.0);
+}

@@ -1,14 +1,19 @@
 // docs/qnav.dbc is the interface control document; the codec's tables must say exactly what it says.
 // The DBC is parsed, every message and signal is matched against the codec, and the codec's bit
 // placement is checked against an independent reading of the DBC bit numbering (cantools' msb0
-// conversion for Motorola signals), so a wrong start bit, length or byte order fails here.
+// conversion for Motorola signals), so a wrong start bit, length or byte order fails here. The
+// value tables (VAL_) and signal comments (CM_ SG_), which the bounded reader skips, are read here
+// line by line: every enumeration and flag has names, and they are the codec's names.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <memory>
+#include <sstream>
 #include <string>
+#include <utility>
 
 #include "drivers/qnavcan/dbc.hpp"
 #include "drivers/qnavcan/messages.hpp"
@@ -41,13 +46,51 @@ void expected_positions(const DbcSignal& s, int* pos) {
   }
 }
 
+std::string dbc_text() { return read_file(std::string(QNAV_SOURCE_DIR) + "/docs/qnav.dbc"); }
+
+// VAL_ <id> <signal> <raw> "<name>" ... ; -> {(id, signal) -> {raw -> name}}.
+using ValueTables = std::map<std::pair<std::uint32_t, std::string>, std::map<long, std::string>>;
+ValueTables value_tables(const std::string& text, std::string& error) {
+  ValueTables out;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("VAL_ ", 0) != 0) continue;
+    std::istringstream in(line.substr(5));
+    std::uint32_t id = 0;
+    std::string sig;
+    if (!(in >> id >> sig)) {
+      error = "bad VAL_ line: " + line;
+      return out;
+    }
+    std::map<long, std::string>& table = out[{id, sig}];
+    std::string tok;
+    while (in >> tok && tok != ";") {
+      const long raw = std::stol(tok);
+      std::string name;
+      in >> std::ws;
+      if (in.get() != '"' || !std::getline(in, name, '"')) {
+        error = "bad VAL_ entry: " + line;
+        return out;
+      }
+      table[raw] = name;
+    }
+    if (tok != ";") error = "VAL_ line without ';': " + line;
+  }
+  return out;
+}
+
+bool has_signal_comment(const std::string& text, std::uint32_t id, const char* sig) {
+  return text.find("CM_ SG_ " + std::to_string(id) + " " + sig + " \"") != std::string::npos;
+}
+
 struct Loaded {
   std::unique_ptr<DbcFile> dbc = std::make_unique<DbcFile>();
   Status status;
 };
 Loaded load() {
   Loaded l;
-  const std::string text = read_file(std::string(QNAV_SOURCE_DIR) + "/docs/qnav.dbc");
+  const std::string text = dbc_text();
   if (text.empty()) {
     l.status = Status(StatusCode::kNotFound, "docs/qnav.dbc not readable");
     return l;
@@ -129,4 +172,98 @@ TEST(QnavDbc, ParserReportsTheBrokenLine) {
   EXPECT_EQ(dbc->error_line, 2u);
   const char orphan[] = " SG_ S : 0|16@1+ (1,0) [0|1] \"\" B\n";
   EXPECT_EQ(parse_dbc(orphan, sizeof orphan - 1, *dbc), StatusCode::kCorrupt);
+}
+
+TEST(QnavDbc, EveryEnumerationAndFlagHasAValueTableNamingEveryValue) {
+  Loaded l = load();
+  ASSERT_TRUE(l.status.is_ok()) << l.status.message();
+  std::string error;
+  const ValueTables tables = value_tables(dbc_text(), error);
+  ASSERT_TRUE(error.empty()) << error;
+  for (const auto& t : tables) {  // every table belongs to a signal that exists
+    const DbcMessage* m = l.dbc->find(t.first.first);
+    ASSERT_NE(m, nullptr) << "VAL_ for unknown message " << t.first.first;
+    bool found = false;
+    for (const DbcSignal& s : m->signals) found = found || t.first.second == s.name;
+    EXPECT_TRUE(found) << "VAL_ for unknown signal " << m->name << "." << t.first.second;
+  }
+  const char* const kEnumerations[] = {"Mode", "State", "GuidanceStatus", "Side"};
+  int enumerations = 0, flags = 0;
+  for (const DbcMessage& m : l.dbc->messages) {
+    for (const DbcSignal& s : m.signals) {
+      bool enumeration = s.length == 1;
+      for (const char* e : kEnumerations) enumeration = enumeration || std::strcmp(s.name, e) == 0;
+      const auto it = tables.find({m.id, s.name});
+      if (!enumeration) {
+        EXPECT_EQ(it, tables.end()) << m.name << "." << s.name << " is a number, not an enumeration";
+        continue;
+      }
+      SCOPED_TRACE(std::string(m.name) + "." + s.name);
+      ASSERT_NE(it, tables.end()) << "no VAL_ table: CAN tools would show integers";
+      // Exactly the values the range allows, each named.
+      EXPECT_EQ(it->second.size(), static_cast<std::size_t>(s.max - s.min) + 1);
+      for (long v = static_cast<long>(s.min); v <= static_cast<long>(s.max); ++v) {
+        const auto n = it->second.find(v);
+        ASSERT_NE(n, it->second.end()) << "value " << v << " has no name";
+        EXPECT_FALSE(n->second.empty());
+      }
+      if (s.length == 1)
+        ++flags;
+      else
+        ++enumerations;
+    }
+  }
+  EXPECT_EQ(enumerations,
+            5);          // MODE_CMD.Mode, NAV_STATUS.State, ROUTE_STATUS.GuidanceStatus and .Side, HEARTBEAT.State
+  EXPECT_EQ(flags, 28);  // Valid, DepthValid, AltitudeValid, ResetNav, Reverse, Localised, 2 x 10 Fault*, Leak, BusOff
+}
+
+TEST(QnavDbc, RouteStatusValueNamesAreTheCodecNames) {
+  std::string error;
+  const ValueTables tables = value_tables(dbc_text(), error);
+  ASSERT_TRUE(error.empty()) << error;
+  const auto status = tables.find({kIdRouteStatus, "GuidanceStatus"});
+  ASSERT_NE(status, tables.end());
+  ASSERT_EQ(status->second.size(), 5u);
+  for (const auto& v : status->second) EXPECT_EQ(v.second, to_string(static_cast<GuidanceState>(v.first))) << v.first;
+  const auto side = tables.find({kIdRouteStatus, "Side"});
+  ASSERT_NE(side, tables.end());
+  ASSERT_EQ(side->second.size(), 4u);
+  for (const auto& v : side->second) EXPECT_EQ(v.second, to_string(static_cast<SideOfRoute>(v.first))) << v.first;
+  const auto reverse = tables.find({kIdModeCmd, "Reverse"});
+  ASSERT_NE(reverse, tables.end());
+  EXPECT_EQ(reverse->second.at(0), "Forward");
+  EXPECT_EQ(reverse->second.at(1), "Reverse");
+}
+
+TEST(QnavDbc, FaultBitsAreCommentedOneBitSignalsAtTheWordsPositions) {
+  Loaded l = load();
+  ASSERT_TRUE(l.status.is_ok()) << l.status.message();
+  const std::string text = dbc_text();
+  const std::pair<std::uint32_t, int> words[] = {{kIdNavStatus, 32}, {kIdHealth, 0}};  // message, bit of word bit 0
+  for (const auto& w : words) {
+    const DbcMessage* m = l.dbc->find(w.first);
+    ASSERT_NE(m, nullptr);
+    SCOPED_TRACE(m->name);
+    int found = 0;
+    for (const DbcSignal& s : m->signals) {
+      EXPECT_STRNE(s.name, "FaultFlags") << "the 16-bit word is sent as per-bit signals";
+      for (int b = 0; b < fault::kBitCount; ++b) {
+        if (std::strcmp(s.name, fault::kSignalNames[b]) != 0) continue;
+        ++found;
+        EXPECT_EQ(s.start_bit, w.second + b) << s.name;
+        EXPECT_EQ(s.length, 1) << s.name;
+        EXPECT_FALSE(s.big_endian);
+        EXPECT_TRUE(has_signal_comment(text, m->id, s.name)) << s.name << " has no CM_ comment";
+      }
+      // Nothing else may use the reserved word bits 10..15.
+      if (!s.big_endian)
+        for (int k = 0; k < s.length; ++k) {
+          const int bit = s.start_bit + k;
+          EXPECT_FALSE(bit >= w.second + fault::kBitCount && bit < w.second + 16)
+              << s.name << " uses reserved bit " << bit;
+        }
+    }
+    EXPECT_EQ(found, fault::kBitCount);
+  }
 }

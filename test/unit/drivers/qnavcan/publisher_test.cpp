@@ -77,3 +77,62 @@ TEST(QnavCanPublisher, RetriesWhenTxIsFullAndDropsUnencodableValues) {
   EXPECT_EQ(pub.poll(4000000), 0);  // not retried
   EXPECT_EQ(pub.counters().get(TxCounter::kEncodeError), 1u);
 }
+
+TEST(QnavCanPublisher, SendsRouteStatusEvery100msRightAfterRouteGuidance) {
+  hal::ManualClock clock(0);
+  hal::SimCanNetwork net(clock);
+  hal::SimCanBus tx, rx;
+  ASSERT_TRUE(tx.attach(net).is_ok());
+  ASSERT_TRUE(rx.attach(net).is_ok());
+  QnavCanPublisher pub(tx);
+  pub.set(RouteGuidance{1.5, 0.1, 20.0, 7});
+  // A sigma too large for the signal is sent saturated ("unknown"), not dropped as unencodable.
+  pub.set(RouteStatus{GuidanceState::kHoldCourse, SideOfRoute::kUnknown, 1e6, 7, 41, 99});
+  int status = 0, guidance = 0;
+  std::uint8_t last_counter = 0;
+  std::uint32_t previous_id = 0;
+  QNAV_EXPECT_NO_ALLOC(for (std::int64_t t = 0; t < 2000000000LL; t += 10000000LL) {  // 2 s in 10 ms steps
+    clock.set_ns(t);
+    pub.poll(t);
+    hal::CanRxFrame f;
+    while (rx.receive(f, 0).is_ok()) {
+      if (f.frame.id == kIdRouteStatus) {
+        RouteStatus m;
+        ASSERT_TRUE(decode(f.frame, m).is_ok());
+        EXPECT_EQ(previous_id, kIdRouteGuidance) << "ROUTE_STATUS follows its ROUTE_GUIDANCE";
+        EXPECT_EQ(f.stamp.sample_ns, static_cast<std::int64_t>(status) * 100000000LL);
+        EXPECT_EQ(m.status, GuidanceState::kHoldCourse);
+        EXPECT_EQ(m.side, SideOfRoute::kUnknown);
+        EXPECT_DOUBLE_EQ(m.cross_track_sigma_m, kCrossTrackSigmaMaxM);
+        EXPECT_EQ(m.estimate_node, 7);
+        EXPECT_EQ(m.tile_seq, 41);
+        if (status > 0) {
+          EXPECT_EQ(m.counter, static_cast<std::uint8_t>(last_counter + 1));
+        } else {
+          EXPECT_EQ(m.counter, 0) << "the publisher fills the counter, not the caller";
+        }
+        last_counter = m.counter;
+        ++status;
+      } else if (f.frame.id == kIdRouteGuidance) {
+        ++guidance;
+      }
+      previous_id = f.frame.id;
+    }
+  });
+  EXPECT_EQ(status, 20);  // 100 ms period over 2 s
+  EXPECT_EQ(guidance, 20);
+  EXPECT_EQ(pub.counters().get(TxCounter::kSent), 40u);
+  EXPECT_EQ(pub.counters().get(TxCounter::kEncodeError), 0u);
+}
+
+TEST(QnavCanPublisher, DropsAFaultWordWithAReservedBit) {
+  BusyBus bus;
+  bus.busy = 0;
+  QnavCanPublisher pub(bus);
+  pub.set(Health{static_cast<std::uint16_t>(1u << 12), 0, 0, 0, false, false});
+  EXPECT_EQ(pub.poll(0), 0);
+  EXPECT_EQ(pub.counters().get(TxCounter::kEncodeError), 1u);
+  pub.set(Health{fault::kSoftware, 0, 0, 0, false, false});
+  EXPECT_EQ(pub.poll(1000000), 1);
+  EXPECT_EQ(bus.sent, 1);
+}

@@ -1,0 +1,115 @@
+// qnavd's configuration: one TOML file, read and validated once at start-up (before any buffer is
+// sized). Every key has a default, a unit and bounds (docs/configuration.md lists them all, generated
+// from the same key table: `qnavd --print-config-keys`). Unknown keys, wrong types and values out of
+// range are errors that name the key, the line and the allowed range. The route localiser and tile
+// settings start from firmware/pipeline/route_defaults (the tuned values `qnav route eval` measured)
+// and the [route] keys override them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "drivers/qnavcan/messages.hpp"
+#include "firmware/pipeline/route_defaults.hpp"
+#include "nav/core/fixed_vector.hpp"
+#include "nav/core/status.hpp"
+
+namespace qnav::daemon {
+
+enum class Backend : std::uint8_t { kSim, kLinux };
+enum class LogFormat : std::uint8_t { kJson, kKeyValue, kOff };
+enum class SonarSource : std::uint8_t { kSim, kJsfTcp };
+enum class SimSpeed : std::uint8_t { kFast, kRecorded };  // as fast as the pipeline takes it / in sample time
+
+// One pass of the simulated mission: the simulated autopilot sends QNAV_MODE_CMD (mode, reverse,
+// route id) before it and Idle after it, as a vehicle's autopilot would.
+struct SimPass {
+  drivers::qnavcan::Mode mode = drivers::qnavcan::Mode::kTeach;  // teach, repeat or hold
+  double offset_pct = 0.0;  // lateral offset, percent of the full swath, right of the taught direction [-100, 100]
+  bool reverse = false;
+};
+
+struct DaemonConfig {
+  // [daemon]
+  Backend backend = Backend::kSim;            // daemon.backend = "sim" | "linux"
+  std::string route_dir = "routes";          // daemon.route_dir: where route files live (route_<id>.qroute)
+  LogFormat log = LogFormat::kJson;          // daemon.log = "json" | "kv" | "off": one line per tile to stdout
+  bool realtime = true;                      // daemon.realtime: mlockall + SCHED_FIFO when permitted
+  int io_priority = 30;                      // daemon.io_priority [1, 99] (SCHED_FIFO)
+  int nav_priority = 20;                     // daemon.nav_priority [1, 99]
+  int io_cpu = -1;                           // daemon.io_cpu [-1, 63] (-1 = any)
+  int nav_cpu = -1;                          // daemon.nav_cpu [-1, 63]
+  double shutdown_timeout_s = 5.0;           // daemon.shutdown_timeout_s [0.1, 60]
+  double health_period_s = 1.0;              // daemon.health_period_s [0.1, 60]: log line with the counters
+
+  // [can]
+  std::string can_interface = "vcan0";       // can.interface (linux backend)
+  double attitude_stale_s = 0.5;             // can.attitude_stale_s [0.01, 10]
+  double depth_stale_s = 2.0;                // can.depth_stale_s [0.01, 60]
+  std::size_t can_rx_queue = 256;            // can.rx_queue [16, 4096] frames, power of two
+  std::size_t can_tx_queue = 64;             // can.tx_queue [16, 4096] frames, power of two
+
+  // [sonar]
+  SonarSource sonar_source = SonarSource::kSim;  // sonar.source = "sim" | "jsf_tcp"
+  std::string sonar_address = "127.0.0.1:1700";  // sonar.address host:port (jsf_tcp)
+  double sonar_stale_s = 2.0;                // sonar.stale_s [0.1, 60]
+  std::size_t ping_queue = 32;               // sonar.ping_queue [4, 1024] pings, power of two
+  std::size_t max_samples_per_side = 1024;   // sonar.max_samples_per_side [64, 16384]
+
+  // [dvl]
+  bool dvl_enabled = true;                   // dvl.enabled
+  std::string dvl_device = "/dev/ttyUSB0";   // dvl.device (linux backend)
+  std::string dvl_protocol = "waterlinked";  // dvl.protocol = "waterlinked" | "pd6"
+  int dvl_baud = 115200;                     // dvl.baud: 9600 | 19200 | 38400 | 57600 | 115200 | 230400 | 460800
+  double dvl_stale_s = 1.0;                  // dvl.stale_s [0.05, 60]
+
+  // [route]
+  std::uint16_t route_id = 1;                // route.id [0, 65535]: route used when a MODE_CMD gives 0
+  std::size_t max_nodes = 10000;             // route.max_nodes [2, 65535]
+  pipeline::RouteTileConfig tiles = pipeline::default_route_tile_config();
+  route::LocaliserConfig localiser = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
+  //   route.scanlines_per_tile [20, 4000]   -> tiles.tiles.scanlines_per_tile
+  //   route.scanline_stride [1, scanlines_per_tile] -> tiles.tiles.scanline_stride
+  //   route.resolution_m [0.01, 5]          -> tiles.tiles.resolution_m
+  //   route.tile_px [64, 2048]              -> tiles.tiles.tile_width_px/height_px, tiles.features.max_width/height
+  //   route.ground_bins_per_side [16, 4096] -> tiles.corrector.ground_bins_per_side, tiles.tiles.max_bins_per_side
+  //   route.ground_bin_m [0.01, 5]          -> tiles.corrector.ground_bin_m
+  //   route.max_keypoints [8, 128]          -> tiles.features.max_keypoints
+  //   route.belief_registrations [1, 64]    -> localiser.filter.belief_registrations
+  //   route.searching_registrations [1, 64] -> localiser.filter.searching_registrations
+  //   route.min_inliers [3, 100]            -> localiser.registration.robust.min_inliers
+  //   route.side_deadband_m [0, 100]        -> localiser.guidance.side_deadband_m
+  //   route.dead_reckon_max_m [0, 10000]    -> localiser.guidance.dead_reckon_max_m
+  //   route.motion = "odometry" | "eq5"     -> localiser.filter.motion
+
+  // [budget] per-stage time budgets on the host, microseconds (docs/budgets.md)
+  std::uint32_t ping_budget_us = 2000;       // budget.ping_us [10, 1000000]
+  std::uint32_t tile_budget_us = 50000;      // budget.tile_us [100, 10000000]: features + localiser update
+  std::uint32_t mode_budget_us = 200000;     // budget.mode_us [100, 10000000]: a mode change (route file open/close, fsync)
+
+  // [sim] (backend = "sim")
+  double sim_length_m = 2000.0;              // sim.length_m [200, 50000]
+  std::uint64_t sim_seed = 1;                // sim.seed [0, 2^32)
+  SimSpeed sim_speed = SimSpeed::kFast;      // sim.speed = "fast" | "recorded"
+  bool sim_exit_at_end = true;               // sim.exit_at_end: qnavd exits 0 when the mission is flown
+  FixedVector<SimPass, 16> sim_mission;      // [[sim.pass]] mode = "teach"|"repeat"|"hold", offset_pct, reverse
+};
+
+// Where a configuration error is: key (dotted), line (0 if unknown) and a message with the allowed range.
+struct ConfigError {
+  std::string key;
+  int line = 0;
+  std::string message;
+  std::string to_string() const;  // "FILE:LINE: key: message"
+  std::string file;
+};
+
+// Reads and validates a file. On failure returns false and fills err; out is left default.
+bool load_config(const char* path, DaemonConfig& out, ConfigError& err);
+// The same from a string (tests); `name` stands in for the file name in errors.
+bool parse_config(const std::string& text, const char* name, DaemonConfig& out, ConfigError& err);
+// Every key with its type, default, unit and bounds, one per line as a markdown table row.
+std::string config_keys_markdown();
+
+}  // namespace qnav::daemon

@@ -1,0 +1,383 @@
+#include "firmware/qnavd/daemon.hpp"
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+
+#include "drivers/dvl/dvl_driver.hpp"
+#include "drivers/sonar_stream/jsf_stream_driver.hpp"
+#include "hal/linux/monotonic_clock.hpp"
+#include "hal/linux/process.hpp"
+#include "hal/linux/socketcan_bus.hpp"
+#include "hal/linux/tcp_client_port.hpp"
+#include "hal/linux/termios_serial.hpp"
+#include "hal/sim/sim_can.hpp"
+#include "hal/sim/sim_serial.hpp"
+
+namespace qnav::daemon {
+
+// What the io thread drives: one poll of every device, pushing into the nav worker's queues.
+class IoBackend {
+ public:
+  virtual ~IoBackend() = default;
+  // Returns true when something was read or produced; false when the caller may wait.
+  virtual bool poll_devices(Daemon& d, IoCounters& io) noexcept = 0;
+  virtual void send(const hal::CanFrame& f, IoCounters& io) noexcept = 0;
+  virtual void wait(int timeout_ms) noexcept = 0;
+  virtual bool done() const noexcept { return false; }
+};
+
+struct QueueRefs {
+  SpscRing<PingMsg>* pings;
+  SpscRing<std::uint32_t>* free_slots;
+  SpscRing<hal::CanRxFrame>* can_rx;
+  SpscRing<drivers::dvl::DvlVelocity>* dvl;
+  float* pool;
+  std::size_t stride;
+};
+
+namespace {
+
+using std::chrono::microseconds;
+
+bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io) noexcept {
+  bool did = false;
+  hal::CanRxFrame rx;
+  for (int i = 0; i < 64; ++i) {
+    const Status s = bus.receive(rx, 0);
+    if (!s) {
+      if (s.code() != StatusCode::kTimeout) {
+        io.device_errors.fetch_add(1, std::memory_order_relaxed);
+        io.can_device_down.store(true);
+      }
+      break;
+    }
+    io.can_device_down.store(false);
+    if (!q.try_push(rx)) io.can_rx_overflow.fetch_add(1, std::memory_order_relaxed);
+    did = true;
+  }
+  return did;
+}
+
+bool drain_dvl(drivers::dvl::DvlSerialDriver& dvl, SpscRing<drivers::dvl::DvlVelocity>& q, IoCounters& io, std::uint32_t& last_rejects) noexcept {
+  bool did = false;
+  Result<int> r = dvl.poll(0);
+  if (!r) {
+    io.device_errors.fetch_add(1, std::memory_order_relaxed);
+    io.dvl_device_down.store(true);
+    return false;
+  }
+  drivers::dvl::DvlVelocity v;
+  while (dvl.pop(v)) {
+    if (!q.try_push(v)) io.dvl_overflow.fetch_add(1, std::memory_order_relaxed);
+    did = true;
+  }
+  std::uint32_t rej = 0;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(drivers::dvl::DvlCounter::kCount); ++i)
+    if (static_cast<drivers::dvl::DvlCounter>(i) != drivers::dvl::DvlCounter::kNoLock) rej += dvl.counter(static_cast<drivers::dvl::DvlCounter>(i));
+  if (rej != last_rejects) {
+    io.dvl_rejected.fetch_add(rej - last_rejects, std::memory_order_relaxed);
+    last_rejects = rej;
+  }
+  return did;
+}
+
+// ---- sim: the simulated vehicle on in-process buses, mission time ----
+class SimBackend final : public IoBackend {
+ public:
+  SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
+      : net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q) {}
+  Status init(BusObserver obs, void* ctx) {
+    QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
+    QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
+    vehicle_.set_bus_observer(obs, ctx);
+    return vehicle_.init(vehicle_bus_, pipe_.a());
+  }
+  bool poll_devices(Daemon&, IoCounters& io) noexcept override {
+    const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
+    done_ = r == SimVehicle::StepResult::kDone;
+    bool did = r == SimVehicle::StepResult::kProduced;
+    did |= drain_can(daemon_bus_, *q_.can_rx, io);
+    did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
+    return did;
+  }
+  void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
+    if (!daemon_bus_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
+  }
+  void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
+  bool done() const noexcept override { return done_; }
+
+ private:
+  hal::SimCanNetwork net_;
+  hal::SimCanBus daemon_bus_, vehicle_bus_;
+  hal::SimSerialPipe pipe_;
+  SimVehicle vehicle_;
+  drivers::dvl::DvlSerialDriver dvl_;
+  QueueRefs q_;
+  std::uint32_t dvl_rejects_ = 0;
+  bool done_ = false;
+};
+
+// ---- linux: SocketCAN, termios DVL, JSF over TCP; reopened once a second when they fail ----
+class LinuxBackend final : public IoBackend {
+ public:
+  LinuxBackend(const DaemonConfig& c, const hal::Clock& clock, QueueRefs q, FILE* log)
+      : cfg_(c), clock_(clock), q_(q), log_(log), dvl_(dvl_port_, c.dvl_protocol == "pd6" ? drivers::dvl::DvlProtocol::kPd6 : drivers::dvl::DvlProtocol::kWaterLinked) {}
+  Status init() {
+    drivers::sonar_stream::JsfStreamConfig jc;
+    jc.max_samples_per_side = cfg_.max_samples_per_side;
+    QNAV_RETURN_IF_ERROR(jsf_.init(jc));
+    const char* colon = std::strrchr(cfg_.sonar_address.c_str(), ':');
+    if (colon == nullptr) return Status(StatusCode::kInvalidArgument, "sonar.address must be host:port");
+    const std::size_t n = static_cast<std::size_t>(colon - cfg_.sonar_address.c_str());
+    if (n >= sizeof sonar_host_) return Status(StatusCode::kInvalidArgument, "sonar.address host too long");
+    std::memcpy(sonar_host_, cfg_.sonar_address.c_str(), n);
+    sonar_port_ = static_cast<std::uint16_t>(std::atoi(colon + 1));
+    // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
+    return open_can(true);
+  }
+  bool poll_devices(Daemon&, IoCounters& io) noexcept override {
+    const std::int64_t now = clock_.now_ns();
+    if (now >= next_retry_ns_) {
+      if (!can_.is_open()) open_can(false).ignore();
+      if (cfg_.dvl_enabled && !dvl_port_.is_open()) open_dvl();
+      if (!sonar_.is_open()) open_sonar();
+      next_retry_ns_ = now + 1000000000;
+    }
+    bool did = false;
+    if (can_.is_open()) {
+      did |= drain_can(can_, *q_.can_rx, io);
+      if (io.can_device_down.load()) can_.close();
+    }
+    if (dvl_port_.is_open()) {
+      did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
+      if (io.dvl_device_down.load()) dvl_port_.close();
+    }
+    if (sonar_.is_open()) {
+      io_ = &io;
+      Result<int> r = jsf_.poll(sonar_, 0, &LinuxBackend::on_ping, this);
+      if (!r) {
+        io.device_errors.fetch_add(1, std::memory_order_relaxed);
+        io.sonar_device_down.store(true);
+        sonar_.close();
+      } else {
+        did |= *r > 0;
+      }
+      const std::uint32_t rej = static_cast<std::uint32_t>(jsf_.framer_counters().total() + jsf_.ping_counters().total());
+      if (rej != sonar_rejects_) {
+        io.sonar_rejected.fetch_add(rej - sonar_rejects_, std::memory_order_relaxed);
+        sonar_rejects_ = rej;
+      }
+    }
+    return did;
+  }
+  void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
+    if (!can_.is_open() || !can_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
+  }
+  void wait(int timeout_ms) noexcept override {
+    const int fds[3] = {can_.fd(), dvl_port_.fd(), sonar_.fd()};
+    hal::wait_readable(fds, 3, timeout_ms);
+  }
+
+ private:
+  Status open_can(bool report) noexcept {
+    hal::SocketCanConfig sc;
+    sc.interface = cfg_.can_interface.c_str();
+    const Status s = can_.open(sc);
+    if (!s && report && log_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", sc.interface, s.message());
+    return s;
+  }
+  void open_dvl() noexcept {
+    hal::SerialConfig sc;
+    sc.baud = static_cast<std::uint32_t>(cfg_.dvl_baud);
+    const Status s = dvl_port_.open(cfg_.dvl_device.c_str(), sc);
+    if (!s && log_ && !dvl_warned_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", cfg_.dvl_device.c_str(), s.message());
+    dvl_warned_ = !s;
+  }
+  void open_sonar() noexcept {
+    const Status s = sonar_.open(sonar_host_, sonar_port_, 200);
+    if (!s && log_ && !sonar_warned_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", cfg_.sonar_address.c_str(), s.message());
+    sonar_warned_ = !s;
+  }
+  static void on_ping(void* ctx, const sonar::SonarPing& ping, const hal::SampleStamp& stamp) {
+    auto* self = static_cast<LinuxBackend*>(ctx);
+    IoCounters& io = *self->io_;
+    std::uint32_t slot = 0;
+    const std::size_t half = self->q_.stride / 2;
+    if (ping.port.size() > half || ping.stbd.size() > half) {
+      io.sonar_rejected.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    if (!self->q_.free_slots->try_pop(slot)) {  // the nav worker is behind: drop, count, never block
+      io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    float* port = self->q_.pool + static_cast<std::size_t>(slot) * self->q_.stride;
+    std::memcpy(port, ping.port.data(), ping.port.size() * sizeof(float));
+    std::memcpy(port + half, ping.stbd.data(), ping.stbd.size() * sizeof(float));
+    PingMsg m;
+    m.slot = slot;
+    m.ping_number = ping.ping_number;
+    m.port_samples = static_cast<std::uint32_t>(ping.port.size());
+    m.stbd_samples = static_cast<std::uint32_t>(ping.stbd.size());
+    m.slant_range_m = ping.slant_range_m;
+    m.altitude_m = ping.altitude_m;
+    m.device_stamp_ns = ping.stamp_ns;
+    m.stamp = stamp;
+    if (!self->q_.pings->try_push(m)) io.ping_overflow.fetch_add(1, std::memory_order_relaxed);  // cannot happen: one slot per entry
+  }
+
+  const DaemonConfig& cfg_;
+  const hal::Clock& clock_;
+  QueueRefs q_;
+  FILE* log_;
+  hal::SocketCanBus can_;
+  hal::TermiosSerialPort dvl_port_;
+  drivers::dvl::DvlSerialDriver dvl_;
+  hal::TcpClientPort sonar_;
+  drivers::sonar_stream::JsfStreamDriver jsf_;
+  char sonar_host_[64] = {};
+  std::uint16_t sonar_port_ = 0;
+  IoCounters* io_ = nullptr;
+  std::int64_t next_retry_ns_ = 0;
+  std::uint32_t dvl_rejects_ = 0, sonar_rejects_ = 0;
+  bool dvl_warned_ = false, sonar_warned_ = false;
+};
+
+template <typename T>
+Status make_ring(std::vector<T>& store, SpscRing<T>& ring, std::size_t depth) {
+  store.assign(depth, T{});
+  return ring.init(Span<T>(store.data(), store.size()));
+}
+
+}  // namespace
+
+Daemon::Daemon(const DaemonConfig& config) noexcept : cfg_(config) {}
+
+Daemon::~Daemon() {
+  stop();
+  if (io_thread_.joinable()) io_thread_.join();
+  if (nav_thread_.joinable()) nav_thread_.join();
+}
+
+const hal::Clock& Daemon::sample_clock() const noexcept {
+  if (sim_clock_) return *sim_clock_;
+  return *wall_;
+}
+
+Status Daemon::init(FILE* log) {
+  log_ = log;
+  wall_ = std::make_unique<hal::MonotonicClock>();
+  if (cfg_.backend == Backend::kSim) sim_clock_ = std::make_unique<SimClock>();
+  stride_ = 2 * cfg_.max_samples_per_side;
+  pool_.assign(cfg_.ping_queue * stride_, 0.0f);
+  QNAV_RETURN_IF_ERROR(make_ring(ping_store_, pings_, cfg_.ping_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(free_store_, free_slots_, cfg_.ping_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(can_rx_store_, can_rx_, cfg_.can_rx_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(can_tx_store_, can_tx_, cfg_.can_tx_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(dvl_store_, dvl_q_, 64));
+  for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
+  const QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, pool_.data(), stride_};
+  if (cfg_.backend == Backend::kSim) {
+    auto sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
+    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_));
+    backend_ = std::move(sim);
+  } else {
+    auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, log);
+    QNAV_RETURN_IF_ERROR(lb->init());
+    backend_ = std::move(lb);
+  }
+  QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));
+  nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_);
+  NavQueues nq;
+  nq.pings = &pings_;
+  nq.free_slots = &free_slots_;
+  nq.can_rx = &can_rx_;
+  nq.can_tx = &can_tx_;
+  nq.dvl = &dvl_q_;
+  nq.ping_pool = pool_.data();
+  nq.ping_pool_stride = stride_;
+  nq.io = &io_;
+  return nav_->init(nq, tile_observer_, tile_ctx_, log);
+}
+
+void Daemon::io_loop() noexcept {
+  if (cfg_.realtime) {
+    const Status s = hal::set_thread_realtime(cfg_.io_priority, cfg_.io_cpu);
+    if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"thread\":\"io\",\"what\":\"realtime not set: %s\"}\n", s.message());
+  }
+  while (!io_exit_.load(std::memory_order_relaxed)) {
+    bool did = backend_->poll_devices(*this, io_);
+    hal::CanFrame f;
+    while (can_tx_.try_pop(f)) {
+      backend_->send(f, io_);
+      did = true;
+    }
+    if (backend_->done()) mission_done_.store(true);
+    if (!did) backend_->wait(5);
+  }
+}
+
+void Daemon::nav_loop() noexcept {
+  if (cfg_.realtime) {
+    const Status s = hal::set_thread_realtime(cfg_.nav_priority, cfg_.nav_cpu);
+    if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"thread\":\"nav\",\"what\":\"realtime not set: %s\"}\n", s.message());
+  }
+  while (!stop_.load(std::memory_order_relaxed)) {
+    if (!nav_->run_once()) std::this_thread::sleep_for(microseconds(200));
+  }
+  nav_->shutdown();  // the node in progress finished or discarded, the route closed and fsynced
+  nav_exited_.store(true);
+}
+
+Status Daemon::start() {
+  if (!nav_) return Status(StatusCode::kNotReady, "daemon: start() before init()");
+  if (cfg_.realtime) {
+    const Status s = hal::lock_memory();
+    if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"what\":\"memory not locked: %s\"}\n", s.message());
+  }
+  io_thread_ = std::thread([this] { io_loop(); });
+  nav_thread_ = std::thread([this] { nav_loop(); });
+  started_ = true;
+  return Status::ok();
+}
+
+int Daemon::run() {
+  hal::ServiceNotifier notifier;
+  notifier.notify("READY=1\nSTATUS=navigating").ignore();
+  const std::uint64_t wd_us = notifier.watchdog_usec();
+  std::uint64_t last_progress = nav_->progress();
+  auto next_pet = std::chrono::steady_clock::now();
+  while (!stop_.load() && !hal::StopSignals::requested() && !(cfg_.backend == Backend::kSim && cfg_.sim_exit_at_end && mission_done_.load())) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (wd_us > 0 && std::chrono::steady_clock::now() >= next_pet) {
+      // Pet the watchdog only when the nav worker made progress since the last pet.
+      const std::uint64_t p = nav_->progress();
+      if (p != last_progress) notifier.notify("WATCHDOG=1").ignore();
+      last_progress = p;
+      next_pet = std::chrono::steady_clock::now() + microseconds(wd_us / 2);
+    }
+  }
+  notifier.notify("STOPPING=1").ignore();
+  stop_.store(true);
+  // Bounded shutdown: the nav worker finishes its step and closes the route; the io thread keeps
+  // draining (the last outputs) until then.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<long>(cfg_.shutdown_timeout_s * 1000));
+  while (!nav_exited_.load() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  io_exit_.store(true);
+  if (io_thread_.joinable()) io_thread_.join();
+  if (!nav_exited_.load()) {
+    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"nav worker did not stop within %.1f s\"}\n", cfg_.shutdown_timeout_s);
+    nav_thread_.detach();
+    return 1;
+  }
+  if (nav_thread_.joinable()) nav_thread_.join();
+  const int sig = hal::StopSignals::signal_number();
+  if (log_) {
+    std::fprintf(log_, "{\"event\":\"stopped\",\"signal\":%d,\"mission_done\":%s}\n", sig, mission_done_.load() ? "true" : "false");
+    std::fflush(log_);
+  }
+  return 0;
+}
+
+}  // namespace qnav::daemon

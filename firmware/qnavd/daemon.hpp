@@ -1,0 +1,78 @@
+// Daemon: qnavd's process structure (deployment.hpp): it owns the queues, the ping pool, the I/O
+// backend and the NavWorker, starts the io and nav threads, and runs the main thread's duties
+// (signals, sd_notify READY / WATCHDOG / STOPPING, bounded shutdown).
+// Backends: sim (SimVehicle on an in-process CAN network and serial line, mission time) or linux
+// (SocketCAN on can.interface, the DVL on dvl.device through termios, the sonar's JSF stream over
+// TCP from sonar.address). A device that fails or disappears is counted (device_errors), flagged
+// (its *_device_down bit; the nav worker reports the sensor lost) and reopened once a second.
+// init() allocates everything; after start() no thread allocates (the allocation test proves it).
+#pragma once
+
+#include <atomic>
+#include <cstdio>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "firmware/qnavd/config.hpp"
+#include "firmware/qnavd/nav_worker.hpp"
+#include "firmware/qnavd/sim_vehicle.hpp"
+
+namespace qnav::daemon {
+
+class IoBackend;
+
+class Daemon {
+ public:
+  explicit Daemon(const DaemonConfig& config) noexcept;
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  // Sizes and allocates every buffer, opens the devices. log: where log lines go (stdout in qnavd).
+  Status init(FILE* log);
+  void set_tile_observer(TileObserver f, void* ctx) noexcept { tile_observer_ = f, tile_ctx_ = ctx; }
+  void set_bus_observer(BusObserver f, void* ctx) noexcept { bus_observer_ = f, bus_ctx_ = ctx; }
+  // Starts the io and nav threads (realtime when configured and permitted; a warning otherwise).
+  Status start();
+  // The main thread: until a stop signal, stop(), or (sim) the end of the mission. Returns the exit code.
+  int run();
+  void stop() noexcept { stop_.store(true); }
+  bool mission_done() const noexcept { return mission_done_.load(); }
+  const NavWorker& nav() const noexcept { return *nav_; }
+  const IoCounters& io_counters() const noexcept { return io_; }
+  const hal::Clock& sample_clock() const noexcept;
+
+ private:
+  void io_loop() noexcept;
+  void nav_loop() noexcept;
+
+  const DaemonConfig& cfg_;
+  FILE* log_ = nullptr;
+  std::unique_ptr<hal::Clock> wall_;
+  std::unique_ptr<SimClock> sim_clock_;
+  std::vector<float> pool_;
+  std::vector<PingMsg> ping_store_;
+  std::vector<std::uint32_t> free_store_;
+  std::vector<hal::CanRxFrame> can_rx_store_;
+  std::vector<hal::CanFrame> can_tx_store_;
+  std::vector<drivers::dvl::DvlVelocity> dvl_store_;
+  SpscRing<PingMsg> pings_;
+  SpscRing<std::uint32_t> free_slots_;
+  SpscRing<hal::CanRxFrame> can_rx_;
+  SpscRing<hal::CanFrame> can_tx_;
+  SpscRing<drivers::dvl::DvlVelocity> dvl_q_;
+  std::size_t stride_ = 0;
+  IoCounters io_;
+  std::unique_ptr<IoBackend> backend_;
+  std::unique_ptr<NavWorker> nav_;
+  TileObserver tile_observer_ = nullptr;
+  void* tile_ctx_ = nullptr;
+  BusObserver bus_observer_ = nullptr;
+  void* bus_ctx_ = nullptr;
+  std::thread io_thread_, nav_thread_;
+  std::atomic<bool> stop_{false}, io_exit_{false}, nav_exited_{false}, mission_done_{false};
+  bool started_ = false;
+};
+
+}  // namespace qnav::daemon

@@ -1,0 +1,42 @@
+// The items that cross qnavd's queues (deployment.hpp declares the queues and their depths).
+// Ping samples do not travel in the queue: a PingMsg names a slot of the ping pool (floats owned by
+// the Daemon, sized from sonar.max_samples_per_side x sonar.ping_queue), and the slot returns to the
+// producer through the free-slot queue when the nav worker is done with it.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "firmware/pipeline/route_tile_pipeline.hpp"
+#include "hal/core/stamp.hpp"
+
+namespace qnav::daemon {
+
+struct PingMsg {
+  std::uint32_t slot = 0;
+  std::uint32_t ping_number = 0;
+  std::uint32_t port_samples = 0, stbd_samples = 0;
+  float slant_range_m = 0.0f;
+  float altitude_m = -1.0f;
+  std::uint64_t device_stamp_ns = 0;  // the sonar's own time field, passed on untouched
+  hal::SampleStamp stamp;             // monotonic (linux) or simulated (sim) sample time
+  bool has_truth = false;             // sim backend: the simulator's truth for evaluation
+  pipeline::PingTruth truth;
+};
+
+// Counters the I/O thread owns and the nav worker reads for health (relaxed atomics, monotonic).
+struct IoCounters {
+  std::atomic<std::uint32_t> can_rx_overflow{0};
+  std::atomic<std::uint32_t> can_tx_overflow{0};
+  std::atomic<std::uint32_t> can_tx_errors{0};
+  std::atomic<std::uint32_t> ping_overflow{0};   // a ping arrived with no free slot / full queue: dropped
+  std::atomic<std::uint32_t> dvl_overflow{0};
+  std::atomic<std::uint32_t> dvl_rejected{0};    // the DVL parser's rejections (checksum, format, stale ...)
+  std::atomic<std::uint32_t> sonar_rejected{0};  // the JSF framer's and assembler's rejections
+  std::atomic<std::uint32_t> device_errors{0};   // read/open failures of a device (disappeared, EOF)
+  std::atomic<bool> sonar_device_down{false};
+  std::atomic<bool> can_device_down{false};
+  std::atomic<bool> dvl_device_down{false};
+};
+
+}  // namespace qnav::daemon

@@ -1,0 +1,442 @@
+#include "firmware/qnavd/nav_worker.hpp"
+
+#include <algorithm>
+#include <cinttypes>
+#include <cmath>
+#include <cstring>
+
+#include "firmware/qnavd/software_fault.hpp"
+#include "nav/core/geometry.hpp"
+
+namespace qnav::daemon {
+
+namespace qc = drivers::qnavcan;
+
+const char* to_string(ModeReject r) noexcept {
+  switch (r) {
+    case ModeReject::kNone: return "none";
+    case ModeReject::kUnsupportedMode: return "mode not supported by this build";
+    case ModeReject::kRouteMissing: return "route file not found";
+    case ModeReject::kRouteDamaged: return "route file damaged";
+    case ModeReject::kRouteTooShort: return "route has fewer than 2 nodes";
+    case ModeReject::kStorage: return "route storage error";
+    case ModeReject::kNoHeading: return "no attitude (heading) yet";
+  }
+  return "?";
+}
+
+namespace {
+const char* mode_name(qc::Mode m) noexcept {
+  switch (m) {
+    case qc::Mode::kIdle: return "idle";
+    case qc::Mode::kTeach: return "teach";
+    case qc::Mode::kRepeat: return "repeat";
+    case qc::Mode::kMap: return "map";
+    case qc::Mode::kHold: return "hold";
+  }
+  return "?";
+}
+qc::GuidanceState to_wire(route::GuidanceStatus s) noexcept {
+  switch (s) {
+    case route::GuidanceStatus::kTracking: return qc::GuidanceState::kTracking;
+    case route::GuidanceStatus::kHoldCourse: return qc::GuidanceState::kHoldCourse;
+    case route::GuidanceStatus::kDeadReckoned: return qc::GuidanceState::kDeadReckoned;
+    case route::GuidanceStatus::kRouteEnd: return qc::GuidanceState::kRouteEnd;
+  }
+  return qc::GuidanceState::kHoldCourse;
+}
+qc::SideOfRoute to_wire(route::RouteSide s) noexcept {
+  switch (s) {
+    case route::RouteSide::kPort: return qc::SideOfRoute::kPort;
+    case route::RouteSide::kOnRoute: return qc::SideOfRoute::kOnRoute;
+    case route::RouteSide::kStarboard: return qc::SideOfRoute::kStarboard;
+    case route::RouteSide::kUnknown: return qc::SideOfRoute::kUnknown;
+  }
+  return qc::SideOfRoute::kUnknown;
+}
+double clampd(double v, double lo, double hi) noexcept { return std::isfinite(v) ? std::min(hi, std::max(lo, v)) : 0.0; }
+constexpr std::int64_t kNsPerS = 1000000000;
+}  // namespace
+
+NavWorker::NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock) noexcept
+    : cfg_(config), sample_clock_(sample_clock), cpu_clock_(cpu_clock) {}
+
+NavWorker::~NavWorker() { shutdown(); }
+
+Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log) {
+  q_ = q;
+  observer_ = observer;
+  observer_ctx_ = observer_ctx;
+  log_ = log;
+  if (!q.pings || !q.free_slots || !q.can_rx || !q.can_tx || !q.dvl || !q.ping_pool || !q.io)
+    return Status(StatusCode::kInvalidArgument, "nav worker: queues missing");
+  tx_bus_ = std::make_unique<QueueCanBus>(q.can_tx);
+  publisher_ = std::make_unique<qc::QnavCanPublisher>(*tx_bus_);
+  QNAV_RETURN_IF_ERROR(tiles_.init(cfg_.tiles));
+  route::LocaliserConfig lc = cfg_.localiser;
+  lc.filter.max_nodes = cfg_.max_nodes;
+  QNAV_RETURN_IF_ERROR(repeater_.init(lc));
+  meta_.reserve(cfg_.max_nodes);
+  writer_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
+  reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
+  tile_sink_ = [this](const pipeline::RouteTile& t) { return on_tile(t); };
+  const Deployment d = make_deployment(cfg_);
+  for (int i = 0; i < static_cast<int>(Stage::kCount); ++i) budgets_us_[i] = d.stages[i].budget_us;
+  return Status::ok();
+}
+
+void NavWorker::stage_time(Stage s, std::int64_t t0_ns) noexcept {
+  const std::int64_t dt = cpu_clock_.now_ns() - t0_ns;
+  const int i = static_cast<int>(s);
+  ++stage_runs_[i];
+  stage_max_ns_[i] = std::max(stage_max_ns_[i], dt);
+  busy_ns_ += dt;
+  if (budgets_us_[i] > 0 && dt > static_cast<std::int64_t>(budgets_us_[i]) * 1000) {
+    ++stage_misses_[i];
+    ++deadline_misses_;
+  }
+}
+
+bool NavWorker::run_once() noexcept {
+  if (shut_) return false;
+  bool did = false;
+  PingMsg ping;
+  const bool have_ping = q_.pings->try_pop(ping).is_ok();
+  // Every input sampled up to this ping (mode commands, headings, velocities), and none after it:
+  // the ping is placed with the navigation of its own sample time, whatever the I/O thread queued since.
+  const std::int64_t until_ns = have_ping ? ping.stamp.sample_ns : INT64_MAX;
+  hal::CanRxFrame rx;
+  std::int64_t t0 = cpu_clock_.now_ns();
+  mode_ns_ = 0;
+  while (q_.can_rx->front() != nullptr && q_.can_rx->front()->stamp.sample_ns <= until_ns && q_.can_rx->try_pop(rx)) {
+    handle_frame(rx);
+    nav_now_ns_ = std::max(nav_now_ns_, rx.stamp.sample_ns);
+    did = true;
+  }
+  drivers::dvl::DvlVelocity v;
+  while (q_.dvl->front() != nullptr && q_.dvl->front()->stamp.sample_ns <= until_ns && q_.dvl->try_pop(v)) {
+    if (!dr_.on_velocity(v.stamp.sample_ns, v.vx_mps, v.vy_mps)) ++dr_rejected_;
+    nav_now_ns_ = std::max(nav_now_ns_, v.stamp.sample_ns);
+    did = true;
+  }
+  if (did) stage_time(Stage::kInputs, t0 + mode_ns_);  // a mode change inside is timed as its own stage
+  if (have_ping) {
+    nav_now_ns_ = std::max(nav_now_ns_, ping.stamp.sample_ns);
+    handle_ping(ping);
+    QNAVD_CHECK(q_.free_slots->try_push(ping.slot).is_ok(), "free-slot queue full: a ping slot was returned twice");
+    did = true;
+  }
+  if (!did) {
+    // Idle queues: time still passes (a stalled sensor must show as stale).
+    nav_now_ns_ = std::max(nav_now_ns_, sample_clock_.now_ns());
+  }
+  if (!started_ns_set_) {
+    start_ns_ = nav_now_ns_;
+    busy_window_start_ns_ = cpu_clock_.now_ns();
+    next_health_ns_ = nav_now_ns_;
+    started_ns_set_ = true;
+  }
+  t0 = cpu_clock_.now_ns();
+  update_faults();
+  publish();
+  if (nav_now_ns_ >= next_health_ns_) {
+    log_health();
+    next_health_ns_ = nav_now_ns_ + static_cast<std::int64_t>(cfg_.health_period_s * 1e9);
+  }
+  stage_time(Stage::kOutputs, t0);
+  progress_.fetch_add(1, std::memory_order_relaxed);
+  return did;
+}
+
+void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
+  if (!receiver_.on_frame(rx)) return;  // counted by the receiver
+  if (rx.frame.id == qc::kIdAttitudeIn) {
+    qc::Stamped<qc::AttitudeIn> a;
+    if (receiver_.latest_attitude(rx.stamp.sample_ns, INT64_MAX / 2, a) && !dr_.on_heading(a.stamp.sample_ns, a.value.heading_rad)) ++dr_rejected_;
+  } else if (rx.frame.id == qc::kIdModeCmd) {
+    handle_mode(receiver_.last_mode().value);
+  }
+}
+
+void NavWorker::route_path(std::uint16_t id, const char* suffix, char* out, std::size_t n) const noexcept {
+  std::snprintf(out, n, "%s/route_%u.qroute%s", cfg_.route_dir.c_str(), static_cast<unsigned>(id), suffix);
+}
+
+ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
+  char path[1024], interrupted[1024];
+  route_path(id, ".new", path, sizeof path);
+  route_path(id, ".interrupted", interrupted, sizeof interrupted);
+  // A teach run that was cut off (power, kill -9) left its nodes under .new: keep them aside.
+  if (std::rename(path, interrupted) == 0 && log_)
+    std::fprintf(log_, "{\"event\":\"teach_interrupted_kept\",\"file\":\"%s\"}\n", interrupted);
+  const double spacing = cfg_.tiles.tiles.scanline_stride * 0.3;  // nominal (1.5 m/s at 5 Hz); nav along_m is what repeat uses
+  route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing, 2.0 * cfg_.tiles.corrector.ground_bins_per_side *
+                                                                                        static_cast<double>(cfg_.tiles.corrector.ground_bin_m));
+  tools::RouteWriterOptions o;
+  o.overwrite = true;
+  const Status s = writer_.create(path, params, o);
+  if (!s) {
+    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: %s: %s\"}\n", path, s.message());
+    return ModeReject::kStorage;
+  }
+  teach_open_ = true;
+  return ModeReject::kNone;
+}
+
+ModeReject NavWorker::enter_repeat(std::uint16_t id, bool reverse) noexcept {
+  char path[1024];
+  route_path(id, "", path, sizeof path);
+  reader_.close();
+  Status s = reader_.open(path);
+  if (!s) return s.code() == StatusCode::kIoError ? ModeReject::kRouteMissing : ModeReject::kRouteDamaged;
+  if (reader_.node_count() > cfg_.max_nodes) return ModeReject::kRouteTooShort;
+  std::uint32_t bad = 0;
+  s = reader_.read_all_meta(meta_, &bad);
+  if (!s) {
+    if (log_) std::fprintf(log_, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, bad, s.message());
+    faults_ |= qc::fault::kRouteDamaged;
+    return ModeReject::kRouteDamaged;
+  }
+  if (meta_.size() < 2) return ModeReject::kRouteTooShort;
+  repeater_.set_motion(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, route::MotionModel::kOdometry);
+  s = repeater_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_);
+  if (!s) return ModeReject::kRouteDamaged;
+  eq5_ = false;
+  return ModeReject::kNone;
+}
+
+void NavWorker::leave_mode() noexcept {
+  if (mode_ == qc::Mode::kTeach && teach_open_) {
+    // The node in progress: a tile of at least half the configured scanlines is finished, less is discarded.
+    tiles_.flush(tile_sink_).ignore();
+    char final_path[1024];
+    route_path(route_id_, "", final_path, sizeof final_path);
+    const std::uint32_t nodes = writer_.node_count();
+    Status s;
+    if (nodes >= 2) {
+      s = writer_.commit_as(final_path);
+    } else {
+      s = writer_.close();  // kept as .new: too short to repeat, but nothing taught is deleted
+    }
+    if (log_)
+      std::fprintf(log_, "{\"event\":\"teach_closed\",\"route_id\":%u,\"nodes\":%u,\"file\":\"%s%s\",\"ok\":%s}\n", route_id_, nodes, final_path,
+                   nodes >= 2 ? "" : ".new", s ? "true" : "false");
+    if (!s) ++writer_errors_;
+    teach_open_ = false;
+  }
+  if (mode_ == qc::Mode::kRepeat) reader_.close();
+  tiles_.reset_pass();
+  pass_ping_ = 0;
+}
+
+void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
+  const std::int64_t t0 = cpu_clock_.now_ns();
+  const std::uint16_t id = cmd.route_id != 0 ? cmd.route_id : cfg_.route_id;
+  ModeReject why = ModeReject::kNone;
+  if (cmd.mode == qc::Mode::kMap) why = ModeReject::kUnsupportedMode;
+  if (why == ModeReject::kNone && (cmd.mode != mode_ || id != route_id_ || cmd.reverse != reverse_)) {
+    if (cmd.mode == qc::Mode::kTeach && !dr_.has_heading()) why = ModeReject::kNoHeading;
+    if (why == ModeReject::kNone) {
+      leave_mode();
+      if (cmd.mode == qc::Mode::kTeach) why = enter_teach(id);
+      if (cmd.mode == qc::Mode::kRepeat) why = enter_repeat(id, cmd.reverse);
+      if (why == ModeReject::kNone) {
+        mode_ = cmd.mode;
+        reverse_ = cmd.reverse;
+        route_id_ = id;
+        dr_.reset(dr_.pose_at(nav_now_ns_));
+      } else {
+        mode_ = qc::Mode::kIdle;  // the old mode was left: a defined state
+      }
+    }
+  }
+  last_reject_ = why;
+  if (why != ModeReject::kNone) ++mode_refused_;
+  if (log_ && cfg_.log != LogFormat::kOff)
+    std::fprintf(log_, "{\"event\":\"mode\",\"t_s\":%.3f,\"cmd\":\"%s\",\"reverse\":%s,\"route_id\":%u,\"state\":\"%s\",\"refused\":%s%s%s}\n",
+                 static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(cmd.mode), cmd.reverse ? "true" : "false", id, mode_name(mode_),
+                 why == ModeReject::kNone ? "false" : "\"", why == ModeReject::kNone ? "" : to_string(why), why == ModeReject::kNone ? "" : "\"");
+  stage_time(Stage::kModes, t0);
+  mode_ns_ += cpu_clock_.now_ns() - t0;
+}
+
+void NavWorker::handle_ping(const PingMsg& p) noexcept {
+  const std::int64_t t0 = cpu_clock_.now_ns();
+  ++pings_;
+  last_ping_ns_ = p.stamp.sample_ns;
+  if (mode_ != qc::Mode::kTeach && mode_ != qc::Mode::kRepeat) return;
+  if (!dr_.has_heading() || dr_.heading_age_s(p.stamp.sample_ns) > cfg_.attitude_stale_s) return;  // no tiles without a heading
+  const std::size_t half = q_.ping_pool_stride / 2;
+  if (!QNAVD_CHECK(p.port_samples <= half && p.stbd_samples <= half, "ping larger than its pool slot")) return;
+  const float* base = q_.ping_pool + static_cast<std::size_t>(p.slot) * q_.ping_pool_stride;
+  sonar::SonarPing ping;
+  ping.stamp_ns = static_cast<std::uint64_t>(p.stamp.sample_ns);
+  ping.ping_number = pass_ping_++;
+  ping.port = Span<const float>(base, p.port_samples);
+  ping.stbd = Span<const float>(base + half, p.stbd_samples);
+  ping.slant_range_m = p.slant_range_m;
+  ping.altitude_m = p.altitude_m;
+  const Pose2 nav = dr_.pose_at(p.stamp.sample_ns);
+  ping_rx_cpu_ns_ = t0;
+  report_.truth_along_m = -1.0;
+  Status s = p.has_truth ? tiles_.push_ping(ping, nav, p.truth, tile_sink_, nullptr) : tiles_.push_ping(ping, nav, tile_sink_, nullptr);
+  QNAVD_CHECK(s.is_ok(), "tile pipeline refused a ping (its rejections are counted, not returned)");
+  stage_time(Stage::kPing, t0);
+}
+
+bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
+  const std::int64_t t0 = cpu_clock_.now_ns();
+  TileReport& r = report_;
+  r = TileReport{};
+  r.seq = tile_seq_++;
+  r.mode = mode_;
+  r.reverse = reverse_;
+  r.route_id = route_id_;
+  r.nav_step_m = t.nav_step_m;
+  r.truth_along_m = t.truth_along_m;
+  r.truth_lateral_m = t.truth_lateral_m;
+  r.stamp_ns = static_cast<std::int64_t>(t.node.meta.stamp_ns);
+  if (mode_ == qc::Mode::kTeach && teach_open_) {
+    r.node_written = writer_.node_count();
+    const Status s = writer_.append(t.node);
+    if (!s) {
+      ++writer_errors_;
+      if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach append: %s\"}\n", s.message());
+    }
+  } else if (mode_ == qc::Mode::kRepeat) {
+    const bool first = t.tile_index == 0;
+    const bool dvl_lost = !dr_.has_velocity() || dr_.velocity_age_s(nav_now_ns_) > cfg_.dvl_stale_s;
+    if (dvl_lost != eq5_) {
+      eq5_ = dvl_lost;
+      repeater_.set_motion(reverse_ ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
+                           eq5_ ? route::MotionModel::kPaperEq5 : route::MotionModel::kOdometry);
+    }
+    r.eq5_motion = eq5_;
+    const Status s = repeater_.step(t.node, first ? 0.0 : t.nav_step_m, r.step);
+    if (!s) {
+      ++step_errors_;
+      r.step = route::LocaliserStep{};
+      r.step.guidance.status = route::GuidanceStatus::kHoldCourse;
+      r.step.guidance.side = route::RouteSide::kUnknown;
+    }
+    const route::GuidanceOutput& g = r.step.guidance;
+    guidance_.cross_track_m = clampd(g.cross_track_m, -327.0, 327.0);
+    guidance_.heading_error_rad = clampd(g.heading_error_rad, -3.1416, 3.1416);
+    // The next node in the direction of travel is one spacing ahead of the node the offsets refer to.
+    guidance_.dist_to_next_m = clampd(static_cast<double>(reader_.params().node_spacing_m) - g.along_track_m, 0.0, 6553.5);
+    guidance_.target_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(g.node, 65535));
+    route_status_.status = to_wire(g.status);
+    route_status_.side = to_wire(g.side);
+    route_status_.cross_track_sigma_m = std::isfinite(g.cross_track_sigma_m) ? g.cross_track_sigma_m : qc::kCrossTrackSigmaMaxM;
+    route_status_.estimate_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(r.step.estimate, 65535));
+    route_status_.tile_seq = static_cast<std::uint16_t>(r.seq & 0xFFFF);
+    publisher_->set(guidance_);
+    publisher_->set(route_status_);
+  }
+  stage_time(Stage::kTile, t0);
+  r.latency_ms = static_cast<double>(cpu_clock_.now_ns() - ping_rx_cpu_ns_) * 1e-6;
+  if (log_ && cfg_.log == LogFormat::kJson) {
+    const route::LocaliserStep& st = r.step;
+    std::fprintf(log_,
+                 "{\"event\":\"tile\",\"seq\":%u,\"t_s\":%.1f,\"mode\":\"%s\",\"route_id\":%u,\"node_written\":%d,\"estimate\":%u,\"p\":%.3f,"
+                 "\"entropy\":%.3f,\"inliers\":%u,\"status\":\"%s\",\"side\":\"%s\",\"cross_track_m\":%.2f,\"sigma_m\":%.2f,\"eq5\":%s,"
+                 "\"truth_along_m\":%.1f,\"latency_ms\":%.2f}\n",
+                 r.seq, static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(r.mode), r.route_id,
+                 r.mode == qc::Mode::kTeach ? static_cast<int>(r.node_written) : -1, st.estimate, static_cast<double>(st.probability), st.entropy,
+                 st.best_inliers, r.mode == qc::Mode::kRepeat ? route::to_string(st.guidance.status) : "-",
+                 r.mode == qc::Mode::kRepeat ? route::to_string(st.guidance.side) : "-", st.guidance.cross_track_m, st.guidance.cross_track_sigma_m,
+                 r.eq5_motion ? "true" : "false", r.truth_along_m, r.latency_ms);
+  } else if (log_ && cfg_.log == LogFormat::kKeyValue) {
+    std::fprintf(log_, "tile seq=%u mode=%s estimate=%u status=%s side=%s cross_track_m=%.2f sigma_m=%.2f\n", r.seq, mode_name(r.mode),
+                 r.step.estimate, route::to_string(r.step.guidance.status), route::to_string(r.step.guidance.side), r.step.guidance.cross_track_m,
+                 r.step.guidance.cross_track_sigma_m);
+  }
+  if (observer_) observer_(observer_ctx_, r);
+  return true;
+}
+
+void NavWorker::update_faults() noexcept {
+  std::uint16_t f = faults_ & qc::fault::kRouteDamaged;
+  const bool sonar_lost = last_ping_ns_ < 0 ? (nav_now_ns_ - start_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS)
+                                            : (nav_now_ns_ - last_ping_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS);
+  const bool att_lost = dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s;
+  const bool dvl_lost = cfg_.dvl_enabled && dr_.velocity_age_s(nav_now_ns_) > cfg_.dvl_stale_s;
+  if (sonar_lost) f |= qc::fault::kSonarLost;
+  if (att_lost) f |= qc::fault::kAttitudeLost;
+  if (dvl_lost) f |= qc::fault::kDvlLost;
+  if (sonar_lost || att_lost || dvl_lost) f |= qc::fault::kSensorTimeout;
+  if (deadline_misses_ > 0) f |= qc::fault::kDeadlineMiss;
+  if (SoftwareFaults::count() > 0) f |= qc::fault::kSoftware;
+  faults_ = f;
+  // Degraded repeat: without sonar or heading there is no fix; the autopilot is told to hold course.
+  if (mode_ == qc::Mode::kRepeat && (sonar_lost || att_lost)) {
+    route_status_.status = qc::GuidanceState::kHoldCourse;
+    route_status_.side = qc::SideOfRoute::kUnknown;
+    route_status_.cross_track_sigma_m = qc::kCrossTrackSigmaMaxM;
+    publisher_->set(route_status_);
+  }
+  if (mode_ != qc::Mode::kRepeat) {
+    route_status_ = qc::RouteStatus{};
+    route_status_.tile_seq = static_cast<std::uint16_t>(tile_seq_ & 0xFFFF);
+    publisher_->set(route_status_);
+  }
+}
+
+void NavWorker::publish() noexcept {
+  qc::NavStatus ns;
+  ns.state = mode_;
+  ns.localised = mode_ == qc::Mode::kRepeat && report_.step.confident;
+  ns.confidence_pct = mode_ == qc::Mode::kRepeat ? clampd(100.0 * static_cast<double>(report_.step.probability), 0.0, 100.0) : 0.0;
+  ns.node_index = static_cast<std::uint16_t>(std::min<std::uint32_t>(mode_ == qc::Mode::kTeach ? writer_.node_count() : report_.step.estimate, 65535));
+  ns.fault_flags = faults_;
+  ns.mode_reject = static_cast<std::uint8_t>(last_reject_);
+  publisher_->set(ns);
+  qc::Health h;
+  h.fault_flags = faults_;
+  std::uint64_t rejected = 0;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(qc::RxCounter::kCount); ++i) rejected += receiver_.counters().get(static_cast<qc::RxCounter>(i));
+  rejected += q_.io->dvl_rejected.load(std::memory_order_relaxed) + q_.io->sonar_rejected.load(std::memory_order_relaxed) + dr_rejected_;
+  rejected += q_.io->can_rx_overflow.load(std::memory_order_relaxed) + q_.io->ping_overflow.load(std::memory_order_relaxed);
+  h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
+  h.deadline_misses = static_cast<std::uint16_t>(std::min<std::uint32_t>(deadline_misses_, 65535));
+  h.cpu_load_pct = clampd(cpu_load_pct_, 0.0, 100.0);
+  h.bus_off = q_.io->can_device_down.load(std::memory_order_relaxed);
+  publisher_->set(h);
+  qc::Heartbeat hb;
+  hb.uptime_s = static_cast<std::uint32_t>(std::max<std::int64_t>(0, nav_now_ns_ - start_ns_) / kNsPerS);
+  hb.state = mode_;
+  hb.sw_major = 0;
+  hb.sw_minor = 1;
+  publisher_->set(hb);
+  publisher_->poll(nav_now_ns_);
+}
+
+void NavWorker::log_health() noexcept {
+  const std::int64_t now_cpu = cpu_clock_.now_ns();
+  const std::int64_t window = now_cpu - busy_window_start_ns_;
+  if (window > 0) cpu_load_pct_ = 100.0 * static_cast<double>(busy_ns_) / static_cast<double>(window);
+  busy_ns_ = 0;
+  busy_window_start_ns_ = now_cpu;
+  if (!log_ || cfg_.log == LogFormat::kOff) return;
+  const IoCounters& io = *q_.io;
+  std::fprintf(log_,
+               "{\"event\":\"health\",\"t_s\":%.1f,\"mode\":\"%s\",\"faults\":%u,\"pings\":%u,\"tiles\":%u,\"deadline_misses\":%u,"
+               "\"ping_max_us\":%" PRId64 ",\"tile_max_us\":%" PRId64 ",\"cpu_load_pct\":%.1f,\"can_rx_overflow\":%u,\"can_tx_overflow\":%u,"
+               "\"ping_overflow\":%u,\"dvl_rejected\":%u,\"sonar_rejected\":%u,\"device_errors\":%u,\"can_rejected\":%u,\"dr_rejected\":%u,"
+               "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"tx_busy\":%u}\n",
+               static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
+               stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
+               io.can_rx_overflow.load(), io.can_tx_overflow.load(), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
+               io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
+               SoftwareFaults::count(), publisher_->counters().get(qc::TxCounter::kTxBusy));
+  std::fflush(log_);
+}
+
+void NavWorker::shutdown() noexcept {
+  if (shut_) return;
+  leave_mode();
+  mode_ = qc::Mode::kIdle;
+  shut_ = true;
+}
+
+}  // namespace qnav::daemon

@@ -1,0 +1,165 @@
+// NavWorker: the nav thread of qnavd. One run_once() drains the queues from the I/O thread (a ping
+// first, then every CAN frame and DVL sample sent before it, so a mode command or a heading that
+// preceded a ping is applied before the ping), then runs the stages:
+//   modes     QNAV_MODE_CMD (range- and counter-checked by QnavCanReceiver): idle, teach, repeat
+//             (forward or reverse), hold; map is refused (not built). A refused transition keeps the
+//             current mode and reports why (NAV_STATUS ModeReject, log).
+//   dead reckoning  DVL body velocity x attitude heading (pipeline::DeadReckoner); the ping's pose.
+//   ping -> tile (pipeline::RouteTilePipeline) -> teach: RouteFileWriter.append (durable per node)
+//                                               -> repeat: RouteRepeater.step -> guidance
+//   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
+//             into the can_tx queue; one log line per tile and per event; health every period.
+// Sensor loss degrades, never stops: sonar or attitude lost -> guidance "hold course" (tiles are not
+// built without a heading); DVL lost -> the route filter runs the paper's eq. 5 motion model
+// (FaultDvlLost) until velocities return.
+// Memory: everything is sized in init() from the configuration; run_once() does not allocate.
+// Time: run_once() handles at most one ping and at most the queue depths of frames and samples.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "drivers/dvl/dvl_types.hpp"
+#include "drivers/qnavcan/publisher.hpp"
+#include "drivers/qnavcan/receiver.hpp"
+#include "firmware/pipeline/dead_reckoner.hpp"
+#include "firmware/pipeline/route_repeater.hpp"
+#include "firmware/pipeline/route_tile_pipeline.hpp"
+#include "firmware/qnavd/config.hpp"
+#include "firmware/qnavd/deployment.hpp"
+#include "firmware/qnavd/messages.hpp"
+#include "firmware/tools/route_file.hpp"
+#include "hal/core/clock.hpp"
+#include "nav/core/spsc_ring.hpp"
+
+namespace qnav::daemon {
+
+// Why a mode command was refused (NAV_STATUS ModeReject).
+enum class ModeReject : std::uint8_t { kNone = 0, kUnsupportedMode, kRouteMissing, kRouteDamaged, kRouteTooShort, kStorage, kNoHeading };
+const char* to_string(ModeReject r) noexcept;
+
+// One sensed tile as the nav worker reported it (log line, tests).
+struct TileReport {
+  std::uint32_t seq = 0;
+  drivers::qnavcan::Mode mode = drivers::qnavcan::Mode::kIdle;
+  bool reverse = false;
+  std::uint16_t route_id = 0;
+  std::uint32_t node_written = 0;         // teach: index of the node appended
+  route::LocaliserStep step;              // repeat
+  double nav_step_m = 0.0;
+  bool eq5_motion = false;                // DVL lost: the paper's motion model
+  double truth_along_m = -1.0;            // sim backend only
+  double truth_lateral_m = 0.0;
+  std::int64_t stamp_ns = 0;
+  double latency_ms = 0.0;                // last ping of the tile received -> outputs queued
+};
+using TileObserver = void (*)(void* ctx, const TileReport& r);
+
+struct NavQueues {
+  SpscRing<PingMsg>* pings = nullptr;
+  SpscRing<std::uint32_t>* free_slots = nullptr;
+  SpscRing<hal::CanRxFrame>* can_rx = nullptr;
+  SpscRing<hal::CanFrame>* can_tx = nullptr;
+  SpscRing<drivers::dvl::DvlVelocity>* dvl = nullptr;
+  const float* ping_pool = nullptr;       // slot s: port at s * stride, starboard at s * stride + stride / 2
+  std::size_t ping_pool_stride = 0;
+  IoCounters* io = nullptr;
+};
+
+// The can_tx queue as a CanBus for the publisher (send = push; a full queue is "busy").
+class QueueCanBus final : public hal::CanBus {
+ public:
+  explicit QueueCanBus(SpscRing<hal::CanFrame>* q) noexcept : q_(q) {}
+  Status send(const hal::CanFrame& f) noexcept override { return q_->try_push(f); }
+  Status receive(hal::CanRxFrame&, int) noexcept override { return Status(StatusCode::kUnsupported, "tx only"); }
+  hal::CanBusStats stats() const noexcept override { return {}; }
+
+ private:
+  SpscRing<hal::CanFrame>* q_;
+};
+
+class NavWorker {
+ public:
+  NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock) noexcept;
+  ~NavWorker();
+  Status init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log);
+  // One pass over the queues and stages; false when there was nothing to do.
+  bool run_once() noexcept;
+  // Stop: finish or discard the node in progress, close the route durably. Idempotent.
+  void shutdown() noexcept;
+
+  std::uint64_t progress() const noexcept { return progress_.load(std::memory_order_relaxed); }
+  drivers::qnavcan::Mode mode() const noexcept { return mode_; }
+  std::uint32_t deadline_misses() const noexcept { return deadline_misses_; }
+  std::uint16_t fault_flags() const noexcept { return faults_; }
+  ModeReject last_reject() const noexcept { return last_reject_; }
+  std::uint32_t tiles() const noexcept { return tile_seq_; }
+  std::uint32_t pings() const noexcept { return pings_; }
+
+ private:
+  void handle_frame(const hal::CanRxFrame& rx) noexcept;
+  void handle_mode(const drivers::qnavcan::ModeCmd& cmd) noexcept;
+  ModeReject enter_teach(std::uint16_t id) noexcept;
+  ModeReject enter_repeat(std::uint16_t id, bool reverse) noexcept;
+  void leave_mode() noexcept;
+  void handle_ping(const PingMsg& p) noexcept;
+  bool on_tile(const pipeline::RouteTile& t) noexcept;
+  void update_faults() noexcept;
+  void publish() noexcept;
+  void log_health() noexcept;
+  void route_path(std::uint16_t id, const char* suffix, char* out, std::size_t n) const noexcept;
+  void stage_time(Stage s, std::int64_t t0_ns) noexcept;
+
+  const DaemonConfig& cfg_;
+  const hal::Clock& sample_clock_;
+  const hal::Clock& cpu_clock_;
+  NavQueues q_{};
+  TileObserver observer_ = nullptr;
+  void* observer_ctx_ = nullptr;
+  FILE* log_ = nullptr;
+
+  std::unique_ptr<QueueCanBus> tx_bus_;
+  std::unique_ptr<drivers::qnavcan::QnavCanPublisher> publisher_;
+  drivers::qnavcan::QnavCanReceiver receiver_;
+  pipeline::DeadReckoner dr_;
+  pipeline::RouteTilePipeline tiles_;
+  pipeline::RouteRepeater repeater_;
+  pipeline::RouteTileSink tile_sink_;
+  tools::RouteFileWriter writer_;
+  tools::RouteFileReader reader_;
+  std::vector<route::NodeMeta> meta_;  // reserved for route.max_nodes at init
+
+  drivers::qnavcan::Mode mode_ = drivers::qnavcan::Mode::kIdle;
+  bool reverse_ = false;
+  std::uint16_t route_id_ = 0;
+  ModeReject last_reject_ = ModeReject::kNone;
+  bool teach_open_ = false;
+  bool eq5_ = false;
+  std::uint16_t faults_ = 0;
+  std::int64_t nav_now_ns_ = 0;
+  std::int64_t last_ping_ns_ = -1;
+  std::int64_t ping_rx_cpu_ns_ = 0;
+  std::uint32_t pings_ = 0, tile_seq_ = 0, pass_ping_ = 0;
+  std::uint32_t deadline_misses_ = 0;
+  std::uint32_t stage_runs_[static_cast<int>(Stage::kCount)] = {};
+  std::uint32_t stage_misses_[static_cast<int>(Stage::kCount)] = {};
+  std::int64_t stage_max_ns_[static_cast<int>(Stage::kCount)] = {};
+  std::uint32_t budgets_us_[static_cast<int>(Stage::kCount)] = {};
+  std::uint32_t dr_rejected_ = 0, mode_refused_ = 0, step_errors_ = 0, writer_errors_ = 0;
+  std::int64_t next_health_ns_ = 0;
+  std::int64_t busy_ns_ = 0, busy_window_start_ns_ = 0;
+  std::int64_t mode_ns_ = 0;  // time spent in handle_mode during this loop's input drain
+  double cpu_load_pct_ = 0.0;
+  bool started_ns_set_ = false;
+  std::int64_t start_ns_ = 0;
+  TileReport report_{};
+  drivers::qnavcan::RouteStatus route_status_{};
+  drivers::qnavcan::RouteGuidance guidance_{};
+  std::atomic<std::uint64_t> progress_{0};
+  bool shut_ = false;
+};
+
+}  // namespace qnav::daemon

@@ -1,0 +1,224 @@
+#include "firmware/qnavd/sim_vehicle.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "drivers/dvl/wl_parser.hpp"
+#include "nav/core/geometry.hpp"
+
+namespace qnav::daemon {
+
+namespace qc = drivers::qnavcan;
+
+namespace {
+constexpr std::int64_t kIdleTickNs = 100000000;      // the AHRS streams between passes (10 Hz)
+constexpr std::int64_t kStateTimeoutNs = 5000000000;  // 5 s of mission time for NAV_STATUS to confirm
+constexpr double kTwoPi = 6.283185307179586;
+}  // namespace
+
+Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
+  bus_ = &autopilot;
+  dvl_ = &dvl_out;
+  survey_ = std::make_unique<pipeline::SimSurvey>();
+  QNAV_RETURN_IF_ERROR(survey_->init(cfg_.sim_length_m, cfg_.sim_seed));
+  sonar_ = std::make_unique<sidescan::SideScanSimulator>();
+  QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar, &survey_->seabed));  // sized here; each pass re-seeds it without allocating
+  if (cfg_.sim_mission.size() == 0) return Status(StatusCode::kInvalidArgument, "sim: the mission has no [[sim.pass]]");
+  phase_ = Phase::kCommand;
+  wall_start_ns_ = wall_.now_ns();
+  sim_start_ns_ = clock_.now_ns();
+  next_idle_att_ns_ = clock_.now_ns();
+  return Status::ok();
+}
+
+void SimVehicle::drain_bus() noexcept {
+  hal::CanRxFrame rx;
+  while (bus_->receive(rx, 0)) {
+    if (observer_) observer_(observer_ctx_, rx);
+    if (rx.frame.id == qc::kIdNavStatus) {
+      qc::NavStatus ns;
+      if (qc::decode(rx.frame, ns)) {
+        reported_state_ = ns.state;
+        reported_reject_ = ns.mode_reject;
+        status_seen_since_cmd_ = true;
+      }
+    }
+  }
+}
+
+void SimVehicle::send_mode(qc::Mode m, bool reverse) noexcept {
+  qc::ModeCmd cmd;
+  cmd.mode = m;
+  cmd.reverse = reverse;
+  cmd.route_id = cfg_.route_id;
+  cmd.counter = ++mode_counter_;
+  hal::CanFrame f;
+  if (qc::encode(cmd, f)) bus_->send(f).ignore();
+  status_seen_since_cmd_ = false;
+  phase_start_ns_ = clock_.now_ns();
+}
+
+void SimVehicle::send_attitude(double heading_rad) noexcept {
+  qc::AttitudeIn a;
+  double h = std::fmod(heading_rad, kTwoPi);
+  if (h < 0) h += kTwoPi;
+  a.heading_rad = std::fmin(h, 6.2832);
+  a.valid = true;
+  a.counter = att_counter_++;
+  hal::CanFrame f;
+  if (qc::encode(a, f)) bus_->send(f).ignore();
+  last_heading_ = heading_rad;
+}
+
+void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
+  long long tov = t_ns / 1000;
+  if (tov <= last_tov_us_) tov = last_tov_us_ + 1;
+  last_tov_us_ = tov;
+  char body[200], line[240];
+  std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", fwd, stbd,
+                pass_cfg_.altitude_m, tov, tov);
+  const std::size_t n = drivers::dvl::wl_with_checksum(body, line, sizeof line);
+  static_cast<void>(dvl_->write(Span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line), n)));
+}
+
+// Between passes the vehicle is alive: time passes and the AHRS streams.
+void SimVehicle::idle_tick() noexcept {
+  const std::int64_t t = clock_.now_ns() + kIdleTickNs / 10;
+  clock_.set(t);
+  if (t >= next_idle_att_ns_) {
+    send_attitude(last_heading_);
+    next_idle_att_ns_ = t + kIdleTickNs;
+  }
+}
+
+Status SimVehicle::start_pass() {
+  const SimPass& p = cfg_.sim_mission[pass_];
+  const std::uint64_t seed = pass_ == 0 ? pipeline::teach_pass_seed(cfg_.sim_seed) : pipeline::repeat_pass_seed(cfg_.sim_seed) + pass_;
+  pass_cfg_ = survey_->pass(p.offset_pct / 100.0 * survey_->swath_m, p.reverse, seed);
+  pass_cfg_.start_stamp_ns = static_cast<std::uint64_t>(clock_.now_ns());
+  QNAV_RETURN_IF_ERROR(traj_.init(pass_cfg_));
+  QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar_for(pass_cfg_.seed), &survey_->seabed));
+  have_prev_ = false;
+  pass_start_ns_ = clock_.now_ns();
+  return Status::ok();
+}
+
+SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
+                                        IoCounters& io) noexcept {
+  drain_bus();
+  switch (phase_) {
+    case Phase::kCommand: {
+      if (pass_ >= cfg_.sim_mission.size()) {
+        phase_ = Phase::kDone;
+        return StepResult::kDone;
+      }
+      const SimPass& p = cfg_.sim_mission[pass_];
+      send_attitude(last_heading_);  // the AHRS is up before the first command
+      send_mode(p.mode, p.reverse);
+      phase_ = Phase::kAwaitState;
+      return StepResult::kWaiting;
+    }
+    case Phase::kAwaitState: {
+      const SimPass& p = cfg_.sim_mission[pass_];
+      if (status_seen_since_cmd_ && reported_state_ == p.mode && reported_reject_ == 0) {
+        if (!start_pass()) {
+          ++refusals_;
+          ++pass_;
+          phase_ = Phase::kCommand;
+          return StepResult::kWaiting;
+        }
+        phase_ = Phase::kFly;
+        return StepResult::kWaiting;
+      }
+      if ((status_seen_since_cmd_ && reported_reject_ != 0) || clock_.now_ns() - phase_start_ns_ > kStateTimeoutNs) {
+        std::fprintf(stderr, "sim autopilot: pass %u: qnavd did not enter the commanded mode (reject code %u); skipping the pass\n", pass_,
+                     reported_reject_);
+        ++refusals_;
+        ++pass_;
+        send_mode(qc::Mode::kIdle, false);
+        phase_ = Phase::kAwaitIdle;
+        return StepResult::kWaiting;
+      }
+      idle_tick();
+      return StepResult::kWaiting;
+    }
+    case Phase::kFly: {
+      if (pings.size() >= 2 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // replay waits for the consumer
+      sidescan::TrajectorySample s;
+      if (cfg_.sim_speed == SimSpeed::kRecorded) {
+        // next ping's time = now + 1 / ping rate; wait for the wall clock to catch up
+        const std::int64_t sim_elapsed = clock_.now_ns() - sim_start_ns_;
+        if (wall_.now_ns() - wall_start_ns_ < sim_elapsed) return StepResult::kWaiting;
+      }
+      if (!traj_.next(s)) {
+        phase_ = Phase::kEndPass;
+        return StepResult::kWaiting;
+      }
+      const std::int64_t t = static_cast<std::int64_t>(s.stamp_ns);
+      clock_.set(t);
+      // AHRS: the compass heading (with the DVL + compass errors of the pass) at the ping time.
+      send_attitude(s.nav.heading_rad);
+      // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
+      if (have_prev_) {
+        const double dt = 1.0 / pass_cfg_.ping_rate_hz;
+        const double dn = (s.nav.x_m - prev_nav_.x_m) / dt, de = (s.nav.y_m - prev_nav_.y_m) / dt;
+        const double c = std::cos(s.nav.heading_rad), sn = std::sin(s.nav.heading_rad);
+        send_dvl(c * dn + sn * de, -sn * dn + c * de, t);
+      } else {
+        send_dvl(pass_cfg_.speed_mps, 0.0, t);
+      }
+      prev_nav_ = s.nav;
+      have_prev_ = true;
+      // Side-scan: render into a free slot of the pool.
+      std::uint32_t slot = 0;
+      if (spare_slot_ >= 0) {
+        slot = static_cast<std::uint32_t>(spare_slot_);
+        spare_slot_ = -1;
+      } else if (!free_slots.try_pop(slot)) {
+        io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+        return StepResult::kProduced;
+      }
+      const std::size_t n = static_cast<std::size_t>(survey_->sonar.samples_per_side);
+      float* port = pool + static_cast<std::size_t>(slot) * stride;
+      float* stbd = port + stride / 2;
+      PingMsg m;
+      m.slot = slot;
+      if (n > stride / 2 || !sonar_->ping(s.truth, s.altitude_m, s.index, Span<float>(port, n), Span<float>(stbd, n))) {
+        io.sonar_rejected.fetch_add(1, std::memory_order_relaxed);
+        spare_slot_ = slot;  // kept for the next ping (the nav worker is the only producer of free_slots)
+        return StepResult::kProduced;
+      }
+      m.ping_number = s.index;
+      m.port_samples = m.stbd_samples = static_cast<std::uint32_t>(n);
+      m.slant_range_m = survey_->sonar.slant_range_m;
+      m.altitude_m = s.altitude_m;
+      m.device_stamp_ns = s.stamp_ns;
+      m.stamp.sample_ns = m.stamp.arrival_ns = t;
+      m.has_truth = true;
+      m.truth.along_m = s.along_route_m;
+      m.truth.pose = s.truth;
+      m.truth.lateral_m = pass_cfg_.lateral_offset_m;
+      if (!pings.try_push(m)) io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+      return StepResult::kProduced;
+    }
+    case Phase::kEndPass:
+      // Let the nav worker finish the pass: every slot back (the last ping processed, not only popped).
+      if (free_slots.size() + (spare_slot_ >= 0 ? 1u : 0u) < free_slots.capacity()) return StepResult::kWaiting;
+      send_mode(qc::Mode::kIdle, false);
+      ++pass_;
+      phase_ = Phase::kAwaitIdle;
+      return StepResult::kWaiting;
+    case Phase::kAwaitIdle:
+      if (status_seen_since_cmd_ && reported_state_ == qc::Mode::kIdle) {
+        phase_ = Phase::kCommand;
+        return StepResult::kWaiting;
+      }
+      idle_tick();
+      return StepResult::kWaiting;
+    case Phase::kDone: return StepResult::kDone;
+  }
+  return StepResult::kDone;
+}
+
+}  // namespace qnav::daemon

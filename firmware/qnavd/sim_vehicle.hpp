@@ -1,0 +1,100 @@
+// SimVehicle: qnavd's sim backend -- the vehicle around the daemon, inside the I/O thread. It flies
+// the configured mission over pipeline::SimSurvey (the same survey `qnav route eval` uses) and plays
+// every peer on the daemon's buses as the real ones would:
+//   - the autopilot on the in-process CAN bus: QNAV_MODE_CMD before each pass (mode, reverse, route
+//     id) and Idle after it, waiting for QNAV_NAV_STATUS to report the commanded state (or a refusal);
+//   - the AHRS on the same bus: QNAV_ATTITUDE_IN with the compass heading, one per ping and every
+//     100 ms between passes;
+//   - the DVL on an in-process serial line: Water Linked "wrz" sentences (real checksums) with the
+//     dead-reckoning velocity (bias, scale error, noise of a DVL + compass), parsed by the real driver;
+//   - the side-scan: each rendered ping copied into a free slot of the ping pool.
+// Time is simulated (SimClock): sample stamps are mission time; sim.speed = "fast" runs as fast as
+// the nav worker takes pings (at most two in flight, so nothing is dropped), "recorded" paces the
+// pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
+// init() allocates the seabed and simulator; step() allocates nothing.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+#include "drivers/qnavcan/messages.hpp"
+#include "drivers/sidescan/sim_sidescan.hpp"
+#include "drivers/sidescan/sim_trajectory.hpp"
+#include "firmware/pipeline/sim_survey.hpp"
+#include "firmware/qnavd/config.hpp"
+#include "firmware/qnavd/messages.hpp"
+#include "hal/core/clock.hpp"
+#include "hal/core/serial.hpp"
+#include "hal/sim/sim_can.hpp"
+#include "nav/core/spsc_ring.hpp"
+
+namespace qnav::daemon {
+
+// Mission time for the sim backend (set by the I/O thread, read by every thread).
+class SimClock final : public hal::Clock {
+ public:
+  std::int64_t now_ns() const noexcept override { return t_ns_.load(std::memory_order_acquire); }
+  void set(std::int64_t t) noexcept { t_ns_.store(t, std::memory_order_release); }
+
+ private:
+  std::atomic<std::int64_t> t_ns_{1000000000};
+};
+
+// A frame the autopilot saw on the bus (the daemon's outputs), for logs and tests.
+using BusObserver = void (*)(void* ctx, const hal::CanRxFrame& f);
+
+class SimVehicle {
+ public:
+  enum class StepResult : std::uint8_t { kProduced, kWaiting, kDone };
+
+  SimVehicle(const DaemonConfig& config, SimClock& clock, const hal::Clock& wall) noexcept : cfg_(config), clock_(clock), wall_(wall) {}
+  // autopilot: this vehicle's node on the daemon's CAN network; dvl_out: the DVL's end of the serial line.
+  Status init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out);
+  void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
+  // One step: produce the next ping (with its attitude frame and DVL sentence) if the nav side has
+  // room, or advance the mission's handshake. pool/stride: the ping pool (see messages.hpp).
+  StepResult step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride, IoCounters& io) noexcept;
+  std::uint32_t passes_flown() const noexcept { return pass_; }
+  std::uint32_t refusals() const noexcept { return refusals_; }
+  double swath_m() const noexcept { return survey_->swath_m; }
+
+ private:
+  enum class Phase : std::uint8_t { kCommand, kAwaitState, kFly, kEndPass, kAwaitIdle, kDone };
+  void drain_bus() noexcept;
+  void send_mode(drivers::qnavcan::Mode m, bool reverse) noexcept;
+  void send_attitude(double heading_rad) noexcept;
+  void send_dvl(double fwd_mps, double stbd_mps, std::int64_t t_ns) noexcept;
+  void idle_tick() noexcept;
+  Status start_pass();
+
+  const DaemonConfig& cfg_;
+  SimClock& clock_;
+  const hal::Clock& wall_;
+  hal::SimCanBus* bus_ = nullptr;
+  hal::SerialPort* dvl_ = nullptr;
+  BusObserver observer_ = nullptr;
+  void* observer_ctx_ = nullptr;
+  std::unique_ptr<pipeline::SimSurvey> survey_;
+  std::unique_ptr<sidescan::SideScanSimulator> sonar_;
+  sidescan::Trajectory traj_;
+  sidescan::TrajectoryConfig pass_cfg_;
+  Phase phase_ = Phase::kCommand;
+  std::uint32_t pass_ = 0;
+  std::uint32_t refusals_ = 0;
+  std::uint8_t mode_counter_ = 0, att_counter_ = 0;
+  drivers::qnavcan::Mode reported_state_ = drivers::qnavcan::Mode::kIdle;
+  std::uint8_t reported_reject_ = 0;
+  bool status_seen_since_cmd_ = false;
+  std::int64_t phase_start_ns_ = 0;
+  std::int64_t pass_start_ns_ = 0;
+  std::int64_t next_idle_att_ns_ = 0;
+  std::int64_t wall_start_ns_ = 0, sim_start_ns_ = 0;
+  bool have_prev_ = false;
+  Pose2 prev_nav_{};
+  double last_heading_ = 0.0;
+  std::int64_t last_tov_us_ = 0;
+  std::int64_t spare_slot_ = -1;  // a slot taken from free_slots but not used (render failed)
+};
+
+}  // namespace qnav::daemon

@@ -1,0 +1,238 @@
+// qnavd through whole missions on the sim backend (in-process buses, mission time):
+//  - teach, repeat forwards at +10 % of the swath and in reverse at -20 %: the ROUTE_STATUS /
+//    NAV_STATUS frames the simulated autopilot received agree with the simulator's truth (node within
+//    +/-1 >= 95 %, side correct >= 95 % where decided) and with the nav worker's own per-tile report;
+//    no heap allocation while repeating; no software fault.
+//  - a stop request while teaching: run() returns 0 within the shutdown bound and every node taught
+//    is readable; a damaged route is refused by name and the daemon carries on.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <unistd.h>
+
+#include "drivers/qnavcan/messages.hpp"
+#include "firmware/qnavd/daemon.hpp"
+#include "firmware/qnavd/software_fault.hpp"
+#include "firmware/tools/route_file.hpp"
+#include "test/support/alloc_guard.hpp"
+
+namespace qnav::daemon {
+namespace {
+
+namespace qc = drivers::qnavcan;
+
+constexpr std::size_t kMaxTiles = 512;
+
+struct Recorder {
+  std::array<TileReport, kMaxTiles> tiles{};
+  std::atomic<std::uint32_t> n{0};
+  // ROUTE_STATUS by tile sequence number, as the autopilot received it (-1 = never seen).
+  std::array<int, kMaxTiles> can_estimate{};
+  std::array<int, kMaxTiles> can_side{};
+  std::array<int, kMaxTiles> can_status{};
+  std::atomic<int> stop_after{-1};
+  Daemon* daemon = nullptr;
+  std::atomic<std::uint64_t> allocs_in_repeat{0};
+  Recorder() {
+    can_estimate.fill(-1);
+    can_side.fill(-1);
+    can_status.fill(-1);
+  }
+};
+
+void on_tile(void* ctx, const TileReport& r) {
+  auto* rec = static_cast<Recorder*>(ctx);
+  const std::uint32_t i = rec->n.load();
+  if (i < kMaxTiles) rec->tiles[i] = r;
+  rec->n.store(i + 1);
+  if (rec->stop_after.load() >= 0 && static_cast<int>(i + 1) >= rec->stop_after.load() && rec->daemon) rec->daemon->stop();
+}
+
+void on_frame(void* ctx, const hal::CanRxFrame& f) {
+  auto* rec = static_cast<Recorder*>(ctx);
+  if (f.frame.id != qc::kIdRouteStatus) return;
+  qc::RouteStatus rs;
+  if (!qc::decode(f.frame, rs) || rs.status == qc::GuidanceState::kNotRepeating) return;
+  const std::size_t seq = rs.tile_seq;
+  if (seq >= kMaxTiles) return;
+  rec->can_estimate[seq] = rs.estimate_node;
+  rec->can_side[seq] = static_cast<int>(rs.side);
+  rec->can_status[seq] = static_cast<int>(rs.status);
+}
+
+std::string temp_dir() {
+  char t[] = "/tmp/qnavd_test_XXXXXX";
+  const char* d = mkdtemp(t);
+  return d ? std::string(d) : std::string("/tmp");
+}
+
+DaemonConfig sim_config(const std::string& dir, double length_m) {
+  DaemonConfig c;
+  c.backend = Backend::kSim;
+  c.route_dir = dir;
+  c.log = LogFormat::kOff;
+  c.realtime = false;
+  c.sim_length_m = length_m;
+  c.sim_seed = 1;
+  c.sim_speed = SimSpeed::kFast;
+  c.tile_budget_us = 10000000;  // timing is measured by bench, not asserted here (ASan is slow)
+  c.ping_budget_us = 1000000;
+  return c;
+}
+
+qc::SideOfRoute expected_side(double lateral_m, bool reverse, double deadband) {
+  if (std::abs(lateral_m) <= deadband) return qc::SideOfRoute::kOnRoute;
+  return ((lateral_m > 0) != reverse) ? qc::SideOfRoute::kStarboard : qc::SideOfRoute::kPort;
+}
+
+qc::SideOfRoute wire(route::RouteSide s) {
+  switch (s) {
+    case route::RouteSide::kPort: return qc::SideOfRoute::kPort;
+    case route::RouteSide::kStarboard: return qc::SideOfRoute::kStarboard;
+    case route::RouteSide::kOnRoute: return qc::SideOfRoute::kOnRoute;
+    default: return qc::SideOfRoute::kUnknown;
+  }
+}
+
+TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
+  SoftwareFaults::reset_for_tests();
+  const std::string dir = temp_dir();
+  DaemonConfig c = sim_config(dir, 1500.0);
+  SimPass teach{qc::Mode::kTeach, 0.0, false}, fwd{qc::Mode::kRepeat, 10.0, false}, rev{qc::Mode::kRepeat, -20.0, true};
+  ASSERT_TRUE(c.sim_mission.push_back(teach));
+  ASSERT_TRUE(c.sim_mission.push_back(fwd));
+  ASSERT_TRUE(c.sim_mission.push_back(rev));
+  auto rec = std::make_unique<Recorder>();
+  Daemon d(c);
+  rec->daemon = &d;
+  d.set_tile_observer(on_tile, rec.get());
+  d.set_bus_observer(on_frame, rec.get());
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  test::AllocationGuard guard;
+  EXPECT_EQ(d.run(), 0);
+  const std::uint64_t allocs = guard.allocations();
+  EXPECT_TRUE(d.mission_done());
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
+
+  // The taught route: its nodes' truth positions along the route.
+  std::vector<double> node_along;
+  const std::uint32_t n = std::min<std::uint32_t>(rec->n.load(), kMaxTiles);
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (rec->tiles[i].mode == qc::Mode::kTeach) node_along.push_back(rec->tiles[i].truth_along_m);
+  ASSERT_GE(node_along.size(), 15u);
+  tools::RouteFileReader reader;
+  ASSERT_TRUE(reader.open((dir + "/route_1.qroute").c_str()));
+  EXPECT_EQ(reader.node_count(), node_along.size());
+
+  const double swath = 2.0 * std::sqrt(50.0 * 50.0 - 8.0 * 8.0);
+  int scored = 0, within1 = 0, decided = 0, side_ok = 0, on_bus = 0, bus_agrees = 0;
+  int pass_tile = 0;
+  bool prev_rev = false;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const TileReport& r = rec->tiles[i];
+    if (r.mode != qc::Mode::kRepeat) continue;
+    if (r.reverse != prev_rev || (i > 0 && rec->tiles[i - 1].mode != qc::Mode::kRepeat)) pass_tile = 0;
+    prev_rev = r.reverse;
+    if (pass_tile++ < 2) continue;  // warm-up: the belief starts uniform (as qnav route eval scores)
+    int truth = 0;
+    double best = 1e300;
+    for (std::size_t k = 0; k < node_along.size(); ++k)
+      if (std::abs(node_along[k] - r.truth_along_m) < best) best = std::abs(node_along[k] - r.truth_along_m), truth = static_cast<int>(k);
+    ++scored;
+    within1 += std::abs(static_cast<int>(r.step.estimate) - truth) <= 1;
+    const double lateral = (r.reverse ? -20.0 : 10.0) / 100.0 * swath;
+    const qc::SideOfRoute want = expected_side(lateral, r.reverse, c.localiser.guidance.side_deadband_m);
+    const qc::SideOfRoute got = wire(r.step.guidance.side);
+    if (want != qc::SideOfRoute::kOnRoute && got != qc::SideOfRoute::kUnknown) {
+      ++decided;
+      side_ok += got == want;
+    }
+    if (rec->can_estimate[r.seq] >= 0) {
+      ++on_bus;
+      bus_agrees += rec->can_estimate[r.seq] == static_cast<int>(r.step.estimate) && rec->can_side[r.seq] == static_cast<int>(got);
+    }
+  }
+  ASSERT_GT(scored, 20);
+  const double pct1 = 100.0 * within1 / scored, pct_side = decided ? 100.0 * side_ok / decided : 0.0;
+  std::printf("qnavd mission: %d repeat tiles scored, node +/-1 %.1f %%, side correct %.1f %% of %d decided, %d on the bus (%d agree), "
+              "%llu heap allocations after start, %u deadline misses\n",
+              scored, pct1, pct_side, decided, on_bus, bus_agrees, static_cast<unsigned long long>(allocs), d.nav().deadline_misses());
+  EXPECT_GE(pct1, 95.0);
+  EXPECT_GE(pct_side, 95.0);
+  EXPECT_GE(decided, scored / 2);
+  EXPECT_EQ(on_bus, scored) << "every repeat tile's ROUTE_STATUS must reach the autopilot";
+  EXPECT_EQ(bus_agrees, on_bus);
+  if (test::malloc_counted()) {
+    EXPECT_EQ(allocs, 0u) << guard.report();
+  }
+}
+
+TEST(QnavdMission, StopWhileTeachingKeepsEveryCompletedNode) {
+  SoftwareFaults::reset_for_tests();
+  const std::string dir = temp_dir();
+  DaemonConfig c = sim_config(dir, 2000.0);
+  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kTeach, 0.0, false}));
+  auto rec = std::make_unique<Recorder>();
+  rec->stop_after.store(6);
+  Daemon d(c);
+  rec->daemon = &d;
+  d.set_tile_observer(on_tile, rec.get());
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  EXPECT_EQ(d.run(), 0);
+  EXPECT_FALSE(d.mission_done());
+  tools::RouteFileReader reader;
+  ASSERT_TRUE(reader.open((dir + "/route_1.qroute").c_str())) << "the route taught so far is committed on stop";
+  EXPECT_GE(reader.node_count(), 6u);
+  EXPECT_EQ(reader.torn_bytes(), 0u);
+  std::vector<route::NodeMeta> meta;
+  std::uint32_t bad = 0;
+  EXPECT_TRUE(reader.read_all_meta(meta, &bad));
+  EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
+TEST(QnavdMission, DamagedRouteIsRefusedAndTheDaemonCarriesOn) {
+  SoftwareFaults::reset_for_tests();
+  const std::string dir = temp_dir();
+  {
+    DaemonConfig c = sim_config(dir, 400.0);
+    ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kTeach, 0.0, false}));
+    Daemon d(c);
+    ASSERT_TRUE(d.init(nullptr));
+    ASSERT_TRUE(d.start());
+    EXPECT_EQ(d.run(), 0);
+  }
+  const std::string path = dir + "/route_1.qroute";
+  FILE* f = std::fopen(path.c_str(), "r+b");
+  ASSERT_NE(f, nullptr);
+  std::fseek(f, 200, SEEK_SET);  // inside node 0's record
+  std::fputc(0x5A, f);
+  std::fclose(f);
+  DaemonConfig c = sim_config(dir, 400.0);
+  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kRepeat, 0.0, false}));
+  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kHold, 0.0, false}));
+  Daemon d(c);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  EXPECT_EQ(d.run(), 0);
+  EXPECT_TRUE(d.mission_done());
+  EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
+TEST(QnavdMission, MissingCanInterfaceIsAClearStartUpError) {
+  DaemonConfig c = sim_config(temp_dir(), 400.0);
+  c.backend = Backend::kLinux;
+  c.can_interface = "qnavnone0";
+  Daemon d(c);
+  const Status s = d.init(nullptr);
+  EXPECT_FALSE(s);
+}
+
+}  // namespace
+}  // namespace qnav::daemon
