@@ -18,9 +18,15 @@ class DeadReckoner {
  public:
   explicit DeadReckoner(double max_extrapolation_s = 1.0) noexcept : max_extrap_s_(max_extrapolation_s) {}
 
+  // A new origin (a pass starts): position and distance restart; the newest heading and velocity
+  // samples stay (the sensors did not stop).
   void reset(const Pose2& start = Pose2{}) noexcept {
     pose_ = start;
     distance_m_ = 0.0;
+  }
+  // Forgets the sensors too (nothing known until the next samples).
+  void clear() noexcept {
+    reset();
     have_heading_ = have_velocity_ = false;
     last_v_ns_ = 0;
   }

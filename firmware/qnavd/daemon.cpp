@@ -94,9 +94,14 @@ class SimBackend final : public IoBackend {
     return vehicle_.init(vehicle_bus_, pipe_.a());
   }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
-    const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
-    done_ = r == SimVehicle::StepResult::kDone;
-    bool did = r == SimVehicle::StepResult::kProduced;
+    // Replay paces itself to the nav worker: the vehicle moves on only while the worker keeps up
+    // (a recorded dive loses nothing to the speed of the replay).
+    bool did = false;
+    if (q_.can_rx->size() < kMaxBacklog && q_.dvl->size() < kMaxBacklog) {
+      const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
+      done_ = r == SimVehicle::StepResult::kDone;
+      did = r == SimVehicle::StepResult::kProduced;
+    }
     did |= drain_can(daemon_bus_, *q_.can_rx, io);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
     return did;
@@ -108,6 +113,7 @@ class SimBackend final : public IoBackend {
   bool done() const noexcept override { return done_; }
 
  private:
+  static constexpr std::size_t kMaxBacklog = 8;
   hal::SimCanNetwork net_;
   hal::SimCanBus daemon_bus_, vehicle_bus_;
   hal::SimSerialPipe pipe_;

@@ -111,6 +111,7 @@ bool NavWorker::run_once() noexcept {
   while (q_.can_rx->front() != nullptr && q_.can_rx->front()->stamp.sample_ns <= until_ns && q_.can_rx->try_pop(rx)) {
     handle_frame(rx);
     nav_now_ns_ = std::max(nav_now_ns_, rx.stamp.sample_ns);
+    publisher_->poll(nav_now_ns_);  // outputs keep their DBC periods in sample time, also in a fast replay
     did = true;
   }
   drivers::dvl::DvlVelocity v;
@@ -340,12 +341,12 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
     std::fprintf(log_,
                  "{\"event\":\"tile\",\"seq\":%u,\"t_s\":%.1f,\"mode\":\"%s\",\"route_id\":%u,\"node_written\":%d,\"estimate\":%u,\"p\":%.3f,"
                  "\"entropy\":%.3f,\"inliers\":%u,\"status\":\"%s\",\"side\":\"%s\",\"cross_track_m\":%.2f,\"sigma_m\":%.2f,\"eq5\":%s,"
-                 "\"truth_along_m\":%.1f,\"latency_ms\":%.2f}\n",
+                 "\"reverse\":%s,\"truth_along_m\":%.1f,\"truth_lateral_m\":%.2f,\"latency_ms\":%.2f}\n",
                  r.seq, static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(r.mode), r.route_id,
                  r.mode == qc::Mode::kTeach ? static_cast<int>(r.node_written) : -1, st.estimate, static_cast<double>(st.probability), st.entropy,
                  st.best_inliers, r.mode == qc::Mode::kRepeat ? route::to_string(st.guidance.status) : "-",
                  r.mode == qc::Mode::kRepeat ? route::to_string(st.guidance.side) : "-", st.guidance.cross_track_m, st.guidance.cross_track_sigma_m,
-                 r.eq5_motion ? "true" : "false", r.truth_along_m, r.latency_ms);
+                 r.eq5_motion ? "true" : "false", r.reverse ? "true" : "false", r.truth_along_m, r.truth_lateral_m, r.latency_ms);
   } else if (log_ && cfg_.log == LogFormat::kKeyValue) {
     std::fprintf(log_, "tile seq=%u mode=%s estimate=%u status=%s side=%s cross_track_m=%.2f sigma_m=%.2f\n", r.seq, mode_name(r.mode),
                  r.step.estimate, route::to_string(r.step.guidance.status), route::to_string(r.step.guidance.side), r.step.guidance.cross_track_m,

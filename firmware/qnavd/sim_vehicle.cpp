@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "drivers/dvl/wl_parser.hpp"
+#include "hal/core/candump.hpp"
 #include "nav/core/geometry.hpp"
 
 namespace qnav::daemon {
@@ -17,7 +18,32 @@ constexpr std::int64_t kStateTimeoutNs = 5000000000;  // 5 s of mission time for
 constexpr double kTwoPi = 6.283185307179586;
 }  // namespace
 
+SimVehicle::~SimVehicle() {
+  if (candump_) std::fclose(candump_);
+}
+
+bool SimVehicle::stalled(const char* sensor, std::int64_t t_ns) const noexcept {
+  if (cfg_.sim_stall != sensor || static_cast<int>(pass_) != cfg_.sim_stall_pass) return false;
+  const double since_s = static_cast<double>(t_ns - pass_start_ns_) * 1e-9;
+  return since_s >= cfg_.sim_stall_start_s && since_s < cfg_.sim_stall_start_s + cfg_.sim_stall_s;
+}
+
+void SimVehicle::record(const hal::CanFrame& f, std::int64_t t_ns) noexcept {
+  if (!candump_) return;
+  hal::CanLogRecord r;
+  r.frame = f;
+  r.has_time = true;
+  r.time_us = t_ns / 1000;
+  std::memcpy(r.interface, "vcan0", 6);
+  char line[hal::kMaxCanLogLine];
+  if (hal::format_can_log_line(r, line, sizeof line) > 0) std::fprintf(candump_, "%s\n", line);
+}
+
 Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
+  if (!cfg_.sim_candump.empty()) {
+    candump_ = std::fopen(cfg_.sim_candump.c_str(), "w");
+    if (!candump_) return Status(StatusCode::kIoError, "sim: cannot write sim.candump");
+  }
   bus_ = &autopilot;
   dvl_ = &dvl_out;
   survey_ = std::make_unique<pipeline::SimSurvey>();
@@ -36,6 +62,7 @@ void SimVehicle::drain_bus() noexcept {
   hal::CanRxFrame rx;
   while (bus_->receive(rx, 0)) {
     if (observer_) observer_(observer_ctx_, rx);
+    record(rx.frame, rx.stamp.sample_ns);
     if (rx.frame.id == qc::kIdNavStatus) {
       qc::NavStatus ns;
       if (qc::decode(rx.frame, ns)) {
@@ -54,12 +81,14 @@ void SimVehicle::send_mode(qc::Mode m, bool reverse) noexcept {
   cmd.route_id = cfg_.route_id;
   cmd.counter = ++mode_counter_;
   hal::CanFrame f;
-  if (qc::encode(cmd, f)) bus_->send(f).ignore();
+  if (qc::encode(cmd, f) && bus_->send(f)) record(f, clock_.now_ns());
   status_seen_since_cmd_ = false;
   phase_start_ns_ = clock_.now_ns();
 }
 
 void SimVehicle::send_attitude(double heading_rad) noexcept {
+  last_heading_ = heading_rad;
+  if (stalled("attitude", clock_.now_ns())) return;
   qc::AttitudeIn a;
   double h = std::fmod(heading_rad, kTwoPi);
   if (h < 0) h += kTwoPi;
@@ -67,11 +96,11 @@ void SimVehicle::send_attitude(double heading_rad) noexcept {
   a.valid = true;
   a.counter = att_counter_++;
   hal::CanFrame f;
-  if (qc::encode(a, f)) bus_->send(f).ignore();
-  last_heading_ = heading_rad;
+  if (qc::encode(a, f) && bus_->send(f)) record(f, clock_.now_ns());
 }
 
 void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
+  if (stalled("dvl", t_ns)) return;
   long long tov = t_ns / 1000;
   if (tov <= last_tov_us_) tov = last_tov_us_ + 1;
   last_tov_us_ = tov;
@@ -88,6 +117,7 @@ void SimVehicle::idle_tick() noexcept {
   clock_.set(t);
   if (t >= next_idle_att_ns_) {
     send_attitude(last_heading_);
+    send_dvl(0.0, 0.0, t);  // the DVL streams too (the vehicle waits between passes)
     next_idle_att_ns_ = t + kIdleTickNs;
   }
 }
@@ -171,6 +201,7 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
       prev_nav_ = s.nav;
       have_prev_ = true;
       // Side-scan: render into a free slot of the pool.
+      if (stalled("sonar", t)) return StepResult::kProduced;
       std::uint32_t slot = 0;
       if (spare_slot_ >= 0) {
         slot = static_cast<std::uint32_t>(spare_slot_);

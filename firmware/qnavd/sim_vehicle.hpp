@@ -11,10 +11,13 @@
 // Time is simulated (SimClock): sample stamps are mission time; sim.speed = "fast" runs as fast as
 // the nav worker takes pings (at most two in flight, so nothing is dropped), "recorded" paces the
 // pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
+// Fault injection (sim.stall): the DVL, the AHRS or the sonar falls silent for a stretch of a pass.
+// sim.candump records every frame on the bus in candump -l format (`qnav can decode` reads it).
 // init() allocates the seabed and simulator; step() allocates nothing.
 #pragma once
 
 #include <atomic>
+#include <cstdio>
 #include <cstdint>
 #include <memory>
 
@@ -49,6 +52,9 @@ class SimVehicle {
   enum class StepResult : std::uint8_t { kProduced, kWaiting, kDone };
 
   SimVehicle(const DaemonConfig& config, SimClock& clock, const hal::Clock& wall) noexcept : cfg_(config), clock_(clock), wall_(wall) {}
+  ~SimVehicle();
+  SimVehicle(const SimVehicle&) = delete;
+  SimVehicle& operator=(const SimVehicle&) = delete;
   // autopilot: this vehicle's node on the daemon's CAN network; dvl_out: the DVL's end of the serial line.
   Status init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out);
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
@@ -95,6 +101,9 @@ class SimVehicle {
   double last_heading_ = 0.0;
   std::int64_t last_tov_us_ = 0;
   std::int64_t spare_slot_ = -1;  // a slot taken from free_slots but not used (render failed)
+  bool stalled(const char* sensor, std::int64_t t_ns) const noexcept;
+  void record(const hal::CanFrame& f, std::int64_t t_ns) noexcept;
+  std::FILE* candump_ = nullptr;
 };
 
 }  // namespace qnav::daemon
