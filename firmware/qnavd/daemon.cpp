@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "drivers/dvl/dvl_driver.hpp"
+#include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/process.hpp"
@@ -111,6 +112,12 @@ class SimBackend final : public IoBackend {
   }
   void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
   bool done() const noexcept override { return done_; }
+  ~SimBackend() override {
+    if (std::getenv("QNAVD_DEBUG_COUNTERS")) {
+      for (std::size_t i = 0; i < static_cast<std::size_t>(drivers::dvl::DvlCounter::kCount); ++i)
+        std::fprintf(stderr, "dvl %s=%u\n", drivers::dvl::kDvlCounterNames[i], dvl_.counter(static_cast<drivers::dvl::DvlCounter>(i)));
+    }
+  }
 
  private:
   static constexpr std::size_t kMaxBacklog = 8;
@@ -342,6 +349,7 @@ Status Daemon::start() {
     const Status s = hal::lock_memory();
     if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"what\":\"memory not locked: %s\"}\n", s.message());
   }
+  started_wall_ns_ = wall_->now_ns();
   io_thread_ = std::thread([this] { io_loop(); });
   nav_thread_ = std::thread([this] { nav_loop(); });
   started_ = true;
@@ -380,7 +388,13 @@ int Daemon::run() {
   if (nav_thread_.joinable()) nav_thread_.join();
   const int sig = hal::StopSignals::signal_number();
   if (log_) {
-    std::fprintf(log_, "{\"event\":\"stopped\",\"signal\":%d,\"mission_done\":%s}\n", sig, mission_done_.load() ? "true" : "false");
+    const hal::ProcessUsage u = hal::process_usage();
+    const double wall_s = static_cast<double>(wall_->now_ns() - started_wall_ns_) * 1e-9;
+    std::fprintf(log_,
+                 "{\"event\":\"stopped\",\"signal\":%d,\"mission_done\":%s,\"wall_s\":%.2f,\"cpu_s\":%.2f,\"cpu_load_pct\":%.1f,"
+                 "\"max_rss_kb\":%ld,\"tiles\":%u,\"deadline_misses\":%u,\"software_faults\":%u}\n",
+                 sig, mission_done_.load() ? "true" : "false", wall_s, u.cpu_s, wall_s > 0 ? 100.0 * u.cpu_s / wall_s : 0.0, u.max_rss_kb,
+                 nav_->tiles(), nav_->deadline_misses(), SoftwareFaults::count());
     std::fflush(log_);
   }
   return 0;

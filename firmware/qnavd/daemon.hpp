@@ -73,6 +73,7 @@ class Daemon {
   std::thread io_thread_, nav_thread_;
   std::atomic<bool> stop_{false}, io_exit_{false}, nav_exited_{false}, mission_done_{false};
   bool started_ = false;
+  std::int64_t started_wall_ns_ = 0;
 };
 
 }  // namespace qnav::daemon

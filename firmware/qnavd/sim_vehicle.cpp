@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "drivers/dvl/wl_parser.hpp"
@@ -88,7 +89,9 @@ void SimVehicle::send_mode(qc::Mode m, bool reverse) noexcept {
 
 void SimVehicle::send_attitude(double heading_rad) noexcept {
   last_heading_ = heading_rad;
-  if (stalled("attitude", clock_.now_ns())) return;
+  const std::int64_t now = clock_.now_ns();
+  if (stalled("attitude", now) || now == last_att_ns_) return;  // one AHRS sample per instant
+  last_att_ns_ = now;
   qc::AttitudeIn a;
   double h = std::fmod(heading_rad, kTwoPi);
   if (h < 0) h += kTwoPi;
@@ -126,7 +129,8 @@ Status SimVehicle::start_pass() {
   const SimPass& p = cfg_.sim_mission[pass_];
   const std::uint64_t seed = pass_ == 0 ? pipeline::teach_pass_seed(cfg_.sim_seed) : pipeline::repeat_pass_seed(cfg_.sim_seed) + pass_;
   pass_cfg_ = survey_->pass(p.offset_pct / 100.0 * survey_->swath_m, p.reverse, seed);
-  pass_cfg_.start_stamp_ns = static_cast<std::uint64_t>(clock_.now_ns());
+  // The first ping one ping period after the last sample between passes (sample times strictly increase).
+  pass_cfg_.start_stamp_ns = static_cast<std::uint64_t>(clock_.now_ns() + static_cast<std::int64_t>(1e9 / pass_cfg_.ping_rate_hz));
   QNAV_RETURN_IF_ERROR(traj_.init(pass_cfg_));
   QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar_for(pass_cfg_.seed), &survey_->seabed));
   have_prev_ = false;

@@ -100,6 +100,7 @@ class SimVehicle {
   Pose2 prev_nav_{};
   double last_heading_ = 0.0;
   std::int64_t last_tov_us_ = 0;
+  std::int64_t last_att_ns_ = -1;
   std::int64_t spare_slot_ = -1;  // a slot taken from free_slots but not used (render failed)
   bool stalled(const char* sensor, std::int64_t t_ns) const noexcept;
   void record(const hal::CanFrame& f, std::int64_t t_ns) noexcept;

@@ -124,6 +124,7 @@ Status ServiceNotifier::notify(const char* state) noexcept {
 }  // namespace qnav::hal
 
 #include <poll.h>
+#include <sys/resource.h>
 
 namespace qnav::hal {
 bool wait_readable(const int* fds, int n, int timeout_ms) noexcept {
@@ -137,5 +138,17 @@ bool wait_readable(const int* fds, int n, int timeout_ms) noexcept {
   }
   const int r = ::poll(p, static_cast<nfds_t>(k), timeout_ms);
   return r != 0;
+}
+}  // namespace qnav::hal
+
+namespace qnav::hal {
+ProcessUsage process_usage() noexcept {
+  ProcessUsage u;
+  rusage r{};
+  if (getrusage(RUSAGE_SELF, &r) == 0) {
+    u.max_rss_kb = r.ru_maxrss;
+    u.cpu_s = static_cast<double>(r.ru_utime.tv_sec + r.ru_stime.tv_sec) + 1e-6 * static_cast<double>(r.ru_utime.tv_usec + r.ru_stime.tv_usec);
+  }
+  return u;
 }
 }  // namespace qnav::hal

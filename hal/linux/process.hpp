@@ -56,4 +56,11 @@ namespace qnav::hal {
 // Waits until one of fds (negative entries ignored) is readable, at most timeout_ms. Returns true
 // when one is (or on EINTR), false on timeout. The I/O thread's wait on all its devices at once.
 bool wait_readable(const int* fds, int n, int timeout_ms) noexcept;
+
+// This process's resource use so far (getrusage): peak resident set, CPU time (user + system).
+struct ProcessUsage {
+  long max_rss_kb = 0;
+  double cpu_s = 0.0;
+};
+ProcessUsage process_usage() noexcept;
 }  // namespace qnav::hal

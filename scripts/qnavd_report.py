@@ -1,0 +1,105 @@
+#!/usr/bin/python3
+"""qnavd_report.py LOG.jsonl OUT_DIR: the demo's view of a qnavd mission on the sim backend.
+
+Reads qnavd's JSON log (one line per tile and per event), prints a per-tile table of every repeat
+pass (estimate vs the simulator's true node, side vs the true side, cross-track vs the true offset)
+and a summary per pass, and writes qnavd_mission.png (estimate vs truth, cross-track vs truth).
+Truth comes from the sim backend (truth_along_m / truth_lateral_m in each tile line); the true node
+is the taught node nearest along the route, as `qnav route eval` scores it. Exit 1 when the log
+holds no repeat tile.
+"""
+import json
+import sys
+
+
+def main():
+    if len(sys.argv) != 3:
+        print(__doc__, file=sys.stderr)
+        return 2
+    tiles, events = [], []
+    with open(sys.argv[1]) as f:
+        for line in f:
+            line = line.strip()
+            if not line.startswith("{"):
+                continue
+            rec = json.loads(line)
+            (tiles if rec.get("event") == "tile" else events).append(rec)
+    taught = [t["truth_along_m"] for t in tiles if t["mode"] == "teach"]
+    passes, cur = [], None
+    for t in tiles:
+        if t["mode"] != "repeat":
+            cur = None
+            continue
+        if cur is None or cur["reverse"] != t["reverse"] or abs(cur["lateral"] - t["truth_lateral_m"]) > 1e-6:
+            cur = {"reverse": t["reverse"], "lateral": t["truth_lateral_m"], "tiles": []}
+            passes.append(cur)
+        cur["tiles"].append(t)
+    if not passes or not taught:
+        print("qnavd_report: no teach and repeat tiles in the log", file=sys.stderr)
+        return 1
+    deadband = 1.0
+    print(f"taught route: {len(taught)} nodes")
+    print("pass  dir      offset_m  tile  true  est   p      status         side       true_side  cross_track_m  sigma_m  latency_ms")
+    summary = []
+    for k, p in enumerate(passes, 1):
+        n = w1 = decided = side_ok = 0
+        for i, t in enumerate(p["tiles"]):
+            truth = min(range(len(taught)), key=lambda j: abs(taught[j] - t["truth_along_m"]))
+            lat = p["lateral"]
+            want = "on_route" if abs(lat) <= deadband else ("starboard" if (lat > 0) != p["reverse"] else "port")
+            true_ct = -lat if p["reverse"] else lat
+            print(f"{k:4d}  {'reverse' if p['reverse'] else 'forward':7s}  {lat:8.1f}  {t['seq']:4d}  {truth:4d}  {t['estimate']:4d}  "
+                  f"{t['p']:.3f}  {t['status']:13s}  {t['side']:9s}  {want:9s}  {t['cross_track_m']:7.2f} ({true_ct:6.2f})  "
+                  f"{t['sigma_m']:7.2f}  {t['latency_ms']:8.2f}")
+            if i < 2:
+                continue  # warm-up: the belief starts uniform (as `qnav route eval` scores)
+            n += 1
+            w1 += abs(t["estimate"] - truth) <= 1
+            if want != "on_route" and t["side"] != "unknown":
+                decided += 1
+                side_ok += t["side"] == want
+        summary.append((k, p, n, w1, decided, side_ok))
+    print()
+    for k, p, n, w1, decided, side_ok in summary:
+        print(f"pass {k} ({'reverse' if p['reverse'] else 'forward'}, offset {p['lateral']:+.1f} m): {n} tiles scored, "
+              f"node within +/-1 {100.0 * w1 / max(n, 1):.1f} %, side correct {side_ok}/{decided} decided")
+    lat = sorted(t["latency_ms"] for p in passes for t in p["tiles"])
+    q = lambda f: lat[min(len(lat) - 1, int(f * len(lat)))]
+    print(f"last scanline -> guidance queued for CAN: p50 {q(0.5):.1f} ms, p99 {q(0.99):.1f} ms, max {lat[-1]:.1f} ms over {len(lat)} tiles")
+    for e in events:
+        if e.get("event") == "stopped":
+            print(f"qnavd process: {e['wall_s']:.1f} s wall, {e['cpu_s']:.1f} s CPU ({e['cpu_load_pct']:.0f} % of one core), "
+                  f"peak RSS {e['max_rss_kb'] / 1024:.1f} MB, {e['deadline_misses']} deadline misses, {e['software_faults']} software faults")
+    refused = [e for e in events if e.get("event") == "mode" and e.get("refused")]
+    print(f"mode commands: {sum(1 for e in events if e.get('event') == 'mode')}, refused {len(refused)}")
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("(matplotlib missing: no plot)")
+        return 0
+    fig, axes = plt.subplots(2, 1, figsize=(9, 7))
+    for k, p, *_ in summary:
+        seq = [t["seq"] for t in p["tiles"]]
+        truth = [min(range(len(taught)), key=lambda j: abs(taught[j] - t["truth_along_m"])) for t in p["tiles"]]
+        label = f"pass {k} {'rev' if p['reverse'] else 'fwd'} {p['lateral']:+.0f} m"
+        axes[0].plot(seq, truth, "k-", lw=3, alpha=0.25)
+        axes[0].plot(seq, [t["estimate"] for t in p["tiles"]], "o", ms=4, label=label)
+        true_ct = -p["lateral"] if p["reverse"] else p["lateral"]
+        axes[1].plot(seq, [true_ct] * len(seq), "k-", lw=3, alpha=0.25)
+        axes[1].errorbar(seq, [t["cross_track_m"] for t in p["tiles"]], yerr=[min(t["sigma_m"], 50) for t in p["tiles"]], fmt="o", ms=4, label=label)
+    axes[0].set_ylabel("node (grey: truth)")
+    axes[0].set_title("qnavd on the simulated vehicle: route estimate and cross-track per tile, from its log")
+    axes[0].legend(fontsize=8)
+    axes[1].set_ylabel("cross-track m (+ starboard; grey: truth)")
+    axes[1].set_xlabel("tile sequence number")
+    fig.tight_layout()
+    out = sys.argv[2] + "/qnavd_mission.png"
+    fig.savefig(out, dpi=90)
+    print(f"plot: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
