@@ -1,8 +1,8 @@
 // Side-scan files for the host tools: every ping of an XTF or EdgeTech JSF file (told apart by the
 // first bytes) with its samples and navigation, and the local north/east track of the pings. Used by
 // `qnav sonar` and `qnav route train|repeat|xtf`. Not flight code: tool-side memory (std::vector);
-// the drivers' parsers underneath are the bounded, counted ones. Header-only for the same link-order
-// reason as route_tiles.hpp (qnav_tools is linked before drivers/sidescan).
+// the drivers' parsers underneath are the bounded, counted ones. Header-only: qnav_tools is linked
+// before drivers/sidescan.
 #pragma once
 
 #include <cmath>
