@@ -11,6 +11,13 @@ endif()
 target_compile_definitions(qnav_options INTERFACE
   # Eigen: no alignment-based heap tricks are needed; fixed-size types only in nav/.
   EIGEN_MPL2_ONLY)
+# Builds with assertions (Debug: host-debug, host-clang) compile Eigen's run-time allocation check
+# everywhere; the tests' no-allocation regions (QNAV_EXPECT_NO_ALLOC, test::EigenMallocForbidden)
+# switch it on, so an Eigen heap allocation on a hot path asserts there (DESIGN.md, fixed allocation).
+option(QNAV_EIGEN_NO_MALLOC "Compile EIGEN_RUNTIME_NO_MALLOC (Debug builds)" ON)
+if(QNAV_EIGEN_NO_MALLOC AND CMAKE_BUILD_TYPE STREQUAL "Debug")
+  target_compile_definitions(qnav_options INTERFACE EIGEN_RUNTIME_NO_MALLOC)
+endif()
 if(QNAV_SANITIZE)
   target_compile_options(qnav_options INTERFACE -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   target_link_options(qnav_options INTERFACE -fsanitize=address,undefined)

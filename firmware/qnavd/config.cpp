@@ -495,6 +495,9 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(int_key(
       "budget.tile_us", [](auto& c) -> auto& { return c.tile_budget_us; }, 100, 10000000, "us",
       "Time budget of one tile: features + localiser update"));
+  t.push_back(int_key(
+      "budget.mode_us", [](auto& c) -> auto& { return c.mode_budget_us; }, 100, 10000000, "us",
+      "Time budget of a mode change: route file create / open and every node's metadata read (fsync included)"));
   // [sim]
   t.push_back(float_key(
       "sim.length_m", [](auto& c) -> auto& { return c.sim_length_m; }, 200.0, 50000.0, "m",
@@ -509,6 +512,10 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(bool_key(
       "sim.exit_at_end", [](auto& c) -> auto& { return c.sim_exit_at_end; },
       "qnavd exits 0 when the mission is flown"));
+  t.push_back(enum_key(
+      "sim.ahrs", [](auto& c) -> auto& { return c.sim_ahrs; },
+      std::vector<std::pair<std::string, std::string>>{{"qnav", "qnav"}, {"dronecan", "dronecan"}},
+      "The simulated AHRS speaks qnav's QNAV_ATTITUDE_IN or a DroneCAN uavcan.equipment.ahrs.Solution (node 42)"));
   t.push_back(string_key(
       "sim.candump", [](auto& c) -> auto& { return c.sim_candump; }, "any; \"\" = off", nullptr,
       "File the simulated autopilot records every bus frame to (candump -l format, `qnav can decode` reads it)"));

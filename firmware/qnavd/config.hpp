@@ -94,6 +94,7 @@ struct DaemonConfig {
   SimSpeed sim_speed = SimSpeed::kFast;      // sim.speed = "fast" | "recorded"
   bool sim_exit_at_end = true;               // sim.exit_at_end: qnavd exits 0 when the mission is flown
   FixedVector<SimPass, 16> sim_mission;      // [[sim.pass]] mode = "teach"|"repeat"|"hold", offset_pct, reverse
+  std::string sim_ahrs = "qnav";              // sim.ahrs = "qnav" (QNAV_ATTITUDE_IN) | "dronecan" (uavcan.equipment.ahrs.Solution, node 42)
   std::string sim_candump;                   // sim.candump: the autopilot records the bus here (candump -l format); "" = off
   // A sensor of the simulated vehicle stops for a while (fault tests): sim.stall = "none" | "dvl" |
   // "attitude" | "sonar", from sim.stall_start_s [0, 100000] after the start of pass sim.stall_pass

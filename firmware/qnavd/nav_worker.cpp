@@ -152,6 +152,17 @@ bool NavWorker::run_once() noexcept {
 }
 
 void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
+  if (rx.frame.extended && !rx.frame.error) {
+    // DroneCAN (29-bit): an AHRS Solution's orientation quaternion (NED) gives the compass heading.
+    if (ahrs_.on_frame(rx) == drivers::dronecan::AhrsUpdate::kSolution) {
+      const float* q = ahrs_.solution().value.orientation_xyzw;
+      const double x = q[0], y = q[1], z = q[2], w = q[3];
+      double yaw = std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+      if (yaw < 0.0) yaw += 2.0 * 3.14159265358979323846;
+      if (!dr_.on_heading(ahrs_.solution().stamp.sample_ns, yaw)) ++dr_rejected_;
+    }
+    return;  // rejections counted by the AHRS receiver
+  }
   if (!receiver_.on_frame(rx)) return;  // counted by the receiver
   if (rx.frame.id == qc::kIdAttitudeIn) {
     qc::Stamped<qc::AttitudeIn> a;
@@ -399,6 +410,7 @@ void NavWorker::publish() noexcept {
   h.fault_flags = faults_;
   std::uint64_t rejected = 0;
   for (std::size_t i = 0; i < static_cast<std::size_t>(qc::RxCounter::kCount); ++i) rejected += receiver_.counters().get(static_cast<qc::RxCounter>(i));
+  rejected += ahrs_.counters().total() + ahrs_.reassembler().counters().total();
   rejected += q_.io->dvl_rejected.load(std::memory_order_relaxed) + q_.io->sonar_rejected.load(std::memory_order_relaxed) + dr_rejected_;
   rejected += q_.io->can_rx_overflow.load(std::memory_order_relaxed) + q_.io->ping_overflow.load(std::memory_order_relaxed);
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));

@@ -1,6 +1,7 @@
 // NavWorker: the nav thread of qnavd. One run_once() drains the queues from the I/O thread (a ping
 // first, then every CAN frame and DVL sample sent before it, so a mode command or a heading that
 // preceded a ping is applied before the ping), then runs the stages:
+//   attitude  QNAV_ATTITUDE_IN or a DroneCAN AHRS Solution (29-bit frames): the heading.
 //   modes     QNAV_MODE_CMD (range- and counter-checked by QnavCanReceiver): idle, teach, repeat
 //             (forward or reverse), hold; map is refused (not built). A refused transition keeps the
 //             current mode and reports why (NAV_STATUS ModeReject, log).
@@ -22,6 +23,7 @@
 #include <memory>
 #include <vector>
 
+#include "drivers/dronecan/ahrs_receiver.hpp"
 #include "drivers/dvl/dvl_types.hpp"
 #include "drivers/qnavcan/publisher.hpp"
 #include "drivers/qnavcan/receiver.hpp"
@@ -124,6 +126,7 @@ class NavWorker {
   std::unique_ptr<QueueCanBus> tx_bus_;
   std::unique_ptr<drivers::qnavcan::QnavCanPublisher> publisher_;
   drivers::qnavcan::QnavCanReceiver receiver_;
+  drivers::dronecan::DroneCanAhrsReceiver ahrs_;  // a DroneCAN AHRS as the attitude source (extended frames)
   pipeline::DeadReckoner dr_;
   pipeline::RouteTilePipeline tiles_;
   pipeline::RouteRepeater repeater_;

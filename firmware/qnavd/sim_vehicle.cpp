@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "drivers/dronecan/ahrs.hpp"
+#include "drivers/dronecan/transfer.hpp"
 #include "drivers/dvl/wl_parser.hpp"
 #include "hal/core/candump.hpp"
 #include "nav/core/geometry.hpp"
@@ -92,9 +94,26 @@ void SimVehicle::send_attitude(double heading_rad) noexcept {
   const std::int64_t now = clock_.now_ns();
   if (stalled("attitude", now) || now == last_att_ns_) return;  // one AHRS sample per instant
   last_att_ns_ = now;
-  qc::AttitudeIn a;
   double h = std::fmod(heading_rad, kTwoPi);
   if (h < 0) h += kTwoPi;
+  if (cfg_.sim_ahrs == "dronecan") {
+    // uavcan.equipment.ahrs.Solution from node 42: yaw about NED down as a quaternion.
+    namespace dc = drivers::dronecan;
+    dc::AhrsSolution sol;
+    sol.timestamp_us = static_cast<std::uint64_t>(now / 1000);
+    sol.orientation_xyzw[2] = static_cast<float>(std::sin(h / 2));
+    sol.orientation_xyzw[3] = static_cast<float>(std::cos(h / 2));
+    sol.linear_accel_mps2[2] = -9.81f;
+    std::uint8_t payload[dc::kSolutionMaxBytes];
+    const std::size_t n = dc::encode_solution(sol, true, payload, sizeof payload);
+    hal::CanFrame frames[16];
+    const std::size_t k = dc::split_transfer(dc::kSolutionSignature, dc::make_message_id(16, dc::kSolutionId, 42), att_counter_++, payload, n,
+                                             frames, 16);
+    for (std::size_t j = 0; j < k; ++j)
+      if (bus_->send(frames[j])) record(frames[j], now);
+    return;
+  }
+  qc::AttitudeIn a;
   a.heading_rad = std::fmin(h, 6.2832);
   a.valid = true;
   a.counter = att_counter_++;

@@ -18,7 +18,34 @@
 #include <cstdint>
 #include <string>
 
+#ifdef EIGEN_RUNTIME_NO_MALLOC
+#include <Eigen/Core>
+#endif
+
 namespace qnav::test {
+
+// While one exists, Eigen's own run-time check (EIGEN_RUNTIME_NO_MALLOC, compiled into Debug builds)
+// asserts on any Eigen heap allocation, in every thread; a no-op in builds without the check.
+#ifdef EIGEN_RUNTIME_NO_MALLOC
+class EigenMallocForbidden {
+ public:
+  EigenMallocForbidden() noexcept : was_(Eigen::internal::is_malloc_allowed()) { Eigen::internal::set_is_malloc_allowed(false); }
+  ~EigenMallocForbidden() { Eigen::internal::set_is_malloc_allowed(was_); }
+  EigenMallocForbidden(const EigenMallocForbidden&) = delete;
+  EigenMallocForbidden& operator=(const EigenMallocForbidden&) = delete;
+
+ private:
+  bool was_;
+};
+#else
+class EigenMallocForbidden {
+ public:
+  EigenMallocForbidden() noexcept {}  // user-provided: an instance is not an "unused variable"
+  ~EigenMallocForbidden() {}
+  EigenMallocForbidden(const EigenMallocForbidden&) = delete;
+  EigenMallocForbidden& operator=(const EigenMallocForbidden&) = delete;
+};
+#endif
 
 struct AllocationCounts {
   std::uint64_t news = 0;     // operator new / new[] calls
@@ -47,7 +74,10 @@ class AllocationGuard {
 #define QNAV_EXPECT_NO_ALLOC(statement)                                                                         \
   do {                                                                                                          \
     ::qnav::test::AllocationGuard qnav_alloc_guard_;                                                            \
-    statement;                                                                                                  \
+    {                                                                                                           \
+      ::qnav::test::EigenMallocForbidden qnav_no_eigen_malloc_;                                                 \
+      statement;                                                                                                \
+    }                                                                                                           \
     const auto qnav_allocs_ = qnav_alloc_guard_.allocations();                                                  \
     EXPECT_EQ(qnav_allocs_, 0u) << "heap allocation in: " #statement " (" << qnav_alloc_guard_.report() << ")"; \
   } while (0)

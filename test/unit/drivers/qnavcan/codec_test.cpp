@@ -307,19 +307,22 @@ TEST(QnavCanCodec, PerBitFaultSignalsDecodeGenericallyByName) {
   struct Case {
     hal::CanFrame f;
     std::size_t first;  // index of FaultLeak in the message's signal table
+    std::size_t signals;
   };
   Case cases[2];
-  ASSERT_TRUE(encode(NavStatus{Mode::kMap, true, 50, 3, word, 1}, cases[0].f).is_ok());
+  ASSERT_TRUE(encode(NavStatus{Mode::kMap, true, 50, 3, word, 1, 2}, cases[0].f).is_ok());
   cases[0].first = 4;
+  cases[0].signals = 16;  // ... + Counter + ModeReject
   ASSERT_TRUE(encode(Health{word, 1, 2, 10, false, true}, cases[1].f).is_ok());
   cases[1].first = 0;
+  cases[1].signals = 15;
   for (const Case& c : cases) {
     const MessageDef* def = nullptr;
     double values[kMaxSignalsPerMessage];
     QNAV_EXPECT_NO_ALLOC(ASSERT_TRUE(decode_generic(c.f, def, values, kMaxSignalsPerMessage).is_ok()));
     ASSERT_NE(def, nullptr);
     SCOPED_TRACE(def->name);
-    EXPECT_EQ(def->signals.size(), 15u);
+    EXPECT_EQ(def->signals.size(), c.signals);
     for (int b = 0; b < fault::kBitCount; ++b) {
       const SignalDef& s = def->signals[c.first + static_cast<std::size_t>(b)];
       EXPECT_STREQ(s.name, fault::kSignalNames[b]);
@@ -354,3 +357,26 @@ TEST(QnavCanCodec, NoMessageHasMoreSignalsThanTheGenericArray) {
   EXPECT_NEAR(v[2], 2.5, 1e-9);
   EXPECT_DOUBLE_EQ(v[5], 42.0);
 }
+
+namespace qnav::drivers::qnavcan {
+namespace {
+// NAV_STATUS.ModeReject (bits 56..59) says why the last mode command was refused; 0 = accepted.
+TEST(QnavCanCodec, NavStatusCarriesTheModeRejectReason) {
+  for (std::uint8_t why = 0; why <= 6; ++why) {
+    NavStatus in;
+    in.state = Mode::kIdle;
+    in.mode_reject = why;
+    hal::CanFrame f;
+    ASSERT_TRUE(encode(in, f));
+    EXPECT_EQ(f.data[7] & 0x0F, why);
+    NavStatus out;
+    ASSERT_TRUE(decode(f, out));
+    EXPECT_EQ(out.mode_reject, why);
+  }
+  NavStatus bad;
+  bad.mode_reject = 7;  // outside the DBC's [0|6]
+  hal::CanFrame f;
+  EXPECT_FALSE(encode(bad, f));
+}
+}  // namespace
+}  // namespace qnav::drivers::qnavcan

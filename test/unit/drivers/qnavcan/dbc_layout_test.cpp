@@ -187,7 +187,7 @@ TEST(QnavDbc, EveryEnumerationAndFlagHasAValueTableNamingEveryValue) {
     for (const DbcSignal& s : m->signals) found = found || t.first.second == s.name;
     EXPECT_TRUE(found) << "VAL_ for unknown signal " << m->name << "." << t.first.second;
   }
-  const char* const kEnumerations[] = {"Mode", "State", "GuidanceStatus", "Side"};
+  const char* const kEnumerations[] = {"Mode", "State", "GuidanceStatus", "Side", "ModeReject"};
   int enumerations = 0, flags = 0;
   for (const DbcMessage& m : l.dbc->messages) {
     for (const DbcSignal& s : m.signals) {
@@ -214,7 +214,7 @@ TEST(QnavDbc, EveryEnumerationAndFlagHasAValueTableNamingEveryValue) {
     }
   }
   EXPECT_EQ(enumerations,
-            5);          // MODE_CMD.Mode, NAV_STATUS.State, ROUTE_STATUS.GuidanceStatus and .Side, HEARTBEAT.State
+            6);  // MODE_CMD.Mode, NAV_STATUS.State and .ModeReject, ROUTE_STATUS.GuidanceStatus and .Side, HEARTBEAT.State
   EXPECT_EQ(flags, 28);  // Valid, DepthValid, AltitudeValid, ResetNav, Reverse, Localised, 2 x 10 Fault*, Leak, BusOff
 }
 

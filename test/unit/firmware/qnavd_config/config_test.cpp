@@ -102,10 +102,12 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(localiser.filter.motion),
       QNAV_FIELD(ping_budget_us),
       QNAV_FIELD(tile_budget_us),
+      QNAV_FIELD(mode_budget_us),
       QNAV_FIELD(sim_length_m),
       QNAV_FIELD(sim_seed),
       QNAV_FIELD(sim_speed),
       QNAV_FIELD(sim_exit_at_end),
+      QNAV_FIELD(sim_ahrs),
       QNAV_FIELD(sim_candump),
       QNAV_FIELD(sim_stall),
       QNAV_FIELD(sim_stall_pass),
@@ -372,12 +374,14 @@ motion = "eq5"
 [budget]
 ping_us = 5000
 tile_us = 100000
+mode_us = 300000
 
 [sim]
 length_m = 5000.0
 seed = 42
 speed = "recorded"
 exit_at_end = false
+ahrs = "dronecan"
 candump = "/tmp/qnavd.candump"
 stall = "dvl"
 stall_pass = 0

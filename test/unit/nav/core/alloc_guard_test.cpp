@@ -63,3 +63,23 @@ TEST(AllocationGuard, NoAllocMacroFailsOnAllocation) {
 
 }  // namespace
 }  // namespace qnav
+
+#ifdef EIGEN_RUNTIME_NO_MALLOC
+// Debug builds compile Eigen's run-time check: a dynamic Eigen allocation inside a no-allocation
+// region asserts (QNAV_EXPECT_NO_ALLOC regions use EigenMallocForbidden).
+TEST(EigenMallocForbidden, DynamicEigenAllocationAsserts) {
+  EXPECT_DEATH(
+      {
+        qnav::test::EigenMallocForbidden forbid;
+        Eigen::MatrixXd m(64, 64);
+        m.setZero();
+      },
+      "heap allocation is forbidden");
+}
+TEST(EigenMallocForbidden, FixedSizeEigenIsAllowed) {
+  qnav::test::EigenMallocForbidden forbid;
+  Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d b = a * a;
+  EXPECT_DOUBLE_EQ(b(0, 0), 1.0);
+}
+#endif
