@@ -105,6 +105,7 @@ class SimBackend final : public IoBackend {
     }
     did |= drain_can(daemon_bus_, *q_.can_rx, io);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
+    vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
     return did;
   }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {

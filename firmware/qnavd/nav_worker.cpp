@@ -257,8 +257,7 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
       if (why == ModeReject::kNone) {
         mode_ = cmd.mode;
         reverse_ = cmd.reverse;
-        route_id_ = id;
-        dr_.reset(dr_.pose_at(nav_now_ns_));
+        route_id_ = id;  // the dead reckoning runs on across modes: poses depend on the samples only, not on when a command came
       } else {
         mode_ = qc::Mode::kIdle;  // the old mode was left: a defined state
       }
@@ -321,7 +320,8 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
     }
   } else if (mode_ == qc::Mode::kRepeat) {
     const bool first = t.tile_index == 0;
-    const bool dvl_lost = !dr_.has_velocity() || dr_.velocity_age_s(nav_now_ns_) > cfg_.dvl_stale_s;
+    // Judged at the tile's last ping (sample time), not at "now": the same data gives the same answer.
+    const bool dvl_lost = !dr_.has_velocity() || dr_.velocity_age_s(last_ping_ns_) > cfg_.dvl_stale_s;
     if (dvl_lost != eq5_) {
       eq5_ = dvl_lost;
       repeater_.set_motion(reverse_ ? route::RouteDirection::kReverse : route::RouteDirection::kForward,

@@ -157,6 +157,12 @@ Status SimVehicle::start_pass() {
   return Status::ok();
 }
 
+void SimVehicle::release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept {
+  if (!has_pending_) return;
+  if (!pings.try_push(pending_)) io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+  has_pending_ = false;
+}
+
 SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
                                         IoCounters& io) noexcept {
   drain_bus();
@@ -219,7 +225,9 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
         const double c = std::cos(s.nav.heading_rad), sn = std::sin(s.nav.heading_rad);
         send_dvl(c * dn + sn * de, -sn * dn + c * de, t);
       } else {
-        send_dvl(pass_cfg_.speed_mps, 0.0, t);
+        // The pass starts here: nothing travelled since the last sample between passes (whose time
+        // depends on how fast the daemon answered the mode command), so every pass is flown the same.
+        send_dvl(0.0, 0.0, t);
       }
       prev_nav_ = s.nav;
       have_prev_ = true;
@@ -253,7 +261,10 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
       m.truth.along_m = s.along_route_m;
       m.truth.pose = s.truth;
       m.truth.lateral_m = pass_cfg_.lateral_offset_m;
-      if (!pings.try_push(m)) io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+      // Held until the I/O thread has queued this instant's attitude frame and DVL sentence
+      // (release_ping), as a real sonar's ping arrives with the navigation of its time.
+      pending_ = m;
+      has_pending_ = true;
       return StepResult::kProduced;
     }
     case Phase::kEndPass:

@@ -60,7 +60,10 @@ class SimVehicle {
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
   // One step: produce the next ping (with its attitude frame and DVL sentence) if the nav side has
   // room, or advance the mission's handshake. pool/stride: the ping pool (see messages.hpp).
+  // A produced ping is held back until release_ping(), which the I/O thread calls after it has
+  // queued the CAN frames and DVL samples of the same instant.
   StepResult step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride, IoCounters& io) noexcept;
+  void release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept;
   std::uint32_t passes_flown() const noexcept { return pass_; }
   std::uint32_t refusals() const noexcept { return refusals_; }
   double swath_m() const noexcept { return survey_->swath_m; }
@@ -101,7 +104,9 @@ class SimVehicle {
   double last_heading_ = 0.0;
   std::int64_t last_tov_us_ = 0;
   std::int64_t last_att_ns_ = -1;
-  std::int64_t spare_slot_ = -1;  // a slot taken from free_slots but not used (render failed)
+  std::int64_t spare_slot_ = -1;
+  PingMsg pending_{};
+  bool has_pending_ = false;  // a slot taken from free_slots but not used (render failed)
   bool stalled(const char* sensor, std::int64_t t_ns) const noexcept;
   void record(const hal::CanFrame& f, std::int64_t t_ns) noexcept;
   std::FILE* candump_ = nullptr;

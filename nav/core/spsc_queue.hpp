@@ -6,10 +6,11 @@
 // pool owned by the stages.
 #pragma once
 
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
 
+#include "nav/core/span.hpp"
+#include "nav/core/spsc_ring.hpp"
 #include "nav/core/status.hpp"
 
 namespace qnav {
@@ -19,35 +20,20 @@ class SpscQueue {
   static_assert(N >= 2 && (N & (N - 1)) == 0, "SpscQueue capacity must be a power of two");
 
  public:
+  SpscQueue() noexcept { static_cast<void>(ring_.init(Span<T>(items_, N))); }  // cannot fail: N is checked above
+  SpscQueue(const SpscQueue&) = delete;
+  SpscQueue& operator=(const SpscQueue&) = delete;
   static constexpr std::size_t capacity() noexcept { return N; }
 
-  Status try_push(const T& v) noexcept {
-    const std::size_t tail = tail_.load(std::memory_order_relaxed);
-    const std::size_t head = head_.load(std::memory_order_acquire);
-    if (tail - head == N) return Status(StatusCode::kCapacityExceeded, "queue full");
-    items_[tail & (N - 1)] = v;
-    tail_.store(tail + 1, std::memory_order_release);
-    return Status::ok();
-  }
-  Status try_pop(T& out) noexcept {
-    const std::size_t head = head_.load(std::memory_order_relaxed);
-    const std::size_t tail = tail_.load(std::memory_order_acquire);
-    if (tail == head) return Status(StatusCode::kEmpty, "queue empty");
-    out = items_[head & (N - 1)];
-    head_.store(head + 1, std::memory_order_release);
-    return Status::ok();
-  }
+  Status try_push(const T& v) noexcept { return ring_.try_push(v); }
+  Status try_pop(T& out) noexcept { return ring_.try_pop(out); }
   // Approximate when called concurrently; exact when both sides are quiet.
-  std::size_t size() const noexcept {
-    return tail_.load(std::memory_order_acquire) - head_.load(std::memory_order_acquire);
-  }
+  std::size_t size() const noexcept { return ring_.size(); }
   bool empty() const noexcept { return size() == 0; }
 
  private:
-  // Separate cache lines for the two indices so producer and consumer do not false-share.
-  alignas(64) std::atomic<std::size_t> head_{0};
-  alignas(64) std::atomic<std::size_t> tail_{0};
   T items_[N]{};
+  SpscRing<T> ring_;  // the indices (on their own cache lines) over items_
 };
 
 }  // namespace qnav

@@ -111,6 +111,42 @@ qc::SideOfRoute wire(route::RouteSide s) {
   }
 }
 
+// Nearest taught node (by the simulator's along-route truth) to a sensed tile, as `qnav route eval` scores.
+int true_node(const std::vector<double>& node_along, double along_m) {
+  int truth = 0;
+  double best = 1e300;
+  for (std::size_t j = 0; j < node_along.size(); ++j)
+    if (std::abs(node_along[j] - along_m) < best) best = std::abs(node_along[j] - along_m), truth = static_cast<int>(j);
+  return truth;
+}
+
+std::vector<double> taught_nodes(const Recorder& rec) {
+  std::vector<double> node_along;
+  const std::uint32_t n = std::min<std::uint32_t>(rec.n.load(), kMaxTiles);
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (rec.tiles[i].mode == qc::Mode::kTeach) node_along.push_back(rec.tiles[i].truth_along_m);
+  return node_along;
+}
+
+// Repeat tiles after the first pass's two warm-up tiles: how many, and how many within +/-1 node.
+struct NodeScore {
+  std::uint32_t repeat_tiles = 0, eq5_tiles = 0, scored = 0, within1 = 0;
+};
+NodeScore score_nodes(const Recorder& rec) {
+  const std::vector<double> node_along = taught_nodes(rec);
+  NodeScore out;
+  const std::uint32_t n = std::min<std::uint32_t>(rec.n.load(), kMaxTiles);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const TileReport& r = rec.tiles[i];
+    if (r.mode != qc::Mode::kRepeat) continue;
+    out.eq5_tiles += r.eq5_motion;
+    if (out.repeat_tiles++ < 2) continue;
+    ++out.scored;
+    out.within1 += std::abs(static_cast<int>(r.step.estimate) - true_node(node_along, r.truth_along_m)) <= 1;
+  }
+  return out;
+}
+
 TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
   SoftwareFaults::reset_for_tests();
   const std::string dir = temp_dir();
@@ -137,10 +173,8 @@ TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
   EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
 
   // The taught route: its nodes' truth positions along the route.
-  std::vector<double> node_along;
+  const std::vector<double> node_along = taught_nodes(*rec);
   const std::uint32_t n = std::min<std::uint32_t>(rec->n.load(), kMaxTiles);
-  for (std::uint32_t i = 0; i < n; ++i)
-    if (rec->tiles[i].mode == qc::Mode::kTeach) node_along.push_back(rec->tiles[i].truth_along_m);
   ASSERT_GE(node_along.size(), 15u);
   tools::RouteFileReader reader;
   ASSERT_TRUE(reader.open((dir + "/route_1.qroute").c_str()));
@@ -156,10 +190,7 @@ TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
     if (r.reverse != prev_rev || (i > 0 && rec->tiles[i - 1].mode != qc::Mode::kRepeat)) pass_tile = 0;
     prev_rev = r.reverse;
     if (pass_tile++ < 2) continue;  // warm-up: the belief starts uniform (as qnav route eval scores)
-    int truth = 0;
-    double best = 1e300;
-    for (std::size_t k = 0; k < node_along.size(); ++k)
-      if (std::abs(node_along[k] - r.truth_along_m) < best) best = std::abs(node_along[k] - r.truth_along_m), truth = static_cast<int>(k);
+    const int truth = true_node(node_along, r.truth_along_m);
     ++scored;
     within1 += std::abs(static_cast<int>(r.step.estimate) - truth) <= 1;
     const double lateral = (r.reverse ? -20.0 : 10.0) / 100.0 * swath;
@@ -194,7 +225,7 @@ TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
 // A sensor of the simulated vehicle falls silent for a stretch of the repeat pass.
 struct StallRun {
   std::unique_ptr<Recorder> rec = std::make_unique<Recorder>();
-  std::uint32_t tiles = 0, eq5_tiles = 0, repeat_tiles = 0, within1 = 0, scored = 0;
+  NodeScore score;
 };
 
 void run_with_stall(const char* sensor, double start_s, double length_s, StallRun& out) {
@@ -214,29 +245,10 @@ void run_with_stall(const char* sensor, double start_s, double length_s, StallRu
   ASSERT_EQ(d.run(), 0);
   EXPECT_TRUE(d.mission_done());
   EXPECT_EQ(SoftwareFaults::count(), 0u);
-  std::vector<double> node_along;
-  out.tiles = std::min<std::uint32_t>(out.rec->n.load(), kMaxTiles);
-  for (std::uint32_t i = 0; i < out.tiles; ++i) {
-    const TileReport& r = out.rec->tiles[i];
-    if (r.mode == qc::Mode::kTeach) node_along.push_back(r.truth_along_m);
-  }
-  int k = 0;
-  for (std::uint32_t i = 0; i < out.tiles; ++i) {
-    const TileReport& r = out.rec->tiles[i];
-    if (r.mode != qc::Mode::kRepeat) continue;
-    ++out.repeat_tiles;
-    out.eq5_tiles += r.eq5_motion;
-    if (k++ < 2) continue;
-    int truth = 0;
-    double best = 1e300;
-    for (std::size_t j = 0; j < node_along.size(); ++j)
-      if (std::abs(node_along[j] - r.truth_along_m) < best) best = std::abs(node_along[j] - r.truth_along_m), truth = static_cast<int>(j);
-    ++out.scored;
-    out.within1 += std::abs(static_cast<int>(r.step.estimate) - truth) <= 1;
-  }
+  out.score = score_nodes(*out.rec);
   std::printf("stall %s %.0f s from %.0f s: %u repeat tiles (%u on the eq. 5 model), node +/-1 on %u of %u, faults seen 0x%x, %u hold-course frames\n",
-              sensor, length_s, start_s, out.repeat_tiles, out.eq5_tiles, out.within1, out.scored, out.rec->faults_seen.load(),
-              out.rec->hold_frames.load());
+              sensor, length_s, start_s, out.score.repeat_tiles, out.score.eq5_tiles, out.score.within1, out.score.scored,
+              out.rec->faults_seen.load(), out.rec->hold_frames.load());
 }
 
 TEST(QnavdMission, DvlLossFallsBackToTheEq5ModelAndRecovers) {
@@ -244,9 +256,9 @@ TEST(QnavdMission, DvlLossFallsBackToTheEq5ModelAndRecovers) {
   run_with_stall("dvl", 150.0, 200.0, r);  // 300 m of travel without velocities
   EXPECT_TRUE(r.rec->faults_seen.load() & qc::fault::kDvlLost);
   EXPECT_FALSE(r.rec->faults_seen.load() & (qc::fault::kSonarLost | qc::fault::kAttitudeLost));
-  EXPECT_GE(r.eq5_tiles, 2u) << "tiles during the loss use the paper's motion model";
-  EXPECT_LT(r.eq5_tiles, r.repeat_tiles) << "odometry returns with the DVL";
-  EXPECT_GE(r.within1, r.scored * 8 / 10);
+  EXPECT_GE(r.score.eq5_tiles, 2u) << "tiles during the loss use the paper's motion model";
+  EXPECT_LT(r.score.eq5_tiles, r.score.repeat_tiles) << "odometry returns with the DVL";
+  EXPECT_GE(r.score.within1, r.score.scored * 8 / 10);
 }
 
 TEST(QnavdMission, SonarLossHoldsCourseInsteadOfStopping) {
@@ -257,7 +269,7 @@ TEST(QnavdMission, SonarLossHoldsCourseInsteadOfStopping) {
   // the replay's pace, 5 Hz), all "hold course".
   EXPECT_GT(r.rec->hold_frames.load(), 200u) << "the autopilot is told to hold course while the sonar is silent";
   EXPECT_FALSE(r.rec->faults_seen.load() & (qc::fault::kDvlLost | qc::fault::kAttitudeLost));
-  EXPECT_GE(r.repeat_tiles, 10u) << "tiles resume after the stall";
+  EXPECT_GE(r.score.repeat_tiles, 10u) << "tiles resume after the stall";
 }
 
 TEST(QnavdMission, AttitudeLossIsReportedAndTilesResume) {
@@ -265,8 +277,8 @@ TEST(QnavdMission, AttitudeLossIsReportedAndTilesResume) {
   run_with_stall("attitude", 150.0, 30.0, r);
   EXPECT_TRUE(r.rec->faults_seen.load() & qc::fault::kAttitudeLost);
   EXPECT_FALSE(r.rec->faults_seen.load() & qc::fault::kSonarLost);
-  EXPECT_GE(r.repeat_tiles, 10u);
-  EXPECT_GE(r.within1, r.scored * 8 / 10);
+  EXPECT_GE(r.score.repeat_tiles, 10u);
+  EXPECT_GE(r.score.within1, r.score.scored * 8 / 10);
 }
 
 TEST(QnavdMission, DroneCanAhrsIsAnAttitudeSource) {
@@ -283,22 +295,9 @@ TEST(QnavdMission, DroneCanAhrsIsAnAttitudeSource) {
   ASSERT_TRUE(d.start());
   ASSERT_EQ(d.run(), 0);
   EXPECT_TRUE(d.mission_done());
-  std::vector<double> node_along;
-  const std::uint32_t n = std::min<std::uint32_t>(rec->n.load(), kMaxTiles);
-  for (std::uint32_t i = 0; i < n; ++i)
-    if (rec->tiles[i].mode == qc::Mode::kTeach) node_along.push_back(rec->tiles[i].truth_along_m);
-  int scored = 0, within1 = 0, k = 0;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const TileReport& r = rec->tiles[i];
-    if (r.mode != qc::Mode::kRepeat || k++ < 2) continue;
-    int truth = 0;
-    double best = 1e300;
-    for (std::size_t j = 0; j < node_along.size(); ++j)
-      if (std::abs(node_along[j] - r.truth_along_m) < best) best = std::abs(node_along[j] - r.truth_along_m), truth = static_cast<int>(j);
-    ++scored;
-    within1 += std::abs(static_cast<int>(r.step.estimate) - truth) <= 1;
-  }
-  ASSERT_GE(scored, 10);
+  const NodeScore sc = score_nodes(*rec);
+  const std::uint32_t scored = sc.scored, within1 = sc.within1;
+  ASSERT_GE(scored, 10u);
   EXPECT_GE(within1, scored * 95 / 100);
   EXPECT_EQ(rec->faults_seen.load() & ~qc::fault::kDeadlineMiss, 0u) << "the DroneCAN heading keeps the attitude alive";
   EXPECT_EQ(SoftwareFaults::count(), 0u);
