@@ -8,6 +8,7 @@
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
 #include "hal/linux/monotonic_clock.hpp"
+#include "hal/linux/posix_file_store.hpp"
 #include "hal/linux/process.hpp"
 #include "hal/linux/socketcan_bus.hpp"
 #include "hal/linux/tcp_client_port.hpp"
@@ -302,7 +303,7 @@ Status Daemon::init(FILE* log) {
     backend_ = std::move(lb);
   }
   QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));
-  nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_);
+  nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_, hal::host_file_store());
   NavQueues nq;
   nq.pings = &pings_;
   nq.free_slots = &free_slots_;

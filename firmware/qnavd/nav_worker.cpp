@@ -59,8 +59,8 @@ double clampd(double v, double lo, double hi) noexcept { return std::isfinite(v)
 constexpr std::int64_t kNsPerS = 1000000000;
 }  // namespace
 
-NavWorker::NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock) noexcept
-    : cfg_(config), sample_clock_(sample_clock), cpu_clock_(cpu_clock) {}
+NavWorker::NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock, hal::FileStore& store) noexcept
+    : cfg_(config), sample_clock_(sample_clock), cpu_clock_(cpu_clock), writer_(store), reader_(store), store_(store) {}
 
 NavWorker::~NavWorker() { shutdown(); }
 
@@ -181,12 +181,12 @@ ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
   route_path(id, ".new", path, sizeof path);
   route_path(id, ".interrupted", interrupted, sizeof interrupted);
   // A teach run that was cut off (power, kill -9) left its nodes under .new: keep them aside.
-  if (std::rename(path, interrupted) == 0 && log_)
+  if (store_.rename(path, interrupted).is_ok() && log_)
     std::fprintf(log_, "{\"event\":\"teach_interrupted_kept\",\"file\":\"%s\"}\n", interrupted);
   const double spacing = cfg_.tiles.tiles.scanline_stride * 0.3;  // nominal (1.5 m/s at 5 Hz); nav along_m is what repeat uses
   route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing, 2.0 * cfg_.tiles.corrector.ground_bins_per_side *
                                                                                         static_cast<double>(cfg_.tiles.corrector.ground_bin_m));
-  tools::RouteWriterOptions o;
+  drivers::route_store::RouteWriterOptions o;
   o.overwrite = true;
   const Status s = writer_.create(path, params, o);
   if (!s) {
@@ -202,7 +202,13 @@ ModeReject NavWorker::enter_repeat(std::uint16_t id, bool reverse) noexcept {
   route_path(id, "", path, sizeof path);
   reader_.close();
   Status s = reader_.open(path);
-  if (!s) return s.code() == StatusCode::kIoError ? ModeReject::kRouteMissing : ModeReject::kRouteDamaged;
+  if (!s) {
+    if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, s.message());
+    if (s.code() == StatusCode::kNotFound) return ModeReject::kRouteMissing;
+    if (s.code() == StatusCode::kIoError) return ModeReject::kStorage;
+    faults_ |= qc::fault::kRouteDamaged;
+    return ModeReject::kRouteDamaged;
+  }
   if (reader_.node_count() > cfg_.max_nodes) return ModeReject::kRouteTooShort;
   std::uint32_t bad = 0;
   s = reader_.read_all_meta(meta_, &bad);

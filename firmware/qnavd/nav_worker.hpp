@@ -33,7 +33,8 @@
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/deployment.hpp"
 #include "firmware/qnavd/messages.hpp"
-#include "firmware/tools/route_file.hpp"
+#include "drivers/route_store/route_file.hpp"
+#include "hal/core/file_store.hpp"
 #include "hal/core/clock.hpp"
 #include "nav/core/spsc_ring.hpp"
 
@@ -85,7 +86,8 @@ class QueueCanBus final : public hal::CanBus {
 
 class NavWorker {
  public:
-  NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock) noexcept;
+  // store: where route files live (the host's file system in qnavd; a memory store in tests).
+  NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock, hal::FileStore& store) noexcept;
   ~NavWorker();
   Status init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log);
   // One pass over the queues and stages; false when there was nothing to do.
@@ -131,9 +133,10 @@ class NavWorker {
   pipeline::RouteTilePipeline tiles_;
   pipeline::RouteRepeater repeater_;
   pipeline::RouteTileSink tile_sink_;
-  tools::RouteFileWriter writer_;
-  tools::RouteFileReader reader_;
+  drivers::route_store::RouteFileWriter writer_;
+  drivers::route_store::RouteFileReader reader_;
   std::vector<route::NodeMeta> meta_;  // reserved for route.max_nodes at init
+  hal::FileStore& store_;
 
   drivers::qnavcan::Mode mode_ = drivers::qnavcan::Mode::kIdle;
   bool reverse_ = false;

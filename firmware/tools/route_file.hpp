@@ -1,94 +1,24 @@
-// Route file I/O for the qnav tool and the daemon's host build (format: nav/route/route_format.hpp).
-//  - RouteFileWriter: append-only and durable node by node. create() writes the header, fsyncs the
-//    file and its directory; append() writes one CRC'd record at header + i * record_bytes with
-//    pwrite and fdatasync()s it before returning, so a crash or power cut loses at most the node in
-//    progress. open_append() reopens a route after a crash: a torn tail (a partial last record) is
-//    reported and cut off, the last complete record is CRC-checked, and appending continues.
-//  - RouteFileReader (a nav NodeSource): validates the header, counts complete records, reports a
-//    torn tail, and reads any node with one pread into a single record buffer (fixed memory whatever
-//    the route length; 10,000+ node routes are read through nav/route's NodeWindow). A damaged
-//    record is reported (kCorrupt + counter), never half-read.
-// Errors are Status values with static messages; OS failures are kIoError. Host-only (POSIX).
+// The route store on this host's file system: drivers/route_store's RouteFileWriter / RouteFileReader
+// bound to hal/linux's PosixFileStore, for the qnav tool and host tests. qnavd passes its own
+// FileStore to the drivers/route_store classes directly.
 #pragma once
 
-#include <cstddef>
-#include <cstdint>
-#include <vector>
-
-#include "nav/core/status.hpp"
-#include "nav/route/node_window.hpp"
-#include "nav/route/route_format.hpp"
+#include "drivers/route_store/route_file.hpp"
+#include "hal/linux/posix_file_store.hpp"
 
 namespace qnav::tools {
 
-struct RouteWriterOptions {
-  bool overwrite = false;       // create(): replace an existing file
-  bool sync_each_node = true;   // fdatasync after every record (the durability guarantee)
-};
+using drivers::route_store::RouteAppendReport;
+using drivers::route_store::RouteWriterOptions;
 
-struct RouteAppendReport {
-  std::uint32_t nodes = 0;         // complete, valid records found
-  std::uint64_t torn_bytes = 0;    // bytes of a partial record cut off the end
-};
-
-class RouteFileWriter {
+class RouteFileWriter final : public drivers::route_store::RouteFileWriter {
  public:
-  RouteFileWriter() = default;
-  RouteFileWriter(const RouteFileWriter&) = delete;
-  RouteFileWriter& operator=(const RouteFileWriter&) = delete;
-  ~RouteFileWriter();
-
-  Status create(const char* path, const route::RouteParams& params, const RouteWriterOptions& options = RouteWriterOptions{});
-  Status open_append(const char* path, RouteAppendReport* report, const RouteWriterOptions& options = RouteWriterOptions{});
-  // Appends `node` as record node_count() (its meta.index is set to that).
-  Status append(const route::RouteNode& node);
-  Status close();
-  // Closes (fsync) and renames the file to final_path (atomically replacing a route there), then
-  // fsyncs the directory: a route taught under a temporary name becomes the route only when complete.
-  Status commit_as(const char* final_path);
-  // Capacity for records of up to `bytes` (create/open_append then allocate nothing).
-  void reserve(std::size_t bytes) { record_.reserve(bytes); }
-  std::uint32_t node_count() const noexcept { return count_; }
-  const route::RouteParams& params() const noexcept { return params_; }
-
- private:
-  int fd_ = -1;
-  char path_[4096] = {};
-  route::RouteParams params_{};
-  RouteWriterOptions options_{};
-  std::uint32_t count_ = 0;
-  std::vector<std::uint8_t> record_;
+  RouteFileWriter() noexcept : drivers::route_store::RouteFileWriter(hal::host_file_store()) {}
 };
 
-class RouteFileReader final : public route::NodeSource {
+class RouteFileReader final : public drivers::route_store::RouteFileReader {
  public:
-  RouteFileReader() : counters_(route::kRouteFormatCounterNames) {}
-  RouteFileReader(const RouteFileReader&) = delete;
-  RouteFileReader& operator=(const RouteFileReader&) = delete;
-  ~RouteFileReader();
-
-  Status open(const char* path);
-  void close();
-  // Capacity for records of up to `bytes` (open then allocates nothing).
-  void reserve(std::size_t bytes) { record_.reserve(bytes); }
-  const route::RouteParams& params() const noexcept { return params_; }
-  std::uint32_t node_count() const noexcept override { return count_; }
-  std::uint64_t torn_bytes() const noexcept { return torn_bytes_; }
-  Status load(std::uint32_t index, route::RouteNode& out) noexcept override;
-  Status load_meta(std::uint32_t index, route::NodeMeta& out) noexcept;
-  // Every node's metadata in order (CRC-checked). Stops at the first damaged record and returns its
-  // status; *first_bad (if given) is its index (node_count() when all are good).
-  Status read_all_meta(std::vector<route::NodeMeta>& out, std::uint32_t* first_bad);
-  const route::RouteFormatCounters& counters() const noexcept { return counters_; }
-
- private:
-  Status read_record(std::uint32_t index) noexcept;
-  int fd_ = -1;
-  route::RouteParams params_{};
-  std::uint32_t count_ = 0;
-  std::uint64_t torn_bytes_ = 0;
-  std::vector<std::uint8_t> record_;
-  route::RouteFormatCounters counters_;
+  RouteFileReader() noexcept : drivers::route_store::RouteFileReader(hal::host_file_store()) {}
 };
 
 }  // namespace qnav::tools

@@ -1,64 +1,9 @@
-#include "firmware/tools/route_file.hpp"
+#include "drivers/route_store/route_file.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstring>
-#include <string>
 
-namespace qnav::tools {
+namespace qnav::drivers::route_store {
 
-namespace {
-Status write_all(int fd, const std::uint8_t* p, std::size_t n, off_t at) {
-  while (n > 0) {
-    const ssize_t w = ::pwrite(fd, p, n, at);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      return Status(StatusCode::kIoError, "route file: write failed");
-    }
-    p += w;
-    n -= static_cast<std::size_t>(w);
-    at += w;
-  }
-  return Status::ok();
-}
-Status read_all(int fd, std::uint8_t* p, std::size_t n, off_t at) {
-  while (n > 0) {
-    const ssize_t r = ::pread(fd, p, n, at);
-    if (r < 0) {
-      if (errno == EINTR) continue;
-      return Status(StatusCode::kIoError, "route file: read failed");
-    }
-    if (r == 0) return Status(StatusCode::kTruncated, "route file: unexpected end of file");
-    p += r;
-    n -= static_cast<std::size_t>(r);
-    at += r;
-  }
-  return Status::ok();
-}
-// fsync the directory holding path, so a newly created file's name is durable too.
-void sync_parent(const char* path) {
-  char dir[4096];
-  const char* slash = std::strrchr(path, '/');
-  const std::size_t n = slash == nullptr ? 0 : static_cast<std::size_t>(slash - path);
-  if (slash == nullptr) {
-    std::strcpy(dir, ".");
-  } else if (n == 0) {
-    std::strcpy(dir, "/");
-  } else {
-    if (n >= sizeof dir) return;
-    std::memcpy(dir, path, n);
-    dir[n] = '\0';
-  }
-  const int d = ::open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (d >= 0) {
-    static_cast<void>(::fsync(d));
-    ::close(d);
-  }
-}
-}  // namespace
 
 RouteFileWriter::~RouteFileWriter() { close().ignore(); }
 
@@ -66,17 +11,18 @@ Status RouteFileWriter::create(const char* path, const route::RouteParams& param
   if (fd_ >= 0) return Status(StatusCode::kInvalidArgument, "route writer: already open");
   std::uint8_t header[route::kHeaderBytes];
   QNAV_RETURN_IF_ERROR(route::encode_header(params, Span<std::uint8_t>(header)));
-  const int flags = O_RDWR | O_CREAT | O_CLOEXEC | (options.overwrite ? O_TRUNC : O_EXCL);
-  fd_ = ::open(path, flags, 0644);
-  if (fd_ < 0) return Status(StatusCode::kIoError, errno == EEXIST ? "route writer: file exists" : "route writer: cannot create file");
-  Status s = write_all(fd_, header, sizeof header, 0);
-  if (s && ::fsync(fd_) != 0) s = Status(StatusCode::kIoError, "route writer: fsync failed");
+  if (std::strlen(path) >= sizeof path_) return Status(StatusCode::kInvalidArgument, "route writer: path too long");
+  Result<int> h = store_.open(path, options.overwrite ? hal::FileMode::kCreateOrTruncate : hal::FileMode::kCreateNew);
+  if (!h) return h.status();
+  fd_ = *h;
+  Status s = store_.write_at(fd_, header, sizeof header, 0);
+  if (s) s = store_.sync(fd_);
+  if (s) s = store_.sync_name(path);
   if (!s) {
-    ::close(fd_);
+    store_.close(fd_);
     fd_ = -1;
     return s;
   }
-  sync_parent(path);
   std::strncpy(path_, path, sizeof path_ - 1);
   params_ = params;
   options_ = options;
@@ -87,38 +33,42 @@ Status RouteFileWriter::create(const char* path, const route::RouteParams& param
 
 Status RouteFileWriter::open_append(const char* path, RouteAppendReport* report, const RouteWriterOptions& options) {
   if (fd_ >= 0) return Status(StatusCode::kInvalidArgument, "route writer: already open");
-  fd_ = ::open(path, O_RDWR | O_CLOEXEC);
-  if (fd_ < 0) return Status(StatusCode::kIoError, "route writer: cannot open file");
+  if (std::strlen(path) >= sizeof path_) return Status(StatusCode::kInvalidArgument, "route writer: path too long");
+  Result<int> h = store_.open(path, hal::FileMode::kReadWrite);
+  if (!h) return h.status();
+  fd_ = *h;
   auto fail = [this](Status s) {
-    ::close(fd_);
+    store_.close(fd_);
     fd_ = -1;
     return s;
   };
   std::uint8_t header[route::kHeaderBytes];
-  Status s = read_all(fd_, header, sizeof header, 0);
+  Status s = store_.read_at(fd_, header, sizeof header, 0);
   if (!s) return fail(s);
   Result<route::RouteParams> p = route::decode_header(Span<const std::uint8_t>(header), nullptr);
   if (!p) return fail(p.status());
-  struct stat st {};
-  if (::fstat(fd_, &st) != 0) return fail(Status(StatusCode::kIoError, "route writer: stat failed"));
+  Result<std::uint64_t> size = store_.size(fd_);
+  if (!size) return fail(size.status());
   const std::size_t rec = route::record_bytes(p->max_keypoints);
-  const std::uint64_t body = static_cast<std::uint64_t>(st.st_size) - route::kHeaderBytes;
+  const std::uint64_t body = *size - route::kHeaderBytes;
   const std::uint64_t n = body / rec;
   const std::uint64_t torn = body % rec;
   record_.assign(rec, 0);
   params_ = *p;
   options_ = options;
   if (n > 0) {
-    s = read_all(fd_, record_.data(), rec, static_cast<off_t>(route::kHeaderBytes + (n - 1) * rec));
+    s = store_.read_at(fd_, record_.data(), rec, route::kHeaderBytes + (n - 1) * rec);
     route::NodeMeta m;
     if (s) s = route::decode_node_meta(params_, Span<const std::uint8_t>(record_.data(), rec), static_cast<std::uint32_t>(n - 1), m, nullptr);
     if (!s) return fail(s);  // a damaged last complete record: do not append after it
   }
   if (torn > 0) {
-    if (::ftruncate(fd_, static_cast<off_t>(route::kHeaderBytes + n * rec)) != 0 || ::fsync(fd_) != 0)
-      return fail(Status(StatusCode::kIoError, "route writer: cannot cut torn tail"));
+    s = store_.truncate(fd_, route::kHeaderBytes + n * rec);
+    if (s) s = store_.sync(fd_);
+    if (!s) return fail(s);
   }
   count_ = static_cast<std::uint32_t>(n);
+  std::strncpy(path_, path, sizeof path_ - 1);
   if (report != nullptr) {
     report->nodes = count_;
     report->torn_bytes = torn;
@@ -136,18 +86,17 @@ Status RouteFileWriter::append(const route::RouteNode& node) {
     n = &tmp;
   }
   QNAV_RETURN_IF_ERROR(route::encode_node(params_, *n, Span<std::uint8_t>(record_.data(), record_.size())));
-  const off_t at = static_cast<off_t>(route::kHeaderBytes + static_cast<std::uint64_t>(count_) * record_.size());
-  QNAV_RETURN_IF_ERROR(write_all(fd_, record_.data(), record_.size(), at));
-  if (options_.sync_each_node && ::fdatasync(fd_) != 0) return Status(StatusCode::kIoError, "route writer: fdatasync failed");
+  const std::uint64_t at = route::kHeaderBytes + static_cast<std::uint64_t>(count_) * record_.size();
+  QNAV_RETURN_IF_ERROR(store_.write_at(fd_, record_.data(), record_.size(), at));
+  if (options_.sync_each_node) QNAV_RETURN_IF_ERROR(store_.sync_data(fd_));
   ++count_;
   return Status::ok();
 }
 
 Status RouteFileWriter::close() {
   if (fd_ < 0) return Status::ok();
-  Status s;
-  if (::fsync(fd_) != 0) s = Status(StatusCode::kIoError, "route writer: fsync failed");
-  if (::close(fd_) != 0 && s) s = Status(StatusCode::kIoError, "route writer: close failed");
+  const Status s = store_.sync(fd_);
+  store_.close(fd_);
   fd_ = -1;
   return s;
 }
@@ -155,8 +104,7 @@ Status RouteFileWriter::close() {
 Status RouteFileWriter::commit_as(const char* final_path) {
   QNAV_RETURN_IF_ERROR(close());
   if (path_[0] == '\0') return Status(StatusCode::kNotReady, "route writer: nothing to commit");
-  if (::rename(path_, final_path) != 0) return Status(StatusCode::kIoError, "route writer: rename to the final name failed");
-  sync_parent(final_path);
+  QNAV_RETURN_IF_ERROR(store_.rename(path_, final_path));
   path_[0] = '\0';
   return Status::ok();
 }
@@ -164,27 +112,29 @@ Status RouteFileWriter::commit_as(const char* final_path) {
 RouteFileReader::~RouteFileReader() { close(); }
 
 void RouteFileReader::close() {
-  if (fd_ >= 0) ::close(fd_);
+  if (fd_ >= 0) store_.close(fd_);
   fd_ = -1;
   count_ = 0;
 }
 
 Status RouteFileReader::open(const char* path) {
   close();
-  fd_ = ::open(path, O_RDONLY | O_CLOEXEC);
-  if (fd_ < 0) return Status(StatusCode::kIoError, "route reader: cannot open file");
+  Result<int> h = store_.open(path, hal::FileMode::kRead);
+  if (!h) return h.status();
+  fd_ = *h;
   std::uint8_t header[route::kHeaderBytes];
-  struct stat st {};
-  if (::fstat(fd_, &st) != 0) {
+  Result<std::uint64_t> size = store_.size(fd_);
+  if (!size) {
+    const Status e = size.status();
     close();
-    return Status(StatusCode::kIoError, "route reader: stat failed");
+    return e;
   }
-  if (static_cast<std::uint64_t>(st.st_size) < route::kHeaderBytes) {
+  if (*size < route::kHeaderBytes) {
     counters_.increment(route::RouteFormatCounter::kShortBuffer);
     close();
     return Status(StatusCode::kTruncated, "route file shorter than its header");
   }
-  Status s = read_all(fd_, header, sizeof header, 0);
+  Status s = store_.read_at(fd_, header, sizeof header, 0);
   if (!s) {
     close();
     return s;
@@ -196,7 +146,7 @@ Status RouteFileReader::open(const char* path) {
   }
   params_ = *p;
   const std::size_t rec = route::record_bytes(params_.max_keypoints);
-  const std::uint64_t body = static_cast<std::uint64_t>(st.st_size) - route::kHeaderBytes;
+  const std::uint64_t body = *size - route::kHeaderBytes;
   if (body / rec > 0xFFFFFFFEull) {
     close();
     return Status(StatusCode::kUnsupported, "route reader: too many nodes");
@@ -210,7 +160,7 @@ Status RouteFileReader::open(const char* path) {
 Status RouteFileReader::read_record(std::uint32_t index) noexcept {
   if (fd_ < 0) return Status(StatusCode::kNotReady, "route reader: not open");
   if (index >= count_) return Status(StatusCode::kOutOfRange, "route reader: node index beyond the route");
-  return read_all(fd_, record_.data(), record_.size(), static_cast<off_t>(route::kHeaderBytes + static_cast<std::uint64_t>(index) * record_.size()));
+  return store_.read_at(fd_, record_.data(), record_.size(), route::kHeaderBytes + static_cast<std::uint64_t>(index) * record_.size());
 }
 
 Status RouteFileReader::load(std::uint32_t index, route::RouteNode& out) noexcept {
@@ -239,4 +189,4 @@ Status RouteFileReader::read_all_meta(std::vector<route::NodeMeta>& out, std::ui
   return Status::ok();
 }
 
-}  // namespace qnav::tools
+}  // namespace qnav::drivers::route_store
