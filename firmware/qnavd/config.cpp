@@ -512,6 +512,17 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(bool_key(
       "sim.exit_at_end", [](auto& c) -> auto& { return c.sim_exit_at_end; },
       "qnavd exits 0 when the mission is flown"));
+  t.push_back(int_key(
+      "sim.replay_lines", [](auto& c) -> auto& { return c.sim_replay_lines; }, 10, 2000, "pings",
+      "Recorded passes: pings per tile (as `qnav route train --sonar --lines`)"));
+  t.push_back(with_rule(int_key(
+                            "sim.replay_stride", [](auto& c) -> auto& { return c.sim_replay_stride; }, 1, 2000, "pings",
+                            "Recorded passes: a tile every this many pings (as `--stride`)"),
+                        "<= sim.replay_lines"));
+  t.push_back(enum_key(
+      "sim.replay_nav", [](auto& c) -> auto& { return c.sim_replay_nav; },
+      std::vector<std::pair<std::string, std::string>>{{"fix", "fix"}, {"dr", "dr"}},
+      "Recorded passes: navigation from the file's position fixes or by dead reckoning on its speed and heading"));
   t.push_back(enum_key(
       "sim.ahrs", [](auto& c) -> auto& { return c.sim_ahrs; },
       std::vector<std::pair<std::string, std::string>>{{"qnav", "qnav"}, {"dronecan", "dronecan"}},
@@ -552,6 +563,16 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(bool_key(
       "sim.pass.reverse", [](auto& c) -> auto& { return pass_of(c).reverse; },
       "Fly the pass from the route's last node to its first"));
+  t.push_back(string_key(
+      "sim.pass.file", [](auto& c) -> auto& { return pass_of(c).file; }, "XTF or JSF file; \"\" = the simulated survey", nullptr,
+      "Replay this recorded side-scan file in the pass (its navigation, timing and pings) instead of the simulated survey"));
+  t.push_back(int_key(
+      "sim.pass.first_ping", [](auto& c) -> auto& { return pass_of(c).first_ping; }, 0, 999999999, "",
+      "First ping of the recorded file flown in the pass"));
+  t.push_back(with_rule(int_key(
+                            "sim.pass.last_ping", [](auto& c) -> auto& { return pass_of(c).last_ping; }, -1, 1000000000, "",
+                            "End of the pass in the recorded file (exclusive); -1 = the end of the file"),
+                        "-1 or > first_ping"));
   return t;
 }
 
@@ -617,7 +638,7 @@ std::string suggest_key(const std::string& name, bool in_pass) {
   const std::string probe = in_pass ? leaf(name) : name;
   const std::string best = closest(probe, candidates);
   if (!best.empty()) return "did you mean " + best + "?";
-  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse";
+  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, file, first_ping, last_ping";
   std::vector<std::string> same_leaf;
   for (const std::string& c : candidates)
     if (leaf(c) == leaf(name)) same_leaf.push_back(c);
@@ -828,6 +849,16 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
     return r.error("sim.stall_pass", at("sim.stall_pass", "sim.stall"),
                    "must be < the number of [[sim.pass]] (" + std::to_string(c.sim_mission.size()) + "), got " +
                        std::to_string(c.sim_stall_pass));
+  }
+  if (c.sim_replay_stride > c.sim_replay_lines) {
+    return r.error("sim.replay_stride", at("sim.replay_stride", "sim.replay_lines"),
+                   "must be <= sim.replay_lines (" + std::to_string(c.sim_replay_lines) + "), got " + std::to_string(c.sim_replay_stride));
+  }
+  for (const SimPass& p : c.sim_mission) {
+    if (p.last_ping >= 0 && p.last_ping <= p.first_ping) {
+      return r.error("sim.pass.last_ping", at("sim.pass.last_ping", "sim.pass.first_ping"),
+                     "must be -1 or > first_ping (" + std::to_string(p.first_ping) + "), got " + std::to_string(p.last_ping));
+    }
   }
   // Derived: the localiser's node window holds every node registered in one update (RouteLocaliser::init).
   c.localiser.window_slots =

@@ -24,10 +24,16 @@ enum class SimSpeed : std::uint8_t { kFast, kRecorded };  // as fast as the pipe
 
 // One pass of the simulated mission: the simulated autopilot sends QNAV_MODE_CMD (mode, reverse,
 // route id) before it and Idle after it, as a vehicle's autopilot would.
+// A pass with a `file` replays a recorded side-scan file (XTF or JSF) instead of the simulated survey:
+// pings [first_ping, last_ping) with the file's navigation, their recorded timing, the heading as the
+// AHRS and the track's velocity as the DVL would give them (offset_pct does not apply).
 struct SimPass {
   drivers::qnavcan::Mode mode = drivers::qnavcan::Mode::kTeach;  // teach, repeat or hold
   double offset_pct = 0.0;  // lateral offset, percent of the full swath, right of the taught direction [-100, 100]
   bool reverse = false;
+  std::string file;         // sim.pass.file: recorded XTF / JSF; "" = the simulated survey
+  std::int64_t first_ping = 0;   // sim.pass.first_ping [0, 1e9]
+  std::int64_t last_ping = -1;   // sim.pass.last_ping [-1, 1e9]: -1 = to the end of the file
 };
 
 struct DaemonConfig {
@@ -94,6 +100,12 @@ struct DaemonConfig {
   SimSpeed sim_speed = SimSpeed::kFast;      // sim.speed = "fast" | "recorded"
   bool sim_exit_at_end = true;               // sim.exit_at_end: qnavd exits 0 when the mission is flown
   FixedVector<SimPass, 16> sim_mission;      // [[sim.pass]] mode = "teach"|"repeat"|"hold", offset_pct, reverse
+  // Recorded passes (a [[sim.pass]] with a file): the tiles and the localiser take the recorded
+  // files' geometry (as `qnav route train|repeat --sonar` does): sim.replay_lines [10, 2000] pings per
+  // tile every sim.replay_stride [1, replay_lines] pings; navigation from the fixes or dead reckoning.
+  int sim_replay_lines = 100;
+  int sim_replay_stride = 50;
+  std::string sim_replay_nav = "fix";        // sim.replay_nav = "fix" | "dr"
   std::string sim_ahrs = "qnav";              // sim.ahrs = "qnav" (QNAV_ATTITUDE_IN) | "dronecan" (uavcan.equipment.ahrs.Solution, node 42)
   std::string sim_candump;                   // sim.candump: the autopilot records the bus here (candump -l format); "" = off
   // A sensor of the simulated vehicle stops for a while (fault tests): sim.stall = "none" | "dvl" |

@@ -1,5 +1,6 @@
 #include "firmware/qnavd/daemon.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -114,6 +115,7 @@ class SimBackend final : public IoBackend {
   }
   void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
   bool done() const noexcept override { return done_; }
+  const SimVehicle& vehicle() const noexcept { return vehicle_; }
   ~SimBackend() override {
     if (std::getenv("QNAVD_DEBUG_COUNTERS")) {
       for (std::size_t i = 0; i < static_cast<std::size_t>(drivers::dvl::DvlCounter::kCount); ++i)
@@ -267,7 +269,7 @@ Status make_ring(std::vector<T>& store, SpscRing<T>& ring, std::size_t depth) {
 
 }  // namespace
 
-Daemon::Daemon(const DaemonConfig& config) noexcept : cfg_(config) {}
+Daemon::Daemon(const DaemonConfig& config) : cfg_(config) {}
 
 Daemon::~Daemon() {
   stop();
@@ -296,6 +298,19 @@ Status Daemon::init(FILE* log) {
   if (cfg_.backend == Backend::kSim) {
     auto sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
     QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_));
+    double range_m = 0.0;
+    if (sim->vehicle().recorded_geometry(range_m, route_spacing_m_)) {
+      // Recorded passes: tiles and registration as `qnav route train|repeat --sonar` sets them for
+      // the file (pipeline/route_defaults), the route header's spacing and swath from the file.
+      cfg_.tiles = pipeline::file_route_tile_config(range_m, cfg_.sim_replay_lines, cfg_.sim_replay_stride);
+      cfg_.tiles.corrector.max_samples_per_side = cfg_.max_samples_per_side;
+      cfg_.localiser = pipeline::file_localiser_config(route::RouteDirection::kForward, cfg_.max_nodes, 8, route_spacing_m_);
+      cfg_.localiser.window_slots = std::max<std::size_t>(cfg_.localiser.window_slots, cfg_.localiser.filter.max_registrations() + 1u);
+      route_swath_m_ = 2.0 * range_m;
+    } else {
+      route_spacing_m_ = sim->vehicle().node_spacing_m(cfg_.tiles.tiles.scanline_stride);
+      route_swath_m_ = sim->vehicle().swath_m();
+    }
     backend_ = std::move(sim);
   } else {
     auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, log);
@@ -304,6 +319,7 @@ Status Daemon::init(FILE* log) {
   }
   QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));
   nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_, hal::host_file_store());
+  nav_->set_route_geometry(route_spacing_m_, route_swath_m_);
   NavQueues nq;
   nq.pings = &pings_;
   nq.free_slots = &free_slots_;

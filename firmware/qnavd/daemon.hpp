@@ -24,7 +24,7 @@ class IoBackend;
 
 class Daemon {
  public:
-  explicit Daemon(const DaemonConfig& config) noexcept;
+  explicit Daemon(const DaemonConfig& config);
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
@@ -42,12 +42,14 @@ class Daemon {
   const NavWorker& nav() const noexcept { return *nav_; }
   const IoCounters& io_counters() const noexcept { return io_; }
   const hal::Clock& sample_clock() const noexcept;
+  // The configuration in force (after recorded passes set their geometry).
+  const DaemonConfig& config() const noexcept { return cfg_; }
 
  private:
   void io_loop() noexcept;
   void nav_loop() noexcept;
 
-  const DaemonConfig& cfg_;
+  DaemonConfig cfg_;  // a copy: recorded passes set the tile and localiser geometry from their files
   FILE* log_ = nullptr;
   std::unique_ptr<hal::Clock> wall_;
   std::unique_ptr<SimClock> sim_clock_;
@@ -74,6 +76,8 @@ class Daemon {
   std::atomic<bool> stop_{false}, io_exit_{false}, nav_exited_{false}, mission_done_{false};
   bool started_ = false;
   std::int64_t started_wall_ns_ = 0;
+  double route_spacing_m_ = 60.0;  // header of a route taught here: node spacing and swath (set by the backend)
+  double route_swath_m_ = 100.0;
 };
 
 }  // namespace qnav::daemon

@@ -156,7 +156,7 @@ void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
     // DroneCAN (29-bit): an AHRS Solution's orientation quaternion (NED) gives the compass heading.
     if (ahrs_.on_frame(rx) == drivers::dronecan::AhrsUpdate::kSolution) {
       const float* q = ahrs_.solution().value.orientation_xyzw;
-      const double x = q[0], y = q[1], z = q[2], w = q[3];
+      const double x = static_cast<double>(q[0]), y = static_cast<double>(q[1]), z = static_cast<double>(q[2]), w = static_cast<double>(q[3]);
       double yaw = std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
       if (yaw < 0.0) yaw += 2.0 * 3.14159265358979323846;
       if (!dr_.on_heading(ahrs_.solution().stamp.sample_ns, yaw)) ++dr_rejected_;
@@ -183,9 +183,7 @@ ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
   // A teach run that was cut off (power, kill -9) left its nodes under .new: keep them aside.
   if (store_.rename(path, interrupted).is_ok() && log_)
     std::fprintf(log_, "{\"event\":\"teach_interrupted_kept\",\"file\":\"%s\"}\n", interrupted);
-  const double spacing = cfg_.tiles.tiles.scanline_stride * 0.3;  // nominal (1.5 m/s at 5 Hz); nav along_m is what repeat uses
-  route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing, 2.0 * cfg_.tiles.corrector.ground_bins_per_side *
-                                                                                        static_cast<double>(cfg_.tiles.corrector.ground_bin_m));
+  const route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing_m_, swath_m_);
   drivers::route_store::RouteWriterOptions o;
   o.overwrite = true;
   const Status s = writer_.create(path, params, o);

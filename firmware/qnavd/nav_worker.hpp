@@ -90,6 +90,8 @@ class NavWorker {
   NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock, hal::FileStore& store) noexcept;
   ~NavWorker();
   Status init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log);
+  // The node spacing and swath written into the header of a route taught here (before start).
+  void set_route_geometry(double spacing_m, double swath_m) noexcept { spacing_m_ = spacing_m, swath_m_ = swath_m; }
   // One pass over the queues and stages; false when there was nothing to do.
   bool run_once() noexcept;
   // Stop: finish or discard the node in progress, close the route durably. Idempotent.
@@ -137,6 +139,7 @@ class NavWorker {
   drivers::route_store::RouteFileReader reader_;
   std::vector<route::NodeMeta> meta_;  // reserved for route.max_nodes at init
   hal::FileStore& store_;
+  double spacing_m_ = 60.0, swath_m_ = 100.0;
 
   drivers::qnavcan::Mode mode_ = drivers::qnavcan::Mode::kIdle;
   bool reverse_ = false;

@@ -1,5 +1,6 @@
 #include "firmware/qnavd/sim_vehicle.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -8,6 +9,7 @@
 #include "drivers/dronecan/ahrs.hpp"
 #include "drivers/dronecan/transfer.hpp"
 #include "drivers/dvl/wl_parser.hpp"
+#include "firmware/tools/sonar_file.hpp"
 #include "hal/core/candump.hpp"
 #include "nav/core/geometry.hpp"
 
@@ -54,6 +56,17 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   sonar_ = std::make_unique<sidescan::SideScanSimulator>();
   QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar, &survey_->seabed));  // sized here; each pass re-seeds it without allocating
   if (cfg_.sim_mission.size() == 0) return Status(StatusCode::kInvalidArgument, "sim: the mission has no [[sim.pass]]");
+  recordings_.clear();
+  for (const SimPass& p : cfg_.sim_mission) {
+    std::unique_ptr<Recording> r;
+    if (!p.file.empty()) {
+      r = std::make_unique<Recording>();
+      if (tools::load_sonar_file(p.file.c_str(), r->data) != 0 || r->data.pings.empty())
+        return Status(StatusCode::kInvalidArgument, "sim: a [[sim.pass]] file cannot be read as XTF or JSF (see the message above)");
+      r->track = tools::build_track(r->data, cfg_.sim_replay_nav == "dr", 0.0);
+    }
+    recordings_.push_back(std::move(r));
+  }
   phase_ = Phase::kCommand;
   wall_start_ns_ = wall_.now_ns();
   sim_start_ns_ = clock_.now_ns();
@@ -146,14 +159,23 @@ void SimVehicle::idle_tick() noexcept {
 
 Status SimVehicle::start_pass() {
   const SimPass& p = cfg_.sim_mission[pass_];
+  recording_ = recordings_[pass_].get();
+  have_prev_ = false;
+  pass_start_ns_ = clock_.now_ns();
+  if (recording_ != nullptr) {
+    rec_next_ = static_cast<std::size_t>(p.first_ping);
+    rec_end_ = p.last_ping < 0 ? recording_->data.pings.size()
+                               : std::min<std::size_t>(recording_->data.pings.size(), static_cast<std::size_t>(p.last_ping));
+    if (rec_next_ >= rec_end_) return Status(StatusCode::kOutOfRange, "sim: the pass's ping range is outside its file");
+    rec_first_stamp_ = recording_->data.pings[rec_next_].ping.stamp_ns;
+    return Status::ok();
+  }
   const std::uint64_t seed = pass_ == 0 ? pipeline::teach_pass_seed(cfg_.sim_seed) : pipeline::repeat_pass_seed(cfg_.sim_seed) + pass_;
   pass_cfg_ = survey_->pass(p.offset_pct / 100.0 * survey_->swath_m, p.reverse, seed);
   // The first ping one ping period after the last sample between passes (sample times strictly increase).
   pass_cfg_.start_stamp_ns = static_cast<std::uint64_t>(clock_.now_ns() + static_cast<std::int64_t>(1e9 / pass_cfg_.ping_rate_hz));
   QNAV_RETURN_IF_ERROR(traj_.init(pass_cfg_));
   QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar_for(pass_cfg_.seed), &survey_->seabed));
-  have_prev_ = false;
-  pass_start_ns_ = clock_.now_ns();
   return Status::ok();
 }
 
@@ -161,6 +183,112 @@ void SimVehicle::release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept
   if (!has_pending_) return;
   if (!pings.try_push(pending_)) io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
   has_pending_ = false;
+}
+
+bool SimVehicle::next_simulated(Sample& out) noexcept {
+  sidescan::TrajectorySample s;
+  if (!traj_.next(s)) return false;
+  out.t_ns = static_cast<std::int64_t>(s.stamp_ns);
+  out.nav = s.nav;
+  out.ping_number = s.index;
+  out.device_stamp_ns = s.stamp_ns;
+  out.altitude_m = s.altitude_m;
+  out.has_truth = true;
+  out.truth.along_m = s.along_route_m;
+  out.truth.pose = s.truth;
+  out.truth.lateral_m = pass_cfg_.lateral_offset_m;
+  out.recorded = nullptr;
+  traj_sample_ = s;
+  return true;
+}
+
+bool SimVehicle::next_recorded(Sample& out) noexcept {
+  const Recording& r = *recording_;
+  while (rec_next_ < rec_end_ && !r.track.ok[rec_next_]) ++rec_next_;  // pings without navigation are not flown
+  if (rec_next_ >= rec_end_) return false;
+  const std::size_t k = rec_next_++;
+  const tools::PingRec& pr = r.data.pings[k];
+  // Recorded timing, carried on the mission clock (strictly increasing even where the file's is not).
+  std::int64_t t = pass_start_ns_ + kPassLeadNs + static_cast<std::int64_t>(pr.ping.stamp_ns - rec_first_stamp_);
+  if (t <= last_sample_ns_) t = last_sample_ns_ + 1000;
+  out.t_ns = t;
+  out.nav = r.track.pose[k];
+  out.ping_number = static_cast<std::uint32_t>(k);
+  out.device_stamp_ns = pr.ping.stamp_ns;
+  out.altitude_m = -1.0f;  // bottom detection, as `qnav route train|repeat --sonar`
+  out.has_truth = false;
+  out.recorded = &pr;
+  return true;
+}
+
+SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride,
+                                        IoCounters& io) noexcept {
+  const std::int64_t t = smp.t_ns;
+  clock_.set(t);
+  // AHRS: the compass heading (with the DVL + compass errors of the pass) at the ping time.
+  send_attitude(smp.nav.heading_rad);
+  // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
+  if (have_prev_ && t > last_sample_ns_) {
+    const double dt = static_cast<double>(t - last_sample_ns_) * 1e-9;
+    const double dn = (smp.nav.x_m - prev_nav_.x_m) / dt, de = (smp.nav.y_m - prev_nav_.y_m) / dt;
+    const double c = std::cos(smp.nav.heading_rad), sn = std::sin(smp.nav.heading_rad);
+    send_dvl(c * dn + sn * de, -sn * dn + c * de, t);
+  } else {
+    // The pass starts here: nothing travelled since the last sample between passes (whose time
+    // depends on how fast the daemon answered the mode command), so every pass is flown the same.
+    send_dvl(0.0, 0.0, t);
+  }
+  prev_nav_ = smp.nav;
+  have_prev_ = true;
+  last_sample_ns_ = t;
+  // Side-scan: render (or copy the recorded ping) into a free slot of the pool.
+  if (stalled("sonar", t)) return StepResult::kProduced;
+  std::uint32_t slot = 0;
+  if (spare_slot_ >= 0) {
+    slot = static_cast<std::uint32_t>(spare_slot_);
+    spare_slot_ = -1;
+  } else if (!free_slots.try_pop(slot)) {
+    io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+    return StepResult::kProduced;
+  }
+  float* port = pool + static_cast<std::size_t>(slot) * stride;
+  float* stbd = port + stride / 2;
+  PingMsg m;
+  m.slot = slot;
+  bool ok = false;
+  if (smp.recorded != nullptr) {
+    const tools::PingRec& pr = *smp.recorded;
+    ok = pr.port.size() <= stride / 2 && pr.stbd.size() <= stride / 2;
+    if (ok) {
+      std::memcpy(port, pr.port.data(), pr.port.size() * sizeof(float));
+      std::memcpy(stbd, pr.stbd.data(), pr.stbd.size() * sizeof(float));
+      m.port_samples = static_cast<std::uint32_t>(pr.port.size());
+      m.stbd_samples = static_cast<std::uint32_t>(pr.stbd.size());
+      m.slant_range_m = pr.ping.slant_range_m;
+    }
+  } else {
+    const std::size_t n = static_cast<std::size_t>(survey_->sonar.samples_per_side);
+    ok = n <= stride / 2 &&
+         sonar_->ping(traj_sample_.truth, traj_sample_.altitude_m, traj_sample_.index, Span<float>(port, n), Span<float>(stbd, n)).is_ok();
+    m.port_samples = m.stbd_samples = static_cast<std::uint32_t>(n);
+    m.slant_range_m = survey_->sonar.slant_range_m;
+  }
+  if (!ok) {
+    io.sonar_rejected.fetch_add(1, std::memory_order_relaxed);
+    spare_slot_ = slot;  // kept for the next ping (the nav worker is the only producer of free_slots)
+    return StepResult::kProduced;
+  }
+  m.ping_number = smp.ping_number;
+  m.altitude_m = smp.altitude_m;
+  m.device_stamp_ns = smp.device_stamp_ns;
+  m.stamp.sample_ns = m.stamp.arrival_ns = t;
+  m.has_truth = smp.has_truth;
+  m.truth = smp.truth;
+  // Held until the I/O thread has queued this instant's attitude frame and DVL sentence
+  // (release_ping), as a real sonar's ping arrives with the navigation of its time.
+  pending_ = m;
+  has_pending_ = true;
+  return StepResult::kProduced;
 }
 
 SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
@@ -204,68 +332,17 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
     }
     case Phase::kFly: {
       if (pings.size() >= 2 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // replay waits for the consumer
-      sidescan::TrajectorySample s;
       if (cfg_.sim_speed == SimSpeed::kRecorded) {
-        // next ping's time = now + 1 / ping rate; wait for the wall clock to catch up
+        // in sample time: wait for the wall clock to catch up with the mission clock
         const std::int64_t sim_elapsed = clock_.now_ns() - sim_start_ns_;
         if (wall_.now_ns() - wall_start_ns_ < sim_elapsed) return StepResult::kWaiting;
       }
-      if (!traj_.next(s)) {
+      Sample smp;
+      if (!(recording_ ? next_recorded(smp) : next_simulated(smp))) {
         phase_ = Phase::kEndPass;
         return StepResult::kWaiting;
       }
-      const std::int64_t t = static_cast<std::int64_t>(s.stamp_ns);
-      clock_.set(t);
-      // AHRS: the compass heading (with the DVL + compass errors of the pass) at the ping time.
-      send_attitude(s.nav.heading_rad);
-      // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
-      if (have_prev_) {
-        const double dt = 1.0 / pass_cfg_.ping_rate_hz;
-        const double dn = (s.nav.x_m - prev_nav_.x_m) / dt, de = (s.nav.y_m - prev_nav_.y_m) / dt;
-        const double c = std::cos(s.nav.heading_rad), sn = std::sin(s.nav.heading_rad);
-        send_dvl(c * dn + sn * de, -sn * dn + c * de, t);
-      } else {
-        // The pass starts here: nothing travelled since the last sample between passes (whose time
-        // depends on how fast the daemon answered the mode command), so every pass is flown the same.
-        send_dvl(0.0, 0.0, t);
-      }
-      prev_nav_ = s.nav;
-      have_prev_ = true;
-      // Side-scan: render into a free slot of the pool.
-      if (stalled("sonar", t)) return StepResult::kProduced;
-      std::uint32_t slot = 0;
-      if (spare_slot_ >= 0) {
-        slot = static_cast<std::uint32_t>(spare_slot_);
-        spare_slot_ = -1;
-      } else if (!free_slots.try_pop(slot)) {
-        io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
-        return StepResult::kProduced;
-      }
-      const std::size_t n = static_cast<std::size_t>(survey_->sonar.samples_per_side);
-      float* port = pool + static_cast<std::size_t>(slot) * stride;
-      float* stbd = port + stride / 2;
-      PingMsg m;
-      m.slot = slot;
-      if (n > stride / 2 || !sonar_->ping(s.truth, s.altitude_m, s.index, Span<float>(port, n), Span<float>(stbd, n))) {
-        io.sonar_rejected.fetch_add(1, std::memory_order_relaxed);
-        spare_slot_ = slot;  // kept for the next ping (the nav worker is the only producer of free_slots)
-        return StepResult::kProduced;
-      }
-      m.ping_number = s.index;
-      m.port_samples = m.stbd_samples = static_cast<std::uint32_t>(n);
-      m.slant_range_m = survey_->sonar.slant_range_m;
-      m.altitude_m = s.altitude_m;
-      m.device_stamp_ns = s.stamp_ns;
-      m.stamp.sample_ns = m.stamp.arrival_ns = t;
-      m.has_truth = true;
-      m.truth.along_m = s.along_route_m;
-      m.truth.pose = s.truth;
-      m.truth.lateral_m = pass_cfg_.lateral_offset_m;
-      // Held until the I/O thread has queued this instant's attitude frame and DVL sentence
-      // (release_ping), as a real sonar's ping arrives with the navigation of its time.
-      pending_ = m;
-      has_pending_ = true;
-      return StepResult::kProduced;
+      return emit(smp, free_slots, pool, stride, io);
     }
     case Phase::kEndPass:
       // Let the nav worker finish the pass: every slot back (the last ping processed, not only popped).
@@ -284,6 +361,33 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
     case Phase::kDone: return StepResult::kDone;
   }
   return StepResult::kDone;
+}
+
+}  // namespace qnav::daemon
+
+namespace qnav::daemon {
+
+bool SimVehicle::recorded_geometry(double& range_m, double& spacing_m) const {
+  std::vector<float> ranges;
+  double dist = 0.0;
+  std::size_t steps = 0;
+  for (std::size_t i = 0; i < recordings_.size(); ++i) {
+    const Recording* r = recordings_[i].get();
+    if (r == nullptr) continue;
+    for (std::size_t k = 0; k < r->data.pings.size(); ++k) {
+      const float sr = r->data.pings[k].ping.slant_range_m;
+      if (std::isfinite(sr) && sr > 0.0f) ranges.push_back(sr);
+      if (k > 0 && r->track.ok[k] && r->track.ok[k - 1]) {
+        dist += std::hypot(r->track.pose[k].x_m - r->track.pose[k - 1].x_m, r->track.pose[k].y_m - r->track.pose[k - 1].y_m);
+        ++steps;
+      }
+    }
+  }
+  if (ranges.empty() || steps == 0) return false;
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
+  range_m = static_cast<double>(ranges[ranges.size() / 2]);
+  spacing_m = cfg_.sim_replay_stride * dist / static_cast<double>(steps);
+  return true;
 }
 
 }  // namespace qnav::daemon

@@ -11,6 +11,8 @@
 // Time is simulated (SimClock): sample stamps are mission time; sim.speed = "fast" runs as fast as
 // the nav worker takes pings (at most two in flight, so nothing is dropped), "recorded" paces the
 // pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
+// A [[sim.pass]] with a file replays a recorded XTF/JSF pass instead: its pings, its navigation (the
+// file's fixes or dead reckoning) as the AHRS heading and DVL velocities, its timing.
 // Fault injection (sim.stall): the DVL, the AHRS or the sonar falls silent for a stretch of a pass.
 // sim.candump records every frame on the bus in candump -l format (`qnav can decode` reads it).
 // init() allocates the seabed and simulator; step() allocates nothing.
@@ -20,6 +22,7 @@
 #include <cstdio>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "drivers/qnavcan/messages.hpp"
 #include "drivers/sidescan/sim_sidescan.hpp"
@@ -27,6 +30,7 @@
 #include "firmware/pipeline/sim_survey.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "firmware/tools/sonar_file.hpp"
 #include "hal/core/clock.hpp"
 #include "hal/core/serial.hpp"
 #include "hal/sim/sim_can.hpp"
@@ -64,12 +68,34 @@ class SimVehicle {
   // queued the CAN frames and DVL samples of the same instant.
   StepResult step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride, IoCounters& io) noexcept;
   void release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept;
+  // Recorded passes: the median slant range of their pings and the distance between tiles
+  // (sim.replay_stride pings); false when the mission has no recorded pass.
+  bool recorded_geometry(double& range_m, double& spacing_m) const;
   std::uint32_t passes_flown() const noexcept { return pass_; }
   std::uint32_t refusals() const noexcept { return refusals_; }
   double swath_m() const noexcept { return survey_->swath_m; }
+  double node_spacing_m(int scanline_stride) const noexcept { return survey_->node_spacing_m(scanline_stride); }
 
  private:
   enum class Phase : std::uint8_t { kCommand, kAwaitState, kFly, kEndPass, kAwaitIdle, kDone };
+  struct Recording {  // a recorded file's pings and track (loaded at init)
+    tools::FileData data;
+    tools::NavTrack track;
+  };
+  struct Sample {  // one ping instant, simulated or recorded
+    std::int64_t t_ns = 0;
+    Pose2 nav{};
+    std::uint32_t ping_number = 0;
+    std::uint64_t device_stamp_ns = 0;
+    float altitude_m = -1.0f;
+    bool has_truth = false;
+    pipeline::PingTruth truth;
+    const tools::PingRec* recorded = nullptr;
+  };
+  static constexpr std::int64_t kPassLeadNs = 200000000;  // a pass's first ping after its mode command
+  bool next_simulated(Sample& out) noexcept;
+  bool next_recorded(Sample& out) noexcept;
+  StepResult emit(const Sample& s, SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride, IoCounters& io) noexcept;
   void drain_bus() noexcept;
   void send_mode(drivers::qnavcan::Mode m, bool reverse) noexcept;
   void send_attitude(double heading_rad) noexcept;
@@ -105,6 +131,12 @@ class SimVehicle {
   std::int64_t last_tov_us_ = 0;
   std::int64_t last_att_ns_ = -1;
   std::int64_t spare_slot_ = -1;
+  std::vector<std::unique_ptr<Recording>> recordings_;  // one per [[sim.pass]]; null for a simulated pass
+  const Recording* recording_ = nullptr;                 // the pass being flown
+  std::size_t rec_next_ = 0, rec_end_ = 0;
+  std::uint64_t rec_first_stamp_ = 0;
+  std::int64_t last_sample_ns_ = 0;
+  sidescan::TrajectorySample traj_sample_{};
   PingMsg pending_{};
   bool has_pending_ = false;  // a slot taken from free_slots but not used (render failed)
   bool stalled(const char* sensor, std::int64_t t_ns) const noexcept;

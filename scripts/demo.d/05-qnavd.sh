@@ -16,6 +16,39 @@ echo "qnavd flew the mission in $(awk -v a="$start" -v b="$end" 'BEGIN { printf 
 # What the autopilot saw on the bus, decoded with the DBC (the companion ROUTE_STATUS frame carries
 # the guidance status, side and cross-track sigma).
 "$QNAV" route info build/demo/routes/route_1.qroute
-grep ' 203#' build/demo/qnavd.candump | sed -n '6000p' > "$out/route_status.log"
-grep ' 200#' build/demo/qnavd.candump | sed -n '6000p' >> "$out/route_status.log"
+# (ROUTE_STATUS with Tracking + Starboard starts 203#20; NAV_STATUS in Repeat and localised, 200#12)
+grep -m 1 ' 203#20' build/demo/qnavd.candump > "$out/route_status.log"
+grep -m 1 ' 200#12' build/demo/qnavd.candump >> "$out/route_status.log"
 "$QNAV" can decode "$out/route_status.log"
+# A recorded dive through the same daemon: the Iver2's XTF replayed as its sonar, AHRS and DVL would
+# deliver it (teach on pings 0-300, repeat on 90-460: the tool's own demo below does the same).
+X="$SHARED/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf"
+if [ -f "$X" ]; then
+  rm -rf "$out/iver2_routes"
+  cat > "$out/iver2.toml" <<CFG
+[daemon]
+backend = "sim"
+route_dir = "$out/iver2_routes"
+log = "json"
+realtime = false
+[sim]
+replay_lines = 100
+replay_stride = 50
+[[sim.pass]]
+mode = "teach"
+file = "$X"
+first_ping = 0
+last_ping = 301
+[[sim.pass]]
+mode = "repeat"
+file = "$X"
+first_ping = 90
+last_ping = 461
+CFG
+  "$QNAVD" --config "$out/iver2.toml" > "$out/iver2.jsonl"
+  echo "qnavd on the recorded Iver2 dive, repeat tiles (estimate, status, side, cross-track m):"
+  grep '"event":"tile"' "$out/iver2.jsonl" | grep '"mode":"repeat"' |
+    sed 's/.*"estimate":\([0-9]*\).*"status":"\([a-z_]*\)","side":"\([a-z_]*\)","cross_track_m":\([-0-9.]*\).*/  \1 \2 \3 \4/'
+else
+  echo "(no $X: the recorded-dive replay is skipped)"
+fi

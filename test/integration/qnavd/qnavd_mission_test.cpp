@@ -97,6 +97,14 @@ DaemonConfig sim_config(const std::string& dir, double length_m) {
   return c;
 }
 
+SimPass sim_pass(qc::Mode mode, double offset_pct, bool reverse) {
+  SimPass p;
+  p.mode = mode;
+  p.offset_pct = offset_pct;
+  p.reverse = reverse;
+  return p;
+}
+
 qc::SideOfRoute expected_side(double lateral_m, bool reverse, double deadband) {
   if (std::abs(lateral_m) <= deadband) return qc::SideOfRoute::kOnRoute;
   return ((lateral_m > 0) != reverse) ? qc::SideOfRoute::kStarboard : qc::SideOfRoute::kPort;
@@ -151,7 +159,8 @@ TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
   SoftwareFaults::reset_for_tests();
   const std::string dir = temp_dir();
   DaemonConfig c = sim_config(dir, 1500.0);
-  SimPass teach{qc::Mode::kTeach, 0.0, false}, fwd{qc::Mode::kRepeat, 10.0, false}, rev{qc::Mode::kRepeat, -20.0, true};
+  const SimPass teach = sim_pass(qc::Mode::kTeach, 0.0, false), fwd = sim_pass(qc::Mode::kRepeat, 10.0, false),
+                rev = sim_pass(qc::Mode::kRepeat, -20.0, true);
   ASSERT_TRUE(c.sim_mission.push_back(teach));
   ASSERT_TRUE(c.sim_mission.push_back(fwd));
   ASSERT_TRUE(c.sim_mission.push_back(rev));
@@ -235,8 +244,8 @@ void run_with_stall(const char* sensor, double start_s, double length_s, StallRu
   c.sim_stall_pass = 1;
   c.sim_stall_start_s = start_s;
   c.sim_stall_s = length_s;
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kTeach, 0.0, false}));
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kRepeat, 10.0, false}));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
   Daemon d(c);
   d.set_tile_observer(on_tile, out.rec.get());
   d.set_bus_observer(on_frame, out.rec.get());
@@ -285,8 +294,8 @@ TEST(QnavdMission, DroneCanAhrsIsAnAttitudeSource) {
   SoftwareFaults::reset_for_tests();
   DaemonConfig c = sim_config(temp_dir(), 1200.0);
   c.sim_ahrs = "dronecan";  // uavcan.equipment.ahrs.Solution, multi-frame transfers on 29-bit ids
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kTeach, 0.0, false}));
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kRepeat, -15.0, true}));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, -15.0, true)));
   auto rec = std::make_unique<Recorder>();
   Daemon d(c);
   d.set_tile_observer(on_tile, rec.get());
@@ -307,7 +316,7 @@ TEST(QnavdMission, StopWhileTeachingKeepsEveryCompletedNode) {
   SoftwareFaults::reset_for_tests();
   const std::string dir = temp_dir();
   DaemonConfig c = sim_config(dir, 2000.0);
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kTeach, 0.0, false}));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
   auto rec = std::make_unique<Recorder>();
   rec->stop_after.store(6);
   Daemon d(c);
@@ -332,7 +341,7 @@ TEST(QnavdMission, DamagedRouteIsRefusedAndTheDaemonCarriesOn) {
   const std::string dir = temp_dir();
   {
     DaemonConfig c = sim_config(dir, 400.0);
-    ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kTeach, 0.0, false}));
+    ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
     Daemon d(c);
     ASSERT_TRUE(d.init(nullptr));
     ASSERT_TRUE(d.start());
@@ -345,8 +354,8 @@ TEST(QnavdMission, DamagedRouteIsRefusedAndTheDaemonCarriesOn) {
   std::fputc(0x5A, f);
   std::fclose(f);
   DaemonConfig c = sim_config(dir, 400.0);
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kRepeat, 0.0, false}));
-  ASSERT_TRUE(c.sim_mission.push_back(SimPass{qc::Mode::kHold, 0.0, false}));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 0.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kHold, 0.0, false)));
   Daemon d(c);
   ASSERT_TRUE(d.init(nullptr));
   ASSERT_TRUE(d.start());

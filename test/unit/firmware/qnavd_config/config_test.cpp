@@ -107,6 +107,9 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(sim_seed),
       QNAV_FIELD(sim_speed),
       QNAV_FIELD(sim_exit_at_end),
+      QNAV_FIELD(sim_replay_lines),
+      QNAV_FIELD(sim_replay_stride),
+      QNAV_FIELD(sim_replay_nav),
       QNAV_FIELD(sim_ahrs),
       QNAV_FIELD(sim_candump),
       QNAV_FIELD(sim_stall),
@@ -381,6 +384,9 @@ length_m = 5000.0
 seed = 42
 speed = "recorded"
 exit_at_end = false
+replay_lines = 300
+replay_stride = 150
+replay_nav = "dr"
 ahrs = "dronecan"
 candump = "/tmp/qnavd.candump"
 stall = "dvl"
@@ -392,6 +398,9 @@ stall_s = 20.0
 mode = "hold"
 offset_pct = -55.5
 reverse = true
+file = "dive.xtf"
+first_ping = 90
+last_ping = 461
 
 [[sim.pass]]
 mode = "repeat"
@@ -435,9 +444,14 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_EQ(c.sim_mission[0].mode, drivers::qnavcan::Mode::kHold);
   EXPECT_EQ(c.sim_mission[0].offset_pct, -55.5);
   EXPECT_TRUE(c.sim_mission[0].reverse);
+  EXPECT_EQ(c.sim_mission[0].file, "dive.xtf");
+  EXPECT_EQ(c.sim_mission[0].first_ping, 90);
+  EXPECT_EQ(c.sim_mission[0].last_ping, 461);
   EXPECT_EQ(c.sim_mission[1].mode, drivers::qnavcan::Mode::kRepeat);
   EXPECT_EQ(c.sim_mission[1].offset_pct, 100.0);  // an integer where a float is expected
   EXPECT_FALSE(c.sim_mission[1].reverse);
+  EXPECT_TRUE(c.sim_mission[1].file.empty());
+  EXPECT_EQ(c.sim_mission[1].last_ping, -1);
   expect_stages_init(c);
 }
 
@@ -551,7 +565,7 @@ const BadConfig kBadConfigs[] = {
     {"pass_bad_mode", "[[sim.pass]]\nmode = \"fly\"\n", "sim.pass[0].mode", 2,
      "must be one of teach, repeat, hold, got \"fly\""},
     {"pass_unknown_key", "[[sim.pass]]\nmode = \"teach\"\noffset = 5\n", "sim.pass[0].offset", 3,
-     "a [[sim.pass]] has mode, offset_pct, reverse"},
+     "a [[sim.pass]] has mode, offset_pct, reverse, file, first_ping, last_ping"},
     {"pass_misspelt_key", "[[sim.pass]]\nmode = \"teach\"\nreverse_ = true\n", "sim.pass[0].reverse_", 3,
      "did you mean reverse?"},
     {"pass_offset_out_of_range", "[[sim.pass]]\nmode = \"repeat\"\noffset_pct = 120\n", "sim.pass[0].offset_pct", 3,
