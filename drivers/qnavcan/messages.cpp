@@ -51,7 +51,7 @@ constexpr SignalDef kNavStatus[] = {
     {"FaultDvlLost", 40, 1, false, false, 1, 0, 0, 1, ""},
     {"FaultCameraLost", 41, 1, false, false, 1, 0, 0, 1, ""},
     {"Counter", 48, 8, false, false, 1, 0, 0, 255, ""},
-    {"ModeReject", 56, 4, false, false, 1, 0, 0, 6, ""},
+    {"ModeReject", 56, 4, false, false, 1, 0, 0, 8, ""},
 };
 constexpr SignalDef kGuidance[] = {
     {"CrossTrack", 0, 16, false, true, 0.01, 0, -327, 327, "m"},

@@ -41,10 +41,15 @@ class DeadReckoner {
   }
   // Body velocity (forward, starboard) measured at t_ns. Refused (false) when not finite, faster than
   // max_speed_mps, not after the previous sample, or before any heading.
-  bool on_velocity(std::int64_t t_ns, double forward_mps, double starboard_mps, double max_speed_mps = 10.0) noexcept {
+  // A sample more than max_gap_s after the previous one starts the integration afresh: a velocity is
+  // not stretched over a gap (the position holds through it, and gaps() counts it).
+  bool on_velocity(std::int64_t t_ns, double forward_mps, double starboard_mps, double max_speed_mps = 10.0,
+                   double max_gap_s = 1e9) noexcept {
     if (!std::isfinite(forward_mps) || !std::isfinite(starboard_mps) || std::hypot(forward_mps, starboard_mps) > max_speed_mps) return false;
     if (!have_heading_ || (have_velocity_ && t_ns <= last_v_ns_)) return false;
-    if (have_velocity_) {
+    if (have_velocity_ && static_cast<double>(t_ns - last_v_ns_) * 1e-9 > max_gap_s) {
+      ++gaps_;
+    } else if (have_velocity_) {
       const double dt = static_cast<double>(t_ns - last_v_ns_) * 1e-9;
       advance(dt, forward_mps, starboard_mps, pose_);
       distance_m_ += dt * std::hypot(forward_mps, starboard_mps);
@@ -69,6 +74,7 @@ class DeadReckoner {
     return p;
   }
   double distance_m() const noexcept { return distance_m_; }
+  std::uint32_t gaps() const noexcept { return gaps_; }
 
  private:
   void advance(double dt, double fwd, double stbd, Pose2& p) const noexcept {
@@ -87,6 +93,7 @@ class DeadReckoner {
   double fwd_mps_ = 0.0, stbd_mps_ = 0.0;
   std::int64_t last_v_ns_ = 0;
   bool have_velocity_ = false;
+  std::uint32_t gaps_ = 0;
 };
 
 }  // namespace qnav::pipeline

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "drivers/dvl/dvl_driver.hpp"
+#include "firmware/qnavd/deployment.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
 #include "hal/linux/monotonic_clock.hpp"
@@ -43,7 +44,8 @@ namespace {
 
 using std::chrono::microseconds;
 
-bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io) noexcept {
+// failed (optional): set when the bus reported an error this call (the device went away).
+bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io, bool* failed = nullptr) noexcept {
   bool did = false;
   hal::CanRxFrame rx;
   for (int i = 0; i < 64; ++i) {
@@ -52,6 +54,7 @@ bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io) n
       if (s.code() != StatusCode::kTimeout) {
         io.device_errors.fetch_add(1, std::memory_order_relaxed);
         io.can_device_down.store(true);
+        if (failed) *failed = true;
       }
       break;
     }
@@ -70,6 +73,7 @@ bool drain_dvl(drivers::dvl::DvlSerialDriver& dvl, SpscRing<drivers::dvl::DvlVel
     io.dvl_device_down.store(true);
     return false;
   }
+  io.dvl_device_down.store(false);
   drivers::dvl::DvlVelocity v;
   while (dvl.pop(v)) {
     if (!q.try_push(v)) io.dvl_overflow.fetch_add(1, std::memory_order_relaxed);
@@ -156,19 +160,20 @@ class LinuxBackend final : public IoBackend {
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
     const std::int64_t now = clock_.now_ns();
     if (now >= next_retry_ns_) {
-      if (!can_.is_open()) open_can(false).ignore();
+      if (!can_.is_open() && open_can(false)) io.can_device_down.store(false);
       if (cfg_.dvl_enabled && !dvl_port_.is_open()) open_dvl();
       if (!sonar_.is_open()) open_sonar();
       next_retry_ns_ = now + 1000000000;
     }
     bool did = false;
     if (can_.is_open()) {
-      did |= drain_can(can_, *q_.can_rx, io);
-      if (io.can_device_down.load()) can_.close();
+      bool failed = false;
+      did |= drain_can(can_, *q_.can_rx, io, &failed);
+      if (failed) can_.close();  // reopened within a second
     }
     if (dvl_port_.is_open()) {
       did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
-      if (io.dvl_device_down.load()) dvl_port_.close();
+      if (io.dvl_device_down.load()) dvl_port_.close();  // this poll failed; reopened within a second
     }
     if (sonar_.is_open()) {
       io_ = &io;
@@ -178,6 +183,7 @@ class LinuxBackend final : public IoBackend {
         io.sonar_device_down.store(true);
         sonar_.close();
       } else {
+        io.sonar_device_down.store(false);
         did |= *r > 0;
       }
       const std::uint32_t rej = static_cast<std::uint32_t>(jsf_.framer_counters().total() + jsf_.ping_counters().total());
@@ -200,6 +206,21 @@ class LinuxBackend final : public IoBackend {
   Status open_can(bool report) noexcept {
     hal::SocketCanConfig sc;
     sc.interface = cfg_.can_interface.c_str();
+    // The kernel passes only what qnav reads: its inputs (0x100-0x10F attitude, rates, depth; 0x110
+    // mode command) and DroneCAN AHRS Solution messages (29-bit, data type 1000 in bits 8..23).
+    hal::CanFilter inputs;
+    inputs.id = 0x100;
+    inputs.mask = 0x7F0;
+    hal::CanFilter mode;
+    mode.id = drivers::qnavcan::kIdModeCmd;
+    mode.mask = hal::kCanSffMask;
+    hal::CanFilter ahrs;
+    ahrs.id = 1000u << 8;
+    ahrs.mask = 0xFFFFu << 8;
+    ahrs.extended = true;
+    static_cast<void>(sc.filters.push_back(inputs));
+    static_cast<void>(sc.filters.push_back(mode));
+    static_cast<void>(sc.filters.push_back(ahrs));
     const Status s = can_.open(sc);
     if (!s && report && log_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", sc.interface, s.message());
     return s;
@@ -273,6 +294,7 @@ Daemon::Daemon(const DaemonConfig& config) : cfg_(config) {}
 
 Daemon::~Daemon() {
   stop();
+  io_exit_.store(true);  // a started daemon destroyed without run() must not hang in join
   if (io_thread_.joinable()) io_thread_.join();
   if (nav_thread_.joinable()) nav_thread_.join();
 }
@@ -368,6 +390,15 @@ Status Daemon::start() {
     if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"what\":\"memory not locked: %s\"}\n", s.message());
   }
   started_wall_ns_ = wall_->now_ns();
+  if (log_ && cfg_.log != LogFormat::kOff) {
+    const Deployment d = make_deployment(cfg_);
+    std::fprintf(log_,
+                 "{\"event\":\"started\",\"backend\":\"%s\",\"route_dir\":\"%s\",\"static_bytes\":%zu,\"ping_queue\":%zu,"
+                 "\"can_interface\":\"%s\",\"realtime\":%s}\n",
+                 cfg_.backend == Backend::kSim ? "sim" : "linux", cfg_.route_dir.c_str(), d.total_static_bytes(), cfg_.ping_queue,
+                 cfg_.can_interface.c_str(), cfg_.realtime ? "true" : "false");
+    std::fflush(log_);
+  }
   io_thread_ = std::thread([this] { io_loop(); });
   nav_thread_ = std::thread([this] { nav_loop(); });
   started_ = true;
@@ -399,9 +430,13 @@ int Daemon::run() {
   io_exit_.store(true);
   if (io_thread_.joinable()) io_thread_.join();
   if (!nav_exited_.load()) {
-    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"nav worker did not stop within %.1f s\"}\n", cfg_.shutdown_timeout_s);
-    nav_thread_.detach();
-    return 1;
+    // The nav thread is stuck (storage hung in the final commit?). Everything taught up to the node in
+    // progress is fdatasync'ed under .new; leave now, without running destructors under its feet.
+    if (log_) {
+      std::fprintf(log_, "{\"event\":\"error\",\"what\":\"nav worker did not stop within %.1f s; exiting\"}\n", cfg_.shutdown_timeout_s);
+      std::fflush(log_);
+    }
+    hal::exit_now(1);
   }
   if (nav_thread_.joinable()) nav_thread_.join();
   const int sig = hal::StopSignals::signal_number();
@@ -410,12 +445,13 @@ int Daemon::run() {
     const double wall_s = static_cast<double>(wall_->now_ns() - started_wall_ns_) * 1e-9;
     std::fprintf(log_,
                  "{\"event\":\"stopped\",\"signal\":%d,\"mission_done\":%s,\"wall_s\":%.2f,\"cpu_s\":%.2f,\"cpu_load_pct\":%.1f,"
-                 "\"max_rss_kb\":%ld,\"tiles\":%u,\"deadline_misses\":%u,\"software_faults\":%u}\n",
+                 "\"max_rss_kb\":%ld,\"tiles\":%u,\"deadline_misses\":%u,\"software_faults\":%u,\"writer_errors\":%u,\"route_committed\":%s}\n",
                  sig, mission_done_.load() ? "true" : "false", wall_s, u.cpu_s, wall_s > 0 ? 100.0 * u.cpu_s / wall_s : 0.0, u.max_rss_kb,
-                 nav_->tiles(), nav_->deadline_misses(), SoftwareFaults::count());
+                 nav_->tiles(), nav_->deadline_misses(), SoftwareFaults::count(), nav_->writer_errors(),
+                 nav_->commit_failed() ? "false" : "true");
     std::fflush(log_);
   }
-  return 0;
+  return nav_->commit_failed() ? 1 : 0;  // a route that could not be committed is not a clean stop
 }
 
 }  // namespace qnav::daemon

@@ -15,7 +15,7 @@ Deployment make_deployment(const DaemonConfig& c) {
       {{"io", c.io_priority, c.io_cpu, "devices: wait, read, stamp at reception, push; CAN tx"},
        {"nav", c.nav_priority, c.nav_cpu, "modes, dead reckoning, route pipeline, outputs, health"}},
       {{"can_rx", "io", "nav", c.can_rx_queue, sizeof(hal::CanRxFrame), "drop newest, count can_rx_overflow"},
-       {"can_tx", "nav", "io", c.can_tx_queue, sizeof(hal::CanFrame), "drop newest, count can_tx_overflow"},
+       {"can_tx", "nav", "io", c.can_tx_queue, sizeof(hal::CanFrame), "not sent now: counted (can_tx_overflow), sent at its next period"},
        {"dvl", "io", "nav", 64, sizeof(drivers::dvl::DvlVelocity), "drop newest, count dvl_overflow"},
        {"pings", "io", "nav", c.ping_queue, sizeof(PingMsg), "drop the ping, count ping_overflow (replay waits instead)"},
        {"free_slots", "nav", "io", c.ping_queue, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"}},

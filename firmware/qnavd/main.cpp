@@ -84,6 +84,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "qnavd: %s\n", ss.message());
     return 1;
   }
+  // stdout (the log, kept by journald) gets its buffer now: the first line after start must not
+  // allocate one. Line buffered so every event reaches the journal as it happens.
+  static char log_buffer[1 << 16];
+  std::setvbuf(stdout, log_buffer, _IOLBF, sizeof log_buffer);
   qnav::daemon::Daemon daemon(cfg);
   qnav::Status s = daemon.init(stdout);
   if (s) s = daemon.start();

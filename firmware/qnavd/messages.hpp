@@ -27,7 +27,6 @@ struct PingMsg {
 // Counters the I/O thread owns and the nav worker reads for health (relaxed atomics, monotonic).
 struct IoCounters {
   std::atomic<std::uint32_t> can_rx_overflow{0};
-  std::atomic<std::uint32_t> can_tx_overflow{0};
   std::atomic<std::uint32_t> can_tx_errors{0};
   std::atomic<std::uint32_t> ping_overflow{0};   // a ping arrived with no free slot / full queue: dropped
   std::atomic<std::uint32_t> dvl_overflow{0};

@@ -21,7 +21,9 @@ const char* to_string(ModeReject r) noexcept {
     case ModeReject::kRouteDamaged: return "route file damaged";
     case ModeReject::kRouteTooShort: return "route has fewer than 2 nodes";
     case ModeReject::kStorage: return "route storage error";
-    case ModeReject::kNoHeading: return "no attitude (heading) yet";
+    case ModeReject::kNoHeading: return "no recent attitude (heading)";
+    case ModeReject::kRouteTooLong: return "route has more nodes than route.max_nodes";
+    case ModeReject::kRouteMismatch: return "route does not fit this configuration (sensor or geometry)";
   }
   return "?";
 }
@@ -109,16 +111,25 @@ bool NavWorker::run_once() noexcept {
   hal::CanRxFrame rx;
   std::int64_t t0 = cpu_clock_.now_ns();
   mode_ns_ = 0;
-  while (q_.can_rx->front() != nullptr && q_.can_rx->front()->stamp.sample_ns <= until_ns && q_.can_rx->try_pop(rx)) {
-    handle_frame(rx);
-    nav_now_ns_ = std::max(nav_now_ns_, rx.stamp.sample_ns);
-    publisher_->poll(nav_now_ns_);  // outputs keep their DBC periods in sample time, also in a fast replay
-    did = true;
-  }
   drivers::dvl::DvlVelocity v;
-  while (q_.dvl->front() != nullptr && q_.dvl->front()->stamp.sample_ns <= until_ns && q_.dvl->try_pop(v)) {
-    if (!dr_.on_velocity(v.stamp.sample_ns, v.vx_mps, v.vy_mps)) ++dr_rejected_;
-    nav_now_ns_ = std::max(nav_now_ns_, v.stamp.sample_ns);
+  // In sample-time order across the two queues (a heading before a velocity of the same instant), so
+  // a DVL sample is turned by the newest heading at or before its own time.
+  for (;;) {
+    const hal::CanRxFrame* cf = q_.can_rx->front();
+    const drivers::dvl::DvlVelocity* dv = q_.dvl->front();
+    const bool can_due = cf != nullptr && cf->stamp.sample_ns <= until_ns;
+    const bool dvl_due = dv != nullptr && dv->stamp.sample_ns <= until_ns;
+    if (!can_due && !dvl_due) break;
+    if (can_due && (!dvl_due || cf->stamp.sample_ns <= dv->stamp.sample_ns)) {
+      if (!q_.can_rx->try_pop(rx)) break;
+      handle_frame(rx);
+      nav_now_ns_ = std::max(nav_now_ns_, rx.stamp.sample_ns);
+      publisher_->poll(nav_now_ns_);  // outputs keep their DBC periods in sample time, also in a fast replay
+    } else {
+      if (!q_.dvl->try_pop(v)) break;
+      if (!dr_.on_velocity(v.stamp.sample_ns, v.vx_mps, v.vy_mps, 10.0, cfg_.dvl_stale_s)) ++dr_rejected_;
+      nav_now_ns_ = std::max(nav_now_ns_, v.stamp.sample_ns);
+    }
     did = true;
   }
   if (did) stage_time(Stage::kInputs, t0 + mode_ns_);  // a mode change inside is timed as its own stage
@@ -157,7 +168,7 @@ void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
     if (ahrs_.on_frame(rx) == drivers::dronecan::AhrsUpdate::kSolution) {
       const float* q = ahrs_.solution().value.orientation_xyzw;
       const double x = static_cast<double>(q[0]), y = static_cast<double>(q[1]), z = static_cast<double>(q[2]), w = static_cast<double>(q[3]);
-      double yaw = std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+      double yaw = std::atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z);  // exact for a quaternion of any norm
       if (yaw < 0.0) yaw += 2.0 * 3.14159265358979323846;
       if (!dr_.on_heading(ahrs_.solution().stamp.sample_ns, yaw)) ++dr_rejected_;
     }
@@ -177,15 +188,31 @@ void NavWorker::route_path(std::uint16_t id, const char* suffix, char* out, std:
 }
 
 ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
-  char path[1024], interrupted[1024];
+  char path[1024], kept[1024];
   route_path(id, ".new", path, sizeof path);
-  route_path(id, ".interrupted", interrupted, sizeof interrupted);
-  // A teach run that was cut off (power, kill -9) left its nodes under .new: keep them aside.
-  if (store_.rename(path, interrupted).is_ok() && log_)
-    std::fprintf(log_, "{\"event\":\"teach_interrupted_kept\",\"file\":\"%s\"}\n", interrupted);
+  // A teach run that was cut off (power, kill -9) or too short to commit left its nodes under .new:
+  // move them aside under the first free name .kept.<n>; nothing taught is deleted or overwritten.
+  Status moved(StatusCode::kNotFound, "");
+  for (int n = 1; n < 1000; ++n) {
+    char suffix[32];
+    std::snprintf(suffix, sizeof suffix, ".new.kept.%d", n);
+    route_path(id, suffix, kept, sizeof kept);
+    Result<int> probe = store_.open(kept, hal::FileMode::kRead);
+    if (probe) {
+      store_.close(*probe);
+      continue;
+    }
+    moved = store_.rename(path, kept);
+    break;
+  }
+  if (moved.is_ok() && log_) std::fprintf(log_, "{\"event\":\"teach_previous_kept\",\"file\":\"%s\"}\n", kept);
+  if (!moved && moved.code() != StatusCode::kNotFound) {
+    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: cannot move the previous %s aside: %s\"}\n", path, moved.message());
+    return ModeReject::kStorage;
+  }
   const route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing_m_, swath_m_);
   drivers::route_store::RouteWriterOptions o;
-  o.overwrite = true;
+  o.overwrite = false;  // the name is free now; never truncate what is there
   const Status s = writer_.create(path, params, o);
   if (!s) {
     if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: %s: %s\"}\n", path, s.message());
@@ -207,18 +234,32 @@ ModeReject NavWorker::enter_repeat(std::uint16_t id, bool reverse) noexcept {
     faults_ |= qc::fault::kRouteDamaged;
     return ModeReject::kRouteDamaged;
   }
-  if (reader_.node_count() > cfg_.max_nodes) return ModeReject::kRouteTooShort;
+  if (reader_.node_count() > cfg_.max_nodes) {
+    if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%u nodes > route.max_nodes %zu\"}\n", path, reader_.node_count(), cfg_.max_nodes);
+    reader_.close();
+    return ModeReject::kRouteTooLong;
+  }
   std::uint32_t bad = 0;
   s = reader_.read_all_meta(meta_, &bad);
   if (!s) {
     if (log_) std::fprintf(log_, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, bad, s.message());
     faults_ |= qc::fault::kRouteDamaged;
+    reader_.close();
     return ModeReject::kRouteDamaged;
   }
-  if (meta_.size() < 2) return ModeReject::kRouteTooShort;
+  if (meta_.size() < 2) {
+    reader_.close();
+    return ModeReject::kRouteTooShort;
+  }
   repeater_.set_motion(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, route::MotionModel::kOdometry);
   s = repeater_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_);
-  if (!s) return ModeReject::kRouteDamaged;
+  if (!s) {
+    // e.g. a route taught with another sensor or tile geometry than this configuration's
+    if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, s.message());
+    reader_.close();
+    return ModeReject::kRouteMismatch;
+  }
+  faults_ &= static_cast<std::uint16_t>(~qc::fault::kRouteDamaged);  // this route is good
   eq5_ = false;
   return ModeReject::kNone;
 }
@@ -226,7 +267,11 @@ ModeReject NavWorker::enter_repeat(std::uint16_t id, bool reverse) noexcept {
 void NavWorker::leave_mode() noexcept {
   if (mode_ == qc::Mode::kTeach && teach_open_) {
     // The node in progress: a tile of at least half the configured scanlines is finished, less is discarded.
-    tiles_.flush(tile_sink_).ignore();
+    const Status fs = tiles_.flush(tile_sink_);
+    if (!fs) {
+      ++writer_errors_;
+      if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: the node in progress was lost: %s\"}\n", fs.message());
+    }
     char final_path[1024];
     route_path(route_id_, "", final_path, sizeof final_path);
     const std::uint32_t nodes = writer_.node_count();
@@ -237,23 +282,54 @@ void NavWorker::leave_mode() noexcept {
       s = writer_.close();  // kept as .new: too short to repeat, but nothing taught is deleted
     }
     if (log_)
-      std::fprintf(log_, "{\"event\":\"teach_closed\",\"route_id\":%u,\"nodes\":%u,\"file\":\"%s%s\",\"ok\":%s}\n", route_id_, nodes, final_path,
-                   nodes >= 2 ? "" : ".new", s ? "true" : "false");
+      std::fprintf(log_, "{\"event\":\"teach_closed\",\"route_id\":%u,\"nodes\":%u,\"file\":\"%s%s\",\"ok\":%s,\"why\":\"%s\"}\n", route_id_, nodes,
+                   final_path, nodes >= 2 ? "" : ".new", s ? "true" : "false", s ? "" : s.message());
+    if (!s) commit_failed_ = true;
     if (!s) ++writer_errors_;
     teach_open_ = false;
   }
   if (mode_ == qc::Mode::kRepeat) reader_.close();
   tiles_.reset_pass();
   pass_ping_ = 0;
+  forget_guidance();
+}
+
+// Nothing said about the previous route may reach the autopilot as if it held for the next one.
+void NavWorker::forget_guidance() noexcept {
+  report_.step = route::LocaliserStep{};
+  guidance_ = qc::RouteGuidance{};
+  route_status_ = qc::RouteStatus{};
+  route_status_.status = qc::GuidanceState::kHoldCourse;
+  route_status_.tile_seq = static_cast<std::uint16_t>(tile_seq_ & 0xFFFF);
+  publisher_->set(guidance_);
+  publisher_->set(route_status_);
 }
 
 void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
   const std::int64_t t0 = cpu_clock_.now_ns();
   const std::uint16_t id = cmd.route_id != 0 ? cmd.route_id : cfg_.route_id;
   ModeReject why = ModeReject::kNone;
+  if (cmd.reset_nav) {
+    dr_.reset();  // the autopilot sets the navigation origin anew (distance and position restart)
+    ++nav_resets_;
+  }
+  const bool uses_route = cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kRepeat;
+  const bool change = cmd.mode != mode_ || (uses_route && id != route_id_) || (cmd.mode == qc::Mode::kRepeat && cmd.reverse != reverse_);
   if (cmd.mode == qc::Mode::kMap) why = ModeReject::kUnsupportedMode;
-  if (why == ModeReject::kNone && (cmd.mode != mode_ || id != route_id_ || cmd.reverse != reverse_)) {
-    if (cmd.mode == qc::Mode::kTeach && !dr_.has_heading()) why = ModeReject::kNoHeading;
+  if (why == ModeReject::kNone && change) {
+    if (cmd.mode == qc::Mode::kTeach && dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s) why = ModeReject::kNoHeading;
+    if (cmd.mode == qc::Mode::kRepeat) {
+      // Refused before the current mode is left when the route is not there at all.
+      char path[1024];
+      route_path(id, "", path, sizeof path);
+      Result<int> probe = store_.open(path, hal::FileMode::kRead);
+      if (probe) {
+        store_.close(*probe);
+      } else {
+        if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, probe.status().message());
+        why = probe.status().code() == StatusCode::kNotFound ? ModeReject::kRouteMissing : ModeReject::kStorage;
+      }
+    }
     if (why == ModeReject::kNone) {
       leave_mode();
       if (cmd.mode == qc::Mode::kTeach) why = enter_teach(id);
@@ -261,7 +337,7 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
       if (why == ModeReject::kNone) {
         mode_ = cmd.mode;
         reverse_ = cmd.reverse;
-        route_id_ = id;  // the dead reckoning runs on across modes: poses depend on the samples only, not on when a command came
+        route_id_ = uses_route ? id : route_id_;  // the dead reckoning runs on across modes: poses depend on the samples only
       } else {
         mode_ = qc::Mode::kIdle;  // the old mode was left: a defined state
       }
@@ -283,6 +359,10 @@ void NavWorker::handle_ping(const PingMsg& p) noexcept {
   last_ping_ns_ = p.stamp.sample_ns;
   if (mode_ != qc::Mode::kTeach && mode_ != qc::Mode::kRepeat) return;
   if (!dr_.has_heading() || dr_.heading_age_s(p.stamp.sample_ns) > cfg_.attitude_stale_s) return;  // no tiles without a heading
+  if (mode_ == qc::Mode::kTeach && cfg_.dvl_enabled && dr_.velocity_age_s(p.stamp.sample_ns) > cfg_.dvl_stale_s) {
+    ++teach_no_odometry_;  // a taught node needs its true place: none is built while the DVL is lost
+    return;
+  }
   const std::size_t half = q_.ping_pool_stride / 2;
   if (!QNAVD_CHECK(p.port_samples <= half && p.stbd_samples <= half, "ping larger than its pool slot")) return;
   const float* base = q_.ping_pool + static_cast<std::size_t>(p.slot) * q_.ping_pool_stride;
@@ -404,8 +484,9 @@ void NavWorker::update_faults() noexcept {
 void NavWorker::publish() noexcept {
   qc::NavStatus ns;
   ns.state = mode_;
-  ns.localised = mode_ == qc::Mode::kRepeat && report_.step.confident;
-  ns.confidence_pct = mode_ == qc::Mode::kRepeat ? clampd(100.0 * static_cast<double>(report_.step.probability), 0.0, 100.0) : 0.0;
+  const bool fix_possible = mode_ == qc::Mode::kRepeat && !(faults_ & (qc::fault::kSonarLost | qc::fault::kAttitudeLost));
+  ns.localised = fix_possible && report_.step.confident;
+  ns.confidence_pct = fix_possible ? clampd(100.0 * static_cast<double>(report_.step.probability), 0.0, 100.0) : 0.0;
   ns.node_index = static_cast<std::uint16_t>(std::min<std::uint32_t>(mode_ == qc::Mode::kTeach ? writer_.node_count() : report_.step.estimate, 65535));
   ns.fault_flags = faults_;
   ns.mode_reject = static_cast<std::uint8_t>(last_reject_);
@@ -413,8 +494,11 @@ void NavWorker::publish() noexcept {
   qc::Health h;
   h.fault_flags = faults_;
   std::uint64_t rejected = 0;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(qc::RxCounter::kCount); ++i) rejected += receiver_.counters().get(static_cast<qc::RxCounter>(i));
-  rejected += ahrs_.counters().total() + ahrs_.reassembler().counters().total();
+  // Input qnav should have understood and refused; frames for other nodes (unknown_id, other_node)
+  // are not rejections.
+  for (std::size_t i = 0; i < static_cast<std::size_t>(qc::RxCounter::kCount); ++i)
+    if (static_cast<qc::RxCounter>(i) != qc::RxCounter::kUnknownId) rejected += receiver_.counters().get(static_cast<qc::RxCounter>(i));
+  rejected += ahrs_.counters().total() - ahrs_.counters().get(drivers::dronecan::AhrsCounter::kOtherNode);
   rejected += q_.io->dvl_rejected.load(std::memory_order_relaxed) + q_.io->sonar_rejected.load(std::memory_order_relaxed) + dr_rejected_;
   rejected += q_.io->can_rx_overflow.load(std::memory_order_relaxed) + q_.io->ping_overflow.load(std::memory_order_relaxed);
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
@@ -443,15 +527,23 @@ void NavWorker::log_health() noexcept {
                "{\"event\":\"health\",\"t_s\":%.1f,\"mode\":\"%s\",\"faults\":%u,\"pings\":%u,\"tiles\":%u,\"deadline_misses\":%u,"
                "\"ping_max_us\":%" PRId64 ",\"tile_max_us\":%" PRId64 ",\"cpu_load_pct\":%.1f,\"can_rx_overflow\":%u,\"can_tx_overflow\":%u,"
                "\"ping_overflow\":%u,\"dvl_rejected\":%u,\"sonar_rejected\":%u,\"device_errors\":%u,\"can_rejected\":%u,\"dr_rejected\":%u,"
-               "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"tx_busy\":%u,"
+               "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
+               "\"teach_no_odometry\":%u,\"nav_resets\":%u,"
                "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"outputs\":%u}}\n",
                static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
                stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
-               io.can_rx_overflow.load(), io.can_tx_overflow.load(), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
+               io.can_rx_overflow.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
-               SoftwareFaults::count(), publisher_->counters().get(qc::TxCounter::kTxBusy), stage_misses_[static_cast<int>(Stage::kInputs)],
+               SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, stage_misses_[static_cast<int>(Stage::kInputs)],
                stage_misses_[static_cast<int>(Stage::kModes)], stage_misses_[static_cast<int>(Stage::kPing)],
                stage_misses_[static_cast<int>(Stage::kTile)], stage_misses_[static_cast<int>(Stage::kOutputs)]);
+  const std::uint32_t sw = SoftwareFaults::count();
+  if (sw != software_faults_logged_) {
+    const SoftwareFaultRecord r = SoftwareFaults::last();
+    std::fprintf(log_, "{\"event\":\"software_fault\",\"count\":%u,\"last\":\"%s\",\"at\":\"%s:%d\"}\n", sw, r.what ? r.what : "?",
+                 r.file ? r.file : "?", r.line);
+    software_faults_logged_ = sw;
+  }
   std::fflush(log_);
 }
 

@@ -10,6 +10,7 @@
 //                                               -> repeat: RouteRepeater.step -> guidance
 //   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
 //             into the can_tx queue; one log line per tile and per event; health every period.
+// Leaving or changing a repeat clears what was said about the old route (guidance, status, localised).
 // Sensor loss degrades, never stops: sonar or attitude lost -> guidance "hold course" (tiles are not
 // built without a heading); DVL lost -> the route filter runs the paper's eq. 5 motion model
 // (FaultDvlLost) until velocities return.
@@ -41,7 +42,9 @@
 namespace qnav::daemon {
 
 // Why a mode command was refused (NAV_STATUS ModeReject).
-enum class ModeReject : std::uint8_t { kNone = 0, kUnsupportedMode, kRouteMissing, kRouteDamaged, kRouteTooShort, kStorage, kNoHeading };
+enum class ModeReject : std::uint8_t {
+  kNone = 0, kUnsupportedMode, kRouteMissing, kRouteDamaged, kRouteTooShort, kStorage, kNoHeading, kRouteTooLong, kRouteMismatch
+};
 const char* to_string(ModeReject r) noexcept;
 
 // One sensed tile as the nav worker reported it (log line, tests).
@@ -104,6 +107,9 @@ class NavWorker {
   ModeReject last_reject() const noexcept { return last_reject_; }
   std::uint32_t tiles() const noexcept { return tile_seq_; }
   std::uint32_t pings() const noexcept { return pings_; }
+  std::uint32_t writer_errors() const noexcept { return writer_errors_; }
+  // The last teach could not be committed (the route stays under .new; the exit code says so).
+  bool commit_failed() const noexcept { return commit_failed_; }
 
  private:
   void handle_frame(const hal::CanRxFrame& rx) noexcept;
@@ -117,6 +123,7 @@ class NavWorker {
   void publish() noexcept;
   void log_health() noexcept;
   void route_path(std::uint16_t id, const char* suffix, char* out, std::size_t n) const noexcept;
+  void forget_guidance() noexcept;
   void stage_time(Stage s, std::int64_t t0_ns) noexcept;
 
   const DaemonConfig& cfg_;
@@ -158,6 +165,8 @@ class NavWorker {
   std::int64_t stage_max_ns_[static_cast<int>(Stage::kCount)] = {};
   std::uint32_t budgets_us_[static_cast<int>(Stage::kCount)] = {};
   std::uint32_t dr_rejected_ = 0, mode_refused_ = 0, step_errors_ = 0, writer_errors_ = 0;
+  std::uint32_t teach_no_odometry_ = 0, nav_resets_ = 0, software_faults_logged_ = 0;
+  bool commit_failed_ = false;
   std::int64_t next_health_ns_ = 0;
   std::int64_t busy_ns_ = 0, busy_window_start_ns_ = 0;
   std::int64_t mode_ns_ = 0;

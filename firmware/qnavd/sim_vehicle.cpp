@@ -167,7 +167,8 @@ Status SimVehicle::start_pass() {
     rec_end_ = p.last_ping < 0 ? recording_->data.pings.size()
                                : std::min<std::size_t>(recording_->data.pings.size(), static_cast<std::size_t>(p.last_ping));
     if (rec_next_ >= rec_end_) return Status(StatusCode::kOutOfRange, "sim: the pass's ping range is outside its file");
-    rec_first_stamp_ = recording_->data.pings[rec_next_].ping.stamp_ns;
+    rec_prev_stamp_ = recording_->data.pings[rec_next_].ping.stamp_ns;
+    rec_started_ = false;
     return Status::ok();
   }
   const std::uint64_t seed = pass_ == 0 ? pipeline::teach_pass_seed(cfg_.sim_seed) : pipeline::repeat_pass_seed(cfg_.sim_seed) + pass_;
@@ -181,7 +182,10 @@ Status SimVehicle::start_pass() {
 
 void SimVehicle::release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept {
   if (!has_pending_) return;
-  if (!pings.try_push(pending_)) io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+  if (!pings.try_push(pending_)) {
+    io.ping_overflow.fetch_add(1, std::memory_order_relaxed);
+    spare_slot_ = pending_.slot;  // the slot stays ours (the end of a pass waits for every slot)
+  }
   has_pending_ = false;
 }
 
@@ -209,8 +213,12 @@ bool SimVehicle::next_recorded(Sample& out) noexcept {
   const std::size_t k = rec_next_++;
   const tools::PingRec& pr = r.data.pings[k];
   // Recorded timing, carried on the mission clock (strictly increasing even where the file's is not).
-  std::int64_t t = pass_start_ns_ + kPassLeadNs + static_cast<std::int64_t>(pr.ping.stamp_ns - rec_first_stamp_);
-  if (t <= last_sample_ns_) t = last_sample_ns_ + 1000;
+  // A file's clock that steps back or jumps ahead is not followed: each step is kept within 0 < dt <= 2 s.
+  const std::int64_t file_dt = static_cast<std::int64_t>(pr.ping.stamp_ns) - static_cast<std::int64_t>(rec_prev_stamp_);
+  rec_prev_stamp_ = pr.ping.stamp_ns;
+  std::int64_t t = pass_start_ns_ + kPassLeadNs;
+  if (rec_started_) t = last_sample_ns_ + std::min<std::int64_t>(std::max<std::int64_t>(file_dt, 1000000), 2000000000);
+  rec_started_ = true;
   out.t_ns = t;
   out.nav = r.track.pose[k];
   out.ping_number = static_cast<std::uint32_t>(k);

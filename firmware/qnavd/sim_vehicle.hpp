@@ -134,7 +134,8 @@ class SimVehicle {
   std::vector<std::unique_ptr<Recording>> recordings_;  // one per [[sim.pass]]; null for a simulated pass
   const Recording* recording_ = nullptr;                 // the pass being flown
   std::size_t rec_next_ = 0, rec_end_ = 0;
-  std::uint64_t rec_first_stamp_ = 0;
+  std::uint64_t rec_prev_stamp_ = 0;
+  bool rec_started_ = false;
   std::int64_t last_sample_ns_ = 0;
   sidescan::TrajectorySample traj_sample_{};
   PingMsg pending_{};

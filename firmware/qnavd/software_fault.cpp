@@ -25,6 +25,10 @@ void SoftwareFaults::reset_for_tests() noexcept {
   g_count.store(0);
   g_first_what.store(nullptr);
   g_last_what.store(nullptr);
+  g_first_file.store(nullptr);
+  g_last_file.store(nullptr);
+  g_first_line.store(0);
+  g_last_line.store(0);
 }
 
 }  // namespace qnav::daemon

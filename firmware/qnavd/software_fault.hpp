@@ -5,7 +5,8 @@
 // QNAVD_CHECK(cond, what) records it (count, first and last message, file:line), raises the
 // FaultSoftware bit in QNAV_NAV_STATUS / QNAV_HEALTH, logs it, and lets the daemon continue in a
 // defined state instead of aborting the vehicle's navigation. Tests turn any such record into a
-// failure. Lock-free; no heap.
+// failure. Lock-free; no heap. The first/last records are separate atomics: with faults in two
+// threads at once a record may mix their fields (the count is exact).
 #pragma once
 
 #include <atomic>

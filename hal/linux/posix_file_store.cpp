@@ -19,7 +19,11 @@ Status os_error(const char* what, const char* path = nullptr) noexcept {
     std::snprintf(t_reason, sizeof t_reason, "%s %s: %s", what, path, std::strerror(err));
   else
     std::snprintf(t_reason, sizeof t_reason, "%s: %s", what, std::strerror(err));
-  return Status(err == ENOENT ? StatusCode::kNotFound : err == EEXIST ? StatusCode::kInvalidArgument : StatusCode::kIoError, t_reason);
+  const StatusCode code = err == ENOENT                      ? StatusCode::kNotFound
+                          : err == EEXIST                    ? StatusCode::kInvalidArgument
+                          : (err == ENOSPC || err == EDQUOT) ? StatusCode::kCapacityExceeded
+                                                             : StatusCode::kIoError;
+  return Status(code, t_reason);
 }
 
 }  // namespace

@@ -152,3 +152,7 @@ ProcessUsage process_usage() noexcept {
   return u;
 }
 }  // namespace qnav::hal
+
+namespace qnav::hal {
+void exit_now(int code) noexcept { ::_exit(code); }
+}  // namespace qnav::hal

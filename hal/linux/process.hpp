@@ -56,6 +56,8 @@ namespace qnav::hal {
 // Waits until one of fds (negative entries ignored) is readable, at most timeout_ms. Returns true
 // when one is (or on EINTR), false on timeout. The I/O thread's wait on all its devices at once.
 bool wait_readable(const int* fds, int n, int timeout_ms) noexcept;
+// Ends the process now (_exit): no destructors, no atexit handlers; what was fsync'ed stays.
+[[noreturn]] void exit_now(int code) noexcept;
 
 // This process's resource use so far (getrusage): peak resident set, CPU time (user + system).
 struct ProcessUsage {

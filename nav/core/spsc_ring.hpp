@@ -49,7 +49,10 @@ class SpscRing {
     return tail == head ? nullptr : &items_[head & mask_];
   }
   // Approximate when called concurrently; exact when both sides are quiet.
-  std::size_t size() const noexcept { return tail_.load(std::memory_order_acquire) - head_.load(std::memory_order_acquire); }
+  std::size_t size() const noexcept {
+    const std::size_t head = head_.load(std::memory_order_acquire);  // head first: tail can only have grown since
+    return tail_.load(std::memory_order_acquire) - head;
+  }
 
  private:
   Span<T> items_;

@@ -40,6 +40,8 @@ struct Recorder {
   std::atomic<std::uint32_t> faults_seen{0};      // OR of the NAV_STATUS fault words sent in repeat mode
   std::atomic<std::uint32_t> last_faults{0};
   std::atomic<std::uint32_t> hold_frames{0};      // ROUTE_STATUS frames saying "hold course" while the sonar is lost
+  std::atomic<int> last_state{0};                 // NAV_STATUS.State of the newest frame
+  std::atomic<std::uint32_t> stale_guidance{0};   // ROUTE_STATUS "Tracking" or NAV_STATUS "Localised" outside Repeat
   Recorder() {
     can_estimate.fill(-1);
     can_side.fill(-1);
@@ -64,11 +66,17 @@ void on_frame(void* ctx, const hal::CanRxFrame& f) {
         std::printf("new fault bits 0x%x at t=%.3f s after %u tiles\n", ns.fault_flags, static_cast<double>(f.stamp.sample_ns) * 1e-9, rec->n.load());
       rec->faults_seen.fetch_or(ns.fault_flags);
     }
-    if (qc::decode(f.frame, ns)) rec->last_faults.store(ns.fault_flags);
+    if (qc::decode(f.frame, ns)) {
+      rec->last_faults.store(ns.fault_flags);
+      rec->last_state.store(static_cast<int>(ns.state));
+      if (ns.localised && ns.state != qc::Mode::kRepeat) rec->stale_guidance.fetch_add(1);
+    }
   }
   if (f.frame.id != qc::kIdRouteStatus) return;
   qc::RouteStatus rs;
-  if (!qc::decode(f.frame, rs) || rs.status == qc::GuidanceState::kNotRepeating) return;
+  if (!qc::decode(f.frame, rs)) return;
+  if (rs.status == qc::GuidanceState::kTracking && rec->last_state.load() != static_cast<int>(qc::Mode::kRepeat)) rec->stale_guidance.fetch_add(1);
+  if (rs.status == qc::GuidanceState::kNotRepeating) return;
   if (rs.status == qc::GuidanceState::kHoldCourse && (rec->last_faults.load() & qc::fault::kSonarLost)) rec->hold_frames.fetch_add(1);
   const std::size_t seq = rs.tile_seq;
   if (seq >= kMaxTiles) return;
@@ -223,6 +231,7 @@ TEST(QnavdMission, TeachThenRepeatForwardAndReverseMatchesTruthOnTheBus) {
   EXPECT_GE(pct_side, 95.0);
   EXPECT_GE(decided, scored / 2);
   EXPECT_EQ(on_bus, scored) << "every repeat tile's ROUTE_STATUS must reach the autopilot";
+  EXPECT_EQ(rec->stale_guidance.load(), 0u) << "no Tracking / Localised may be sent outside Repeat (a previous pass's guidance)";
   EXPECT_EQ(bus_agrees, on_bus);
   // Deadline misses depend on the machine's load (measured by the benchmark, not asserted here).
   EXPECT_EQ(rec->faults_seen.load() & ~qc::fault::kDeadlineMiss, 0u) << "no sensor fault may be reported while every sensor is healthy";
@@ -334,6 +343,32 @@ TEST(QnavdMission, StopWhileTeachingKeepsEveryCompletedNode) {
   std::uint32_t bad = 0;
   EXPECT_TRUE(reader.read_all_meta(meta, &bad));
   EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
+TEST(QnavdMission, AnEarlierInterruptedTeachIsKeptNotOverwritten) {
+  const std::string dir = temp_dir();
+  for (int round = 0; round < 2; ++round) {  // two earlier runs cut off: both kept, under distinct names
+    FILE* f = std::fopen((dir + "/route_1.qroute.new").c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fprintf(f, "interrupted run %d", round);
+    std::fclose(f);
+    DaemonConfig c = sim_config(dir, 400.0);
+    ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+    Daemon d(c);
+    ASSERT_TRUE(d.init(nullptr));
+    ASSERT_TRUE(d.start());
+    EXPECT_EQ(d.run(), 0);
+  }
+  for (int round = 0; round < 2; ++round) {
+    FILE* f = std::fopen((dir + "/route_1.qroute.new.kept." + std::to_string(round + 1)).c_str(), "rb");
+    ASSERT_NE(f, nullptr) << "kept file " << round + 1;
+    char buf[64] = {};
+    const std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+    std::fclose(f);
+    EXPECT_EQ(std::string(buf, n), "interrupted run " + std::to_string(round));
+  }
+  tools::RouteFileReader r;
+  EXPECT_TRUE(r.open((dir + "/route_1.qroute").c_str()));
 }
 
 TEST(QnavdMission, DamagedRouteIsRefusedAndTheDaemonCarriesOn) {

@@ -362,7 +362,7 @@ namespace qnav::drivers::qnavcan {
 namespace {
 // NAV_STATUS.ModeReject (bits 56..59) says why the last mode command was refused; 0 = accepted.
 TEST(QnavCanCodec, NavStatusCarriesTheModeRejectReason) {
-  for (std::uint8_t why = 0; why <= 6; ++why) {
+  for (std::uint8_t why = 0; why <= 8; ++why) {
     NavStatus in;
     in.state = Mode::kIdle;
     in.mode_reject = why;
@@ -374,7 +374,7 @@ TEST(QnavCanCodec, NavStatusCarriesTheModeRejectReason) {
     EXPECT_EQ(out.mode_reject, why);
   }
   NavStatus bad;
-  bad.mode_reject = 7;  // outside the DBC's [0|6]
+  bad.mode_reject = 9;  // outside the DBC's [0|8]
   hal::CanFrame f;
   EXPECT_FALSE(encode(bad, f));
 }
