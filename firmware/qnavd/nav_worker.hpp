@@ -169,8 +169,7 @@ class NavWorker {
   bool commit_failed_ = false;
   std::int64_t next_health_ns_ = 0;
   std::int64_t busy_ns_ = 0, busy_window_start_ns_ = 0;
-  std::int64_t mode_ns_ = 0;
-  std::int64_t tile_ns_ = 0;  // time spent in on_tile during this ping  // time spent in handle_mode during this loop's input drain
+  std::int64_t mode_ns_ = 0;  // time spent in handle_mode during this loop's input drain
   double cpu_load_pct_ = 0.0;
   bool started_ns_set_ = false;
   std::int64_t start_ns_ = 0;

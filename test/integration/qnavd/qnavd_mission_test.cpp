@@ -345,6 +345,16 @@ TEST(QnavdMission, StopWhileTeachingKeepsEveryCompletedNode) {
   EXPECT_EQ(SoftwareFaults::count(), 0u);
 }
 
+// A 400 m route taught into dir (route_1.qroute).
+void teach_short_route(const std::string& dir) {
+  DaemonConfig c = sim_config(dir, 400.0);
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+  Daemon d(c);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  EXPECT_EQ(d.run(), 0);
+}
+
 TEST(QnavdMission, AnEarlierInterruptedTeachIsKeptNotOverwritten) {
   const std::string dir = temp_dir();
   for (int round = 0; round < 2; ++round) {  // two earlier runs cut off: both kept, under distinct names
@@ -352,12 +362,7 @@ TEST(QnavdMission, AnEarlierInterruptedTeachIsKeptNotOverwritten) {
     ASSERT_NE(f, nullptr);
     std::fprintf(f, "interrupted run %d", round);
     std::fclose(f);
-    DaemonConfig c = sim_config(dir, 400.0);
-    ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
-    Daemon d(c);
-    ASSERT_TRUE(d.init(nullptr));
-    ASSERT_TRUE(d.start());
-    EXPECT_EQ(d.run(), 0);
+    teach_short_route(dir);
   }
   for (int round = 0; round < 2; ++round) {
     FILE* f = std::fopen((dir + "/route_1.qroute.new.kept." + std::to_string(round + 1)).c_str(), "rb");
@@ -374,14 +379,7 @@ TEST(QnavdMission, AnEarlierInterruptedTeachIsKeptNotOverwritten) {
 TEST(QnavdMission, DamagedRouteIsRefusedAndTheDaemonCarriesOn) {
   SoftwareFaults::reset_for_tests();
   const std::string dir = temp_dir();
-  {
-    DaemonConfig c = sim_config(dir, 400.0);
-    ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
-    Daemon d(c);
-    ASSERT_TRUE(d.init(nullptr));
-    ASSERT_TRUE(d.start());
-    EXPECT_EQ(d.run(), 0);
-  }
+  teach_short_route(dir);
   const std::string path = dir + "/route_1.qroute";
   FILE* f = std::fopen(path.c_str(), "r+b");
   ASSERT_NE(f, nullptr);

@@ -13,33 +13,14 @@
 
 #include "hal/sim/memory_file_store.hpp"
 #include "test/support/alloc_guard.hpp"
+#include "test/support/route_nodes.hpp"
 
 namespace qnav::drivers::route_store {
 namespace {
 
-route::RouteParams params(std::uint16_t max_kp = 8) {
-  route::RouteParams p;
-  p.sensor = route::SensorKind::kSideScan;
-  p.node_spacing_m = 30.0f;
-  p.tile_length_m = 30.0f;
-  p.tile_width_m = 100.0f;
-  p.pixel_m = 0.2f;
-  p.max_keypoints = max_kp;
-  return p;
-}
-
-route::RouteNode node(std::uint32_t i, int kps) {
-  route::RouteNode n;
-  n.meta.pose = Pose2{30.0 * i, 1.0, 0.1};
-  n.meta.along_m = 30.0 * i;
-  for (int k = 0; k < kps; ++k) {
-    route::RouteKeypoint* kp = n.keypoints.emplace_back();
-    kp->x_m = static_cast<float>(k);
-    kp->y_m = static_cast<float>(i);
-    kp->descriptor[0] = static_cast<std::int8_t>(k);
-  }
-  return n;
-}
+using test::route_node;
+route::RouteParams params(std::uint16_t max_kp = 8) { return test::route_params(max_kp); }
+route::RouteNode node(std::uint32_t i, int kps) { return route_node(i, kps); }
 
 struct Store {
   std::vector<std::uint8_t> mem = std::vector<std::uint8_t>(8 * 64 * 1024);
