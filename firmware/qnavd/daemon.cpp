@@ -120,12 +120,6 @@ class SimBackend final : public IoBackend {
   void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
   bool done() const noexcept override { return done_; }
   const SimVehicle& vehicle() const noexcept { return vehicle_; }
-  ~SimBackend() override {
-    if (std::getenv("QNAVD_DEBUG_COUNTERS")) {
-      for (std::size_t i = 0; i < static_cast<std::size_t>(drivers::dvl::DvlCounter::kCount); ++i)
-        std::fprintf(stderr, "dvl %s=%u\n", drivers::dvl::kDvlCounterNames[i], dvl_.counter(static_cast<drivers::dvl::DvlCounter>(i)));
-    }
-  }
 
  private:
   static constexpr std::size_t kMaxBacklog = 8;
@@ -401,7 +395,6 @@ Status Daemon::start() {
   }
   io_thread_ = std::thread([this] { io_loop(); });
   nav_thread_ = std::thread([this] { nav_loop(); });
-  started_ = true;
   return Status::ok();
 }
 

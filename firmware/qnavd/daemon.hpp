@@ -74,7 +74,6 @@ class Daemon {
   void* bus_ctx_ = nullptr;
   std::thread io_thread_, nav_thread_;
   std::atomic<bool> stop_{false}, io_exit_{false}, nav_exited_{false}, mission_done_{false};
-  bool started_ = false;
   std::int64_t started_wall_ns_ = 0;
   double route_spacing_m_ = 60.0;  // header of a route taught here: node spacing and swath (set by the backend)
   double route_swath_m_ = 100.0;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cinttypes>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 
 #include "firmware/qnavd/software_fault.hpp"
@@ -91,7 +90,6 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
 void NavWorker::stage_time(Stage s, std::int64_t t0_ns) noexcept {
   const std::int64_t dt = cpu_clock_.now_ns() - t0_ns;
   const int i = static_cast<int>(s);
-  ++stage_runs_[i];
   stage_max_ns_[i] = std::max(stage_max_ns_[i], dt);
   busy_ns_ += dt;
   if (budgets_us_[i] > 0 && dt > static_cast<std::int64_t>(budgets_us_[i]) * 1000) {
@@ -549,9 +547,6 @@ void NavWorker::log_health() noexcept {
 
 void NavWorker::shutdown() noexcept {
   if (shut_) return;
-  if (std::getenv("QNAVD_DEBUG_COUNTERS"))
-    for (std::size_t i = 0; i < static_cast<std::size_t>(qc::RxCounter::kCount); ++i)
-      std::fprintf(stderr, "can %s=%u\n", qc::kRxCounterNames[i], receiver_.counters().get(static_cast<qc::RxCounter>(i)));
   leave_mode();
   log_health();  // the final counters
   mode_ = qc::Mode::kIdle;

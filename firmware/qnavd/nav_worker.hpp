@@ -160,7 +160,6 @@ class NavWorker {
   std::int64_t ping_rx_cpu_ns_ = 0;
   std::uint32_t pings_ = 0, tile_seq_ = 0, pass_ping_ = 0;
   std::uint32_t deadline_misses_ = 0;
-  std::uint32_t stage_runs_[static_cast<int>(Stage::kCount)] = {};
   std::uint32_t stage_misses_[static_cast<int>(Stage::kCount)] = {};
   std::int64_t stage_max_ns_[static_cast<int>(Stage::kCount)] = {};
   std::uint32_t budgets_us_[static_cast<int>(Stage::kCount)] = {};

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 
 #include "drivers/dronecan/ahrs.hpp"
@@ -318,7 +317,6 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
       const SimPass& p = cfg_.sim_mission[pass_];
       if (status_seen_since_cmd_ && reported_state_ == p.mode && reported_reject_ == 0) {
         if (!start_pass()) {
-          ++refusals_;
           ++pass_;
           phase_ = Phase::kCommand;
           return StepResult::kWaiting;
@@ -329,7 +327,6 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
       if ((status_seen_since_cmd_ && reported_reject_ != 0) || clock_.now_ns() - phase_start_ns_ > kStateTimeoutNs) {
         std::fprintf(stderr, "sim autopilot: pass %u: qnavd did not enter the commanded mode (reject code %u); skipping the pass\n", pass_,
                      reported_reject_);
-        ++refusals_;
         ++pass_;
         send_mode(qc::Mode::kIdle, false);
         phase_ = Phase::kAwaitIdle;
@@ -382,18 +379,15 @@ bool SimVehicle::recorded_geometry(double& range_m, double& spacing_m) const {
   for (std::size_t i = 0; i < recordings_.size(); ++i) {
     const Recording* r = recordings_[i].get();
     if (r == nullptr) continue;
-    for (std::size_t k = 0; k < r->data.pings.size(); ++k) {
-      const float sr = r->data.pings[k].ping.slant_range_m;
-      if (std::isfinite(sr) && sr > 0.0f) ranges.push_back(sr);
-      if (k > 0 && r->track.ok[k] && r->track.ok[k - 1]) {
+    tools::collect_slant_ranges(r->data, ranges);
+    for (std::size_t k = 1; k < r->data.pings.size(); ++k) {
+      if (r->track.ok[k] && r->track.ok[k - 1]) {
         dist += std::hypot(r->track.pose[k].x_m - r->track.pose[k - 1].x_m, r->track.pose[k].y_m - r->track.pose[k - 1].y_m);
         ++steps;
       }
     }
   }
-  if (ranges.empty() || steps == 0) return false;
-  std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
-  range_m = static_cast<double>(ranges[ranges.size() / 2]);
+  if (steps == 0 || !tools::median_slant_range(ranges, range_m)) return false;
   spacing_m = cfg_.sim_replay_stride * dist / static_cast<double>(steps);
   return true;
 }

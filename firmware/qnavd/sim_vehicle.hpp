@@ -71,8 +71,6 @@ class SimVehicle {
   // Recorded passes: the median slant range of their pings and the distance between tiles
   // (sim.replay_stride pings); false when the mission has no recorded pass.
   bool recorded_geometry(double& range_m, double& spacing_m) const;
-  std::uint32_t passes_flown() const noexcept { return pass_; }
-  std::uint32_t refusals() const noexcept { return refusals_; }
   double swath_m() const noexcept { return survey_->swath_m; }
   double node_spacing_m(int scanline_stride) const noexcept { return survey_->node_spacing_m(scanline_stride); }
 
@@ -116,7 +114,6 @@ class SimVehicle {
   sidescan::TrajectoryConfig pass_cfg_;
   Phase phase_ = Phase::kCommand;
   std::uint32_t pass_ = 0;
-  std::uint32_t refusals_ = 0;
   std::uint8_t mode_counter_ = 0, att_counter_ = 0;
   drivers::qnavcan::Mode reported_state_ = drivers::qnavcan::Mode::kIdle;
   std::uint8_t reported_reject_ = 0;

@@ -5,6 +5,7 @@
 // before drivers/sidescan.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -172,6 +173,19 @@ inline sonar::SonarPing as_ping(const PingRec& r, bool use_altimeter) {
   p.slant_range_m = r.ping.slant_range_m;
   p.altitude_m = use_altimeter ? r.ping.altitude_m : -1.0f;
   return p;
+}
+
+// Median slant range over the pings with a positive finite one (appended to `ranges`, the caller's
+// scratch: several files may be pooled); false when none has one. Sets the tile geometry of a file.
+inline bool median_slant_range(std::vector<float>& ranges, double& range_m) {
+  if (ranges.empty()) return false;
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
+  range_m = static_cast<double>(ranges[ranges.size() / 2]);
+  return true;
+}
+inline void collect_slant_ranges(const FileData& fd, std::vector<float>& ranges) {
+  for (const PingRec& p : fd.pings)
+    if (std::isfinite(p.ping.slant_range_m) && p.ping.slant_range_m > 0.0f) ranges.push_back(p.ping.slant_range_m);
 }
 
 // Local north/east of every ping from the file's fixes (interpolated between fix changes) or by

@@ -921,14 +921,12 @@ int open_file_pass(const char* path, int argc, char** argv, FilePass& out) {
   if (out.track.not_finite > 0)
     std::fprintf(stderr, "qnav route: %s: %zu pings without a finite position or heading are skipped\n", path, out.track.not_finite);
   std::vector<float> ranges;
-  for (const tools::PingRec& p : out.fd.pings)
-    if (std::isfinite(p.ping.slant_range_m) && p.ping.slant_range_m > 0.0f) ranges.push_back(p.ping.slant_range_m);
-  if (ranges.empty()) {
+  tools::collect_slant_ranges(out.fd, ranges);
+  double range = 0.0;
+  if (!tools::median_slant_range(ranges, range)) {
     std::fprintf(stderr, "qnav route: %s: no ping with a slant range\n", path);
     return 1;
   }
-  std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
-  const double range = static_cast<double>(ranges[ranges.size() / 2]);
   out.tiles = pipeline::file_route_tile_config(range, static_cast<int>(lines), static_cast<int>(stride));
   out.swath_m = 2.0 * range;
   return 0;
