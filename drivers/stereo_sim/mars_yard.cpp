@@ -155,8 +155,12 @@ const RoverSample& MarsYardTrajectory::next() noexcept {
   heading_rad_ = 0.7 * heading_rad_ + config_.heading_wander_rad * rng_.normal();
   x_m_ += step * std::cos(heading_rad_);
   y_m_ += step * std::sin(heading_rad_);
-  cur_.world_T_rover.R = rotation_from_rpy(config_.roll_pitch_rad * rng_.normal(), config_.roll_pitch_rad * rng_.normal(),
-                                           heading_rad_);
+  // Drawn in order, in separate statements: the evaluation order of function arguments is unspecified
+  // (x86-64 and SPARC gcc differ), and the same seed must give the same trajectory on every target.
+  // Pitch first: the order x86-64 gcc used, so the host's trajectories (and docs/vo.md) are unchanged.
+  const double pitch_rad = config_.roll_pitch_rad * rng_.normal();
+  const double roll_rad = config_.roll_pitch_rad * rng_.normal();
+  cur_.world_T_rover.R = rotation_from_rpy(roll_rad, pitch_rad, heading_rad_);
   cur_.world_T_rover.t = Vec3d(x_m_, y_m_, 0.0);
   cur_.time_s += step / config_.speed_m_s;
   cur_.path_m += step;

@@ -37,7 +37,7 @@ Sizes sizes_for(const HarrisConfig& c) noexcept {
   const std::size_t cw = (w + static_cast<std::size_t>(c.norm_cell_px) - 1) / static_cast<std::size_t>(c.norm_cell_px);
   const std::size_t ch = (h + static_cast<std::size_t>(c.norm_cell_px) - 1) / static_cast<std::size_t>(c.norm_cell_px);
   // cells: sum, count, neighbourhood mean.
-  return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch, (static_cast<std::size_t>(2 * c.nms_radius + 1) + 1) * w};
+  return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch, static_cast<std::size_t>(2 * c.nms_radius + 1) * w};
 }
 
 // Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x.
@@ -323,7 +323,6 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
   // vectorisable loops; only those (and above the threshold) get the exact check with the tie rule.
   const int nwin = 2 * nms + 1;
   const int dx0 = det.x, dx1 = det.x + det.width;
-  float* __restrict wmax = nms_ring_.data() + static_cast<std::size_t>(nwin) * wz;
   auto row_max = [&](int yy, float* __restrict dst) {
     const float* __restrict src = resp.row(yy);
     for (int x = dx0; x < dx1; ++x) {
@@ -336,18 +335,17 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
     row_max(yy, nms_ring_.data() + static_cast<std::size_t>((yy - (det.y - nms)) % nwin) * wz);
   for (int y = det.y; y < det.y + det.height; ++y) {
     row_max(y + nms, nms_ring_.data() + static_cast<std::size_t>((y + nms - (det.y - nms)) % nwin) * wz);
-    {
-      const float* __restrict r0 = nms_ring_.data();
-      for (int x = dx0; x < dx1; ++x) wmax[x] = r0[x];
-      for (int j = 1; j < nwin; ++j) {
-        const float* __restrict rj = nms_ring_.data() + static_cast<std::size_t>(j) * wz;
-        for (int x = dx0; x < dx1; ++x) wmax[x] = rj[x] > wmax[x] ? rj[x] : wmax[x];
-      }
-    }
+    // The window maximum is the max over the ring of the row maxima; it is only needed where the pixel
+    // is the maximum of its own row window (about one pixel in three), so it is taken there alone:
+    // a third of the compares of a full column pass, the same candidates.
+    const float* __restrict own = nms_ring_.data() + static_cast<std::size_t>((y - (det.y - nms)) % nwin) * wz;
     const float* row = resp.row(y);
     for (int x = dx0; x < dx1; ++x) {
       const float v = row[x];
-      if (v < wmax[x] || !(v > thresh)) continue;
+      if (v < own[x] || !(v > thresh)) continue;
+      bool below = false;
+      for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
+      if (below) continue;
       // Exact check with the tie rule: the earlier pixel in raster order wins.
       bool is_max = true;
       for (int dy = -nms; dy <= nms && is_max; ++dy) {

@@ -10,46 +10,71 @@ constexpr int kMaxPatch = (2 * kMaxPatchRadius + 1) * (2 * kMaxPatchRadius + 1);
 
 bool finite_pos(double v) noexcept { return std::isfinite(v) && v > 0.0; }
 
-// ZNCC of a zero-mean template t (n values, sum of squares tss) against the patch of `img` whose
-// top-left corner is (x0, y0), side s. Returns -1 when the patch is flat (variance <= min_var).
-inline float zncc_at(const float* t, float tss, ConstImageViewU8 img, int x0, int y0, int s, float min_var_n) noexcept {
-  float sum = 0.0f, sq = 0.0f, cross = 0.0f;
-  int k = 0;
-  for (int j = 0; j < s; ++j) {
-    const std::uint8_t* row = img.row(y0 + j) + x0;
-    for (int i = 0; i < s; ++i, ++k) {
-      const float v = static_cast<float>(row[i]);
-      sum += v;
-      sq += v * v;
-      cross += t[k] * v;
-    }
-  }
-  const float n = static_cast<float>(s * s);
-  const float var_n = sq - sum * sum / n;  // n * variance
-  if (!(var_n > min_var_n)) return -1.0f;
-  const float z = cross / std::sqrt(tss * var_n);
-  return z > 1.0f ? 1.0f : (z < -1.0f ? -1.0f : z);
-}
+// A patch for ZNCC: its grey levels (row-major, side s) and moments; n2var = n * sum of squares - sum^2
+// = n^2 * variance. All exact: integers below 2^53 held in doubles (no 64-bit integer arithmetic, a
+// library call on 32-bit SPARC).
+struct Template {
+  std::int32_t v[kMaxPatch];
+  double sum = 0.0;
+  double n2var = 0.0;
+};
 
-// Loads the zero-mean patch centred at (xc, yc); returns n * variance.
-inline float load_template(ConstImageViewU8 img, int xc, int yc, int r, float* t) noexcept {
+// Loads the patch centred at (xc, yc) of half-side r.
+inline void load_template(ConstImageViewU8 img, int xc, int yc, int r, Template& t) noexcept {
   const int s = 2 * r + 1;
-  float sum = 0.0f;
+  std::int32_t sum = 0, sq = 0;
   int k = 0;
   for (int j = 0; j < s; ++j) {
     const std::uint8_t* row = img.row(yc - r + j) + (xc - r);
     for (int i = 0; i < s; ++i, ++k) {
-      t[k] = static_cast<float>(row[i]);
-      sum += t[k];
+      const std::int32_t v = row[i];
+      t.v[k] = v;
+      sum += v;
+      sq += v * v;
     }
   }
-  const float mean = sum / static_cast<float>(s * s);
-  float ss = 0.0f;
-  for (int i = 0; i < k; ++i) {
-    t[i] -= mean;
-    ss += t[i] * t[i];
+  t.sum = static_cast<double>(sum);
+  t.n2var = static_cast<double>(s * s) * static_cast<double>(sq) - t.sum * t.sum;
+}
+
+// Column sums of the band of rows [y0, y0 + s) over columns [xa, xa + ncols), as prefix sums:
+// ps[k] = sum of the grey levels of columns xa .. xa + k - 1, pq the same for their squares. A window
+// of side s whose left column is xa + k then has sum ps[k + s] - ps[k] (likewise sq): each disparity's
+// patch sums cost two subtractions instead of s * s additions.
+inline void band_prefix(ConstImageViewU8 img, int xa, int ncols, int y0, int s, std::int32_t* ps, std::int32_t* pq) noexcept {
+  ps[0] = pq[0] = 0;
+  for (int c = 0; c < ncols; ++c) {
+    std::int32_t a = 0, q = 0;
+    for (int j = 0; j < s; ++j) {
+      const std::int32_t v = img.row(y0 + j)[xa + c];
+      a += v;
+      q += v * v;
+    }
+    ps[c + 1] = ps[c] + a;
+    pq[c + 1] = pq[c] + q;
   }
-  return ss;
+}
+
+// ZNCC of template t against the window of `img` whose top-left corner is (x0, y0), side s, with the
+// window's sum and sum of squares given (band_prefix):
+//   (n sum(t v) - sum(t) sum(v)) / sqrt((n sum(t^2) - sum(t)^2) (n sum(v^2) - sum(v)^2)),
+// in integers up to the final division (225 * 255^2 fits 32 bits; the products are exact in double).
+// Returns -1 when the window is flat (n2var <= min_n2var).
+inline float zncc_window(const Template& t, ConstImageViewU8 img, int x0, int y0, int s, std::int32_t sum, std::int32_t sq,
+                         double min_n2var) noexcept {
+  const double n = static_cast<double>(s * s);
+  const double sum_d = static_cast<double>(sum);
+  const double n2var = n * static_cast<double>(sq) - sum_d * sum_d;
+  if (!(n2var > min_n2var)) return -1.0f;
+  std::int32_t cross = 0;
+  int k = 0;
+  for (int j = 0; j < s; ++j) {
+    const std::uint8_t* row = img.row(y0 + j) + x0;
+    for (int i = 0; i < s; ++i, ++k) cross += t.v[k] * static_cast<std::int32_t>(row[i]);
+  }
+  const double num = n * static_cast<double>(cross) - t.sum * sum_d;
+  const double z = num / std::sqrt(t.n2var * n2var);
+  return z > 1.0 ? 1.0f : (z < -1.0 ? -1.0f : static_cast<float>(z));
 }
 }  // namespace
 
@@ -114,19 +139,25 @@ Status StereoMatcher::match_one(ConstImageViewU8 left, ConstImageViewU8 right, f
     counters_.increment(VisionCounter::kStereoOutOfBounds);
     return Status(StatusCode::kOutOfRange, "stereo: patch or disparity range leaves the image");
   }
-  float t[kMaxPatch];
-  const float n = static_cast<float>(s * s);
-  const float min_var_n = config_.min_patch_stddev * config_.min_patch_stddev * n;
-  const float tss = load_template(left, xi, yi, r, t);
-  if (!(tss > min_var_n)) {
+  // Flat-patch floor: n * variance > min_patch_stddev^2 * n, as n^2 * variance (Template::n2var).
+  const double n = static_cast<double>(s * s);
+  const double min_n2var = static_cast<double>(config_.min_patch_stddev) * static_cast<double>(config_.min_patch_stddev) * n * n;
+  Template t;
+  load_template(left, xi, yi, r, t);
+  if (!(t.n2var > min_n2var)) {
     counters_.increment(VisionCounter::kStereoFlatPatch);
     return Status(StatusCode::kDegenerate, "stereo: left patch has no texture");
   }
   const int nd = dmax - dmin + 1;
   int best = -1;
   float best_v = -2.0f;
+  // Right windows: left columns xi - dmax - r (i = nd - 1) .. xi - dmin - r (i = 0).
+  const int xa = xi - dmax - r;
+  band_prefix(right, xa, nd + s - 1, yi - r, s, prefix_sum_, prefix_sq_);
   for (int i = 0; i < nd; ++i) {
-    const float v = zncc_at(t, tss, right, xi - (dmin + i) - r, yi - r, s, min_var_n);
+    const int x0 = xi - (dmin + i) - r, k = x0 - xa;
+    const float v = zncc_window(t, right, x0, yi - r, s, prefix_sum_[k + s] - prefix_sum_[k], prefix_sq_[k + s] - prefix_sq_[k],
+                                min_n2var);
     scores_[i] = v;
     if (v > best_v) {
       best_v = v;
@@ -161,17 +192,21 @@ Status StereoMatcher::match_one(ConstImageViewU8 left, ConstImageViewU8 right, f
 
   if (config_.left_right_check) {
     const int xr = xi - dbest;
-    float rt[kMaxPatch];
-    const float rss = load_template(right, xr, yi, r, rt);
-    if (!(rss > min_var_n)) {
+    Template rt;
+    load_template(right, xr, yi, r, rt);
+    if (!(rt.n2var > min_n2var)) {
       counters_.increment(VisionCounter::kStereoFlatPatch);
       return Status(StatusCode::kDegenerate, "stereo: right patch has no texture");
     }
     const int lmax = xr + config_.max_disparity_px < W - 1 - r ? xr + config_.max_disparity_px : W - 1 - r;
     int lbest = xi;
     float lbest_v = -2.0f;
+    const int la = xr + dmin - r;
+    if (lmax >= xr + dmin) band_prefix(left, la, lmax - (xr + dmin) + s, yi - r, s, prefix_sum_, prefix_sq_);
     for (int xl = xr + dmin; xl <= lmax; ++xl) {
-      const float v = zncc_at(rt, rss, left, xl - r, yi - r, s, min_var_n);
+      const int k = xl - r - la;
+      const float v = zncc_window(rt, left, xl - r, yi - r, s, prefix_sum_[k + s] - prefix_sum_[k],
+                                  prefix_sq_[k + s] - prefix_sq_[k], min_n2var);
       if (v > lbest_v) {
         lbest_v = v;
         lbest = xl;

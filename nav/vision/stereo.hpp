@@ -96,6 +96,10 @@ class StereoMatcher {
   StereoCamera camera_{};
   bool ready_ = false;
   float scores_[kMaxDisparityRange] = {};
+  // Column prefix sums of the band searched (grey levels and their squares): one window per disparity
+  // plus the patch width (<= 15) plus the leading 0.
+  std::int32_t prefix_sum_[kMaxDisparityRange + 16] = {};
+  std::int32_t prefix_sq_[kMaxDisparityRange + 16] = {};
   VisionCounters counters_;
 };
 

@@ -241,27 +241,36 @@ std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
     nn_cur_[j] = -1;
     refined_[j] = est.apply(cur[j].position_m);
   }
+  // Gate terms of the cur landmarks, once: w_ is free until the pairs are written below.
+  for (std::size_t j = 0; j < cur.size(); ++j) w_[j] = ns * ns * cur[j].sigma_m * cur[j].sigma_m;
   // Nearest cur for each prev (O(n_p n_c)), and nearest prev for each cur, both within the gate.
   for (std::size_t i = 0; i < ref.size(); ++i) {
     nn_prev_[i] = -1;
+    const Vec3d p = ref[i].position_m;
+    const double gi = ns * ns * ref[i].sigma_m * ref[i].sigma_m;
     double best = 0.0;
     for (std::size_t j = 0; j < cur.size(); ++j) {
-      const double d2 = (ref[i].position_m - refined_[j]).squaredNorm();
-      const double g2 = ns * ns * (ref[i].sigma_m * ref[i].sigma_m + cur[j].sigma_m * cur[j].sigma_m);
-      if (d2 >= g2 || (nn_prev_[i] >= 0 && d2 >= best)) continue;
+      // The bound is the gate, or the best so far when nearer; the x term alone rejects most pairs.
+      const double bound = nn_prev_[i] >= 0 && best < gi + w_[j] ? best : gi + w_[j];
+      const double dx = p.x() - refined_[j].x();
+      const double dx2 = dx * dx;
+      if (dx2 >= bound) continue;
+      const double dy = p.y() - refined_[j].y(), dz = p.z() - refined_[j].z();
+      const double d2 = dx2 + dy * dy + dz * dz;  // the order of squaredNorm()
+      if (d2 >= bound) continue;
       nn_prev_[i] = static_cast<std::int32_t>(j);
       best = d2;
     }
   }
-  for (std::size_t j = 0; j < cur.size(); ++j) {
-    double best = 0.0;
-    for (std::size_t i = 0; i < ref.size(); ++i) {
-      if (nn_prev_[i] != static_cast<std::int32_t>(j)) continue;
-      const double d2 = (ref[i].position_m - refined_[j]).squaredNorm();
-      if (nn_cur_[j] >= 0 && d2 >= best) continue;
-      nn_cur_[j] = static_cast<std::int32_t>(i);
-      best = d2;
-    }
+  // Nearest prev for each cur among the prevs that chose it (ascending i, strictly nearer wins: O(n_p)).
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const std::int32_t j = nn_prev_[i];
+    if (j < 0) continue;
+    const Vec3d& c = refined_[static_cast<std::size_t>(j)];
+    std::int32_t& best = nn_cur_[static_cast<std::size_t>(j)];
+    if (best >= 0 && (ref[i].position_m - c).squaredNorm() >= (ref[static_cast<std::size_t>(best)].position_m - c).squaredNorm())
+      continue;
+    best = static_cast<std::int32_t>(i);
   }
   std::size_t n = 0;
   for (std::size_t j = 0; j < cur.size() && n < mp_.size(); ++j) {

@@ -25,7 +25,10 @@ struct SyntheticWorld {
     const std::size_t n = static_cast<std::size_t>(length_m * width_m * density_per_m2);
     landmarks.resize(n);
     for (Landmark& l : landmarks) {
-      l.ne = Vec2d(rng.uniform() * length_m, (rng.uniform() - 0.5) * width_m);
+      // East first, in its own statement: argument evaluation order is unspecified (this is the order
+      // x86-64 gcc used, so the host's worlds are unchanged; SPARC and ARM gcc used the other).
+      const double east = (rng.uniform() - 0.5) * width_m;
+      l.ne = Vec2d(rng.uniform() * length_m, east);
       for (auto& d : l.desc) d = static_cast<std::int8_t>(static_cast<int>(rng.below(200)) - 100);
     }
   }

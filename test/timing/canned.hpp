@@ -1,0 +1,98 @@
+// Canned, deterministic inputs for every stage of the static pipeline, and one call of each stage on
+// them: what the timing tests count instructions of on each target (test/timing/timing_stages.cpp),
+// and what the freestanding LEON3 image runs (test/timing/freestanding). Pure code: nav/ and the
+// simulators (drivers/stereo_sim, drivers/sidescan), no OS. init() renders the inputs and sizes every
+// buffer (heap allowed there, as at a daemon's start-up); the stage calls allocate nothing.
+//
+// Every call returns a 64-bit hash of its results (FNV-1a over integers and the bit patterns of the
+// doubles), so a target that computes different numbers gives a different hash.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "nav/core/status.hpp"
+
+namespace qnav::timing {
+
+// FNV-1a over values, not memory bytes: the same on little- and big-endian targets.
+class Hash {
+ public:
+  void add(std::uint64_t v) noexcept {
+    for (int i = 0; i < 8; ++i) {
+      h_ ^= (v >> (8 * i)) & 0xffu;
+      h_ *= 0x100000001b3ull;
+    }
+  }
+  void add(double v) noexcept;
+  std::uint64_t value() const noexcept { return h_; }
+
+ private:
+  std::uint64_t h_ = 0xcbf29ce484222325ull;
+};
+
+// Harris, remap, stereo, fb/fc/fast matching, 6D and 3D motion and whole VO steps on rendered
+// Mars-yard stereo frames at 320x256 (the VO benchmark's scene and configuration, 300 corners).
+class CannedVo {
+ public:
+  static constexpr int kFrames = 3;  // two VO steps: 0 -> 1 and 1 -> 2
+  CannedVo();
+  ~CannedVo();
+  Status init();
+  std::uint64_t harris(int frame);   // corners of frame's left image
+  std::uint64_t remap(int frame);    // undistortion table applied to frame's left image
+  std::uint64_t stereo(int frame);   // ZNCC stereo at frame's corners
+  std::uint64_t match_fb();          // landmarks of frame 0 against frame 1, binary scores
+  std::uint64_t match_fc();          // continuous scores, full search
+  std::uint64_t match_fast();        // continuous scores, fast batches
+  std::uint64_t motion_6d();         // Arun + IRLS on the fc matches
+  std::uint64_t motion_3d();         // 3D-VME (rotation from attitude) + IRLS on the same matches
+  // Step k (0 or 1): frame k is processed first as the reference (outside the counted region: call
+  // vo_reference(k) before), then vo_step(k) processes frame k + 1.
+  void vo_reference(int step);
+  std::uint64_t vo_step(int step);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> d_;
+};
+
+// Scanline correction (bottom detection on), one tile build (the daemon's 704 x 704 raster) and the
+// tile's features, on simulated side-scan pings of the default route survey.
+class CannedSonar {
+ public:
+  static constexpr int kPings = 8;
+  CannedSonar();
+  ~CannedSonar();
+  Status init();
+  std::uint64_t scanline(int ping);
+  void tile_prepare();            // pushes all but the last scanline of a tile (not counted)
+  std::uint64_t tile_build();     // the last push: builds the raster
+  std::uint64_t tile_features();  // keypoints of the built tile
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> d_;
+};
+
+// Tile registration, a route-filter update on a 10,000-node route at the searching budget (the
+// daemon's localiser configuration, 16 registrations) and a downward-camera tile projection.
+class CannedRoute {
+ public:
+  static constexpr int kUpdates = 3;
+  static constexpr std::uint32_t kRouteNodes = 10000;
+  CannedRoute();
+  ~CannedRoute();
+  Status init();
+  std::uint64_t registration(int pair);  // pair 0..2
+  void route_restart();                   // localiser back to a uniform belief (not counted)
+  std::uint64_t route_update(int k);      // one step with sensed tile k, searching
+  std::uint64_t camera_tile(int k);       // k = 0, 1: two headings
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> d_;
+};
+
+}  // namespace qnav::timing
