@@ -21,7 +21,7 @@
 //
 // Memory (from the Arena in init(), see arena_bytes()): one float response plane
 // max_width*max_height, a ring of 3*(2*block_radius+1) float rows plus 3 column-sum rows, the
-// normalisation cell grid, max_corners Corner (top-K heap), 2*nms_radius+2 rows for the separable
+// normalisation cell grid, max_corners Corner (top-K heap), 2*nms_radius+1 rows for the separable
 // NMS max filter. No heap, no allocation in detect(). Worst case time: O(W*H*(block + nms)) for the
 // ROI + O(K log K) for K kept corners; every loop is bounded by the configured image size and caps.
 #pragma once

@@ -55,6 +55,36 @@ inline void band_prefix(ConstImageViewU8 img, int xa, int ncols, int y0, int s, 
   }
 }
 
+// sum(t v) over the window of side S at (x0, y0). The patch sides of the usual radii get a fixed trip
+// count (fully unrolled inner loop: a third of the instructions on an in-order core without SIMD,
+// scripts/timing --profile stereo); integer sums, so the result does not depend on the order.
+template <int S>
+inline std::int32_t cross_fixed(const std::int32_t* t, ConstImageViewU8 img, int x0, int y0) noexcept {
+  std::int32_t cross = 0;
+  for (int j = 0; j < S; ++j) {
+    const std::uint8_t* row = img.row(y0 + j) + x0;
+    const std::int32_t* tj = t + j * S;
+    for (int i = 0; i < S; ++i) cross += tj[i] * static_cast<std::int32_t>(row[i]);
+  }
+  return cross;
+}
+
+inline std::int32_t cross_sum(const Template& t, ConstImageViewU8 img, int x0, int y0, int s) noexcept {
+  switch (s) {
+    case 5: return cross_fixed<5>(t.v, img, x0, y0);
+    case 7: return cross_fixed<7>(t.v, img, x0, y0);
+    case 9: return cross_fixed<9>(t.v, img, x0, y0);
+    default: break;
+  }
+  std::int32_t cross = 0;
+  int k = 0;
+  for (int j = 0; j < s; ++j) {
+    const std::uint8_t* row = img.row(y0 + j) + x0;
+    for (int i = 0; i < s; ++i, ++k) cross += t.v[k] * static_cast<std::int32_t>(row[i]);
+  }
+  return cross;
+}
+
 // ZNCC of template t against the window of `img` whose top-left corner is (x0, y0), side s, with the
 // window's sum and sum of squares given (band_prefix):
 //   (n sum(t v) - sum(t) sum(v)) / sqrt((n sum(t^2) - sum(t)^2) (n sum(v^2) - sum(v)^2)),
@@ -66,12 +96,7 @@ inline float zncc_window(const Template& t, ConstImageViewU8 img, int x0, int y0
   const double sum_d = static_cast<double>(sum);
   const double n2var = n * static_cast<double>(sq) - sum_d * sum_d;
   if (!(n2var > min_n2var)) return -1.0f;
-  std::int32_t cross = 0;
-  int k = 0;
-  for (int j = 0; j < s; ++j) {
-    const std::uint8_t* row = img.row(y0 + j) + x0;
-    for (int i = 0; i < s; ++i, ++k) cross += t.v[k] * static_cast<std::int32_t>(row[i]);
-  }
+  const std::int32_t cross = cross_sum(t, img, x0, y0, s);
   const double num = n * static_cast<double>(cross) - t.sum * sum_d;
   const double z = num / std::sqrt(t.n2var * n2var);
   return z > 1.0 ? 1.0f : (z < -1.0 ? -1.0f : static_cast<float>(z));
