@@ -6,6 +6,8 @@
 
 #include "drivers/sidescan/sim_seabed.hpp"
 #include "drivers/sidescan/sim_sidescan.hpp"
+#include "drivers/sidescan/xtf_parser.hpp"
+#include "drivers/sidescan/xtf_writer.hpp"
 #include "drivers/stereo_sim/mars_yard.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
 #include "firmware/tools/vo_sim_config.hpp"
@@ -14,10 +16,13 @@
 #include "nav/motion/rigid3d.hpp"
 #include "nav/route/camera_tile.hpp"
 #include "nav/route/registration.hpp"
+#include "nav/route/route_filter.hpp"
 #include "nav/route/route_localiser.hpp"
 #include "nav/route/tile_features.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
 #include "nav/sonar/tile_builder.hpp"
+#include "nav/vision/descriptor.hpp"
+#include "nav/vision/downsample.hpp"
 #include "nav/vision/harris.hpp"
 #include "nav/vision/rectify.hpp"
 #include "nav/vision/stereo.hpp"
@@ -63,6 +68,8 @@ struct CannedVo::Impl {
   BoundedVector<vision::Corner> corners[kFrames];
   vision::RemapTable remap;
   ImageU8 remapped;
+  ImageU8 big, small;  // 1280 x 1024 -> 320 x 256
+  vision::OrientedDescriptor descriptor;
   vision::StereoMatcher stereo;
   std::vector<vision::StereoPoint> point_storage;
   BoundedVector<vision::StereoPoint> points;
@@ -147,6 +154,14 @@ Status CannedVo::init() {
   Result<ImageU8> out = ImageU8::allocate(raw.width, raw.height);
   if (!out) return Status(StatusCode::kCapacityExceeded, "canned remap output");
   d.remapped = std::move(out.value());
+  Result<ImageU8> big = ImageU8::allocate(4 * raw.width, 4 * raw.height);
+  Result<ImageU8> small = ImageU8::allocate(raw.width, raw.height);
+  if (!big || !small) return Status(StatusCode::kCapacityExceeded, "canned downsample images");
+  d.big = std::move(big.value());
+  d.small = std::move(small.value());
+  for (int y = 0; y < d.big.height(); ++y)  // the left frame, each pixel 4 x 4 with a little texture
+    for (int x = 0; x < d.big.width(); ++x)
+      d.big.view().row(y)[x] = static_cast<std::uint8_t>((d.left[0].view().row(y / 4)[x / 4] + ((x ^ y) & 7)) & 0xff);
   Status s = first_error({d.harris.init(hc, *d.arena), d.remap.init(rc, *d.arena),
                           d.stereo.init(d.config.stereo, d.config.camera), d.vo.init(d.config, *d.arena)});
   if (!s.is_ok()) return s;
@@ -223,6 +238,29 @@ std::uint64_t CannedVo::stereo(int frame) {
   return h.value();
 }
 
+std::uint64_t CannedVo::descriptors() {
+  Hash h;
+  const BoundedVector<vision::Corner>& c = d_->corners[0];
+  std::uint64_t valid = 0;
+  for (const vision::Corner& k : c) {
+    // Corners too near the edge for the support are refused (kOutOfRange): part of the cost.
+    if (!vision::compute_oriented_descriptor(d_->left[0].view(), k.x, k.y, 1.0f, d_->descriptor).is_ok()) continue;
+    ++valid;
+    h.add(static_cast<double>(d_->descriptor.orientation_rad));
+    h.add(static_cast<double>(d_->descriptor.v[0]));
+  }
+  h.add(valid);
+  return valid > 0 ? h.value() : 0;
+}
+
+std::uint64_t CannedVo::downsample() {
+  Hash h;
+  if (!vision::downsample(d_->big.view(), 4, d_->small.view()).is_ok()) return 0;
+  for (int y = 0; y < d_->small.height(); y += 17)
+    for (int x = 0; x < d_->small.width(); x += 13) h.add(static_cast<std::uint64_t>(d_->small.view().row(y)[x]));
+  return h.value();
+}
+
 namespace {
 std::uint64_t run_match(match::GeometricMatcher& m, const std::vector<match::Landmark3>& a,
                         const std::vector<match::Landmark3>& b, const match::MotionPrior& prior) {
@@ -295,6 +333,10 @@ struct CannedSonar::Impl {
   route::TileFeatureExtractor features;
   std::vector<float> port[kPings], stbd[kPings];
   std::vector<float> work_port, work_stbd;
+  std::vector<std::uint8_t> xtf_header_bytes;
+  std::vector<std::uint8_t> xtf_packets[kPings];
+  sidescan::XtfFileHeader xtf_header;
+  sidescan::XtfPing xtf_ping;
   sonar::CorrectedScanline line;
   route::RouteNode node;
   int pushed = 0;
@@ -338,7 +380,46 @@ Status CannedSonar::init() {
                           d.corrector.init(d.config.corrector, *d.arena), d.tiles.init(d.config.tiles, *d.arena),
                           d.features.init(d.config.features, *d.arena)});
   for (int k = 0; k < kPings && s.is_ok(); ++k) s = d.simulate(static_cast<std::uint32_t>(k * 37), d.port[k], d.stbd[k]);
-  return s;
+  if (!s.is_ok()) return s;
+  // The same pings as XTF packets, for the decoder.
+  d.xtf_header_bytes.resize(sidescan::kXtfFileHeaderBytes);
+  s = sidescan::encode_xtf_file_header(Span<std::uint8_t>(d.xtf_header_bytes.data(), d.xtf_header_bytes.size()), 0, "TIMING");
+  if (!s.is_ok()) return s;
+  Result<sidescan::XtfFileHeader> hdr =
+      sidescan::parse_xtf_file_header(Span<const std::uint8_t>(d.xtf_header_bytes.data(), d.xtf_header_bytes.size()));
+  if (!hdr) return hdr.status();
+  d.xtf_header = hdr.value();
+  const std::size_t n = d.port[0].size();
+  for (int k = 0; k < kPings; ++k) {
+    sidescan::XtfWritePing w;
+    w.ping_number = static_cast<std::uint32_t>(k);
+    w.slant_range_m = d.sim_config.slant_range_m;
+    w.altitude_m = 8.0f;
+    w.port = Span<const float>(d.port[k].data(), n);
+    w.stbd = Span<const float>(d.stbd[k].data(), n);
+    w.sample_scale = 4.0f;
+    d.xtf_packets[k].resize(sidescan::xtf_ping_bytes(n));
+    Result<std::size_t> r = sidescan::encode_xtf_ping(Span<std::uint8_t>(d.xtf_packets[k].data(), d.xtf_packets[k].size()), w);
+    if (!r) return r.status();
+  }
+  d.work_port.resize(n);
+  d.work_stbd.resize(n);
+  return Status::ok();
+}
+
+std::uint64_t CannedSonar::xtf_decode(int k) {
+  Impl& d = *d_;
+  Hash h;
+  const std::vector<std::uint8_t>& p = d.xtf_packets[k];
+  if (!sidescan::parse_xtf_sonar_ping(Span<const std::uint8_t>(p.data(), p.size()), d.xtf_header, d.xtf_ping,
+                                      Span<float>(d.work_port.data(), d.work_port.size()),
+                                      Span<float>(d.work_stbd.data(), d.work_stbd.size()))
+           .is_ok())
+    return 0;
+  h.add(static_cast<std::uint64_t>(d.xtf_ping.ping_number));
+  h.add(static_cast<double>(d.work_port[100]));
+  h.add(static_cast<double>(d.work_stbd[400]));
+  return h.value();
 }
 
 std::uint64_t CannedSonar::scanline(int k) {
@@ -428,6 +509,9 @@ struct CannedRoute::Impl {
   route::RouteNode sensed[kUpdates];
   route::RegistrationResult registration;
   route::LocaliserStep step;
+  route::RouteFilterConfig big_filter_config;
+  std::unique_ptr<ArenaStorage> big_filter_arena;
+  route::RouteFilter big_filter;
   route::CameraTileProjector projector;
   route::CameraTileConfig camera_config;
   ImageU8 camera_image;
@@ -449,8 +533,11 @@ Status CannedRoute::init() {
   d.params.sensor = route::SensorKind::kSideScan;
   d.params.node_spacing_m = static_cast<float>(kSpacingM);
   d.arena = std::make_unique<ArenaStorage>(route::RouteLocaliser::arena_bytes(d.config) + route::Registrar::arena_bytes(d.config.registration));
+  d.big_filter_config = d.config.filter;
+  d.big_filter_config.max_nodes = 100000;
+  d.big_filter_arena = std::make_unique<ArenaStorage>(route::RouteFilter::arena_bytes(d.big_filter_config));
   Status s = first_error({d.localiser.init(d.config, *d.arena), d.registrar.init(d.config.registration, *d.arena),
-                          d.projector.init(d.camera_config)});
+                          d.projector.init(d.camera_config), d.big_filter.init(d.big_filter_config, *d.big_filter_arena)});
   if (!s.is_ok()) return s;
   for (int k = 0; k < 3; ++k) {
     d.pair_a[k] = d.world.observe(Pose2{300.0 + 200.0 * k, 12.0, 0.02}, 45.0, 49.0, 0.3, 0.8, 128, 1 + 2 * static_cast<std::uint64_t>(k), 20);
@@ -494,6 +581,15 @@ std::uint64_t CannedRoute::route_update(int k) {
   h.add(static_cast<std::uint64_t>(d_->step.registrations));
   h.add(static_cast<double>(d_->step.probability));
   h.add(d_->step.mass_pm1);
+  return h.value();
+}
+
+void CannedRoute::predict_reset() { (void)d_->big_filter.reset(100000, kSpacingM); }
+
+std::uint64_t CannedRoute::predict_100k() {
+  Hash h;
+  if (!d_->big_filter.predict(kSpacingM).is_ok()) return 0;
+  h.add(static_cast<std::uint64_t>(d_->big_filter.argmax()) + 1);
   return h.value();
 }
 

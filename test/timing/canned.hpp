@@ -43,6 +43,8 @@ class CannedVo {
   std::uint64_t harris(int frame);   // corners of frame's left image
   std::uint64_t remap(int frame);    // undistortion table applied to frame's left image
   std::uint64_t stereo(int frame);   // ZNCC stereo at frame's corners
+  std::uint64_t descriptors();       // oriented descriptors at the 300 corners of frame 0
+  std::uint64_t downsample();        // a 1280 x 1024 frame to 320 x 256 (the Mars camera's factor 4)
   std::uint64_t match_fb();          // landmarks of frame 0 against frame 1, binary scores
   std::uint64_t match_fc();          // continuous scores, full search
   std::uint64_t match_fast();        // continuous scores, fast batches
@@ -58,7 +60,7 @@ class CannedVo {
   std::unique_ptr<Impl> d_;
 };
 
-// Scanline correction (bottom detection on), one tile build (the daemon's 704 x 704 raster) and the
+// XTF decoding (the byte-order-sensitive parser), scanline correction (bottom detection on), one tile build (the daemon's 704 x 704 raster) and the
 // tile's features, on simulated side-scan pings of the default route survey.
 class CannedSonar {
  public:
@@ -66,6 +68,7 @@ class CannedSonar {
   CannedSonar();
   ~CannedSonar();
   Status init();
+  std::uint64_t xtf_decode(int ping);  // one XTF sonar packet (2 x 512 samples) decoded
   std::uint64_t scanline(int ping);
   void tile_prepare();            // pushes all but the last scanline of a tile (not counted)
   std::uint64_t tile_build();     // the last push: builds the raster
@@ -88,6 +91,8 @@ class CannedRoute {
   std::uint64_t registration(int pair);  // pair 0..2
   void route_restart();                   // localiser back to a uniform belief (not counted)
   std::uint64_t route_update(int k);      // one step with sensed tile k, searching
+  void predict_reset();                   // a 100,000-node belief back to uniform (not counted)
+  std::uint64_t predict_100k();           // one belief prediction over 100,000 nodes
   std::uint64_t camera_tile(int k);       // k = 0, 1: two headings
 
  private:

@@ -51,6 +51,10 @@ const StageDef kStages[] = {
     {"route_update", CannedRoute::kUpdates, [](Canned& c, int) { c.route.route_restart(); },
      [](Canned& c, int k) { return c.route.route_update(k); }},
     {"camera_tile", 2, nothing, [](Canned& c, int k) { return c.route.camera_tile(k); }},
+    {"descriptor", 1, nothing, [](Canned& c, int) { return c.vo.descriptors(); }},
+    {"downsample", 1, nothing, [](Canned& c, int) { return c.vo.downsample(); }},
+    {"xtf_decode", CannedSonar::kPings, nothing, [](Canned& c, int k) { return c.sonar.xtf_decode(k); }},
+    {"route_predict_100k", 1, [](Canned& c, int) { c.route.predict_reset(); }, [](Canned& c, int) { return c.route.predict_100k(); }},
 };
 
 }  // namespace

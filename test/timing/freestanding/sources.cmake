@@ -9,6 +9,7 @@ list(APPEND QNAV_FREESTANDING_SOURCES
   ${QNAV_FS_ROOT}/drivers/sidescan/sim_sidescan.cpp
   ${QNAV_FS_ROOT}/drivers/sidescan/sim_trajectory.cpp
   ${QNAV_FS_ROOT}/drivers/sidescan/xtf_parser.cpp
+  ${QNAV_FS_ROOT}/drivers/sidescan/xtf_writer.cpp
   ${QNAV_FS_ROOT}/drivers/sidescan/jsf_parser.cpp
   ${QNAV_FS_ROOT}/firmware/pipeline/route_defaults.cpp
   ${QNAV_FS_ROOT}/test/timing/canned.cpp
