@@ -12,6 +12,7 @@ int main() {
   std::printf("qnav-freestanding host\n");
   std::printf("checksum vo_step %016" PRIx64 "\n", r.vo_step);
   std::printf("checksum route_update %016" PRIx64 "\n", r.route_update);
+  std::printf("checksum xtf_decode %016" PRIx64 "\n", r.xtf_decode);
   std::printf("checksum all %016" PRIx64 "\n", r.all);
   for (int i = 0; i < qnav::timing::FreestandingResult::kStages; ++i)
     std::printf("stage %s %016" PRIx64 "\n", r.stage_name[i], r.stage[i]);

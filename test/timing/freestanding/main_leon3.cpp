@@ -3,6 +3,7 @@
 //   qnav-freestanding leon3
 //   checksum vo_step <16 hex>
 //   checksum route_update <16 hex>
+//   checksum xtf_decode <16 hex>
 //   checksum all <16 hex>
 //   heap_used <bytes> heap_capacity <bytes>
 //   status ok | status <message>
@@ -27,6 +28,7 @@ int main() {
   const qnav::Status s = qnav::timing::run_freestanding_workload(r);
   line("vo_step", r.vo_step);
   line("route_update", r.route_update);
+  line("xtf_decode", r.xtf_decode);
   line("all", r.all);
   for (int i = 0; i < qnav::timing::FreestandingResult::kStages; ++i) {
     qnav::bare::put_str("stage ");

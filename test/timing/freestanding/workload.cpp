@@ -25,9 +25,17 @@ Status run_freestanding_workload(FreestandingResult& out) {
     route.route_restart();
     out.route_update = route.route_update(0);
   }
+  {
+    CannedSonar sonar;
+    QNAV_RETURN_IF_ERROR(sonar.init());
+    Hash x;
+    for (int k = 0; k < CannedSonar::kPings; ++k) x.add(sonar.xtf_decode(k));
+    out.xtf_decode = x.value();
+  }
   Hash h;
   h.add(out.vo_step);
   h.add(out.route_update);
+  h.add(out.xtf_decode);
   out.all = h.value();
   if (out.vo_step == 0) return Status(StatusCode::kNotReady, "vo_step failed on its canned input");
   if (out.route_update == 0) return Status(StatusCode::kNotReady, "route_update failed on its canned input");
