@@ -475,30 +475,11 @@ namespace {
 
 constexpr double kSpacingM = 60.0;
 
-// A 10,000-node route along north whose nodes are generated on demand (the world repeats every 30
-// nodes; the route keeps counting), as in bench_route.
-class SyntheticSource final : public route::NodeSource {
- public:
-  explicit SyntheticSource(const route::testing::SyntheticWorld* w, std::uint32_t n) : world_(w), n_(n) {}
-  std::uint32_t node_count() const noexcept override { return n_; }
-  Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
-    out = world_->observe(Pose2{30.0 + kSpacingM * (i % 30), 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 1000 + i, 20);
-    out.meta.index = i;
-    out.meta.pose.x_m = 30.0 + kSpacingM * i;
-    out.meta.along_m = kSpacingM * i;
-    return Status::ok();
-  }
-
- private:
-  const route::testing::SyntheticWorld* world_;
-  std::uint32_t n_;
-};
-
 }  // namespace
 
 struct CannedRoute::Impl {
   route::testing::SyntheticWorld world{1900.0, 200.0, 0.008, 3};
-  SyntheticSource source{&world, kRouteNodes};
+  route::testing::RepeatingRouteSource source{&world, kRouteNodes, kSpacingM};
   std::vector<route::NodeMeta> meta;
   route::LocaliserConfig config = pipeline::default_localiser_config(route::RouteDirection::kForward, kRouteNodes);
   route::RouteParams params;

@@ -30,25 +30,6 @@ BENCHMARK(BM_RouteFilterPredict)->Arg(10000)->Arg(100000)->Unit(benchmark::kMill
 
 constexpr double kSpacing = 60.0;
 
-// A 10,000-node route along north, nodes generated on demand (no storage).
-class SyntheticSource final : public NodeSource {
- public:
-  explicit SyntheticSource(const testing::SyntheticWorld* w, std::uint32_t n) : world_(w), n_(n) {}
-  std::uint32_t node_count() const noexcept override { return n_; }
-  Status load(std::uint32_t i, RouteNode& out) noexcept override {
-    // The world repeats every 30 nodes (its length); the route keeps counting.
-    out = world_->observe(Pose2{30.0 + kSpacing * (i % 30), 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 1000 + i, 20);
-    out.meta.index = i;
-    out.meta.pose.x_m = 30.0 + kSpacing * i;
-    out.meta.along_m = kSpacing * i;
-    return Status::ok();
-  }
-
- private:
-  const testing::SyntheticWorld* world_;
-  std::uint32_t n_;
-};
-
 // The configuration `qnav route eval` uses: 128 keypoints per tile and node, 3 candidates each.
 void BM_Registration128(benchmark::State& state) {
   testing::SyntheticWorld world(2000.0, 200.0, 0.008, 3);
@@ -74,7 +55,7 @@ BENCHMARK(BM_Registration128)->Unit(benchmark::kMillisecond);
 void BM_LocaliserUpdate10000(benchmark::State& state) {
   testing::SyntheticWorld world(1900.0, 200.0, 0.008, 3);
   const std::uint32_t n = 10000;
-  SyntheticSource src(&world, n);
+  testing::RepeatingRouteSource src(&world, n, kSpacing);
   std::vector<NodeMeta> meta(n);
   for (std::uint32_t i = 0; i < n; ++i) {
     meta[i].index = i;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "nav/match/ransac.hpp"
+#include "nav/route/node_window.hpp"
 #include "nav/route/route_types.hpp"
 
 namespace qnav::route::testing {
@@ -69,6 +70,27 @@ struct SyntheticWorld {
     node.meta.keypoint_count = static_cast<std::uint16_t>(node.keypoints.size());
     return node;
   }
+};
+
+// A long route along north, nodes generated on demand (no storage): node i is the world observed at
+// north 30 + spacing * (i % 30) (the world repeats every 30 nodes), numbered and placed as node i. The
+// 10,000-node route of bench_route and of the timing tests (test/timing/canned.cpp).
+class RepeatingRouteSource final : public NodeSource {
+ public:
+  RepeatingRouteSource(const SyntheticWorld* w, std::uint32_t n, double spacing_m) : world_(w), n_(n), spacing_m_(spacing_m) {}
+  std::uint32_t node_count() const noexcept override { return n_; }
+  Status load(std::uint32_t i, RouteNode& out) noexcept override {
+    out = world_->observe(Pose2{30.0 + spacing_m_ * (i % 30), 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 1000 + i, 20);
+    out.meta.index = i;
+    out.meta.pose.x_m = 30.0 + spacing_m_ * i;
+    out.meta.along_m = spacing_m_ * i;
+    return Status::ok();
+  }
+
+ private:
+  const SyntheticWorld* world_;
+  std::uint32_t n_;
+  double spacing_m_;
 };
 
 }  // namespace qnav::route::testing
