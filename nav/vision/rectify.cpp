@@ -104,6 +104,13 @@ bool rectify_point(const PinholeRadTan& cam, const Mat3d& R_out_to_cam, const Ma
   return out_px.allFinite();
 }
 
+std::size_t RemapTable::arena_bytes(const RemapConfig& config) noexcept {
+  if (config.max_width < 2 || config.max_height < 2 || config.max_width > kMaxImageSide || config.max_height > kMaxImageSide)
+    return 0;
+  return static_cast<std::size_t>(config.max_width) * static_cast<std::size_t>(config.max_height) * sizeof(Entry) +
+         alignof(Entry);
+}
+
 Status RemapTable::init(const RemapConfig& config, Arena& arena) noexcept {
   ready_ = false;
   if (config.max_width < 2 || config.max_height < 2 || config.max_width > kMaxImageSide || config.max_height > kMaxImageSide)

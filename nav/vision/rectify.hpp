@@ -20,6 +20,7 @@
 // mean focal length and principal point chosen so that the valid area is centred (no scaling search).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "nav/core/arena.hpp"
@@ -67,6 +68,8 @@ struct RemapConfig {
 
 class RemapTable {
  public:
+  // Bytes init() takes from an arena for this configuration (8 per output pixel), alignment included.
+  static std::size_t arena_bytes(const RemapConfig& config) noexcept;
   Status init(const RemapConfig& config, Arena& arena) noexcept;
   // Builds the table for an output image out_width x out_height with intrinsics K_out (3x3, upper
   // triangular, finite, fx, fy > 0), rotation R_out_to_cam (orthonormal, det +1) from the output

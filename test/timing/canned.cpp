@@ -132,7 +132,7 @@ Status CannedVo::init() {
   rc.max_width = d.config.max_width;
   rc.max_height = d.config.max_height;
   d.arena = std::make_unique<ArenaStorage>(vision::HarrisDetector::arena_bytes(hc) + vo::StereoVo::arena_bytes(d.config) +
-                                           static_cast<std::size_t>(rc.max_width * rc.max_height) * 16 + 4096);
+                                           vision::RemapTable::arena_bytes(rc));
   const std::size_t n = static_cast<std::size_t>(d.config.max_corners);
   for (int i = 0; i < kFrames; ++i) {
     d.corner_storage[i].resize(n);

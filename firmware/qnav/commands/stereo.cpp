@@ -212,7 +212,7 @@ int cmd_euroc_rectify(int argc, char** argv) {
   RemapConfig rc;
   rc.max_width = W;
   rc.max_height = H;
-  ArenaStorage arena(2 * static_cast<std::size_t>(W) * static_cast<std::size_t>(H) * 8 + 64);
+  ArenaStorage arena(2 * RemapTable::arena_bytes(rc));
   RemapTable tl, tr;
   ImageU8 ol = ImageU8::allocate(W, H).value(), orr = ImageU8::allocate(W, H).value();
   Status s = tl.init(rc, arena);

@@ -651,11 +651,11 @@ int run_euroc(int argc, char** argv) {
     std::fprintf(stderr, "vo: rectification failed: %s\n", rect.status().message());
     return 1;
   }
-  ArenaStorage rect_arena(2 * (static_cast<std::size_t>(w) * h * 8 + 1024));
-  vision::RemapTable map_l, map_r;
   vision::RemapConfig rc;
   rc.max_width = w;
   rc.max_height = h;
+  ArenaStorage rect_arena(2 * vision::RemapTable::arena_bytes(rc));
+  vision::RemapTable map_l, map_r;
   if (!map_l.init(rc, rect_arena) || !map_r.init(rc, rect_arena) ||
       !map_l.build(c0->model, rect->K, rect->R_left, vision::FlatPortRefraction{}, w, h) ||
       !map_r.build(c1->model, rect->K, rect->R_right, vision::FlatPortRefraction{}, w, h)) {

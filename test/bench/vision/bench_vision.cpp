@@ -219,7 +219,7 @@ void BM_Remap_qnav(benchmark::State& st) {
   RemapConfig rc;
   rc.max_width = w;
   rc.max_height = h;
-  ArenaStorage arena(static_cast<std::size_t>(w * h) * 8 + 64);
+  ArenaStorage arena(RemapTable::arena_bytes(rc));
   RemapTable t;
   t.init(rc, arena).ignore();
   t.build_undistort(camera_for(w, h), FlatPortRefraction{}).ignore();

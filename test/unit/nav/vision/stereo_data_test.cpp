@@ -95,7 +95,7 @@ TEST(StereoData, EurocRectifiedPairHasEpipolarRowsWithinHalfAPixel) {
   RemapConfig rc;
   rc.max_width = W;
   rc.max_height = H;
-  ArenaStorage arena(2 * static_cast<std::size_t>(W * H) * 8);
+  ArenaStorage arena(2 * RemapTable::arena_bytes(rc));
   RemapTable tl, tr;
   ASSERT_TRUE(tl.init(rc, arena).is_ok() && tr.init(rc, arena).is_ok());
   ASSERT_TRUE(tl.build(c0->model, rect->K, rect->R_left, FlatPortRefraction{}, W, H).is_ok());
