@@ -75,9 +75,11 @@ Status ScanlineCorrector::check_ping(const SonarPing& ping) noexcept {
     counters_.increment(CorrectorCounter::kBadSampleCount);
     return Status(StatusCode::kInvalidArgument, "ping sample count: sides differ, < 8 or above max_samples_per_side");
   }
-  if (!finite_positive(ping.slant_range_m) || ping.slant_range_m > 100000.0f) {
+  // A range no longer than the blanking distance cannot hold a seabed return: it is a damaged
+  // field (one flipped bit turns 30 m into 8.8e-38), and every index computed from it would be absurd.
+  if (!finite_positive(ping.slant_range_m) || ping.slant_range_m <= cfg_.min_altitude_m || ping.slant_range_m > 100000.0f) {
     counters_.increment(CorrectorCounter::kBadRange);
-    return Status(StatusCode::kInvalidArgument, "ping slant range not finite or <= 0");
+    return Status(StatusCode::kInvalidArgument, "ping slant range not finite, not above min_altitude_m or above 100 km");
   }
   for (std::size_t i = 0; i < n; ++i) {
     const float a = ping.port[i], b = ping.stbd[i];
@@ -109,7 +111,9 @@ Result<float> ScanlineCorrector::detect_bottom_checked(const SonarPing& ping) no
   if (search > n) search = n;
   // Blanking: samples nearer than min_altitude_m (transmit pulse, ringing) are not looked at.
   const float dr = ping.slant_range_m / static_cast<float>(n);
-  int start = static_cast<int>(std::ceil(cfg_.min_altitude_m / dr)) + w;
+  // Computed in double and clamped before the conversion: no float-to-int overflow whatever the range.
+  const double blank = std::ceil(static_cast<double>(cfg_.min_altitude_m) / static_cast<double>(dr));
+  int start = (blank < static_cast<double>(n) ? static_cast<int>(blank) : n) + w;
   const int noise_n = cfg_.bottom_noise_samples;
   if (search <= start + noise_n + w) {
     counters_.increment(CorrectorCounter::kNoBottom);

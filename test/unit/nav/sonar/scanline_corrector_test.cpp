@@ -216,6 +216,34 @@ TEST(ScanlineCorrector, BadInputIsRejectedAndCounted) {
   EXPECT_EQ(f.corr.counters().get(CorrectorCounter::kBadAltitude), 1u);
 }
 
+// Regression (issue #19): one flipped bit turned a 30 m slant range into 8.8e-38 m; the blanking
+// index min_altitude / (range / n) overflowed int and bottom detection read far out of bounds. Every
+// range no longer than the blanking distance is refused and counted, with or without an altitude.
+TEST(ScanlineCorrector, TinySlantRangeIsRejectedNotIndexed) {
+  ScanlineCorrectorConfig cfg;
+  Fixture f(cfg);
+  std::vector<float> port, stbd;
+  flat_ping(port, stbd, 256, 30.0f, 8.0f, 1.0f);
+  SonarPing p;
+  p.port = Span<const float>(port.data(), port.size());
+  p.stbd = Span<const float>(stbd.data(), stbd.size());
+  CorrectedScanline out;
+  std::uint64_t expected = 0;
+  for (float r : {8.8e-38f, 1e-30f, 1e-6f, cfg.min_altitude_m}) {
+    p.slant_range_m = r;
+    p.altitude_m = 0.0f;  // detect the bottom
+    EXPECT_EQ(f.corr.correct(p, out), StatusCode::kInvalidArgument) << r;
+    EXPECT_EQ(f.corr.detect_bottom_m(p).status(), StatusCode::kInvalidArgument) << r;
+    expected += 2;
+    EXPECT_EQ(f.corr.counters().get(CorrectorCounter::kBadRange), expected) << r;
+  }
+  // Just above the blanking distance the ping is checked normally (no bottom in 0.6 m of water).
+  p.slant_range_m = cfg.min_altitude_m * 1.2f;
+  EXPECT_EQ(f.corr.correct(p, out), StatusCode::kNotFound);
+  p.slant_range_m = 30.0f;
+  EXPECT_TRUE(f.corr.correct(p, out).is_ok());
+}
+
 TEST(ScanlineCorrector, CorrectMakesNoHeapAllocation) {
   ScanlineCorrectorConfig cfg;
   Fixture f(cfg);
