@@ -11,6 +11,13 @@
 
 namespace qnav::drivers::dvl {
 
+// Plausibility bounds every parser applies (a value beyond them is a damaged field, rejected and
+// counted as kRange, never passed on): no DVL bottom-tracks beyond 1,000 m (a 75 kHz long-ranger
+// reaches ~700 m), and device clocks are bounded so differences of two of them and their conversion
+// to nanoseconds cannot overflow 64 bits.
+constexpr double kMaxDvlAltitudeM = 1000.0;
+constexpr std::int64_t kMaxDvlDeviceTimeUs = 4000000000000000LL;  // ~127 years
+
 enum class DvlSource : std::uint8_t { kWaterLinked, kPd6 };
 
 struct DvlVelocity {

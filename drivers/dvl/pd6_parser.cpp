@@ -118,9 +118,9 @@ Result<Pd6Result> Pd6Parser::parse_line(const char* line, std::size_t n, std::in
       in_ensemble_ = false;
       return reject(DvlCounter::kFormat, StatusCode::kCorrupt, ":BD without :BI in the ensemble");
     }
-    if (d[3] < 0 || d[4] < 0) {
+    if (d[3] < 0 || d[4] < 0 || d[3] > kMaxDvlAltitudeM) {
       in_ensemble_ = false;
-      return reject(DvlCounter::kRange, StatusCode::kOutOfRange, ":BD negative range or time");
+      return reject(DvlCounter::kRange, StatusCode::kOutOfRange, ":BD range negative or beyond 1,000 m, or negative time");
     }
     cur_.velocity.altitude_m = d[3];
     cur_.time_since_good_s = d[4];

@@ -73,8 +73,13 @@ Status WlParser::parse_line(const char* line, std::size_t n, std::int64_t arriva
       if (!parse_double(cov[i], out.covariance[i])) return reject(DvlCounter::kFormat, StatusCode::kCorrupt, "covariance value");
     v.bottom_lock = valid.p[0] == 'y';
     if (std::fabs(v.vx_mps) > 10 || std::fabs(v.vy_mps) > 10 || std::fabs(v.vz_mps) > 10 || v.fom_mps < 0 ||
-        (v.bottom_lock && v.altitude_m < 0))
+        (v.bottom_lock && v.altitude_m < 0) || v.altitude_m > kMaxDvlAltitudeM)
       return reject(DvlCounter::kRange, StatusCode::kOutOfRange, "wrz value out of range");
+    // A covariance's diagonal is a variance: never negative.
+    if (out.covariance[0] < 0 || out.covariance[4] < 0 || out.covariance[8] < 0)
+      return reject(DvlCounter::kRange, StatusCode::kOutOfRange, "wrz covariance has a negative variance");
+    if (tov < 0 || tot < 0 || tov > kMaxDvlDeviceTimeUs || tot > kMaxDvlDeviceTimeUs)
+      return reject(DvlCounter::kRange, StatusCode::kOutOfRange, "wrz time outside 0..127 years");
     const long long latency_us = tot - tov;
     if (latency_us < 0 || latency_us > 1000000) return reject(DvlCounter::kRange, StatusCode::kOutOfRange, "DVL latency outside 0..1 s");
     if (have_last_ && tov <= last_validity_us_) return reject(DvlCounter::kStale, StatusCode::kInvalidArgument, "time_of_validity not advancing");

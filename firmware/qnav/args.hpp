@@ -2,6 +2,8 @@
 // positional arguments. Options may appear anywhere after the sub-command words.
 #pragma once
 
+#include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 
@@ -23,8 +25,10 @@ inline bool option_double(int argc, char** argv, const char* name, double& out) 
   const char* v = option(argc, argv, name);
   if (v == nullptr) return true;
   char* end = nullptr;
+  errno = 0;
   const double d = std::strtod(v, &end);
-  if (end == v || *end != '\0') return false;
+  // Every numeric option is a finite number: "nan", "inf" and overflowing values are refused.
+  if (end == v || *end != '\0' || errno == ERANGE || !std::isfinite(d)) return false;
   out = d;
   return true;
 }
@@ -32,8 +36,9 @@ inline bool option_long(int argc, char** argv, const char* name, long& out) noex
   const char* v = option(argc, argv, name);
   if (v == nullptr) return true;
   char* end = nullptr;
+  errno = 0;
   const long l = std::strtol(v, &end, 10);
-  if (end == v || *end != '\0') return false;
+  if (end == v || *end != '\0' || errno == ERANGE) return false;
   out = l;
   return true;
 }

@@ -147,7 +147,11 @@ class LinuxBackend final : public IoBackend {
     const std::size_t n = static_cast<std::size_t>(colon - cfg_.sonar_address.c_str());
     if (n >= sizeof sonar_host_) return Status(StatusCode::kInvalidArgument, "sonar.address host too long");
     std::memcpy(sonar_host_, cfg_.sonar_address.c_str(), n);
-    sonar_port_ = static_cast<std::uint16_t>(std::atoi(colon + 1));
+    char* end = nullptr;
+    const long port = std::strtol(colon + 1, &end, 10);
+    if (end == colon + 1 || *end != '\0' || port < 1 || port > 65535)
+      return Status(StatusCode::kInvalidArgument, "sonar.address port must be a number in 1..65535");
+    sonar_port_ = static_cast<std::uint16_t>(port);
     // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
     return open_can(true);
   }

@@ -20,6 +20,7 @@
 #include "drivers/qnavcan/receiver.hpp"
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
+#include "firmware/tools/text_file.hpp"
 #include "hal/core/candump.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/socketcan_bus.hpp"
@@ -30,15 +31,9 @@ using namespace qnav;
 namespace qc = qnav::drivers::qnavcan;
 namespace dc = qnav::drivers::dronecan;
 
-bool read_file(const char* path, std::string& out) {
-  FILE* f = std::fopen(path, "rb");
-  if (!f) return false;
-  char buf[65536];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
-  std::fclose(f);
-  return true;
-}
+// candump logs and DBC files are text, read whole and bounded.
+constexpr std::size_t kMaxLogBytes = std::size_t{256} << 20;
+constexpr std::size_t kMaxDbcBytes = std::size_t{4} << 20;
 
 template <typename C>
 void print_counters(const char* what, const C& c) {
@@ -103,16 +98,25 @@ int decode(int argc, char** argv) {
     return 2;
   }
   std::string text;
-  if (!read_file(path, text)) {
-    std::fprintf(stderr, "qnav can: cannot read %s\n", path);
+  const Status rs = tools::read_text_file(path, kMaxLogBytes, text);
+  if (!rs.is_ok()) {
+    std::fprintf(stderr, "qnav can: %s\n", rs.message());
     return 1;
   }
   hal::CanLogReplay replay(text.data(), text.size(), 0);
   auto d = std::make_unique<Decoder>(static_cast<std::uint8_t>(node));
   if (cli::flag(argc, argv, "--all")) d->max_print = ~0u;
   hal::CanRxFrame f;
-  while (replay.receive(f, 0).is_ok()) d->on_frame(f);
+  // To the end of the log: a run of bad lines makes receive() pause (kTimeout), never stop the read.
+  while (!replay.finished()) {
+    if (replay.receive(f, 0).is_ok()) d->on_frame(f);
+  }
   d->summary(replay.bad_lines());
+  if (replay.bad_lines() > 0) {
+    std::fprintf(stderr, "qnav can: %s: %u line(s) did not parse (first: line %u); the rest was decoded\n", path,
+                 replay.bad_lines(), replay.first_bad_line());
+    return 1;
+  }
   return 0;
 }
 
@@ -159,8 +163,9 @@ int dbc(int argc, char** argv) {
     return 2;
   }
   std::string text;
-  if (!read_file(path, text)) {
-    std::fprintf(stderr, "qnav can: cannot read %s\n", path);
+  const Status rs = tools::read_text_file(path, kMaxDbcBytes, text);
+  if (!rs.is_ok()) {
+    std::fprintf(stderr, "qnav can: %s\n", rs.message());
     return 1;
   }
   auto file = std::make_unique<qc::DbcFile>();

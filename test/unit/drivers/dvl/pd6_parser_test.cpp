@@ -81,6 +81,11 @@ TEST(Pd6Parser, EveryRejectedKindIsCounted) {
     EXPECT_EQ(p.counters().get(DvlCounter::kRange), 1u);
   }
   {
+    Pd6Parser p;  // range to bottom 1e300 m (issue #19): a damaged field, not an altitude
+    EXPECT_EQ(feed(p, replace(qnav_test::kPd6Ensemble, "   5.32,", " 1e300,"), e), 0);
+    EXPECT_EQ(p.counters().get(DvlCounter::kRange), 1u);
+  }
+  {
     Pd6Parser p;  // 12:06:19 then 12:06:18 again
     EXPECT_EQ(feed(p, replace(qnav_test::kPd6Ensemble, "22020812061800", "22020812061900"), e), 1);
     EXPECT_EQ(feed(p, qnav_test::kPd6Ensemble, e), 0);

@@ -105,3 +105,26 @@ TEST(WlParser, EveryRejectedKindIsCounted) {
   EXPECT_FALSE(m.velocity.bottom_lock);
   EXPECT_EQ(p.counters().get(DvlCounter::kNoLock), 1u);
 }
+
+// Regression (issue #19): extreme integers made `tot - tov` overflow (UBSan), and an altitude of
+// 1e300 m or a negative variance was passed on. Each is now a counted kRange rejection.
+TEST(WlParser, AbsurdValuesAreRangeErrorsNotOverflows) {
+  WlParser p;
+  WlMessage m;
+  const char* bad[] = {
+      "wrz,0.1,0.2,0.3,y,1.0,0.1,0;0;0;0;0;0;0;0;0,-9223372036854775807,9223372036854775807,1.0,0",
+      "wrz,0.1,0.2,0.3,y,1.0,0.1,0;0;0;0;0;0;0;0;0,9223372036854775807,9223372036854775807,1.0,0",
+      "wrz,0.1,0.2,0.3,y,1e300,0.1,0;0;0;0;0;0;0;0;0,1000,1500,1.0,0",
+      "wrz,0.1,0.2,0.3,n,1e300,0.1,0;0;0;0;0;0;0;0;0,1000,1500,1.0,0",
+      "wrz,0.1,0.2,0.3,y,1.0,0.1,-1;0;0;0;0;0;0;0;0,1000,1500,1.0,0",
+      "wrz,0.1,0.2,0.3,y,1.0,0.1,0;0;0;0;0;0;0;0;-0.5,1000,1500,1.0,0",
+  };
+  std::uint64_t n = 0;
+  for (const char* b : bad) {
+    EXPECT_EQ(parse(p, with_crc(b), m), StatusCode::kOutOfRange) << b;
+    EXPECT_EQ(p.counters().get(DvlCounter::kRange), ++n) << b;
+  }
+  // The bounds do not reject real values: 999 m altitude, a current epoch in microseconds.
+  EXPECT_TRUE(parse(p, with_crc("wrz,0.1,0.2,0.3,y,999.0,0.1,1e-07;0;0;0;1e-07;0;0;0;1e-07,1764000000000000,1764000000010000,1.0,0"), m).is_ok());
+  EXPECT_EQ(m.velocity.device_time_us, 1764000000000000LL);
+}

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "hal/sim/can_log_replay.hpp"
 #include "hal/sim/manual_clock.hpp"
@@ -127,4 +129,29 @@ TEST(CanLogReplay, ReplaysFramesWithRelativeTimesAndCountsBadLines) {
   EXPECT_EQ(rp.stats().bus_off, 1u);
   EXPECT_EQ(rp.receive(f, 0), StatusCode::kTimeout);
   EXPECT_TRUE(rp.finished());
+}
+
+// Regression (issue #19): a timestamp far from the first one made (time_us - first_us) * 1000
+// overflow (UBSan); it is a counted bad line now. A run of more than kMaxSkipPerCall bad lines
+// pauses receive() (kTimeout) but the log is read to its end, and the first bad line is named.
+TEST(CanLogReplay, FarTimestampsAndLongGarbageRunsAreCountedNotWrapped) {
+  std::string log = "(1436509052.249713) can0 100#01\n";
+  for (int i = 0; i < 100; ++i) log += "garbage\n";
+  log += "(999999999999.000000) can0 101#02\n";  // 31,000 years later
+  log += "(1436509053.249713) can0 102#03\n";
+  CanLogReplay rp(log.data(), log.size(), 0);
+  CanRxFrame f;
+  std::vector<std::uint32_t> ids;
+  std::vector<std::int64_t> stamps;
+  while (!rp.finished()) {
+    if (rp.receive(f, 0).is_ok()) {
+      ids.push_back(f.frame.id);
+      stamps.push_back(f.stamp.sample_ns);
+    }
+  }
+  ASSERT_EQ(ids.size(), 2u);
+  EXPECT_EQ(ids[1], 0x102u);
+  EXPECT_EQ(stamps[1], 1000000000);
+  EXPECT_EQ(rp.bad_lines(), 101u);
+  EXPECT_EQ(rp.first_bad_line(), 2u);
 }
