@@ -12,14 +12,19 @@ Status JsfFramer::init(std::size_t max_message_bytes) noexcept {
   buf_.reset(new (std::nothrow) std::uint8_t[max_message_bytes]);
   if (!buf_) return Status(StatusCode::kCapacityExceeded, "out of memory for the JSF framer");
   cap_ = max_message_bytes;
-  have_ = need_ = skip_ = 0;
+  have_ = need_ = delivered_ = 0;
+  want_ = kJsfHeaderBytes;
   ready_ = false;
   return Status::ok();
 }
 
-void JsfFramer::drop_front(std::size_t n) noexcept {
+void JsfFramer::consume_front(std::size_t n) noexcept {
   for (std::size_t i = n; i < have_; ++i) buf_[i - n] = buf_[i];
   have_ -= n;
+}
+
+void JsfFramer::drop_front(std::size_t n) noexcept {
+  consume_front(n);
   counters_.increment(JsfCounter::kResyncBytes, static_cast<std::uint32_t>(n));
 }
 
@@ -33,53 +38,75 @@ void JsfFramer::resync() noexcept {
   if (s > 0) drop_front(s);
 }
 
-std::size_t JsfFramer::feed(Span<const std::uint8_t> in) noexcept {
-  if (!buf_ || ready_) return 0;
-  std::size_t used = 0;
-  while (used < in.size()) {
-    if (skip_ > 0) {
-      const std::size_t k = skip_ < in.size() - used ? skip_ : in.size() - used;
-      skip_ -= k;
-      used += k;
+// Examines what buf_ holds: true when a whole, plausible message starts at the front (need_ bytes;
+// buf_ may hold a few more). Otherwise sets want_, the bytes to hold before looking again. A header
+// found implausible costs one byte and the search goes on in the bytes already held, so the bytes
+// after a damaged size field are framed again rather than swallowed.
+bool JsfFramer::frame_buffered() noexcept {
+  for (;;) {
+    need_ = 0;
+    resync();
+    if (have_ < kJsfHeaderBytes) {
+      want_ = kJsfHeaderBytes;
+      return false;
+    }
+    const Result<JsfMessageHeader> h = parse_jsf_message_header(Span<const std::uint8_t>(buf_.get(), have_));
+    if (!h) {
+      counters_.increment(JsfCounter::kBadHeader);
+      drop_front(1);
       continue;
     }
-    if (need_ == 0) {
-      // Collect the 16-byte header, keeping the buffer aligned on a sync word.
-      buf_[have_++] = in[used++];
-      resync();
-      if (have_ < kJsfHeaderBytes) continue;
-      const Result<JsfMessageHeader> h = parse_jsf_message_header(Span<const std::uint8_t>(buf_.get(), have_));
-      if (!h) {
+    const std::size_t total = kJsfHeaderBytes + static_cast<std::size_t>(h->body_bytes);
+    if (total > cap_) {
+      counters_.increment(JsfCounter::kOversize);
+      drop_front(1);
+      continue;
+    }
+    if (h->message_type == kJsfSonarDataType) {
+      // A sonar message's size must match its sample count: checked once its header is in.
+      if (total < kJsfHeaderBytes + kJsfSonarHeaderBytes) {
         counters_.increment(JsfCounter::kBadHeader);
         drop_front(1);
-        resync();
         continue;
       }
-      header_ = h.value();
-      const std::size_t total = kJsfHeaderBytes + static_cast<std::size_t>(header_.body_bytes);
-      if (total > cap_) {
-        counters_.increment(JsfCounter::kOversize);
-        skip_ = static_cast<std::size_t>(header_.body_bytes);
-        have_ = 0;
+      if (have_ < kJsfHeaderBytes + kJsfSonarHeaderBytes) {
+        want_ = kJsfHeaderBytes + kJsfSonarHeaderBytes;
+        return false;
+      }
+      const Result<std::size_t> body = jsf_sonar_body_bytes(Span<const std::uint8_t>(buf_.get() + kJsfHeaderBytes, kJsfSonarHeaderBytes));
+      if (!body || *body != static_cast<std::size_t>(h->body_bytes)) {
+        counters_.increment(JsfCounter::kBadHeader);
+        drop_front(1);
         continue;
       }
-      need_ = total;
-      if (have_ == need_) {
-        ready_ = true;
-        return used;
-      }
-      continue;
     }
-    const std::size_t k = need_ - have_ < in.size() - used ? need_ - have_ : in.size() - used;
-    for (std::size_t i = 0; i < k; ++i) buf_[have_ + i] = in[used + i];
-    have_ += k;
-    used += k;
-    if (have_ == need_) {
+    header_ = *h;
+    need_ = total;
+    want_ = total;
+    return have_ >= total;
+  }
+}
+
+std::size_t JsfFramer::feed(Span<const std::uint8_t> in) noexcept {
+  if (!buf_ || ready_) return 0;
+  if (delivered_ > 0) {  // the message handed out by next(): its view ends here
+    consume_front(delivered_);
+    delivered_ = 0;
+  }
+  std::size_t used = 0;
+  for (;;) {
+    if (frame_buffered()) {
       ready_ = true;
       return used;
     }
+    if (used == in.size()) return used;
+    // Take only what the framing needs next, so a message never ends inside bytes not yet framed.
+    const std::size_t room = want_ - have_;
+    const std::size_t k = room < in.size() - used ? room : in.size() - used;
+    for (std::size_t i = 0; i < k; ++i) buf_[have_ + i] = in[used + i];
+    have_ += k;
+    used += k;
   }
-  return used;
 }
 
 bool JsfFramer::next(JsfMessageView& out) noexcept {
@@ -89,7 +116,7 @@ bool JsfFramer::next(JsfMessageView& out) noexcept {
   counters_.increment(JsfCounter::kMessages);
   // The view stays valid until the next feed(): the buffer is only reused there.
   ready_ = false;
-  have_ = 0;
+  delivered_ = need_;
   need_ = 0;
   return true;
 }

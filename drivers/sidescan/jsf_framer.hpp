@@ -8,8 +8,11 @@
 //     while (framer.next(m)) handle(m);              // views valid until the next feed()
 //   }
 // Robustness: bytes before a sync word (0x1601) are dropped and counted; a header whose size
-// field is negative or above 16 MiB is counted and the framer re-synchronises one byte later; a
-// message larger than the buffer is skipped by its length (counted); so it never stalls or loops.
+// field is negative, above 16 MiB or larger than the buffer is counted and the framer
+// re-synchronises one byte later (a damaged size field is never trusted to skip data); a sonar data
+// message (type 80) whose size field disagrees with its own sample count and format is counted as a
+// bad header the same way, before its body is read. So it never stalls, loops or swallows the
+// messages that follow a damaged one.
 // Cost: O(bytes fed) copying; O(16) per re-synchronisation step.
 //
 // JsfPingAssembler: pairs the port (channel 0) and starboard (channel 1) message-80 records of the
@@ -29,7 +32,7 @@ namespace qnav::sidescan {
 enum class JsfCounter : std::uint8_t {
   kResyncBytes,   // bytes dropped looking for a sync word
   kBadHeader,     // sync found but size field absurd
-  kOversize,      // messages longer than the buffer (skipped)
+  kOversize,      // size field larger than the buffer (re-synchronised, not skipped)
   kMessages,      // complete messages delivered
   kCount
 };
@@ -46,18 +49,21 @@ class JsfFramer {
   std::size_t feed(Span<const std::uint8_t> bytes) noexcept;
   bool next(JsfMessageView& out) noexcept;
   // Bytes held in an incomplete message (for end-of-file truncation reports).
-  std::size_t pending_bytes() const noexcept { return have_ + (skip_ > 0 ? 1 : 0); }
+  std::size_t pending_bytes() const noexcept { return have_ - delivered_; }
   const CounterSet<JsfCounter>& counters() const noexcept { return counters_; }
 
  private:
   void drop_front(std::size_t n) noexcept;
+  void consume_front(std::size_t n) noexcept;
   void resync() noexcept;
+  bool frame_buffered() noexcept;
 
   std::unique_ptr<std::uint8_t[]> buf_;
   std::size_t cap_ = 0;
-  std::size_t have_ = 0;   // bytes of the current message in buf_
-  std::size_t need_ = 0;   // total bytes of the current message (0 = header not parsed yet)
-  std::size_t skip_ = 0;   // bytes of an oversize message still to drop
+  std::size_t have_ = 0;      // bytes held in buf_, from a (candidate) sync word on
+  std::size_t want_ = 0;      // bytes buf_ must hold before the framing can go on
+  std::size_t need_ = 0;      // total bytes of the message at the front (0 = not yet known)
+  std::size_t delivered_ = 0; // bytes of the message handed out by next(), dropped at the next feed()
   bool ready_ = false;
   JsfMessageHeader header_{};
   CounterSet<JsfCounter> counters_{kJsfCounterNames};

@@ -7,6 +7,18 @@
 
 namespace qnav::sidescan {
 
+namespace {
+std::size_t jsf_bytes_per_sample(std::int16_t data_format) noexcept {
+  switch (data_format) {
+    case 0: return 2;  // envelope
+    case 1: return 4;  // analytic (I, Q)
+    case 2: return 2;  // raw
+    default: return 0;
+  }
+}
+}  // namespace
+
+
 Result<JsfMessageHeader> parse_jsf_message_header(Span<const std::uint8_t> b) noexcept {
   if (b.size() < kJsfHeaderBytes) return Status(StatusCode::kTruncated, "JSF message header truncated");
   const std::uint8_t* p = b.data();
@@ -44,7 +56,9 @@ Status parse_jsf_sonar_data(const JsfMessageHeader& h, Span<const std::uint8_t> 
   const std::int32_t alt_mm = load_le_i32(p + 144);
   o.sound_speed_mps = load_le_f32(p + 148);
   o.weighting_factor = load_le_i16(p + 168);
-  o.heading_deg = static_cast<float>(load_le_u16(p + 172)) * 0.01f;
+  // Heading in 1/100 degree, 0..35999: anything else is a damaged field, not a direction.
+  const std::uint16_t heading_cdeg = load_le_u16(p + 172);
+  o.heading_deg = heading_cdeg < 36000 ? static_cast<float>(heading_cdeg) * 0.01f : std::nanf("");
   o.pitch_deg = static_cast<float>(load_le_i16(p + 174)) * (180.0f / 32768.0f);
   o.roll_deg = static_cast<float>(load_le_i16(p + 176)) * (180.0f / 32768.0f);
   o.speed_knots = static_cast<float>(load_le_i16(p + 194)) * 0.1f;
@@ -62,15 +76,11 @@ Status parse_jsf_sonar_data(const JsfMessageHeader& h, Span<const std::uint8_t> 
     o.x = lon * s;
     o.position_valid = (o.validity & 1u) != 0;
   }
-  std::size_t bps;
-  switch (o.data_format) {
-    case 0: bps = 2; break;
-    case 1: bps = 4; break;
-    case 2: bps = 2; break;
-    default: return Status(StatusCode::kUnsupported, "JSF sample format not envelope, analytic or raw");
-  }
-  const std::size_t avail = static_cast<std::size_t>(h.body_bytes) - kJsfSonarHeaderBytes;
-  if (o.samples > avail / bps) return Status(StatusCode::kCorrupt, "JSF sample count runs past the message body");
+  const std::size_t bps = jsf_bytes_per_sample(o.data_format);
+  if (bps == 0) return Status(StatusCode::kUnsupported, "JSF sample format not envelope, analytic or raw");
+  // The body is exactly the sonar header and its samples: a size field that disagrees is damaged.
+  if (static_cast<std::size_t>(h.body_bytes) != kJsfSonarHeaderBytes + o.samples * bps)
+    return Status(StatusCode::kCorrupt, "JSF body size disagrees with its sample count");
   if (o.samples > samples.size()) return Status(StatusCode::kCapacityExceeded, "JSF message has more samples than the buffer holds");
   if (o.samples < 8) return Status(StatusCode::kCorrupt, "JSF message with fewer than 8 samples");
   if (o.sample_interval_ns == 0 || o.sample_interval_ns > 100000000u) return Status(StatusCode::kCorrupt, "JSF sample interval zero or absurd");
@@ -92,6 +102,16 @@ Status parse_jsf_sonar_data(const JsfMessageHeader& h, Span<const std::uint8_t> 
   o.slant_range_m = static_cast<float>(static_cast<double>(o.samples) * o.sample_interval_ns * 1e-9 *
                                        static_cast<double>(o.sound_speed_mps) * 0.5);
   return Status::ok();
+}
+
+Result<std::size_t> jsf_sonar_body_bytes(Span<const std::uint8_t> b) noexcept {
+  if (b.size() < kJsfSonarHeaderBytes) return Status(StatusCode::kTruncated, "JSF sonar header truncated");
+  const std::uint8_t* p = b.data();
+  const std::uint16_t msbs = load_le_u16(p + 16);
+  const std::size_t samples = static_cast<std::size_t>(load_le_u16(p + 114)) | (static_cast<std::size_t>((msbs >> 8) & 0xF) << 16);
+  const std::size_t bps = jsf_bytes_per_sample(load_le_i16(p + 34));
+  if (bps == 0) return Status(StatusCode::kUnsupported, "JSF sample format not envelope, analytic or raw");
+  return kJsfSonarHeaderBytes + samples * bps;
 }
 
 std::size_t jsf_sonar_message_bytes(std::size_t n) noexcept { return kJsfHeaderBytes + kJsfSonarHeaderBytes + 2 * n; }

@@ -75,6 +75,9 @@ struct JsfWriteSonar {
   std::int16_t weighting_factor = 0;
 };
 std::size_t jsf_sonar_message_bytes(std::size_t samples) noexcept;
+// The body size a sonar data message (type 80) must have, from its 240-byte sonar header: the header
+// plus samples x bytes per sample of its data format. kUnsupported for an unknown format.
+Result<std::size_t> jsf_sonar_body_bytes(Span<const std::uint8_t> sonar_header) noexcept;
 Result<std::size_t> encode_jsf_sonar_message(Span<std::uint8_t> out, const JsfWriteSonar& w) noexcept;
 
 }  // namespace qnav::sidescan

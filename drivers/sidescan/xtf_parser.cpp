@@ -134,11 +134,16 @@ Status parse_xtf_sonar_ping(Span<const std::uint8_t> b, const XtfFileHeader& fh,
     const std::int64_t cs = ((days * 24 + o.hour) * 60 + o.minute) * 6000 + o.second * 100 + o.hundredths;
     o.stamp_ns = static_cast<std::uint64_t>(cs) * 10000000ull;
   }
+  // NavUnits: 0 projected metres, 3 lat/lon degrees; any other value says the position cannot be read.
+  // Projected coordinates beyond 20,000 km (UTM northings stop at 10,000 km) are damaged fields.
   const bool finite = std::isfinite(o.sensor_y) && std::isfinite(o.sensor_x) && std::isfinite(o.heading_deg);
   if (fh.nav_units == 3)
     o.nav_valid = finite && std::fabs(o.sensor_y) <= 90.0 && std::fabs(o.sensor_x) <= 180.0 && !(o.sensor_y == 0.0 && o.sensor_x == 0.0);
+  else if (fh.nav_units == 0)
+    o.nav_valid = finite && std::fabs(o.sensor_y) <= kXtfMaxProjectedM && std::fabs(o.sensor_x) <= kXtfMaxProjectedM &&
+                  !(o.sensor_y == 0.0 && o.sensor_x == 0.0);
   else
-    o.nav_valid = finite && !(o.sensor_y == 0.0 && o.sensor_x == 0.0);
+    o.nav_valid = false;
 
   // Channels.
   std::size_t off = kXtfPingHeaderBytes;

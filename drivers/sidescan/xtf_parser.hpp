@@ -29,6 +29,7 @@ constexpr std::size_t kXtfMaxChannels = 16;       // channel infos decoded from 
 constexpr std::size_t kXtfMaxPingChannels = 8;    // channels decoded per ping packet
 constexpr std::uint16_t kXtfMagic = 0xFACE;
 constexpr std::uint8_t kXtfFileFormat = 123;
+constexpr double kXtfMaxProjectedM = 2.0e7;        // |northing|, |easting| beyond: a damaged field
 
 enum class XtfPacketType : std::uint8_t {
   kSonar = 0,
@@ -107,7 +108,7 @@ struct XtfPing {
   float roll_deg = 0.0f;
   float heading_deg = 0.0f;
   std::uint64_t stamp_ns = 0;  // UTC from the ping's date/time (ns since 1970), 0 when the date is invalid
-  bool nav_valid = false;      // finite, in range, and not the (0, 0) placeholder
+  bool nav_valid = false;      // known nav units, finite, in range, and not the (0, 0) placeholder
   float slant_range_m = 0.0f;  // of the port/stbd channels
   std::uint32_t samples_per_side = 0;  // samples written to each side's buffer
   FixedVector<XtfPingChannel, kXtfMaxPingChannels> channels;

@@ -63,6 +63,7 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
       if (tools::load_sonar_file(p.file.c_str(), r->data) != 0 || r->data.pings.empty())
         return Status(StatusCode::kInvalidArgument, "sim: a [[sim.pass]] file cannot be read as XTF or JSF (see the message above)");
       r->track = tools::build_track(r->data, cfg_.sim_replay_nav == "dr", 0.0);
+      tools::report_track("qnavd sim", p.file.c_str(), r->track);
     }
     recordings_.push_back(std::move(r));
   }

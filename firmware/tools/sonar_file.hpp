@@ -195,7 +195,14 @@ struct NavTrack {
   std::vector<bool> ok;
   double lat0 = 0.0, lon0 = 0.0;
   std::size_t not_finite = 0;  // pings after the first fix without a finite position / heading (not ok)
+  std::size_t nav_outliers = 0;   // fixes rejected: reaching them needs more than kMaxTrackSpeedMps
+  std::size_t nav_reanchors = 0;  // kReanchorFixes consistent "outliers" in a row: the track followed them
 };
+
+// A fix that would need the vehicle to move faster than this from the last accepted fix (over at
+// least 1 s) is a damaged position, not a manoeuvre: towed and AUV side-scan surveys run at 1-6 m/s.
+constexpr double kMaxTrackSpeedMps = 15.0;
+constexpr std::size_t kReanchorFixes = 5;
 
 inline NavTrack build_track(const FileData& fd, bool dead_reckon, double heading_offset_rad) {
   NavTrack t;
@@ -220,14 +227,42 @@ inline NavTrack build_track(const FileData& fd, bool dead_reckon, double heading
   std::vector<Vec2d> ne(n, Vec2d::Zero());
   if (!dead_reckon) {
     // Fix change points: the fix is valid when it changes; interpolate in time between changes.
+    // A fix implausibly far from the last accepted one is rejected and counted; kReanchorFixes such
+    // fixes in a row that agree with each other mean the earlier fixes were wrong (or the navigation
+    // was reset): the track follows them, counted, and a lone first fix they contradict is dropped.
     std::vector<std::size_t> knots;
     Vec2d last(1e300, 1e300);
+    auto plausible = [&](std::size_t a, std::size_t b) {
+      const double dt = std::fabs(static_cast<double>(fd.pings[b].ping.stamp_ns) - static_cast<double>(fd.pings[a].ping.stamp_ns)) * 1e-9;
+      return (ne_of(fd.pings[b].ping) - ne_of(fd.pings[a].ping)).norm() <= kMaxTrackSpeedMps * (dt > 1.0 ? dt : 1.0);
+    };
+    std::size_t streak = 0, streak_first = n, streak_last = n;
     for (std::size_t i = first; i < n; ++i) {
       if (!fd.pings[i].ping.nav_valid) continue;
       const Vec2d p = ne_of(fd.pings[i].ping);
-      if ((p - last).norm() > 1e-6) {
+      if ((p - last).norm() <= 1e-6) continue;
+      if (knots.empty() || plausible(knots.back(), i)) {
         knots.push_back(i);
         last = p;
+        streak = 0;
+        continue;
+      }
+      ++t.nav_outliers;
+      if (streak > 0 && plausible(streak_last, i)) {
+        ++streak;
+      } else {
+        streak = 1;
+        streak_first = i;
+      }
+      streak_last = i;
+      if (streak >= kReanchorFixes) {
+        if (knots.size() == 1) knots.clear();
+        knots.push_back(streak_first);
+        knots.push_back(i);
+        last = p;
+        t.nav_outliers -= streak;
+        ++t.nav_reanchors;
+        streak = 0;
       }
     }
     std::size_t k = 0;
@@ -265,6 +300,15 @@ inline NavTrack build_track(const FileData& fd, bool dead_reckon, double heading
     if (i >= first && !t.ok[i]) ++t.not_finite;
   }
   return t;
+}
+
+// One line on stderr for what build_track() could not use (nothing when every fix was good).
+inline void report_track(const char* who, const char* path, const NavTrack& t) {
+  if (t.not_finite > 0)
+    std::fprintf(stderr, "%s: %s: %zu pings without a finite position or heading are skipped\n", who, path, t.not_finite);
+  if (t.nav_outliers > 0 || t.nav_reanchors > 0)
+    std::fprintf(stderr, "%s: %s: %zu position fixes rejected (would need > %.0f m/s); track re-anchored %zu times\n", who, path,
+                 t.nav_outliers, kMaxTrackSpeedMps, t.nav_reanchors);
 }
 
 }  // namespace qnav::tools

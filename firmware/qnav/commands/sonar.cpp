@@ -140,6 +140,7 @@ int tiles(int argc, char** argv) {
   FileData fd;
   if (load_sonar_file(file, fd) != 0) return 1;
   const NavTrack track = build_track(fd, nav == "dr", deg_to_rad(heading_off_deg));
+  report_track("qnav sonar", file, track);
   const float range = fd.pings[0].ping.slant_range_m;
 
   sonar::ScanlineCorrectorConfig cc;

@@ -178,7 +178,7 @@ TEST(JsfFramer, ResynchronisesAfterGarbageAndCorruptHeaders) {
   EXPECT_GE(f.framer.counters().get(JsfCounter::kResyncBytes), 5u);
 }
 
-TEST(JsfFramer, OversizeMessagesAreSkippedAndTruncationIsVisible) {
+TEST(JsfFramer, OversizeMessagesAreResynchronisedPastAndTruncationIsVisible) {
   std::vector<std::uint8_t> s;
   append_message(s, 0, 0, 2000);  // 4256 bytes: above a 1024-byte framer
   append_message(s, 1, 0, 100);
@@ -191,7 +191,53 @@ TEST(JsfFramer, OversizeMessagesAreSkippedAndTruncationIsVisible) {
   EXPECT_EQ(f.messages, 2);
   ASSERT_EQ(f.ping_numbers.size(), 1u);
   EXPECT_EQ(f.ping_numbers[0], 1u);
+  // The oversize message was searched through for the next sync, not skipped by its length.
+  EXPECT_GE(f.framer.counters().get(JsfCounter::kResyncBytes), 4256u - 16u);
   EXPECT_GT(f.framer.pending_bytes(), 0u);
+}
+
+// Regression (issue #19): one damaged size field made the framer swallow megabytes (every message up
+// to the claimed length). The size of a sonar message must match its own sample count, and a size
+// larger than the buffer is never trusted to skip data: the messages after it are all framed.
+TEST(JsfFramer, ADamagedSizeFieldLosesOnlyItsOwnMessage) {
+  for (std::uint32_t bad_size : {3000000u, 2u << 20, 240u + 2u * 64u + 2u, 100u}) {
+    std::vector<std::uint8_t> s;
+    append_message(s, 0, 0, 64);
+    append_message(s, 0, 1, 64);
+    const std::size_t damaged = s.size();
+    append_message(s, 1, 0, 64);
+    for (std::uint32_t p = 1; p < 6; ++p) {
+      if (p > 1) append_message(s, p, 0, 64);
+      append_message(s, p, 1, 64);
+    }
+    store_le_u32(s.data() + damaged + 12, bad_size);
+    for (std::size_t chunk : {std::size_t{1}, std::size_t{100}, s.size()}) {
+      Feed f(4u << 20);
+      for (std::size_t at = 0; at < s.size(); at += chunk)
+        f.push(Span<const std::uint8_t>(s.data() + at, std::min(chunk, s.size() - at)));
+      EXPECT_EQ(f.messages, 11) << bad_size << " chunk " << chunk;
+      ASSERT_EQ(f.ping_numbers.size(), 5u) << bad_size << " chunk " << chunk;  // ping 1 lost its port side only
+      EXPECT_EQ(f.ping_numbers[1], 2u);
+      EXPECT_EQ(f.ping_numbers[4], 5u);
+      EXPECT_GE(f.framer.counters().get(JsfCounter::kBadHeader), 1u);
+      EXPECT_EQ(f.framer.pending_bytes(), 0u);
+    }
+  }
+}
+
+// Regression (issue #19): heading 0xFFFF (655.35 degrees) was passed on as a direction.
+TEST(Jsf, HeadingOutsideTheCircleIsNotADirection) {
+  std::vector<std::uint8_t> s;
+  append_message(s, 1, 0, 64);
+  std::vector<float> out(64);
+  JsfSonarData d;
+  const JsfMessageHeader h = parse_jsf_message_header(Span<const std::uint8_t>(s.data(), s.size())).value();
+  store_le_u16(s.data() + 16 + 172, 0xFFFF);
+  ASSERT_TRUE(parse_jsf_sonar_data(h, Span<const std::uint8_t>(s.data() + 16, s.size() - 16), d, Span<float>(out.data(), 64)).is_ok());
+  EXPECT_TRUE(std::isnan(d.heading_deg));
+  store_le_u16(s.data() + 16 + 172, 35999);
+  ASSERT_TRUE(parse_jsf_sonar_data(h, Span<const std::uint8_t>(s.data() + 16, s.size() - 16), d, Span<float>(out.data(), 64)).is_ok());
+  EXPECT_NEAR(d.heading_deg, 359.99f, 1e-3f);
 }
 
 TEST(JsfPingAssembler, PairsSidesCountsOrphansAndOtherMessages) {

@@ -274,6 +274,34 @@ TEST(Xtf, NanOrPlaceholderNavigationIsFlaggedAndCounted) {
   EXPECT_EQ(reader.counters().get(XtfCounter::kPingWithoutNav), 2u);
 }
 
+// Regression (issue #19): unknown nav units and projected positions beyond the Earth were read as
+// positions. The file header's NavUnits byte is at offset 164.
+TEST(Xtf, UnknownNavUnitsAndAbsurdProjectedPositionsAreNotNavigation) {
+  std::vector<std::size_t> at;
+  std::vector<std::uint8_t> f = make_file(3, 64, &at);
+  store_le_u16(f.data() + 164, 7);
+  {
+    XtfReader reader = make_reader();
+    const ReadResult rr = read_all(f, reader);
+    ASSERT_EQ(rr.pings, 3);
+    for (const XtfPing& p : rr.got) EXPECT_FALSE(p.nav_valid);
+    EXPECT_EQ(reader.counters().get(XtfCounter::kPingWithoutNav), 3u);
+  }
+  store_le_u16(f.data() + 164, 0);  // metres
+  store_le_f64(f.data() + at[0] + 160, 5.0e6);
+  store_le_f64(f.data() + at[0] + 168, 4.0e5);
+  store_le_f64(f.data() + at[1] + 160, 7.071e7);  // 70,710 km north
+  store_le_f64(f.data() + at[1] + 168, 4.0e5);
+  store_le_f64(f.data() + at[2] + 160, 5.0e6);
+  store_le_f64(f.data() + at[2] + 168, -3.0e7);
+  XtfReader reader = make_reader();
+  const ReadResult rr = read_all(f, reader);
+  ASSERT_EQ(rr.pings, 3);
+  EXPECT_TRUE(rr.got[0].nav_valid);
+  EXPECT_FALSE(rr.got[1].nav_valid);
+  EXPECT_FALSE(rr.got[2].nav_valid);
+}
+
 TEST(Xtf, UnknownPacketTypesAreSkippedByLength) {
   std::vector<std::size_t> at;
   std::vector<std::uint8_t> f = make_file(3, 64, &at);
