@@ -94,7 +94,20 @@ struct JpegErr {
   std::jmp_buf jump;
 };
 void jpeg_fail(j_common_ptr cinfo) { std::longjmp(reinterpret_cast<JpegErr*>(cinfo->err)->jump, 1); }
-void jpeg_silent(j_common_ptr, int) {}
+// Silent, but counted: a warning (msg_level -1) is damaged data; trace messages (>= 0) are not.
+void jpeg_silent(j_common_ptr cinfo, int msg_level) {
+  if (msg_level < 0) ++cinfo->err->num_warnings;
+}
+
+// libjpeg's own words for what went wrong (a truncated file is only a warning to libjpeg, which then
+// fills the rest of the image with grey: here any warning makes the image corrupt).
+Status jpeg_status(j_decompress_ptr cinfo, const char* what) {
+  static char msg[JMSG_LENGTH_MAX + 64];
+  char text[JMSG_LENGTH_MAX];
+  cinfo->err->format_message(reinterpret_cast<j_common_ptr>(cinfo), text);
+  std::snprintf(msg, sizeof msg, "jpeg: %s: %s", what, text);
+  return Status(StatusCode::kCorrupt, msg);
+}
 
 Status decode_jpeg(std::FILE* f, std::vector<std::uint8_t>& pixels, int& width, int& height) {
   jpeg_decompress_struct cinfo;
@@ -103,8 +116,9 @@ Status decode_jpeg(std::FILE* f, std::vector<std::uint8_t>& pixels, int& width, 
   err.mgr.error_exit = jpeg_fail;
   err.mgr.emit_message = jpeg_silent;
   if (setjmp(err.jump)) {
+    const Status e = jpeg_status(&cinfo, "decode error");
     jpeg_destroy_decompress(&cinfo);
-    return Status(StatusCode::kCorrupt, "jpeg: decode error");
+    return e;
   }
   jpeg_create_decompress(&cinfo);
   jpeg_stdio_src(&cinfo, f);
@@ -122,6 +136,12 @@ Status decode_jpeg(std::FILE* f, std::vector<std::uint8_t>& pixels, int& width, 
   while (cinfo.output_scanline < cinfo.output_height) {
     JSAMPROW row = pixels.data() + static_cast<std::size_t>(cinfo.output_scanline) * w;
     jpeg_read_scanlines(&cinfo, &row, 1);
+  }
+  if (cinfo.err->num_warnings > 0) {  // e.g. "Premature end of JPEG file": the rest would be grey
+    const Status e = jpeg_status(&cinfo, "damaged or truncated data");
+    jpeg_destroy_decompress(&cinfo);
+    pixels.clear();
+    return e;
   }
   jpeg_finish_decompress(&cinfo);
   jpeg_destroy_decompress(&cinfo);

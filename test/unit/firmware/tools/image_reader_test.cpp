@@ -105,5 +105,27 @@ TEST(ImageReader, ReadsTheRealJpegAndPngSamples) {
   EXPECT_EQ(kitti->height(), 375);
 }
 
+// Regression (issue #19): a JPEG cut short was decoded with its missing part grey and no error.
+// Every cut of the real JPEG (and of the real PNG) is refused as corrupt or truncated.
+TEST(ImageReader, TruncatedRealImagesAreRefusedNotGreyFilled) {
+  const std::string base = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+  for (const char* name : {"middlebury_aloe_opencv/aloeL.jpg", "kitti_raw_2011_09_26_0013_city100/left/0000000000.png"}) {
+    std::FILE* f = std::fopen((base + name).c_str(), "rb");
+    if (f == nullptr) GTEST_SKIP() << "sample data missing: " << base;
+    std::string bytes;
+    char buf[65536];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.append(buf, n);
+    std::fclose(f);
+    for (double cut : {0.2, 0.5, 0.9, 0.999}) {
+      const std::string path = tmp("cut");
+      write_bytes(path, bytes.substr(0, static_cast<std::size_t>(static_cast<double>(bytes.size()) * cut)));
+      const Result<ImageU8> r = read_image_gray8(path.c_str());
+      ASSERT_FALSE(r.is_ok()) << name << " cut at " << cut;
+      EXPECT_TRUE(r.status() == StatusCode::kCorrupt || r.status() == StatusCode::kTruncated) << r.status().message();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace qnav::tools
