@@ -59,6 +59,7 @@ bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io, b
       break;
     }
     io.can_device_down.store(false);
+    io.can_rx_in.fetch_add(1, std::memory_order_relaxed);
     if (!q.try_push(rx)) io.can_rx_overflow.fetch_add(1, std::memory_order_relaxed);
     did = true;
   }
@@ -76,6 +77,7 @@ bool drain_dvl(drivers::dvl::DvlSerialDriver& dvl, SpscRing<drivers::dvl::DvlVel
   io.dvl_device_down.store(false);
   drivers::dvl::DvlVelocity v;
   while (dvl.pop(v)) {
+    io.dvl_in.fetch_add(1, std::memory_order_relaxed);
     if (!q.try_push(v)) io.dvl_overflow.fetch_add(1, std::memory_order_relaxed);
     did = true;
   }
@@ -240,6 +242,7 @@ class LinuxBackend final : public IoBackend {
     IoCounters& io = *self->io_;
     std::uint32_t slot = 0;
     const std::size_t half = self->q_.stride / 2;
+    io.pings_in.fetch_add(1, std::memory_order_relaxed);
     if (ping.port.size() > half || ping.stbd.size() > half) {
       io.sonar_rejected.fetch_add(1, std::memory_order_relaxed);
       return;
@@ -312,7 +315,7 @@ Status Daemon::init(FILE* log) {
   QNAV_RETURN_IF_ERROR(make_ring(free_store_, free_slots_, cfg_.ping_queue));
   QNAV_RETURN_IF_ERROR(make_ring(can_rx_store_, can_rx_, cfg_.can_rx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(can_tx_store_, can_tx_, cfg_.can_tx_queue));
-  QNAV_RETURN_IF_ERROR(make_ring(dvl_store_, dvl_q_, 64));
+  QNAV_RETURN_IF_ERROR(make_ring(dvl_store_, dvl_q_, kDvlQueueCapacity));
   for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
   const QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, pool_.data(), stride_};
   if (cfg_.backend == Backend::kSim) {

@@ -25,7 +25,14 @@ struct PingMsg {
 };
 
 // Counters the I/O thread owns and the nav worker reads for health (relaxed atomics, monotonic).
+constexpr std::size_t kDvlQueueCapacity = 64;  // DVL velocities between the I/O and nav threads
+
 struct IoCounters {
+  // Inputs as the I/O thread received them (before any drop): the soak's accounting checks
+  // pings_in = nav pings + ping_overflow + sim render failures + queued, and the same for DVL and CAN.
+  std::atomic<std::uint64_t> pings_in{0};
+  std::atomic<std::uint64_t> dvl_in{0};
+  std::atomic<std::uint64_t> can_rx_in{0};
   std::atomic<std::uint32_t> can_rx_overflow{0};
   std::atomic<std::uint32_t> can_tx_errors{0};
   std::atomic<std::uint32_t> ping_overflow{0};   // a ping arrived with no free slot / full queue: dropped

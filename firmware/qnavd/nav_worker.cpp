@@ -120,11 +120,13 @@ bool NavWorker::run_once() noexcept {
     if (!can_due && !dvl_due) break;
     if (can_due && (!dvl_due || cf->stamp.sample_ns <= dv->stamp.sample_ns)) {
       if (!q_.can_rx->try_pop(rx)) break;
+      ++can_frames_;
       handle_frame(rx);
       nav_now_ns_ = std::max(nav_now_ns_, rx.stamp.sample_ns);
       publisher_->poll(nav_now_ns_);  // outputs keep their DBC periods in sample time, also in a fast replay
     } else {
       if (!q_.dvl->try_pop(v)) break;
+      ++dvl_samples_;
       if (!dr_.on_velocity(v.stamp.sample_ns, v.vx_mps, v.vy_mps, 10.0, cfg_.dvl_stale_s)) ++dr_rejected_;
       nav_now_ns_ = std::max(nav_now_ns_, v.stamp.sample_ns);
     }

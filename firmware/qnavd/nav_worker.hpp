@@ -107,6 +107,9 @@ class NavWorker {
   ModeReject last_reject() const noexcept { return last_reject_; }
   std::uint32_t tiles() const noexcept { return tile_seq_; }
   std::uint32_t pings() const noexcept { return pings_; }
+  // Inputs taken off the queues (each then handled or counted as rejected by its receiver).
+  std::uint64_t can_frames() const noexcept { return can_frames_; }
+  std::uint64_t dvl_samples() const noexcept { return dvl_samples_; }
   std::uint32_t writer_errors() const noexcept { return writer_errors_; }
   // The last teach could not be committed (the route stays under .new; the exit code says so).
   bool commit_failed() const noexcept { return commit_failed_; }
@@ -160,6 +163,7 @@ class NavWorker {
   std::int64_t ping_rx_cpu_ns_ = 0;
   std::uint32_t pings_ = 0, tile_seq_ = 0, pass_ping_ = 0;
   std::uint32_t deadline_misses_ = 0;
+  std::uint64_t can_frames_ = 0, dvl_samples_ = 0;
   std::uint32_t stage_misses_[static_cast<int>(Stage::kCount)] = {};
   std::int64_t stage_max_ns_[static_cast<int>(Stage::kCount)] = {};
   std::uint32_t budgets_us_[static_cast<int>(Stage::kCount)] = {};

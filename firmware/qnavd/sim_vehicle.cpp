@@ -251,6 +251,7 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   last_sample_ns_ = t;
   // Side-scan: render (or copy the recorded ping) into a free slot of the pool.
   if (stalled("sonar", t)) return StepResult::kProduced;
+  io.pings_in.fetch_add(1, std::memory_order_relaxed);
   std::uint32_t slot = 0;
   if (spare_slot_ >= 0) {
     slot = static_cast<std::uint32_t>(spare_slot_);
