@@ -18,6 +18,14 @@ option(QNAV_EIGEN_NO_MALLOC "Compile EIGEN_RUNTIME_NO_MALLOC (Debug builds)" ON)
 if(QNAV_EIGEN_NO_MALLOC AND CMAKE_BUILD_TYPE STREQUAL "Debug")
   target_compile_definitions(qnav_options INTERFACE EIGEN_RUNTIME_NO_MALLOC)
 endif()
+# libFuzzer builds (QNAV_FUZZ=ON with clang: the host-clang preset): every library carries the coverage
+# instrumentation the fuzz targets steer by (test/fuzz links -fsanitize=fuzzer into fuzz_<name> only),
+# always with ASan + UBSan.
+option(QNAV_FUZZ "Build the libFuzzer targets of test/fuzz (clang)" OFF)
+if(QNAV_FUZZ AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+  set(QNAV_SANITIZE ON)
+  target_compile_options(qnav_options INTERFACE -fsanitize=fuzzer-no-link)
+endif()
 if(QNAV_SANITIZE)
   target_compile_options(qnav_options INTERFACE -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   target_link_options(qnav_options INTERFACE -fsanitize=address,undefined)

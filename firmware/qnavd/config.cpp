@@ -4,6 +4,10 @@
 // toml::parse_error; nothing escapes this file).
 #include "firmware/qnavd/config.hpp"
 
+// toml++ 3.3.0 asserts (abort) where its own error path handles the input, e.g. a table header
+// "[(a]" (parse_key: "expected bare key starting character"; found by test/fuzz fuzz_config, input
+// test/fuzz/regressions/config/). With asserts off it reports a parse error, as NDEBUG builds do.
+#define TOML_ASSERT(expr) static_cast<void>(0)
 #include <toml++/toml.h>
 
 #include <algorithm>

@@ -151,6 +151,7 @@ std::size_t format_can_log_line(const CanLogRecord& rec, char* out, std::size_t 
   buf[k++] = '#';
   if (f.rtr) {
     buf[k++] = 'R';
+    if (f.len > 0 && f.len <= 8) buf[k++] = kHex[f.len];  // "123#R1": the requested length (can-utils)
   } else {
     if (f.fd) {
       buf[k++] = '#';

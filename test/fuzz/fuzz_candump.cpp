@@ -1,8 +1,9 @@
 // candump log lines -> parse -> format -> parse again must give the same frame.
 #include <cstring>
 
-#include "fuzz_entry.hpp"
 #include "hal/core/candump.hpp"
+#include "test/fuzz/fuzz_support.hpp"
+
 
 int qnav_fuzz_candump(const std::uint8_t* data, std::size_t size) {
   qnav::hal::CanLogRecord r;
@@ -15,4 +16,10 @@ int qnav_fuzz_candump(const std::uint8_t* data, std::size_t size) {
     __builtin_trap();
   return 0;
 }
-QNAV_FUZZ_ENTRY(candump)
+
+static void seeds_candump(qnav::fuzz::Seeds& out) {
+  for (const char* s : {"(1436509052.249713) vcan0 123#DEADBEEF", "1F334455#1122334455667788", "123##1DEADBEEF", "123#R",
+                        "(1.000000) can0 20000040#0000000000000000"})
+    out.push_back(qnav::fuzz::Seed{"line" + std::to_string(out.size()), s});
+}
+QNAV_FUZZ_TARGET(candump, 500)

@@ -3,7 +3,8 @@
 #include <cstring>
 
 #include "drivers/dronecan/ahrs_receiver.hpp"
-#include "fuzz_entry.hpp"
+#include "test/fuzz/fuzz_support.hpp"
+
 
 int qnav_fuzz_dronecan(const std::uint8_t* data, std::size_t size) {
   using namespace qnav;
@@ -31,4 +32,10 @@ int qnav_fuzz_dronecan(const std::uint8_t* data, std::size_t size) {
   }
   return 0;
 }
-QNAV_FUZZ_ENTRY(dronecan)
+
+static void seeds_dronecan(qnav::fuzz::Seeds& out) {
+  std::string s(120, '\0');
+  for (std::size_t i = 0; i < s.size(); ++i) s[i] = static_cast<char>(i * 37 + 11);
+  out.push_back(qnav::fuzz::Seed{"ramp", s});
+}
+QNAV_FUZZ_TARGET(dronecan, 1000)

@@ -1,10 +1,14 @@
-// libFuzzer: any byte string as a JSF stream, fed in chunks whose sizes come from the input.
+// Any byte string as a JSF file: the framer fed in chunks of one size (from the first byte), the
+// port/starboard ping assembler behind it, and the pure message decoders on the same bytes.
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "drivers/sidescan/jsf_framer.hpp"
+#include "test/fuzz/fuzz_support.hpp"
+#include "test/fuzz/sonar_seeds.hpp"
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+int qnav_fuzz_jsf(const std::uint8_t* data, std::size_t size) {
   using namespace qnav;
   using namespace qnav::sidescan;
   if (size < 1) return 0;
@@ -24,5 +28,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (used == 0 && !c.empty()) __builtin_trap();  // the framer must always make progress
     }
   }
+  const Span<const std::uint8_t> all(data + 1, size - 1);
+  Result<JsfMessageHeader> h = parse_jsf_message_header(all);
+  if (h && all.size() >= kJsfHeaderBytes) {
+    static std::vector<float> samples(4096);
+    JsfSonarData d;
+    const std::size_t body = all.size() - kJsfHeaderBytes;
+    (void)parse_jsf_sonar_data(h.value(), all.subspan(kJsfHeaderBytes, body), d, Span<float>(samples.data(), samples.size()));
+  }
   return 0;
 }
+
+static void seeds_jsf(qnav::fuzz::Seeds& out) {
+  out.push_back(qnav::fuzz::Seed{"synthetic-3-pings.jsf", std::string(1, '\x07') + qnav::fuzz::synthetic_jsf(3, 64)});
+}
+QNAV_FUZZ_TARGET(jsf, 100)

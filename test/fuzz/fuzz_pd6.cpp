@@ -2,7 +2,8 @@
 #include <cmath>
 
 #include "drivers/dvl/pd6_parser.hpp"
-#include "fuzz_entry.hpp"
+#include "test/fuzz/fuzz_support.hpp"
+
 
 int qnav_fuzz_pd6(const std::uint8_t* data, std::size_t size) {
   using namespace qnav::drivers::dvl;
@@ -19,4 +20,9 @@ int qnav_fuzz_pd6(const std::uint8_t* data, std::size_t size) {
   }
   return 0;
 }
-QNAV_FUZZ_ENTRY(pd6)
+
+static void seeds_pd6(qnav::fuzz::Seeds& out) {
+  out.push_back(qnav::fuzz::Seed{"ensemble", ":SA, +0.00, +0.00,  0.00\n:TS,22020812061800, 0.0, +0.0,   0.0,1475.0,  0\n"
+                                             ":BI,  +123,  -420, +2000,    +0,A\n:BD,       +0.00,       +0.00,       +0.00,   5.32,  0.00\n"});
+}
+QNAV_FUZZ_TARGET(pd6, 1000)

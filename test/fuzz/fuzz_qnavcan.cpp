@@ -4,7 +4,8 @@
 
 #include "drivers/qnavcan/dbc.hpp"
 #include "drivers/qnavcan/receiver.hpp"
-#include "fuzz_entry.hpp"
+#include "test/fuzz/fuzz_support.hpp"
+
 
 int qnav_fuzz_qnavcan(const std::uint8_t* data, std::size_t size) {
   using namespace qnav;
@@ -30,4 +31,12 @@ int qnav_fuzz_qnavcan(const std::uint8_t* data, std::size_t size) {
       if (std::isnan(v[i])) __builtin_trap();
   return 0;
 }
-QNAV_FUZZ_ENTRY(qnavcan)
+
+static void seeds_qnavcan(qnav::fuzz::Seeds& out) {
+  out.push_back(qnav::fuzz::Seed{"frame", std::string("\x01\x00\x08", 3) + std::string("\x18\xFC\xF4\x01\x30\x75\x2A\x01", 8)});
+  out.push_back(qnav::fuzz::Seed{"dbc-line", "\x80" "BO_ 258 QNAV_DEPTH_IN: 8 DEPTH\n SG_ Depth : 7|24@0+ (0.001,0) [0|11000] \"m\" QNAV\n"
+                                             "BA_ \"GenMsgCycleTime\" BO_ 258 100;\n"});
+  const std::string dbc = qnav::fuzz::read_prefix(qnav::fuzz::source_dir() + "/docs/qnav.dbc", 1u << 16);
+  if (!dbc.empty()) out.push_back(qnav::fuzz::Seed{"qnav.dbc", "\x80" + dbc});
+}
+QNAV_FUZZ_TARGET(qnavcan, 1000)

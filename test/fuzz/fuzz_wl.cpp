@@ -4,7 +4,8 @@
 #include <cstring>
 
 #include "drivers/dvl/wl_parser.hpp"
-#include "fuzz_entry.hpp"
+#include "test/fuzz/fuzz_support.hpp"
+
 
 int qnav_fuzz_wl(const std::uint8_t* data, std::size_t size) {
   using namespace qnav::drivers::dvl;
@@ -22,4 +23,11 @@ int qnav_fuzz_wl(const std::uint8_t* data, std::size_t size) {
   }
   return 0;
 }
-QNAV_FUZZ_ENTRY(wl)
+
+static void seeds_wl(qnav::fuzz::Seeds& out) {
+  for (const char* s : {"wrz,0.120,-0.400,2.000,y,1.30,1.855,1e-07;0;1.4;0;1.2;0;0.2;0;1e+09,7,14,123.00,1*50",
+                        "wru,0,0.070,1.10,-40,-95*9c", "wrp,49056.809,0.41,0.15,1.23,0.4,53.9,13.0,19.3,0*de",
+                        "wrz,0.120,-0.400,2.000,y,1.30,1.855,1e-07;0;1.4;0;1.2;0;0.2;0;1e+09,7,14,123.00,1"})
+    out.push_back(qnav::fuzz::Seed{"sentence" + std::to_string(out.size()), s});
+}
+QNAV_FUZZ_TARGET(wl, 500)
