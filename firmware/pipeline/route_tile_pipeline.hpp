@@ -64,6 +64,8 @@ class RouteTilePipeline {
   void reset_pass();
   const RouteTileConfig& config() const noexcept { return cfg_; }
   const sonar::TileBuilder& builder() const noexcept { return *builder_; }
+  // Pings the corrector refused (its counters: damaged range, samples, altitude; no bottom found).
+  const sonar::ScanlineCorrector& corrector() const noexcept { return *corrector_; }
   const route::TileFeatureExtractor& features() const noexcept { return *features_; }
   // The last tile's raster (for debug images).
   const sonar::SonarTile& last_tile() const noexcept { return builder_->tile(); }

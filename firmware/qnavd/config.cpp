@@ -550,6 +550,24 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "sim.stall_s", [](auto& c) -> auto& { return c.sim_stall_s; }, 0.0, 3600.0, "s",
       "Length of the stall (mission time)"));
+  {
+    std::vector<std::pair<std::string, std::string>> kinds;
+    for (const char* k : kSimFaultKinds) kinds.emplace_back(k, k);
+    t.push_back(enum_key(
+        "sim.fault", [](auto& c) -> auto& { return c.sim_fault; }, kinds,
+        "Fault injection: damaged or disordered input during sim.fault_s of pass sim.fault_pass (docs/reliability.md)"));
+  }
+  t.push_back(with_rule(
+      int_key(
+          "sim.fault_pass", [](auto& c) -> auto& { return c.sim_fault_pass; }, 0,
+          static_cast<std::int64_t>(kMaxPasses) - 1, "", "Pass of the injected fault, counting the [[sim.pass]] tables from 0"),
+      "< number of passes"));
+  t.push_back(float_key(
+      "sim.fault_start_s", [](auto& c) -> auto& { return c.sim_fault_start_s; }, 0.0, 100000.0, "s",
+      "Start of the injected fault after the start of its pass (mission time)"));
+  t.push_back(float_key(
+      "sim.fault_s", [](auto& c) -> auto& { return c.sim_fault_s; }, 0.0, 3600.0, "s",
+      "Length of the injected fault (mission time)"));
   // [[sim.pass]]
   {
     KeySpec mode = enum_key(
@@ -847,6 +865,12 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
   if (c.backend == Backend::kSim && c.sim_mission.empty()) {
     return r.error("sim.pass", at("daemon.backend", "sim.pass"),
                    "daemon.backend = \"sim\" needs at least one [[sim.pass]] (the simulated mission)");
+  }
+  if (c.backend == Backend::kSim && c.sim_fault != "none" &&
+      static_cast<std::size_t>(c.sim_fault_pass) >= c.sim_mission.size()) {
+    return r.error("sim.fault_pass", at("sim.fault_pass", "sim.fault"),
+                   "must be < the number of [[sim.pass]] (" + std::to_string(c.sim_mission.size()) + "), got " +
+                       std::to_string(c.sim_fault_pass));
   }
   if (c.backend == Backend::kSim && c.sim_stall != "none" &&
       static_cast<std::size_t>(c.sim_stall_pass) >= c.sim_mission.size()) {

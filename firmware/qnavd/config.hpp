@@ -115,7 +115,20 @@ struct DaemonConfig {
   int sim_stall_pass = 1;
   double sim_stall_start_s = 0.0;
   double sim_stall_s = 0.0;
+  // Fault injection (tests, the soak, the bench): damaged or disordered input for a while, with the
+  // same window keys (sim.fault_pass, sim.fault_start_s, sim.fault_s). Each kind and the daemon's
+  // expected answer: docs/reliability.md.
+  std::string sim_fault = "none";
+  int sim_fault_pass = 1;
+  double sim_fault_start_s = 0.0;
+  double sim_fault_s = 0.0;
 };
+
+// sim.fault's kinds, in the order docs/reliability.md lists them.
+inline constexpr const char* kSimFaultKinds[] = {
+    "none",          "dvl_nan",          "dvl_time_back",      "dvl_duplicate",   "dvl_line_noise",
+    "attitude_out_of_range", "attitude_duplicate", "can_error_frames", "can_bus_off",
+    "sonar_nan",     "sonar_bad_range",  "ping_time_back",     "disk_full"};
 
 // Where a configuration error is: key (dotted), line (0 if unknown) and a message with the allowed range.
 struct ConfigError {

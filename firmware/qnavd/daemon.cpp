@@ -96,10 +96,12 @@ class SimBackend final : public IoBackend {
  public:
   SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
       : net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q) {}
-  Status init(BusObserver obs, void* ctx) {
+  Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store) {
     QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
     QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
+    daemon_bus_.set_error_frames(true);  // as the SocketCAN backend subscribes to them
     vehicle_.set_bus_observer(obs, ctx);
+    vehicle_.set_fault_targets(&net_, store);
     return vehicle_.init(vehicle_bus_, pipe_.a());
   }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
@@ -320,7 +322,9 @@ Status Daemon::init(FILE* log) {
   const QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, pool_.data(), stride_};
   if (cfg_.backend == Backend::kSim) {
     auto sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
-    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_));
+    // The route store behind a switch that can make the disk full (sim.fault = "disk_full").
+    fault_store_ = std::make_unique<hal::FaultFileStore>(hal::host_file_store());
+    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, fault_store_.get()));
     double range_m = 0.0;
     if (sim->vehicle().recorded_geometry(range_m, route_spacing_m_)) {
       // Recorded passes: tiles and registration as `qnav route train|repeat --sonar` sets them for
@@ -341,7 +345,8 @@ Status Daemon::init(FILE* log) {
     backend_ = std::move(lb);
   }
   QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));
-  nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_, hal::host_file_store());
+  hal::FileStore& store = fault_store_ ? static_cast<hal::FileStore&>(*fault_store_) : hal::host_file_store();
+  nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_, store);
   nav_->set_route_geometry(route_spacing_m_, route_swath_m_);
   NavQueues nq;
   nq.pings = &pings_;

@@ -66,6 +66,7 @@ class Daemon {
   SpscRing<drivers::dvl::DvlVelocity> dvl_q_;
   std::size_t stride_ = 0;
   IoCounters io_;
+  std::unique_ptr<hal::FaultFileStore> fault_store_;  // sim backend: the host store with a "disk full" switch
   std::unique_ptr<IoBackend> backend_;
   std::unique_ptr<NavWorker> nav_;
   TileObserver tile_observer_ = nullptr;

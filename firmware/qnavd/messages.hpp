@@ -33,6 +33,7 @@ struct IoCounters {
   std::atomic<std::uint64_t> pings_in{0};
   std::atomic<std::uint64_t> dvl_in{0};
   std::atomic<std::uint64_t> can_rx_in{0};
+  std::atomic<std::uint32_t> faults_injected{0};  // sim backend, sim.fault: damaged samples it sent
   std::atomic<std::uint32_t> can_rx_overflow{0};
   std::atomic<std::uint32_t> can_tx_errors{0};
   std::atomic<std::uint32_t> ping_overflow{0};   // a ping arrived with no free slot / full queue: dropped

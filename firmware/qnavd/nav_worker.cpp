@@ -174,6 +174,10 @@ void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
     }
     return;  // rejections counted by the AHRS receiver
   }
+  if (rx.frame.error) {  // the controller's own report: bus-off until it says it restarted
+    if (rx.frame.id & hal::can_error::kBusOff) bus_off_ = true;
+    if (rx.frame.id & hal::can_error::kRestarted) bus_off_ = false;
+  }
   if (!receiver_.on_frame(rx)) return;  // counted by the receiver
   if (rx.frame.id == qc::kIdAttitudeIn) {
     qc::Stamped<qc::AttitudeIn> a;
@@ -356,6 +360,12 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
 void NavWorker::handle_ping(const PingMsg& p) noexcept {
   const std::int64_t t0 = cpu_clock_.now_ns();
   ++pings_;
+  // A ping stamped at or before the previous one (a clock stepped back, a duplicate, a reordered
+  // delivery) cannot be placed on the dead-reckoned track: counted and dropped.
+  if (last_ping_ns_ >= 0 && p.stamp.sample_ns <= last_ping_ns_) {
+    ++pings_out_of_order_;
+    return;
+  }
   last_ping_ns_ = p.stamp.sample_ns;
   if (mode_ != qc::Mode::kTeach && mode_ != qc::Mode::kRepeat) return;
   if (!dr_.has_heading() || dr_.heading_age_s(p.stamp.sample_ns) > cfg_.attitude_stale_s) return;  // no tiles without a heading
@@ -464,6 +474,7 @@ void NavWorker::update_faults() noexcept {
   if (att_lost) f |= qc::fault::kAttitudeLost;
   if (dvl_lost) f |= qc::fault::kDvlLost;
   if (sonar_lost || att_lost || dvl_lost) f |= qc::fault::kSensorTimeout;
+  if (bus_off_ || q_.io->can_device_down.load(std::memory_order_relaxed)) f |= qc::fault::kBusOff;
   if (deadline_misses_ > 0) f |= qc::fault::kDeadlineMiss;
   if (SoftwareFaults::count() > 0) f |= qc::fault::kSoftware;
   faults_ = f;
@@ -501,10 +512,11 @@ void NavWorker::publish() noexcept {
   rejected += ahrs_.counters().total() - ahrs_.counters().get(drivers::dronecan::AhrsCounter::kOtherNode);
   rejected += q_.io->dvl_rejected.load(std::memory_order_relaxed) + q_.io->sonar_rejected.load(std::memory_order_relaxed) + dr_rejected_;
   rejected += q_.io->can_rx_overflow.load(std::memory_order_relaxed) + q_.io->ping_overflow.load(std::memory_order_relaxed);
+  rejected += pings_rejected() + pings_out_of_order_;
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
   h.deadline_misses = static_cast<std::uint16_t>(std::min<std::uint32_t>(deadline_misses_, 65535));
   h.cpu_load_pct = clampd(cpu_load_pct_, 0.0, 100.0);
-  h.bus_off = q_.io->can_device_down.load(std::memory_order_relaxed);
+  h.bus_off = bus_off_ || q_.io->can_device_down.load(std::memory_order_relaxed);
   publisher_->set(h);
   qc::Heartbeat hb;
   hb.uptime_s = static_cast<std::uint32_t>(std::max<std::int64_t>(0, nav_now_ns_ - start_ns_) / kNsPerS);
@@ -528,13 +540,13 @@ void NavWorker::log_health() noexcept {
                "\"ping_max_us\":%" PRId64 ",\"tile_max_us\":%" PRId64 ",\"cpu_load_pct\":%.1f,\"can_rx_overflow\":%u,\"can_tx_overflow\":%u,"
                "\"ping_overflow\":%u,\"dvl_rejected\":%u,\"sonar_rejected\":%u,\"device_errors\":%u,\"can_rejected\":%u,\"dr_rejected\":%u,"
                "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
-               "\"teach_no_odometry\":%u,\"nav_resets\":%u,"
+               "\"teach_no_odometry\":%u,\"nav_resets\":%u,\"pings_rejected\":%u,\"pings_out_of_order\":%u,\"bus_off\":%s,"
                "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"outputs\":%u}}\n",
                static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
                stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
                io.can_rx_overflow.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
-               SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, stage_misses_[static_cast<int>(Stage::kInputs)],
+               SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, pings_rejected(), pings_out_of_order_, bus_off_ ? "true" : "false", stage_misses_[static_cast<int>(Stage::kInputs)],
                stage_misses_[static_cast<int>(Stage::kModes)], stage_misses_[static_cast<int>(Stage::kPing)],
                stage_misses_[static_cast<int>(Stage::kTile)], stage_misses_[static_cast<int>(Stage::kOutputs)]);
   const std::uint32_t sw = SoftwareFaults::count();

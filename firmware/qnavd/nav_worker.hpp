@@ -110,6 +110,20 @@ class NavWorker {
   // Inputs taken off the queues (each then handled or counted as rejected by its receiver).
   std::uint64_t can_frames() const noexcept { return can_frames_; }
   std::uint64_t dvl_samples() const noexcept { return dvl_samples_; }
+  // Pings the tile pipeline's corrector refused as damaged (range, samples, altitude), and pings
+  // stamped at or before the previous one (dropped).
+  std::uint32_t pings_rejected() const noexcept {
+    const auto& c = tiles_.corrector().counters();
+    return c.get(sonar::CorrectorCounter::kBadSampleCount) + c.get(sonar::CorrectorCounter::kBadRange) +
+           c.get(sonar::CorrectorCounter::kNonFiniteSample) + c.get(sonar::CorrectorCounter::kBadAltitude);
+  }
+  std::uint32_t pings_out_of_order() const noexcept { return pings_out_of_order_; }
+  // qnav CAN frames refused by the receiver (format, length, range, invalid, stale, error frames).
+  std::uint32_t can_rejected() const noexcept {
+    return receiver_.counters().total() - receiver_.counters().get(drivers::qnavcan::RxCounter::kUnknownId);
+  }
+  std::uint32_t can_error_frames() const noexcept { return receiver_.counters().get(drivers::qnavcan::RxCounter::kErrorFrame); }
+  bool bus_off() const noexcept { return bus_off_; }
   std::uint32_t writer_errors() const noexcept { return writer_errors_; }
   // The last teach could not be committed (the route stays under .new; the exit code says so).
   bool commit_failed() const noexcept { return commit_failed_; }
@@ -164,6 +178,8 @@ class NavWorker {
   std::uint32_t pings_ = 0, tile_seq_ = 0, pass_ping_ = 0;
   std::uint32_t deadline_misses_ = 0;
   std::uint64_t can_frames_ = 0, dvl_samples_ = 0;
+  std::uint32_t pings_out_of_order_ = 0;
+  bool bus_off_ = false;
   std::uint32_t stage_misses_[static_cast<int>(Stage::kCount)] = {};
   std::int64_t stage_max_ns_[static_cast<int>(Stage::kCount)] = {};
   std::uint32_t budgets_us_[static_cast<int>(Stage::kCount)] = {};

@@ -32,6 +32,36 @@ bool SimVehicle::stalled(const char* sensor, std::int64_t t_ns) const noexcept {
   return since_s >= cfg_.sim_stall_start_s && since_s < cfg_.sim_stall_start_s + cfg_.sim_stall_s;
 }
 
+bool SimVehicle::faulty(const char* kind, std::int64_t t_ns) const noexcept {
+  if (cfg_.sim_fault != kind || static_cast<int>(pass_) != cfg_.sim_fault_pass || phase_ != Phase::kFly) return false;
+  const double since_s = static_cast<double>(t_ns - pass_start_ns_) * 1e-9;
+  return since_s >= cfg_.sim_fault_start_s && since_s < cfg_.sim_fault_start_s + cfg_.sim_fault_s;
+}
+
+// Once per ping instant: error frames on the bus, bus-off and its restart, the disk filling up.
+void SimVehicle::inject_bus_faults(std::int64_t t) noexcept {
+  const std::uint8_t data[8] = {};
+  if (net_ != nullptr && faulty("can_error_frames", t)) {
+    net_->inject_error(hal::can_error::kProtocol | hal::can_error::kBusError, data);
+    io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (net_ != nullptr && cfg_.sim_fault == "can_bus_off") {
+    const bool off = faulty("can_bus_off", t);
+    if (off && !bus_off_) {
+      net_->inject_error(hal::can_error::kBusOff, data);
+      io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+    } else if (!off && bus_off_) {
+      net_->inject_error(hal::can_error::kRestarted, data);
+    }
+    bus_off_ = off;
+  }
+  if (store_ != nullptr && cfg_.sim_fault == "disk_full") {
+    const bool full = faulty("disk_full", t);
+    if (full && !store_->full()) io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+    store_->set_full(full);
+  }
+}
+
 void SimVehicle::record(const hal::CanFrame& f, std::int64_t t_ns) noexcept {
   if (!candump_) return;
   hal::CanLogRecord r;
@@ -131,7 +161,17 @@ void SimVehicle::send_attitude(double heading_rad) noexcept {
   a.valid = true;
   a.counter = att_counter_++;
   hal::CanFrame f;
-  if (qc::encode(a, f) && bus_->send(f)) record(f, clock_.now_ns());
+  if (!qc::encode(a, f)) return;
+  if (faulty("attitude_out_of_range", now)) {
+    f.data[4] = 0xFF;  // Heading (bits 32..47): 6.5535 rad, beyond the DBC's [0, 6.2832]
+    f.data[5] = 0xFF;
+    io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (bus_->send(f)) record(f, clock_.now_ns());
+  if (faulty("attitude_duplicate", now) && bus_->send(f)) {  // the same frame again (same counter)
+    record(f, clock_.now_ns());
+    io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
@@ -139,11 +179,33 @@ void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
   long long tov = t_ns / 1000;
   if (tov <= last_tov_us_) tov = last_tov_us_ + 1;
   last_tov_us_ = tov;
+  const bool nan = faulty("dvl_nan", t_ns), back = faulty("dvl_time_back", t_ns);
+  const long long stamp = back ? tov - 5000000 : tov;  // 5 s in the past
   char body[200], line[240];
-  std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", fwd, stbd,
-                pass_cfg_.altitude_m, tov, tov);
+  if (nan)
+    std::snprintf(body, sizeof body, "wrz,nan,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", stbd,
+                  pass_cfg_.altitude_m, stamp, stamp);
+  else
+    std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", fwd, stbd,
+                  pass_cfg_.altitude_m, stamp, stamp);
   const std::size_t n = drivers::dvl::wl_with_checksum(body, line, sizeof line);
+  if (faulty("dvl_line_noise", t_ns)) {
+    // A burst of line noise ending in a line break: a line of its own, before the real sentence.
+    std::uint8_t noise[24];
+    for (std::uint8_t& b : noise) {
+      noise_seed_ = noise_seed_ * 1103515245u + 12345u;
+      b = static_cast<std::uint8_t>(0x20 + (noise_seed_ >> 16) % 0x5F);
+    }
+    noise[sizeof noise - 1] = '\n';
+    static_cast<void>(dvl_->write(Span<const std::uint8_t>(noise, sizeof noise)));
+    io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
   static_cast<void>(dvl_->write(Span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line), n)));
+  if (nan || back) io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+  if (faulty("dvl_duplicate", t_ns)) {
+    static_cast<void>(dvl_->write(Span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line), n)));
+    io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 // Between passes the vehicle is alive: time passes and the AHRS streams.
@@ -233,6 +295,7 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
                                         IoCounters& io) noexcept {
   const std::int64_t t = smp.t_ns;
   clock_.set(t);
+  inject_bus_faults(t);
   // AHRS: the compass heading (with the DVL + compass errors of the pass) at the ping time.
   send_attitude(smp.nav.heading_rad);
   // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
@@ -291,6 +354,18 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   m.altitude_m = smp.altitude_m;
   m.device_stamp_ns = smp.device_stamp_ns;
   m.stamp.sample_ns = m.stamp.arrival_ns = t;
+  if (faulty("sonar_nan", t)) {
+    port[m.port_samples / 3] = std::nanf("");
+    io.faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (faulty("sonar_bad_range", t)) {
+    m.slant_range_m = 8.8e-38f;  // one flipped exponent bit of 30 m
+    io.faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (faulty("ping_time_back", t)) {
+    m.stamp.sample_ns = m.stamp.arrival_ns = t - 3000000000;  // stamped 3 s in the past
+    io.faults_injected.fetch_add(1, std::memory_order_relaxed);
+  }
   m.has_truth = smp.has_truth;
   m.truth = smp.truth;
   // Held until the I/O thread has queued this instant's attitude frame and DVL sentence
@@ -302,6 +377,7 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
 
 SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
                                         IoCounters& io) noexcept {
+  io_ = &io;
   drain_bus();
   switch (phase_) {
     case Phase::kCommand: {

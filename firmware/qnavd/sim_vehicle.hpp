@@ -13,7 +13,11 @@
 // pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
 // A [[sim.pass]] with a file replays a recorded XTF/JSF pass instead: its pings, its navigation (the
 // file's fixes or dead reckoning) as the AHRS heading and DVL velocities, its timing.
-// Fault injection (sim.stall): the DVL, the AHRS or the sonar falls silent for a stretch of a pass.
+// Fault injection (sim.stall): the DVL, the AHRS or the sonar falls silent for a stretch of a pass;
+// (sim.fault) damaged or disordered input for a stretch of a pass: NaN, duplicated, backwards or
+// noisy DVL sentences, out-of-range or duplicated attitude frames, CAN error frames and
+// bus-off, NaN or damaged-range pings, pings stamped in the past, a full disk. Every injected sample
+// is counted in IoCounters::faults_injected (the tests compare it with the daemon's rejections).
 // sim.candump records every frame on the bus in candump -l format (`qnav can decode` reads it).
 // init() allocates the seabed and simulator; step() allocates nothing.
 #pragma once
@@ -33,6 +37,7 @@
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/clock.hpp"
 #include "hal/core/serial.hpp"
+#include "hal/sim/fault_file_store.hpp"
 #include "hal/sim/sim_can.hpp"
 #include "nav/core/spsc_ring.hpp"
 
@@ -61,6 +66,8 @@ class SimVehicle {
   SimVehicle& operator=(const SimVehicle&) = delete;
   // autopilot: this vehicle's node on the daemon's CAN network; dvl_out: the DVL's end of the serial line.
   Status init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out);
+  // Fault injection's reach: the CAN network (error frames) and the route store (a full disk).
+  void set_fault_targets(hal::SimCanNetwork* net, hal::FaultFileStore* store) noexcept { net_ = net, store_ = store; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
   // One step: produce the next ping (with its attitude frame and DVL sentence) if the nav side has
   // room, or advance the mission's handshake. pool/stride: the ping pool (see messages.hpp).
@@ -138,6 +145,13 @@ class SimVehicle {
   PingMsg pending_{};
   bool has_pending_ = false;  // a slot taken from free_slots but not used (render failed)
   bool stalled(const char* sensor, std::int64_t t_ns) const noexcept;
+  bool faulty(const char* kind, std::int64_t t_ns) const noexcept;
+  void inject_bus_faults(std::int64_t t_ns) noexcept;
+  hal::SimCanNetwork* net_ = nullptr;
+  hal::FaultFileStore* store_ = nullptr;
+  IoCounters* io_ = nullptr;       // for faults_injected (set by step())
+  bool bus_off_ = false;           // can_bus_off: the bus is off; a restart frame follows the window
+  std::uint32_t noise_seed_ = 12345;
   void record(const hal::CanFrame& f, std::int64_t t_ns) noexcept;
   std::FILE* candump_ = nullptr;
 };

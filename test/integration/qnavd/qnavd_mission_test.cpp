@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <unistd.h>
 
@@ -404,6 +405,146 @@ TEST(QnavdMission, MissingCanInterfaceIsAClearStartUpError) {
   Daemon d(c);
   const Status s = d.init(nullptr);
   EXPECT_FALSE(s);
+}
+
+
+// ---- Fault injection (sim.fault): damaged or disordered input during the repeat pass ----
+// Each fault runs from 100 s for `length_s` of the repeat pass (teach + repeat over 1,200 m). The
+// daemon must count every damaged sample (faults_injected, from the simulator, against its own
+// counters), keep navigating (tiles and ROUTE_STATUS for every repeat tile), report the state the
+// fault implies, and recover after it.
+struct FaultRun {
+  std::unique_ptr<Recorder> rec = std::make_unique<Recorder>();
+  NodeScore score;
+  std::uint32_t injected = 0;
+  std::uint32_t dvl_rejected = 0, can_rejected = 0, error_frames = 0, pings_rejected = 0, pings_out_of_order = 0, writer_errors = 0;
+  std::uint32_t final_faults = 0;
+  std::uint32_t route_nodes = 0;
+  bool route_intact = false;
+};
+
+void run_with_fault(const char* kind, int pass, double length_s, FaultRun& out) {
+  SoftwareFaults::reset_for_tests();
+  const std::string dir = temp_dir();
+  DaemonConfig c = sim_config(dir, 1200.0);
+  c.sim_fault = kind;
+  c.sim_fault_pass = pass;
+  c.sim_fault_start_s = 100.0;
+  c.sim_fault_s = length_s;
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
+  Daemon d(c);
+  d.set_tile_observer(on_tile, out.rec.get());
+  d.set_bus_observer(on_frame, out.rec.get());
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  ASSERT_EQ(d.run(), 0) << kind;
+  EXPECT_TRUE(d.mission_done()) << kind;
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << kind;
+  out.score = score_nodes(*out.rec);
+  const IoCounters& io = d.io_counters();
+  out.injected = io.faults_injected.load();
+  out.dvl_rejected = io.dvl_rejected.load();
+  out.can_rejected = d.nav().can_rejected();
+  out.error_frames = d.nav().can_error_frames();
+  out.pings_rejected = d.nav().pings_rejected();
+  out.pings_out_of_order = d.nav().pings_out_of_order();
+  out.writer_errors = d.nav().writer_errors();
+  out.final_faults = out.rec->last_faults.load();
+  tools::RouteFileReader reader;
+  if (reader.open((dir + "/route_1.qroute").c_str())) {
+    out.route_nodes = reader.node_count();
+    route::NodeMeta m;
+    out.route_intact = true;
+    for (std::uint32_t i = 0; i < reader.node_count(); ++i) out.route_intact = out.route_intact && reader.load_meta(i, m).is_ok();
+  }
+  std::printf("fault %s %.0f s: %u injected; rejected dvl %u, can %u (error frames %u), pings %u, out of order %u; writer errors %u; "
+              "%u repeat tiles, node +/-1 on %u of %u; faults seen 0x%x, at the end 0x%x\n",
+              kind, length_s, out.injected, out.dvl_rejected, out.can_rejected, out.error_frames, out.pings_rejected, out.pings_out_of_order,
+              out.writer_errors, out.score.repeat_tiles, out.score.within1, out.score.scored, out.rec->faults_seen.load(), out.final_faults);
+  EXPECT_GT(out.injected, 0u) << kind << ": the simulator injected nothing";
+  EXPECT_EQ(out.final_faults & ~qc::fault::kDeadlineMiss, 0u) << kind << ": recovered by the end of the pass";
+}
+
+TEST(QnavdFaults, DamagedDvlSentencesAreRejectedAndCounted) {
+  // 0.5 s of NaN: shorter than dvl.stale_s, so the DVL is never reported lost. Duplicates and line
+  // noise come with every good sentence, so it never is either.
+  for (const char* kind : {"dvl_nan", "dvl_duplicate", "dvl_line_noise"}) {
+    FaultRun r;
+    run_with_fault(kind, 1, std::strcmp(kind, "dvl_nan") == 0 ? 0.5 : 20.0, r);
+    EXPECT_GE(r.dvl_rejected, r.injected) << kind;
+    EXPECT_LE(r.dvl_rejected, r.injected + 5u) << kind << ": rejections beyond the injected ones";
+    EXPECT_FALSE(r.rec->faults_seen.load() & qc::fault::kDvlLost) << kind << ": good sentences kept coming";
+    EXPECT_GE(r.score.within1, r.score.scored * 8 / 10) << kind;
+  }
+}
+
+TEST(QnavdFaults, ADvlClockSteppedBackIsStaleUntilItPassesTheLastGoodTime) {
+  // For 20 s the DVL's time of validity runs 5 s behind: the sentences stamped at or before the last
+  // accepted one (the first 5 s, 5 Hz) are stale, counted, and the DVL is reported lost meanwhile;
+  // then its clock is past the last good time again and its velocities are used.
+  FaultRun r;
+  run_with_fault("dvl_time_back", 1, 20.0, r);
+  EXPECT_GE(r.dvl_rejected, 24u);
+  EXPECT_LE(r.dvl_rejected, 30u);
+  EXPECT_TRUE(r.rec->faults_seen.load() & qc::fault::kDvlLost);
+  EXPECT_GE(r.score.within1, r.score.scored * 8 / 10);
+}
+
+TEST(QnavdFaults, LongDvlNanIsADvlLossAndRecovers) {
+  FaultRun r;
+  run_with_fault("dvl_nan", 1, 20.0, r);
+  EXPECT_GE(r.dvl_rejected, r.injected);
+  EXPECT_TRUE(r.rec->faults_seen.load() & qc::fault::kDvlLost) << "20 s of unusable velocities is a DVL loss";
+  EXPECT_GE(r.score.within1, r.score.scored * 8 / 10);
+}
+
+TEST(QnavdFaults, DamagedAttitudeFramesAreRejectedAndCounted) {
+  for (const char* kind : {"attitude_out_of_range", "attitude_duplicate"}) {
+    FaultRun r;
+    run_with_fault(kind, 1, 20.0, r);
+    EXPECT_GE(r.can_rejected, r.injected) << kind;
+    if (std::strcmp(kind, "attitude_out_of_range") == 0) {
+      EXPECT_TRUE(r.rec->faults_seen.load() & qc::fault::kAttitudeLost) << "20 s without a usable heading";
+    } else {
+      EXPECT_FALSE(r.rec->faults_seen.load() & qc::fault::kAttitudeLost) << "the first copy of each frame is good";
+    }
+    EXPECT_GE(r.score.repeat_tiles, 10u) << kind;
+  }
+}
+
+TEST(QnavdFaults, CanErrorFramesAndBusOffAreCountedAndReported) {
+  FaultRun e;
+  run_with_fault("can_error_frames", 1, 20.0, e);
+  EXPECT_EQ(e.error_frames, e.injected);
+  EXPECT_FALSE(e.rec->faults_seen.load() & qc::fault::kBusOff);
+  EXPECT_GE(e.score.within1, e.score.scored * 8 / 10);
+  FaultRun b;
+  run_with_fault("can_bus_off", 1, 20.0, b);
+  EXPECT_TRUE(b.rec->faults_seen.load() & qc::fault::kBusOff) << "bus-off is reported until the controller restarts";
+  EXPECT_GE(b.score.within1, b.score.scored * 8 / 10);
+}
+
+TEST(QnavdFaults, DamagedAndDisorderedPingsAreRejectedAndCounted) {
+  for (const char* kind : {"sonar_nan", "sonar_bad_range"}) {
+    FaultRun r;
+    run_with_fault(kind, 1, 20.0, r);
+    EXPECT_EQ(r.pings_rejected, r.injected) << kind;
+    EXPECT_GE(r.score.repeat_tiles, 10u) << kind;
+  }
+  FaultRun t;
+  run_with_fault("ping_time_back", 1, 2.0, t);  // stamped 3 s in the past for 2 s: every one out of order
+  EXPECT_EQ(t.pings_out_of_order, t.injected);
+  EXPECT_GE(t.score.within1, t.score.scored * 8 / 10);
+}
+
+TEST(QnavdFaults, AFullDiskWhileTeachingKeepsTheRouteValidAndTheDaemonRunning) {
+  FaultRun r;
+  run_with_fault("disk_full", 0, 60.0, r);
+  EXPECT_GE(r.writer_errors, 1u);
+  EXPECT_TRUE(r.route_intact) << "every node in the route file decodes";
+  EXPECT_GE(r.route_nodes, 3u) << "the nodes taught before the disk filled are kept";
+  EXPECT_GE(r.score.repeat_tiles, 10u) << "the repeat pass still flies";
 }
 
 }  // namespace

@@ -116,6 +116,10 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(sim_stall_pass),
       QNAV_FIELD(sim_stall_start_s),
       QNAV_FIELD(sim_stall_s),
+      QNAV_FIELD(sim_fault),
+      QNAV_FIELD(sim_fault_pass),
+      QNAV_FIELD(sim_fault_start_s),
+      QNAV_FIELD(sim_fault_s),
   };
   return f;
 }
@@ -393,6 +397,10 @@ stall = "dvl"
 stall_pass = 0
 stall_start_s = 30.0
 stall_s = 20.0
+fault = "disk_full"
+fault_pass = 2
+fault_start_s = 30.0
+fault_s = 5.0
 
 [[sim.pass]]
 mode = "hold"
