@@ -55,8 +55,17 @@ int parse(int argc, char** argv) {
   unsigned n_lines = 0, n_vel = 0, n_lock = 0, shown = 0;
   double sum_speed = 0;
   std::int64_t t_ns = 0;  // line index as time (a file has no arrival times): 1 ms per line
+  // A capture is read to its end but never without bound (a device such as /dev/zero has no end).
+  constexpr std::uint64_t kMaxCaptureBytes = std::uint64_t{64} << 20;
+  std::uint64_t bytes = 0;
   int c;
   while ((c = std::fgetc(f)) != EOF) {
+    if (++bytes > kMaxCaptureBytes) {
+      std::fclose(f);
+      std::fprintf(stderr, "qnav dvl: %s: larger than %llu MiB: split the capture\n", path,
+                   static_cast<unsigned long long>(kMaxCaptureBytes >> 20));
+      return 1;
+    }
     if (!lines.push(static_cast<std::uint8_t>(c))) continue;
     ++n_lines;
     t_ns += 1000000;
@@ -83,6 +92,11 @@ int parse(int argc, char** argv) {
               pd6 ? "PD6" : "Water Linked", n_lines, n_vel, n_lock, n_lock ? sum_speed / n_lock : 0.0, lines.overlong());
   if (pd6) print_counters(pd.counters());
   else print_counters(wl.counters());
+  if (n_vel == 0) {
+    std::fprintf(stderr, "qnav dvl: %s: no %s velocity sentence in %u lines (rejections counted above)\n", path,
+                 pd6 ? "PD6" : "Water Linked", n_lines);
+    return 1;
+  }
   return 0;
 }
 
