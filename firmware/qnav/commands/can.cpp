@@ -112,6 +112,10 @@ int decode(int argc, char** argv) {
     if (replay.receive(f, 0).is_ok()) d->on_frame(f);
   }
   d->summary(replay.bad_lines());
+  if (d->frames == 0) {
+    std::fprintf(stderr, "qnav can: %s: no CAN frame in the log\n", path);
+    return 1;
+  }
   if (replay.bad_lines() > 0) {
     std::fprintf(stderr, "qnav can: %s: %u line(s) did not parse (first: line %u); the rest was decoded\n", path,
                  replay.bad_lines(), replay.first_bad_line());
@@ -172,6 +176,10 @@ int dbc(int argc, char** argv) {
   const Status s = qc::parse_dbc(text.data(), text.size(), *file);
   if (!s.is_ok()) {
     std::fprintf(stderr, "qnav can: %s: line %zu: %s\n", path, file->error_line, s.message());
+    return 1;
+  }
+  if (file->messages.empty()) {
+    std::fprintf(stderr, "qnav can: %s: no message (BO_) in the DBC file\n", path);
     return 1;
   }
   int mismatches = 0, signals = 0;
