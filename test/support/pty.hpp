@@ -29,6 +29,11 @@ class PseudoTerminal {
   // True when the pair exists and the slave has a name.
   bool ok() const { return master_ >= 0 && slave_[0] != '\0'; }
   int master_fd() const { return master_; }
+  // The device goes away (unplugged USB adapter, powered-down sensor): the slave side sees a hang-up.
+  void close_master() {
+    if (master_ >= 0) close(master_);
+    master_ = -1;
+  }
   const char* slave_path() const { return slave_; }
 
  private:
