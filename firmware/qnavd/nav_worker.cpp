@@ -215,9 +215,7 @@ ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
     return ModeReject::kStorage;
   }
   const route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing_m_, swath_m_);
-  drivers::route_store::RouteWriterOptions o;
-  o.overwrite = false;  // the name is free now; never truncate what is there
-  const Status s = writer_.create(path, params, o);
+  const Status s = writer_.create(path, params);  // the name is free now; create() never truncates
   if (!s) {
     if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: %s: %s\"}\n", path, s.message());
     return ModeReject::kStorage;
@@ -237,6 +235,13 @@ ModeReject NavWorker::enter_repeat(std::uint16_t id, bool reverse) noexcept {
     if (s.code() == StatusCode::kIoError) return ModeReject::kStorage;
     faults_ |= qc::fault::kRouteDamaged;
     return ModeReject::kRouteDamaged;
+  }
+  if (!reader_.closed_cleanly() || reader_.torn_bytes() > 0) {
+    // Still usable (every complete node is checked below), but the autopilot's operator should know.
+    if (log_)
+      std::fprintf(log_, "{\"event\":\"route_cut_off\",\"file\":\"%s\",\"nodes\":%u,\"torn_bytes\":%llu,\"partial_node_dropped\":%s,\"end\":\"%s\"}\n", path,
+                   reader_.node_count(), static_cast<unsigned long long>(reader_.torn_bytes()), reader_.torn_bytes() > 0 ? "true" : "false",
+                   drivers::route_store::to_string(reader_.end()));
   }
   if (reader_.node_count() > cfg_.max_nodes) {
     if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%u nodes > route.max_nodes %zu\"}\n", path, reader_.node_count(), cfg_.max_nodes);

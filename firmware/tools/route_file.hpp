@@ -8,7 +8,10 @@
 
 namespace qnav::tools {
 
+using drivers::route_store::kRoutePathBytes;
 using drivers::route_store::RouteAppendReport;
+using drivers::route_store::RouteEnd;
+using drivers::route_store::RouteReplaceReport;
 using drivers::route_store::RouteWriterOptions;
 
 class RouteFileWriter final : public drivers::route_store::RouteFileWriter {

@@ -1,6 +1,8 @@
 // qnav route: route teach and repeat (route-following paper) on the side-scan simulator or XTF files.
-//   qnav route train  --sim --out FILE [--length-m 2000] [--seed N]      -> route file (durable)
-//   qnav route info   FILE                                                -> header, nodes, damage
+//   qnav route train  --sim --out FILE [--length-m 2000] [--seed N] [--force] -> route file (durable; taught
+//                     under FILE.new, renamed over FILE only when complete: the old route survives a kill)
+//   qnav route info   FILE                                                -> header, end (closed cleanly / cut off),
+//                     torn tail, every damaged node
 //   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]
 //   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--seabeds 3] [--quick] -> Table I, Fig. 5/7/9/10 data
 //   qnav route xtf    --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]  -> real data: teach on pings A..B,
@@ -83,7 +85,7 @@ using TileSource = VectorNodeSource<pipeline::RouteTile>;
 
 int usage() {
   std::fprintf(stderr,
-               "usage: qnav route train --sim --out FILE [--length-m M] [--seed N]\n"
+               "usage: qnav route train --sim --out FILE [--length-m M] [--seed N] [--force]\n"
                "       qnav route info FILE\n"
                "       qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]\n"
                "       qnav route eval [--json] [--out DIR] [--length-m M] [--seabeds N (3)] [--quick]\n"
@@ -92,6 +94,117 @@ int usage() {
                "       qnav route repeat --route FILE --sonar FILE.xtf|.jsf [--pings A:B] [--reverse] [--csv OUT]\n"
                "       qnav route camera [--json] [--length-m M (2-200)] [--seed N]\n");
   return 2;
+}
+
+// ---- route files: teaching never destroys a route before its replacement is complete ----
+
+// The reader's non-zero counters, "name=N ..." ("none" when all are zero).
+std::string counter_text(const route::RouteFormatCounters& c) {
+  std::string t;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (c.count_at(i) > 0) t += (t.empty() ? "" : " ") + std::string(c.name_at(i)) + "=" + std::to_string(c.count_at(i));
+  return t.empty() ? "none" : t;
+}
+
+// Starts teaching the route `out`: the nodes go to OUT.new (durable node by node) and replace OUT
+// only at finish_route's commit, so a kill or power cut at any moment leaves the old route whole.
+// Without --force an existing OUT is refused before anything is taught. A previous run's OUT.new
+// (cut off) is kept as OUT.new.kept.<n>. Reports and returns false on error.
+bool begin_route(tools::RouteFileWriter& w, const char* cmd, const char* out, const route::RouteParams& p, bool force,
+                 tools::RouteWriterOptions o = tools::RouteWriterOptions{}) {
+  o.replace_existing = force;
+  tools::RouteReplaceReport rep;
+  const Status s = w.create_replacement(out, p, o, &rep);
+  if (!s) {
+    std::fprintf(stderr, "qnav route %s: %s: %s%s\n", cmd, out, s.message(),
+                 !force && s.code() == StatusCode::kInvalidArgument ? " (--force replaces it; the old route stays until the new one is complete)" : "");
+    return false;
+  }
+  if (rep.previous_kept)
+    std::fprintf(stderr, "qnav route %s: a previous unfinished run's %s was kept as %s\n", cmd, rep.temp_path, rep.kept_path);
+  return true;
+}
+
+// Ends teaching: when taught is ok, the end mark, fsync and the atomic rename over OUT (directory
+// fsync'ed); otherwise OUT is left untouched and the nodes taught so far stay durable in OUT.new
+// (without an end mark: it reads as cut off). Reports; true when committed.
+bool finish_route(tools::RouteFileWriter& w, const char* cmd, const char* out, Status taught) {
+  char temp[tools::kRoutePathBytes];
+  std::snprintf(temp, sizeof temp, "%s", w.path());
+  if (taught) {
+    const Status c = w.commit();
+    if (c) return true;
+    std::fprintf(stderr, "qnav route %s: %s: commit failed: %s (the %u nodes taught stay in %s; %s is unchanged)\n", cmd, out, c.message(),
+                 w.node_count(), temp, out);
+    return false;
+  }
+  const std::uint32_t n = w.node_count();
+  const Status a = w.abandon();
+  std::fprintf(stderr, "qnav route %s: %s (%s is unchanged; the %u nodes taught %s in %s)\n", cmd, taught.message(), out, n,
+               a ? "stay" : "may not all be durable", temp);
+  return false;
+}
+
+// How the route file ends, one line (stdout for info, stderr as a warning for repeat). true when
+// the route was closed cleanly and has no torn tail.
+bool report_route_end(FILE* f, const char* prefix, const tools::RouteFileReader& r) {
+  bool clean = true;
+  switch (r.end()) {
+    case tools::RouteEnd::kClosedCleanly:
+      std::fprintf(f, "%sformat version %u, closed cleanly (end mark: %u nodes)\n", prefix, r.format_version(), r.end_mark_nodes());
+      break;
+    case tools::RouteEnd::kCutOff:
+      std::fprintf(f, "%sCUT OFF: no end mark: the teach was killed or lost power before it closed the route; its %u complete nodes are usable\n",
+                   prefix, r.file_nodes());
+      clean = false;
+      break;
+    case tools::RouteEnd::kCountMismatch:
+      std::fprintf(f, "%sCUT OFF: the end mark records %u nodes but the file holds %u\n", prefix, r.end_mark_nodes(), r.file_nodes());
+      clean = false;
+      break;
+    case tools::RouteEnd::kNoEndMarkV1:
+      std::fprintf(f, "%sno end marker: version 1 (a complete route and a cut-off one look the same)\n", prefix);
+      clean = false;
+      break;
+  }
+  if (r.torn_bytes() > 0) {
+    std::fprintf(f, "%storn tail: %llu bytes after node %u: the last, partial node was dropped\n", prefix,
+                 static_cast<unsigned long long>(r.torn_bytes()), r.file_nodes() == 0 ? 0u : r.file_nodes() - 1);
+    clean = false;
+  }
+  return clean;
+}
+
+// Opens a route to repeat: how it ends is reported (a warning when cut off or torn: still usable)
+// and every node is checked in full. A damaged node is named with why (CRC, magic, index, field);
+// with at least 2 good nodes before it the repeat goes on over that good prefix (warning with the
+// counters), otherwise it is refused. Reports and returns false when the route cannot be used.
+bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std::vector<route::NodeMeta>& meta) {
+  Status s = reader.open(path);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, s.message());
+    return false;
+  }
+  char prefix[600];
+  std::snprintf(prefix, sizeof prefix, "qnav route repeat: WARNING: %s: ", path);
+  report_route_end(stderr, reader.closed_cleanly() ? "qnav route repeat: " : prefix, reader);
+  std::uint32_t bad = 0;
+  s = reader.read_all_meta(meta, &bad);
+  if (s) return true;
+  if (bad < 2) {
+    std::fprintf(stderr, "qnav route repeat: %s: node %u is damaged: %s; fewer than 2 good nodes before it: refused (counters: %s)\n", path, bad,
+                 s.message(), counter_text(reader.counters()).c_str());
+    return false;
+  }
+  std::fprintf(stderr,
+               "%snode %u is damaged: %s; repeating on the good prefix, nodes 0..%u (%u later nodes not used; counters: %s nodes_unused=%u)\n",
+               prefix, bad, s.message(), bad - 1, reader.file_nodes() - bad, counter_text(reader.counters()).c_str(), reader.file_nodes() - bad);
+  s = reader.limit_nodes(bad);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, s.message());
+    return false;
+  }
+  return true;
 }
 
 int cmd_train_file(const char* path, int argc, char** argv);
@@ -120,13 +233,7 @@ int cmd_train(int argc, char** argv) {
   const auto& tc = pipe.config();
   const double spacing = tc.tiles.scanline_stride * w.route.speed_mps / w.route.ping_rate_hz;
   tools::RouteFileWriter writer;
-  tools::RouteWriterOptions o;
-  o.overwrite = cli::flag(argc, argv, "--force");
-  s = writer.create(out, pipeline::side_scan_route_params(tc, spacing, w.swath_m), o);
-  if (!s) {
-    std::fprintf(stderr, "qnav route train: %s: %s\n", out, s.message());
-    return 1;
-  }
+  if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(tc, spacing, w.swath_m), cli::flag(argc, argv, "--force"))) return 1;
   const auto t0 = Clock::now();
   std::size_t kps = 0;
   Status ws;
@@ -137,11 +244,7 @@ int cmd_train(int argc, char** argv) {
     return ws.is_ok();
   });
   if (s && !ws) s = ws;
-  const Status cs = writer.close();
-  if (!s || !cs) {
-    std::fprintf(stderr, "qnav route train: %s\n", (!s ? s : cs).message());
-    return 1;
-  }
+  if (!finish_route(writer, "train", out, s)) return 1;
   std::printf("route %s: %u nodes, spacing %.1f m, swath %.1f m, %.1f keypoints/node, trained in %.1f s (fsync per node)\n", out,
               writer.node_count(), spacing, w.swath_m, writer.node_count() ? static_cast<double>(kps) / writer.node_count() : 0.0,
               ms_since(t0) / 1000.0);
@@ -161,15 +264,26 @@ int cmd_info(int argc, char** argv) {
   std::printf("route %s: sensor %s, %u nodes, spacing %.2f m, tile %.1f x %.1f m, pixel %.2f m, depth %.1f m, <= %u keypoints/node\n", path,
               route::to_string(p.sensor), r.node_count(), static_cast<double>(p.node_spacing_m), static_cast<double>(p.tile_length_m),
               static_cast<double>(p.tile_width_m), static_cast<double>(p.pixel_m), static_cast<double>(p.depth_m), p.max_keypoints);
-  if (r.torn_bytes() > 0) std::printf("torn tail: %llu bytes after the last complete node (ignored)\n", static_cast<unsigned long long>(r.torn_bytes()));
-  std::vector<route::NodeMeta> meta;
-  std::uint32_t bad = 0;
-  const Status ms = r.read_all_meta(meta, &bad);
-  if (!ms) {
-    std::printf("DAMAGED: node %u: %s (nodes 0..%u are good)\n", bad, ms.message(), bad == 0 ? 0 : bad - 1);
+  report_route_end(stdout, "", r);
+  // Every record checked in full (CRC, magic, index, every field and keypoint); every damaged one named.
+  std::uint32_t damaged = 0, first_bad = r.node_count();
+  for (std::uint32_t i = 0; i < r.node_count(); ++i) {
+    route::NodeMeta m;
+    const Status ms = r.load_meta(i, m);
+    if (ms) continue;
+    std::printf("DAMAGED: node %u: %s\n", i, ms.message());
+    first_bad = std::min(first_bad, i);
+    ++damaged;
+  }
+  if (damaged > 0) {
+    std::printf("%u of %u nodes damaged (counters: %s); ", damaged, r.node_count(), counter_text(r.counters()).c_str());
+    if (first_bad >= 2)
+      std::printf("route repeat uses the good prefix, nodes 0..%u\n", first_bad - 1);
+    else
+      std::printf("fewer than 2 good nodes before node %u: route repeat refuses this route\n", first_bad);
     return 1;
   }
-  std::printf("all %u records pass their CRC\n", r.node_count());
+  std::printf("all %u records pass their CRC and field checks\n", r.node_count());
   return 0;
 }
 
@@ -237,18 +351,12 @@ int cmd_repeat(int argc, char** argv) {
     return 2;
   }
   tools::RouteFileReader reader;
-  Status s = reader.open(path);
   std::vector<route::NodeMeta> meta;
-  std::uint32_t bad = 0;
-  if (s) s = reader.read_all_meta(meta, &bad);
-  if (!s) {
-    std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, s.message());
-    return 1;
-  }
+  if (!open_route_for_repeat(path, reader, meta)) return 1;
   const bool reverse = cli::flag(argc, argv, "--reverse");
   pipeline::SimSurvey w;
   pipeline::RouteTilePipeline pipe;
-  s = w.init(length_m, static_cast<std::uint64_t>(seed));
+  Status s = w.init(length_m, static_cast<std::uint64_t>(seed));
   if (s) s = pipe.init(pipeline::default_route_tile_config());
   route::LocaliserConfig lc = pipeline::default_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
   auto loc = std::make_unique<pipeline::RouteRepeater>();
@@ -561,16 +669,14 @@ int cmd_eval(int argc, char** argv) {
   const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
   const std::string route_path = out_dir + "/route_eval.qroute";
   tools::RouteFileWriter writer;
-  tools::RouteWriterOptions wo;
-  wo.overwrite = true;
-  s = writer.create(route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), wo);
+  if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
   t0 = Clock::now();
   for (const pipeline::RouteTile& t : train)
     if (s) s = writer.append(t.node);
   const double append_ms = ms_since(t0) / static_cast<double>(train.size());
-  if (s) s = writer.close();
+  if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
   tools::RouteFileReader reader;
-  if (s) s = reader.open(route_path.c_str());
+  s = reader.open(route_path.c_str());
   std::vector<route::NodeMeta> meta;
   std::uint32_t bad = 0;
   if (s) s = reader.read_all_meta(meta, &bad);
@@ -681,9 +787,10 @@ int cmd_eval(int argc, char** argv) {
     const std::string big = out_dir + "/route_10000.qroute";
     tools::RouteFileWriter bw;
     tools::RouteWriterOptions o;
-    o.overwrite = true;
     o.sync_each_node = false;
-    Status bs = bw.create(big.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), o);
+    Status bs = begin_route(bw, "eval", big.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true, o)
+                    ? Status::ok()
+                    : Status(StatusCode::kIoError, "cannot create the 10,000-node route");
     const double block_m = node_along.back() + spacing;
     for (std::uint32_t i = 0; i < 10000 && bs; ++i) {
       route::RouteNode n = train[i % train.size()].node;
@@ -692,7 +799,7 @@ int cmd_eval(int argc, char** argv) {
       n.meta.along_m += shift;
       bs = bw.append(n);
     }
-    if (bs) bs = bw.close();
+    if (!finish_route(bw, "eval", big.c_str(), bs) && bs) bs = Status(StatusCode::kIoError, "10,000-node route not committed");
     tools::RouteFileReader br;
     std::vector<route::NodeMeta> bmeta;
     if (bs) bs = br.open(big.c_str());
@@ -1065,21 +1172,14 @@ int cmd_train_file(const char* path, int argc, char** argv) {
   }
   const double spacing = (tiles.back().node.meta.along_m - tiles.front().node.meta.along_m) / static_cast<double>(tiles.size() - 1);
   tools::RouteFileWriter writer;
-  tools::RouteWriterOptions o;
-  o.overwrite = cli::flag(argc, argv, "--force");
-  s = writer.create(out, pipeline::side_scan_route_params(fp.tiles, spacing, fp.swath_m), o);
-  const bool created = s.is_ok();
+  if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(fp.tiles, spacing, fp.swath_m), cli::flag(argc, argv, "--force"))) return 1;
   std::size_t kps = 0;
   for (const pipeline::RouteTile& t : tiles) {
     if (!s) break;
     s = writer.append(t.node);
     kps += t.node.keypoints.size();
   }
-  const Status cs = created ? writer.close() : Status::ok();  // nodes appended before an error stay durable
-  if (!s || !cs) {
-    std::fprintf(stderr, "qnav route train: %s: %s\n", out, (!s ? s : cs).message());
-    return 1;
-  }
+  if (!finish_route(writer, "train", out, s)) return 1;  // nodes appended before an error stay durable in OUT.new
   std::printf("route %s: %u nodes from %s pings %ld..%ld, spacing %.1f m, swath %.1f m, %.1f keypoints/node (%s)\n", out, writer.node_count(), path,
               a, b - 1, spacing, fp.swath_m, static_cast<double>(kps) / static_cast<double>(tiles.size()), fp.fd.counters.c_str());
   return 0;
@@ -1092,13 +1192,8 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
   long a = 0, b = 1L << 40;
   if (route_path == nullptr || !parse_range(cli::option(argc, argv, "--pings"), a, b)) return usage();
   tools::RouteFileReader reader;
-  Status s = reader.open(route_path);
   std::vector<route::NodeMeta> meta;
-  if (s) s = reader.read_all_meta(meta, nullptr);
-  if (!s) {
-    std::fprintf(stderr, "qnav route repeat: %s: %s\n", route_path, s.message());
-    return 1;
-  }
+  if (!open_route_for_repeat(route_path, reader, meta)) return 1;
   FilePass fp;
   if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
   b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
@@ -1109,7 +1204,7 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
   pipeline::RouteTilePipeline pipe;
   std::vector<pipeline::RouteTile> tiles;
   std::vector<double> centre;
-  s = loc->init(lc);
+  Status s = loc->init(lc);
   if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
   if (s) s = pipe.init(fp.tiles);
   if (s) s = file_tiles(pipe, fp, a, b, tiles, &centre);

@@ -37,7 +37,7 @@ TEST(RouteFile, WriteThenReadEveryNode) {
     for (std::uint32_t i = 0; i < 20; ++i) ASSERT_TRUE(w.append(node(i, static_cast<int>(i % 9))).is_ok());
     ASSERT_TRUE(w.close().is_ok());
   }
-  EXPECT_EQ(file_size(p), route::kHeaderBytes + 20 * route::record_bytes(8));
+  EXPECT_EQ(file_size(p), route::kHeaderBytes + 20 * route::record_bytes(8) + route::kEndMarkBytes);  // closed: the end mark
   RouteFileReader r;
   ASSERT_TRUE(r.open(p.c_str()).is_ok());
   EXPECT_EQ(r.node_count(), 20u);
@@ -150,7 +150,11 @@ TEST(RouteFile, TenThousandNodeRouteReadsInFixedMemory) {
   {
     RouteFileWriter w;
     ASSERT_TRUE(w.create(p.c_str(), params(2), o).is_ok());
-    for (std::uint32_t i = 0; i < 10000; ++i) ASSERT_TRUE(w.append(node(i, 2)).is_ok());
+    for (std::uint32_t i = 0; i < 10000; ++i) {
+      route::RouteNode n = node(i, 2);
+      for (route::RouteKeypoint& k : n.keypoints) k.y_m = static_cast<float>(i % 50);  // within a tile (y = i m is refused beyond 4.9 km)
+      ASSERT_TRUE(w.append(n).is_ok());
+    }
   }
   RouteFileReader r;
   ASSERT_TRUE(r.open(p.c_str()).is_ok());
@@ -160,6 +164,70 @@ TEST(RouteFile, TenThousandNodeRouteReadsInFixedMemory) {
     ASSERT_TRUE(r.load(i, out).is_ok());
     EXPECT_EQ(out.meta.index, i);
   }
+  std::remove(p.c_str());
+}
+
+
+// Issue 19: --force truncated the old route before the new one held a node. A replacement is taught
+// next to the target and renamed over it only when complete; until then the old route is whole.
+TEST(RouteFile, ReplacementOnDiskKeepsTheOldRouteUntilCommit) {
+  const std::string p = temp_path("replace.qroute");
+  std::remove((p + ".new").c_str());
+  {
+    RouteFileWriter w;
+    ASSERT_TRUE(w.create(p.c_str(), params()).is_ok());
+    for (std::uint32_t i = 0; i < 6; ++i) ASSERT_TRUE(w.append(node(i, 2)).is_ok());
+    ASSERT_TRUE(w.close().is_ok());
+  }
+  const std::uint64_t old_size = file_size(p);
+  EXPECT_EQ(old_size, route::kHeaderBytes + 6 * route::record_bytes(8) + route::kEndMarkBytes);
+  RouteFileWriter w;
+  RouteWriterOptions o;
+  EXPECT_EQ(w.create_replacement(p.c_str(), params(), o), StatusCode::kInvalidArgument);
+  o.replace_existing = true;
+  ASSERT_TRUE(w.create_replacement(p.c_str(), params(), o).is_ok());
+  EXPECT_EQ(std::string(w.path()), p + ".new");
+  for (std::uint32_t i = 0; i < 3; ++i) ASSERT_TRUE(w.append(node(i, 7)).is_ok());
+  EXPECT_EQ(file_size(p), old_size) << "the old route is untouched while the new one is taught";
+  EXPECT_EQ(file_size(p + ".new"), route::kHeaderBytes + 3 * route::record_bytes(8));
+  {
+    RouteFileReader r;
+    ASSERT_TRUE(r.open(p.c_str()).is_ok());
+    EXPECT_TRUE(r.closed_cleanly());
+    EXPECT_EQ(r.node_count(), 6u);
+  }
+  ASSERT_TRUE(w.commit().is_ok());
+  EXPECT_EQ(file_size(p + ".new"), 0u) << "renamed, not copied";
+  RouteFileReader r;
+  ASSERT_TRUE(r.open(p.c_str()).is_ok());
+  EXPECT_TRUE(r.closed_cleanly());
+  EXPECT_EQ(r.node_count(), 3u);
+  route::RouteNode out;
+  ASSERT_TRUE(r.load(2, out).is_ok());
+  EXPECT_EQ(out.keypoints.size(), 7u);
+  std::remove(p.c_str());
+}
+
+TEST(RouteFile, ACutOffRouteOnDiskIsToldApartFromAClosedOne) {
+  const std::string p = temp_path("cut.qroute");
+  {
+    RouteFileWriter w;
+    ASSERT_TRUE(w.create(p.c_str(), params()).is_ok());
+    for (std::uint32_t i = 0; i < 4; ++i) ASSERT_TRUE(w.append(node(i, 2)).is_ok());
+  }  // destroyed without close(): a killed teach
+  RouteFileReader r;
+  ASSERT_TRUE(r.open(p.c_str()).is_ok());
+  EXPECT_EQ(r.end(), RouteEnd::kCutOff);
+  EXPECT_EQ(r.node_count(), 4u);
+  r.close();
+  RouteFileWriter w;
+  RouteAppendReport rep;
+  ASSERT_TRUE(w.open_append(p.c_str(), &rep).is_ok());
+  EXPECT_FALSE(rep.end_mark_cut);
+  ASSERT_TRUE(w.close().is_ok());
+  ASSERT_TRUE(r.open(p.c_str()).is_ok());
+  EXPECT_EQ(r.end(), RouteEnd::kClosedCleanly);
+  EXPECT_EQ(r.end_mark_nodes(), 4u);
   std::remove(p.c_str());
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "nav/core/byte_order.hpp"
@@ -46,8 +47,9 @@ TEST(RouteFormat, HeaderRoundTripAndFixedLittleEndianLayout) {
   std::uint8_t buf[kHeaderBytes];
   ASSERT_TRUE(encode_header(params(), Span<std::uint8_t>(buf)).is_ok());
   EXPECT_EQ(0, std::memcmp(buf, "QNAVRTE", 7));
-  EXPECT_EQ(buf[8], 1);  // version, little-endian on every host
+  EXPECT_EQ(buf[8], 2);  // version, little-endian on every host
   EXPECT_EQ(buf[9], 0);
+  for (std::size_t i = 44; i < 60; ++i) EXPECT_EQ(buf[i], 0) << "reserved byte " << i;
   EXPECT_EQ(load_le_u32(buf + 60), crc32(buf, 60));
   RouteFormatCounters c{kRouteFormatCounterNames};
   Result<RouteParams> p = decode_header(Span<const std::uint8_t>(buf), &c);
@@ -143,6 +145,145 @@ TEST(RouteFormat, WriterRefusesTooManyKeypointsAndNonFinitePoses) {
   RouteNode n = node(0, 1);
   n.meta.pose.x_m = std::nan("");
   EXPECT_EQ(encode_node(p, n, Span<std::uint8_t>(buf.data(), buf.size())), StatusCode::kInvalidArgument);
+}
+
+
+TEST(RouteFormat, Version1HeadersAreReadAndOtherVersionsRefused) {
+  std::uint8_t buf[kHeaderBytes];
+  ASSERT_TRUE(encode_header(params(), Span<std::uint8_t>(buf)).is_ok());
+  RouteFormatCounters c{kRouteFormatCounterNames};
+  RouteHeaderInfo info;
+  ASSERT_TRUE(decode_header(Span<const std::uint8_t>(buf), &c, &info).is_ok());
+  EXPECT_EQ(info.version, 2);
+  store_le_u16(buf + 8, 1);
+  store_le_u32(buf + 60, crc32(buf, 60));
+  ASSERT_TRUE(decode_header(Span<const std::uint8_t>(buf), &c, &info).is_ok());
+  EXPECT_EQ(info.version, 1);
+  for (std::uint16_t v : {std::uint16_t{0}, std::uint16_t{3}, std::uint16_t{0x0200}}) {
+    store_le_u16(buf + 8, v);
+    store_le_u32(buf + 60, crc32(buf, 60));
+    EXPECT_EQ(decode_header(Span<const std::uint8_t>(buf), &c, &info).status(), StatusCode::kUnsupported) << v;
+  }
+  EXPECT_EQ(c.get(RouteFormatCounter::kUnsupportedVersion), 3u);
+}
+
+TEST(RouteFormat, AbsurdHeaderLengthsAreRefused) {
+  std::uint8_t buf[kHeaderBytes];
+  RouteParams p = params();
+  p.node_spacing_m = 7.07e7f;  // 70,710 km: the bad-XTF route of issue 19
+  EXPECT_EQ(encode_header(p, Span<std::uint8_t>(buf)), StatusCode::kInvalidArgument);
+  p = params();
+  p.depth_m = 1e9f;
+  EXPECT_EQ(encode_header(p, Span<std::uint8_t>(buf)), StatusCode::kInvalidArgument);
+  // ... and on reading: a CRC-valid header holding one is bad_params.
+  ASSERT_TRUE(encode_header(params(), Span<std::uint8_t>(buf)).is_ok());
+  store_le_f32(buf + 32, std::numeric_limits<float>::infinity());
+  store_le_u32(buf + 60, crc32(buf, 60));
+  RouteFormatCounters c{kRouteFormatCounterNames};
+  EXPECT_FALSE(decode_header(Span<const std::uint8_t>(buf), &c).is_ok());
+  EXPECT_EQ(c.get(RouteFormatCounter::kBadParams), 1u);
+}
+
+// Rewrites field bytes of an encoded record and makes its CRC valid again: what a foreign writer or
+// damage the CRC missed would leave.
+void patch_f32(std::vector<std::uint8_t>& rec, std::size_t at, float v) {
+  store_le_f32(rec.data() + at, v);
+  store_le_u32(rec.data() + rec.size() - 4, crc32(rec.data(), rec.size() - 4));
+}
+void patch_f64(std::vector<std::uint8_t>& rec, std::size_t at, double v) {
+  store_le_f64(rec.data() + at, v);
+  store_le_u32(rec.data() + rec.size() - 4, crc32(rec.data(), rec.size() - 4));
+}
+
+TEST(RouteFormat, CrcValidRecordsWithNonFiniteOrAbsurdFieldsAreCorruptNeverUsed) {
+  const RouteParams p = params();
+  std::vector<std::uint8_t> good(record_bytes(p.max_keypoints));
+  ASSERT_TRUE(encode_node(p, node(3, 5), Span<std::uint8_t>(good.data(), good.size())).is_ok());
+  const std::size_t kp2 = kRecordFixedBytes + 2 * kKeypointBytes;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  struct Case {
+    const char* what;
+    std::size_t at;
+    bool f64;
+    double v;
+    const char* why;
+  };
+  const double bound = kMaxKeypointOffsetPx * static_cast<double>(p.pixel_m);
+  const Case cases[] = {
+      {"keypoint x NaN", kp2, false, nan, "route keypoint not finite"},
+      {"keypoint y inf", kp2 + 4, false, -inf, "route keypoint not finite"},
+      {"keypoint score NaN", kp2 + 8, false, nan, "route keypoint not finite"},
+      {"keypoint x beyond any tile", kp2, false, 1.01 * bound, "route keypoint position out of range"},
+      {"keypoint y 1e30", kp2 + 4, false, 1e30, "route keypoint position out of range"},
+      {"node x 1e12 m", 8, true, 1e12, "route node position out of range"},
+      {"node along NaN", 28, true, std::nan(""), "route node pose not finite"},
+      {"node heading 1e6 rad", 24, false, 1e6, "route node heading out of range"},
+  };
+  for (const Case& k : cases) {
+    std::vector<std::uint8_t> rec = good;
+    if (k.f64)
+      patch_f64(rec, k.at, k.v);
+    else
+      patch_f32(rec, k.at, static_cast<float>(k.v));
+    RouteFormatCounters c{kRouteFormatCounterNames};
+    RouteNode out = node(99, 2);
+    const Status s = decode_node(p, Span<const std::uint8_t>(rec.data(), rec.size()), 3, out, &c);
+    EXPECT_EQ(s, StatusCode::kCorrupt) << k.what;
+    EXPECT_STREQ(s.message(), k.why) << k.what;
+    EXPECT_EQ(c.get(RouteFormatCounter::kBadRecordField), 1u) << k.what;
+    EXPECT_EQ(c.total(), 1u) << k.what;
+    EXPECT_EQ(out.meta.index, 99u) << k.what << ": half-read";
+    // The metadata decoder (route info, the repeat's start) applies the same checks.
+    NodeMeta m;
+    EXPECT_EQ(decode_node_meta(p, Span<const std::uint8_t>(rec.data(), rec.size()), 3, m, &c), StatusCode::kCorrupt) << k.what;
+  }
+  // Within the bounds: a keypoint at the edge of the largest tile and a large but real position.
+  std::vector<std::uint8_t> rec = good;
+  patch_f32(rec, kp2, static_cast<float>(0.99 * bound));
+  patch_f64(rec, 8, 6.4e6);
+  RouteNode out;
+  EXPECT_TRUE(decode_node(p, Span<const std::uint8_t>(rec.data(), rec.size()), 3, out, nullptr).is_ok());
+}
+
+TEST(RouteFormat, TheWriterRefusesEveryValueTheReaderWouldRejectAndWritesNothing) {
+  const RouteParams p = params();
+  std::vector<std::uint8_t> buf(record_bytes(p.max_keypoints), 0xEE);
+  const std::vector<std::uint8_t> untouched = buf;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (int i = 0; i < 7; ++i) {
+    RouteNode n = node(1, 4);
+    switch (i) {
+      case 0: n.keypoints[3].x_m = nan; break;
+      case 1: n.keypoints[0].y_m = inf; break;
+      case 2: n.keypoints[2].score = -inf; break;
+      case 3: n.keypoints[1].x_m = 1e20f; break;
+      case 4: n.meta.pose.y_m = -3e7; break;
+      case 5: n.meta.along_m = std::numeric_limits<double>::infinity(); break;
+      case 6: n.meta.pose.heading_rad = 1e300; break;
+    }
+    EXPECT_EQ(encode_node(p, n, Span<std::uint8_t>(buf.data(), buf.size())), StatusCode::kInvalidArgument) << "case " << i;
+    EXPECT_EQ(buf, untouched) << "case " << i << ": bytes written before the refusal";
+    EXPECT_EQ(validate_node(p, n), StatusCode::kInvalidArgument) << "case " << i;
+  }
+}
+
+TEST(RouteFormat, EndMarkRoundTripAndEveryFlippedByteIsDetected) {
+  std::uint8_t m[kEndMarkBytes];
+  ASSERT_TRUE(encode_end_mark(123456, Span<std::uint8_t>(m)).is_ok());
+  EXPECT_EQ(0, std::memcmp(m, "QEND", 4));
+  EXPECT_EQ(load_le_u32(m + 4), 123456u);  // little-endian on every host
+  Result<std::uint32_t> n = decode_end_mark(Span<const std::uint8_t>(m), nullptr);
+  ASSERT_TRUE(n.is_ok());
+  EXPECT_EQ(*n, 123456u);
+  RouteFormatCounters c{kRouteFormatCounterNames};
+  for (std::size_t i = 0; i < kEndMarkBytes; ++i) {
+    m[i] ^= 0x08;
+    EXPECT_EQ(decode_end_mark(Span<const std::uint8_t>(m), &c).status(), StatusCode::kCorrupt) << "byte " << i;
+    m[i] ^= 0x08;
+  }
+  EXPECT_EQ(c.get(RouteFormatCounter::kBadEndMark), kEndMarkBytes);
+  EXPECT_EQ(decode_end_mark(Span<const std::uint8_t>(m, kEndMarkBytes - 1), &c).status(), StatusCode::kCorrupt);
+  EXPECT_LT(kEndMarkBytes, record_bytes(1)) << "a mark can never be mistaken for a whole record";
 }
 
 }  // namespace
