@@ -20,19 +20,23 @@ Result<int> JsfStreamDriver::poll(hal::SerialPort& port, int timeout_ms, PingSin
     hal::SampleStamp stamp;
     stamp.sample_ns = stamp.arrival_ns = r.value().arrival_ns;
     Span<const std::uint8_t> rest(chunk_, r.value().bytes);
-    // feed() stops after each completed message; the loop is bounded by the chunk size.
+    // feed() stops after each completed message, which may come from bytes it already held (after a
+    // re-synchronisation) without taking any new ones: a round makes progress when it takes bytes or
+    // hands out a message, and the held bytes are finite, so the loop is bounded by the chunk size.
     while (!rest.empty()) {
       const std::size_t used = framer_.feed(rest);
       rest = rest.subspan(used, rest.size() - used);
+      bool message = false;
       sidescan::JsfMessageView m;
       while (framer_.next(m)) {
+        message = true;
         if (assembler_.add(m)) {
           ++pings_;
           ++delivered;
           if (sink != nullptr) sink(ctx, assembler_.ping(), stamp);
         }
       }
-      if (used == 0 && !rest.empty()) break;  // defensive: the framer always consumes; never spin
+      if (used == 0 && !message) break;  // defensive: never spin (the framer always progresses)
     }
   }
   return delivered;

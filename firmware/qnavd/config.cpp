@@ -906,6 +906,19 @@ std::string ConfigError::to_string() const {
 bool parse_config(const std::string& text, const char* name, DaemonConfig& out, ConfigError& err) {
   out = DaemonConfig{};
   Reader reader(name);
+  // toml++ 3.3.0's whitespace tables reach __builtin_unreachable for many non-ASCII code points
+  // (U+00E9, U+3042, U+FEFB ...: undefined behaviour; found by test/fuzz fuzz_config, inputs in
+  // test/fuzz/regressions/config/). The configuration is ASCII text: a non-ASCII byte is refused
+  // with its line before toml++ sees the text.
+  int line = 1;
+  for (const char ch : text) {
+    if (ch == '\n') ++line;
+    if (static_cast<unsigned char>(ch) >= 0x80) {
+      reader.error("", line, "non-ASCII character (the configuration is ASCII text)");
+      err = reader.first_error();
+      return false;
+    }
+  }
   toml::table root;
   try {
     root = toml::parse(text, std::string_view(name ? name : ""));

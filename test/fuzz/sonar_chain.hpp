@@ -1,7 +1,8 @@
 // The side-scan chain shared by fuzz_sonar_chain_xtf and fuzz_sonar_chain_jsf: a file's bytes through
 // exactly what `qnav route train --sonar` and qnavd's recorded passes run (firmware/tools/sonar_file:
 // load_xtf / load_jsf, build_track, the median slant range; firmware/pipeline: file_route_tile_config
-// and RouteTilePipeline = ScanlineCorrector -> TileBuilder -> TileFeatureExtractor -> route node).
+// and RouteTilePipeline = ScanlineCorrector -> TileBuilder -> TileFeatureExtractor -> route node),
+// with the tile size reduced through the daemon's own configuration keys.
 // Byte 0: bit 0 dead reckoning instead of fixes; bits 1-2 pings per tile 10/16/24/40 (stride half).
 // Every tile's node must hold at most max_keypoints finite keypoints.
 #pragma once
@@ -32,7 +33,17 @@ inline int run_sonar_chain(const std::uint8_t* data, std::size_t size, bool jsf)
   tools::collect_slant_ranges(fd, ranges);
   double range_m = 0.0;
   if (!tools::median_slant_range(ranges, range_m)) return 0;
-  const pipeline::RouteTileConfig tc = pipeline::file_route_tile_config(range_m, lines, lines / 2);
+  pipeline::RouteTileConfig tc = pipeline::file_route_tile_config(range_m, lines, lines / 2);
+  // Smaller tiles (the full 800 px ones cost seconds per input under ASan), set as qnavd's [route]
+  // keys set them (firmware/qnavd/config.cpp): ground_bins_per_side = 64, ground_bin_m = resolution_m
+  // = range / 64, tile_px = 160.
+  const float bin_m = static_cast<float>(range_m / 64.0 > 0.02 ? range_m / 64.0 : 0.02);
+  tc.corrector.ground_bins_per_side = 64;
+  tc.tiles.max_bins_per_side = 64;
+  tc.corrector.ground_bin_m = bin_m;
+  tc.tiles.resolution_m = static_cast<double>(bin_m);
+  tc.tiles.tile_width_px = tc.tiles.tile_height_px = 160;
+  tc.features.max_width = tc.features.max_height = 160;
   pipeline::RouteTilePipeline pipe;
   if (!pipe.init(tc)) return 0;
   bool stop = false;
