@@ -93,7 +93,7 @@ Status RouteFileWriter::create_replacement(const char* final_path, const route::
     Result<int> probe = store_.open(final_path, hal::FileMode::kRead);
     if (probe) {
       store_.close(*probe);
-      return Status(StatusCode::kInvalidArgument, "route exists (replace it explicitly)");
+      return Status(StatusCode::kInvalidArgument, "route exists");  // replaced only when the caller says so
     }
     if (probe.status().code() != StatusCode::kNotFound) return probe.status();
   }

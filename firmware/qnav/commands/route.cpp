@@ -168,8 +168,12 @@ bool report_route_end(FILE* f, const char* prefix, const tools::RouteFileReader&
       break;
   }
   if (r.torn_bytes() > 0) {
-    std::fprintf(f, "%storn tail: %llu bytes after node %u: the last, partial node was dropped\n", prefix,
-                 static_cast<unsigned long long>(r.torn_bytes()), r.file_nodes() == 0 ? 0u : r.file_nodes() - 1);
+    if (r.file_nodes() > 0)
+      std::fprintf(f, "%storn tail: %llu bytes after node %u, the last complete one: the partial node %u was dropped\n", prefix,
+                   static_cast<unsigned long long>(r.torn_bytes()), r.file_nodes() - 1, r.file_nodes());
+    else
+      std::fprintf(f, "%storn tail: %llu bytes after the header: the partial node 0 was dropped\n", prefix,
+                   static_cast<unsigned long long>(r.torn_bytes()));
     clean = false;
   }
   return clean;
@@ -187,7 +191,7 @@ bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std
   }
   char prefix[600];
   std::snprintf(prefix, sizeof prefix, "qnav route repeat: WARNING: %s: ", path);
-  report_route_end(stderr, reader.closed_cleanly() ? "qnav route repeat: " : prefix, reader);
+  if (!reader.closed_cleanly() || reader.torn_bytes() > 0) report_route_end(stderr, prefix, reader);  // still usable: a warning
   std::uint32_t bad = 0;
   s = reader.read_all_meta(meta, &bad);
   if (s) return true;
@@ -281,6 +285,8 @@ int cmd_info(int argc, char** argv) {
       std::printf("route repeat uses the good prefix, nodes 0..%u\n", first_bad - 1);
     else
       std::printf("fewer than 2 good nodes before node %u: route repeat refuses this route\n", first_bad);
+    std::fflush(stdout);
+    std::fprintf(stderr, "qnav route info: %s: %u of %u nodes damaged (the first: node %u)\n", path, damaged, r.node_count(), first_bad);
     return 1;
   }
   std::printf("all %u records pass their CRC and field checks\n", r.node_count());
