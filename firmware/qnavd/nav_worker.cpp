@@ -221,6 +221,7 @@ ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
     return ModeReject::kStorage;
   }
   teach_open_ = true;
+  teach_stopped_ = false;
   return ModeReject::kNone;
 }
 
@@ -410,12 +411,18 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
   r.truth_along_m = t.truth_along_m;
   r.truth_lateral_m = t.truth_lateral_m;
   r.stamp_ns = static_cast<std::int64_t>(t.node.meta.stamp_ns);
-  if (mode_ == qc::Mode::kTeach && teach_open_) {
+  if (mode_ == qc::Mode::kTeach && teach_open_ && !teach_stopped_) {
     r.node_written = writer_.node_count();
     const Status s = writer_.append(t.node);
     if (!s) {
+      // A node that could not be made durable (a full disk, a failing medium) ends this route at the
+      // last durable node: appending later nodes would leave a gap the repeat pass cannot tell from
+      // the place. The daemon keeps navigating; the route is committed as it is when teaching ends.
       ++writer_errors_;
-      if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach append: %s\"}\n", s.message());
+      teach_stopped_ = true;
+      if (log_)
+        std::fprintf(log_, "{\"event\":\"teach_stopped\",\"route_id\":%u,\"nodes_durable\":%u,\"why\":\"%s\"}\n", route_id_,
+                     writer_.node_count(), s.message());
     }
   } else if (mode_ == qc::Mode::kRepeat) {
     const bool first = t.tile_index == 0;

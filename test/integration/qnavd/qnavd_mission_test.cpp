@@ -409,7 +409,7 @@ TEST(QnavdMission, MissingCanInterfaceIsAClearStartUpError) {
 
 
 // ---- Fault injection (sim.fault): damaged or disordered input during the repeat pass ----
-// Each fault runs from 100 s for `length_s` of the repeat pass (teach + repeat over 1,200 m). The
+// Each fault runs from 100 s (start_s) for `length_s` of the repeat pass (teach + repeat over 1,200 m). The
 // daemon must count every damaged sample (faults_injected, from the simulator, against its own
 // counters), keep navigating (tiles and ROUTE_STATUS for every repeat tile), report the state the
 // fault implies, and recover after it.
@@ -423,13 +423,13 @@ struct FaultRun {
   bool route_intact = false;
 };
 
-void run_with_fault(const char* kind, int pass, double length_s, FaultRun& out) {
+void run_with_fault(const char* kind, int pass, double length_s, FaultRun& out, double start_s = 100.0) {
   SoftwareFaults::reset_for_tests();
   const std::string dir = temp_dir();
   DaemonConfig c = sim_config(dir, 1200.0);
   c.sim_fault = kind;
   c.sim_fault_pass = pass;
-  c.sim_fault_start_s = 100.0;
+  c.sim_fault_start_s = start_s;
   c.sim_fault_s = length_s;
   ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
   ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
@@ -538,13 +538,33 @@ TEST(QnavdFaults, DamagedAndDisorderedPingsAreRejectedAndCounted) {
   EXPECT_GE(t.score.within1, t.score.scored * 8 / 10);
 }
 
-TEST(QnavdFaults, AFullDiskWhileTeachingKeepsTheRouteValidAndTheDaemonRunning) {
+TEST(QnavdFaults, AFullDiskWhileTeachingEndsTheRouteAtItsLastDurableNode) {
+  // The disk is full from 400 s to 460 s of the teach pass: the first node that cannot be written
+  // ends the route there (no gap), the route is committed with the nodes before it, and the repeat
+  // pass localises on that prefix.
   FaultRun r;
-  run_with_fault("disk_full", 0, 60.0, r);
-  EXPECT_GE(r.writer_errors, 1u);
+  run_with_fault("disk_full", 0, 60.0, r, 400.0);
+  EXPECT_EQ(r.writer_errors, 1u) << "one failed append, then no more attempts on this route";
   EXPECT_TRUE(r.route_intact) << "every node in the route file decodes";
+  const std::size_t taught = taught_nodes(*r.rec).size();
   EXPECT_GE(r.route_nodes, 3u) << "the nodes taught before the disk filled are kept";
-  EXPECT_GE(r.score.repeat_tiles, 10u) << "the repeat pass still flies";
+  EXPECT_LT(r.route_nodes, taught) << "nothing is appended after the failure";
+  // Repeat tiles over the kept prefix localise; beyond its end they cannot.
+  std::uint32_t scored = 0, within1 = 0;
+  const std::vector<double> node_along = taught_nodes(*r.rec);
+  const double end_along = node_along[r.route_nodes - 1];
+  bool warm = false;
+  for (std::uint32_t i = 0, seen = 0; i < std::min<std::uint32_t>(r.rec->n.load(), kMaxTiles); ++i) {
+    const TileReport& t = r.rec->tiles[i];
+    if (t.mode != qc::Mode::kRepeat) continue;
+    if (++seen <= 2 || t.truth_along_m > end_along - 10.0) continue;
+    warm = true;
+    ++scored;
+    const std::vector<double> prefix(node_along.begin(), node_along.begin() + r.route_nodes);
+    within1 += std::abs(static_cast<int>(t.step.estimate) - true_node(prefix, t.truth_along_m)) <= 1;
+  }
+  ASSERT_TRUE(warm);
+  EXPECT_GE(within1, scored * 8 / 10) << within1 << " of " << scored;
 }
 
 }  // namespace
