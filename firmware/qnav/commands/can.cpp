@@ -206,7 +206,11 @@ int dbc(int argc, char** argv) {
     }
   }
   std::printf("%zu messages, %d signals, %d mismatches with the codec\n", file->messages.size(), signals, mismatches);
-  return mismatches == 0 ? 0 : 1;
+  if (mismatches != 0) {
+    std::fprintf(stderr, "qnav can: %s: %d mismatches with the codec (listed above)\n", path, mismatches);
+    return 1;
+  }
+  return 0;
 }
 
 int simulate(int argc, char** argv) {

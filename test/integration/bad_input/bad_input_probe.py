@@ -167,7 +167,7 @@ def main():
         data = open(src, "rb").read()
         for k in range(a.runs):
             bad, what = mutate(data, rng)
-            f = write(w(f"bad{k}.txt"), bad)
+            f = write(w(f"bad{k}_{cmd[0]}_{cmd[1]}.txt"), bad)
             pr.run(cmd + [f], f"{os.path.basename(src)}: {what}")
 
     # Images (the stereo tools' reader): damaged copies of the real JPEG.
