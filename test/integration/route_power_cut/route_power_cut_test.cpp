@@ -9,11 +9,13 @@
 //    old route intact until the new one is committed: the final name holds the old route or the
 //    complete new one, never anything in between.
 // kill -9 alone cannot tear a write (every byte written is in the page cache and survives the
-// process), so after every other kill the test also drops a random part of what was not yet reported
-// durable -- as a power cut may -- before reopening. Two processes are killed:
+// process), so after every other kill the test also makes it a power cut before reopening: a random
+// part of what was not yet reported durable is dropped, or, when nothing was, a random part of the
+// node in progress is left on the medium. Two processes are killed:
 //  - SyntheticTeach: route_power_cut_child, a synthetic route through the route store exactly as
 //    `qnav route train` writes one (create_replacement, append + fdatasync, commit), as fast as the
-//    disk allows; killed 0-50 ms after it starts, QNAV_POWER_CUT_KILLS times (default 200);
+//    disk allows; killed 0-50 ms after it created the route (one in eight: after it started),
+//    QNAV_POWER_CUT_KILLS times (default 200);
 //  - Qnavd: the real daemon teaching on its sim backend, killed at random moments of the teach pass,
 //    QNAV_POWER_CUT_DAEMON_KILLS times (default 20).
 // Each prints one summary line (kills, nodes reported durable, nodes recovered, torn tails seen, ...)
@@ -88,6 +90,7 @@ void remove_route_files(const std::string& final_path) {
 // start_line (or after it was started when start_line is empty); kill_after_ms < 0: runs to the end.
 struct RunResult {
   std::vector<std::string> lines;  // every complete line it printed before it died
+  std::vector<double> line_ms;     // when each arrived, from the start
   bool killed = false;             // the SIGKILL ended it (it had not exited by itself)
   int exit_code = -1;
   double ms = 0.0;                 // from start to death
@@ -145,6 +148,7 @@ RunResult run_and_kill(const std::vector<std::string>& args, double kill_after_m
     std::size_t nl;
     while ((nl = buf.find('\n')) != std::string::npos) {
       r.lines.push_back(buf.substr(0, nl));
+      r.line_ms.push_back(ms_since(t0));
       if (!armed && r.lines.back() == start_line) {
         armed = true;
         deadline = Clock::now() + std::chrono::microseconds(static_cast<long>(kill_after_ms * 1000.0));
@@ -186,14 +190,24 @@ std::string check_synthetic(tools::RouteFileReader& r, std::uint64_t seed) {
   return "";
 }
 
-// A power cut: bytes written after the last node reported durable may be lost; drop a random part.
-// Returns the bytes dropped.
-std::uint64_t drop_undurable_bytes(const std::string& path, std::uint64_t durable_end, std::mt19937_64& rng) {
+// A power cut: what was written after the last node reported durable may be lost in part, and the
+// write in progress may have reached the medium in part. When the file holds bytes beyond the
+// durable ones, a random part of them is dropped; otherwise a random prefix (1 byte to the whole
+// record but one) of the node that was being written is left after them. Returns the bytes changed.
+std::uint64_t emulate_power_cut(const std::string& path, std::uint64_t durable_end, const route::RouteParams& p, const route::RouteNode& next,
+                                std::mt19937_64& rng) {
   const std::uint64_t size = file_size(path);
-  if (size <= durable_end) return 0;
-  const std::uint64_t keep = std::uniform_int_distribution<std::uint64_t>(durable_end, size)(rng);
-  if (::truncate(path.c_str(), static_cast<off_t>(keep)) != 0) return 0;
-  return size - keep;
+  if (size > durable_end) {
+    const std::uint64_t keep = std::uniform_int_distribution<std::uint64_t>(durable_end, size)(rng);
+    if (::truncate(path.c_str(), static_cast<off_t>(keep)) != 0) return 0;
+    return size - keep;
+  }
+  std::vector<std::uint8_t> rec(route::record_bytes(p.max_keypoints));
+  if (!route::encode_node(p, next, Span<std::uint8_t>(rec.data(), rec.size()))) return 0;
+  const std::size_t part = std::uniform_int_distribution<std::size_t>(1, rec.size() - 1)(rng);
+  std::ofstream f(path, std::ios::binary | std::ios::app);
+  f.write(reinterpret_cast<const char*>(rec.data()), static_cast<std::streamsize>(part));
+  return f ? part : 0;
 }
 
 struct Tally {
@@ -278,8 +292,10 @@ TEST(RoutePowerCut, SyntheticTeachKilledAtRandomMoments) {
   RunResult cal = run_and_kill({QNAV_POWER_CUT_CHILD, final_path, "30", "1"}, -1.0, "", err);
   ASSERT_EQ(cal.exit_code, 0) << read_all(err);
   ASSERT_EQ(count_prefix(cal.lines, "durable "), 30);
-  const double node_ms = std::max(0.05, cal.ms / 30.0);
-  const long max_nodes = std::max(2L, std::min(400L, static_cast<long>(50.0 / node_ms * 1.5)));
+  ASSERT_EQ(cal.lines.size(), cal.line_ms.size());
+  ASSERT_GE(cal.lines.size(), 33u);  // start, created, 30 x durable, committed
+  const double node_ms = std::max(0.05, (cal.line_ms[cal.lines.size() - 2] - cal.line_ms[1]) / 30.0);
+  const long max_nodes = std::max(2L, std::min(400L, static_cast<long>(50.0 / node_ms * 3.0)));
   remove_route_files(final_path);
   Tally t;
   for (long k = 0; k < kills; ++k) {
@@ -301,7 +317,9 @@ TEST(RoutePowerCut, SyntheticTeachKilledAtRandomMoments) {
     const double delay_ms = std::uniform_real_distribution<double>(0.0, 50.0)(rng);
     std::vector<std::string> args{QNAV_POWER_CUT_CHILD, final_path, std::to_string(planned), std::to_string(new_seed)};
     if (replace) args.push_back("--replace");
-    const RunResult r = run_and_kill(args, delay_ms, "start", err);
+    // Most kills land while nodes are taught (0-50 ms after the route was created); one in eight
+    // 0-50 ms after the process started (creating the route, or moving a leftover aside).
+    const RunResult r = run_and_kill(args, delay_ms, k % 8 == 0 ? "start" : "created", err);
     ++t.kills;
     const bool created = count_prefix(r.lines, "created") > 0;
     const auto durable = static_cast<std::uint32_t>(count_prefix(r.lines, "durable "));
@@ -341,7 +359,8 @@ TEST(RoutePowerCut, SyntheticTeachKilledAtRandomMoments) {
     // Half of the kills are power cuts: a random part of what was not reported durable is lost.
     if (rng() % 2 == 0) {
       ++t.emulated;
-      drop_undurable_bytes(temp, route::kHeaderBytes + durable * rec, rng);
+      route::RouteNode next = test::power_cut_node(new_seed, durable);
+      emulate_power_cut(temp, route::kHeaderBytes + durable * rec, params, next, rng);
     } else if ((file_size(temp) - route::kHeaderBytes) % rec != 0 && (file_size(temp) - route::kHeaderBytes) % rec != route::kEndMarkBytes) {
       ++t.torn_natural;  // a torn tail left by the kill alone
     }
@@ -476,18 +495,19 @@ TEST(RoutePowerCut, QnavdTeachKilledAtRandomMoments) {
     }
     tools::RouteFileReader probe;
     ASSERT_TRUE(probe.open(temp.c_str()).is_ok()) << where;
-    const std::uint64_t rec = route::record_bytes(probe.params().max_keypoints);
+    const route::RouteParams params = probe.params();
+    const std::uint64_t rec = route::record_bytes(params.max_keypoints);
     probe.close();
-    if (rng() % 2 == 0) {
-      ++t.emulated;
-      drop_undurable_bytes(temp, route::kHeaderBytes + durable * rec, rng);
-    }
     // Teaching resumes with the node the complete run taught next.
     auto next_node = [&](std::uint32_t i) {
       route::RouteNode n;
       if (!full_route.load(i < full_nodes ? i : 0, n)) n = route::RouteNode{};
       return n;
     };
+    if (rng() % 2 == 0) {
+      ++t.emulated;
+      emulate_power_cut(temp, route::kHeaderBytes + durable * rec, params, next_node(durable), rng);
+    }
     check_reopen(temp, durable, full_nodes, t, next_node, same_as_full, where);
     if (HasFatalFailure()) return;
   }
