@@ -19,7 +19,8 @@
 //  - Qnavd: the real daemon teaching on its sim backend, killed at random moments of the teach pass,
 //    QNAV_POWER_CUT_DAEMON_KILLS times (default 20).
 // Each prints one summary line (kills, nodes reported durable, nodes recovered, torn tails seen, ...)
-// for docs/reliability.md. QNAV_POWER_CUT_SEED (default 19) seeds the kill moments.
+// for docs/reliability.md. QnavdReportsACutOffRouteItRepeats: qnavd logs route_cut_off (nodes, torn
+// bytes, the partial node dropped) when told to repeat such a route, and uses its complete nodes. QNAV_POWER_CUT_SEED (default 19) seeds the kill moments.
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -524,6 +525,67 @@ TEST(RoutePowerCut, QnavdTeachKilledAtRandomMoments) {
   std::remove(full_copy.c_str());
   std::remove(cfg.c_str());
   std::remove(err.c_str());
+  ::rmdir(routes.c_str());
+  ::rmdir(dir.c_str());
+}
+
+
+// qnavd says so when the route it is told to repeat was cut off or has a torn tail (and still uses
+// its complete nodes); a clean route raises nothing.
+TEST(RoutePowerCut, QnavdReportsACutOffRouteItRepeats) {
+  const std::string dir = temp_dir();
+  ASSERT_FALSE(dir.empty());
+  const std::string routes = dir + "/routes", err = dir + "/qnavd.err";
+  ASSERT_EQ(::mkdir(routes.c_str(), 0755), 0);
+  auto config = [&](const char* name, const char* mode) {
+    const std::string path = dir + "/" + name;
+    std::ofstream f(path);
+    f << "[daemon]\nbackend = \"sim\"\nroute_dir = \"" << routes << "\"\nlog = \"json\"\nrealtime = false\nhealth_period_s = 60.0\n"
+      << "[sim]\nlength_m = 300.0\nspeed = \"fast\"\nexit_at_end = true\n[[sim.pass]]\nmode = \"" << mode << "\"\n";
+    return path;
+  };
+  const std::string teach = config("teach.toml", "teach"), repeat = config("repeat.toml", "repeat");
+  const std::string route = routes + "/route_1.qroute";
+  RunResult r = run_and_kill({QNAVD_PATH, "--config", teach}, -1.0, "", err);
+  ASSERT_EQ(r.exit_code, 0) << read_all(err);
+  auto events = [](const RunResult& run, const char* what) {
+    std::vector<std::string> out;
+    for (const std::string& l : run.lines)
+      if (l.find(std::string("\"event\":\"") + what + "\"") != std::string::npos) out.push_back(l);
+    return out;
+  };
+  auto repeat_tiles = [](const RunResult& run) {
+    int n = 0;
+    for (const std::string& l : run.lines) n += l.find("\"event\":\"tile\"") != std::string::npos && l.find("\"mode\":\"repeat\"") != std::string::npos;
+    return n;
+  };
+  std::uint32_t nodes = 0;
+  std::uint64_t rec = 0;
+  {
+    tools::RouteFileReader rd;
+    ASSERT_TRUE(rd.open(route.c_str()).is_ok());
+    ASSERT_TRUE(rd.closed_cleanly());
+    nodes = rd.node_count();
+    rec = route::record_bytes(rd.params().max_keypoints);
+  }
+  ASSERT_GE(nodes, 4u);
+  r = run_and_kill({QNAVD_PATH, "--config", repeat}, -1.0, "", err);
+  ASSERT_EQ(r.exit_code, 0) << read_all(err);
+  EXPECT_TRUE(events(r, "route_cut_off").empty()) << "a clean route reported cut off";
+  EXPECT_GT(repeat_tiles(r), 0);
+  // The end mark and the second half of the last node lost to a power cut.
+  ASSERT_EQ(::truncate(route.c_str(), static_cast<off_t>(route::kHeaderBytes + nodes * rec - rec / 2)), 0);
+  r = run_and_kill({QNAVD_PATH, "--config", repeat}, -1.0, "", err);
+  ASSERT_EQ(r.exit_code, 0) << read_all(err);
+  const std::vector<std::string> cut = events(r, "route_cut_off");
+  ASSERT_EQ(cut.size(), 1u) << "qnavd did not report the cut-off route";
+  EXPECT_NE(cut[0].find("\"nodes\":" + std::to_string(nodes - 1) + ","), std::string::npos) << cut[0];
+  EXPECT_NE(cut[0].find("\"torn_bytes\":" + std::to_string(rec - rec / 2) + ","), std::string::npos) << cut[0];
+  EXPECT_NE(cut[0].find("\"partial_node_dropped\":true"), std::string::npos) << cut[0];
+  EXPECT_NE(cut[0].find("cut off: no end mark"), std::string::npos) << cut[0];
+  EXPECT_GT(repeat_tiles(r), 0) << "the cut-off route's complete nodes were not used";
+  remove_route_files(route);
+  for (const char* f : {"teach.toml", "repeat.toml", "qnavd.err"}) std::remove((dir + "/" + f).c_str());
   ::rmdir(routes.c_str());
   ::rmdir(dir.c_str());
 }
