@@ -1031,8 +1031,7 @@ int open_file_pass(const char* path, int argc, char** argv, FilePass& out) {
   }
   if (tools::load_sonar_file(path, out.fd) != 0) return 1;
   out.track = tools::build_track(out.fd, std::strcmp(nav, "dr") == 0, deg_to_rad(hoff_deg));
-  if (out.track.not_finite > 0)
-    std::fprintf(stderr, "qnav route: %s: %zu pings without a finite position or heading are skipped\n", path, out.track.not_finite);
+  tools::report_track("qnav route", path, out.track);
   std::vector<float> ranges;
   tools::collect_slant_ranges(out.fd, ranges);
   double range = 0.0;
@@ -1172,10 +1171,21 @@ int cmd_train_file(const char* path, int argc, char** argv) {
   Status s = pipe.init(fp.tiles);
   if (s) s = file_tiles(pipe, fp, a, b, tiles, nullptr);
   if (s && tiles.size() < 2) s = Status(StatusCode::kInvalidArgument, "fewer than 2 tiles in the ping range: a route needs 2 nodes");
+  // A node with fewer keypoints than a registration's minimum consensus can never be recognised:
+  // a route made only of such nodes (a featureless pass, or pings whose navigation was unusable) is
+  // refused rather than written; some of them are reported.
+  std::size_t blind = 0;
+  const std::size_t min_kp = static_cast<std::size_t>(pipeline::default_localiser_config(route::RouteDirection::kForward, 2).registration.robust.min_inliers);
+  for (const pipeline::RouteTile& t : tiles) blind += t.node.keypoints.size() < min_kp ? 1u : 0u;
+  if (s && blind == tiles.size())
+    s = Status(StatusCode::kInvalidArgument, "no tile holds enough keypoints to be recognised: this pass cannot be a route");
   if (!s) {
     std::fprintf(stderr, "qnav route train: %s: %s\n", path, s.message());
     return 1;
   }
+  if (blind > 0)
+    std::fprintf(stderr, "qnav route train: %s: WARNING: %zu of %zu nodes hold fewer than %zu keypoints (never recognised)\n", path, blind,
+                 tiles.size(), min_kp);
   const double spacing = (tiles.back().node.meta.along_m - tiles.front().node.meta.along_m) / static_cast<double>(tiles.size() - 1);
   tools::RouteFileWriter writer;
   if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(fp.tiles, spacing, fp.swath_m), cli::flag(argc, argv, "--force"))) return 1;
