@@ -8,8 +8,9 @@
 //  - a replacement (qnav route train --force, a new teach of the same route id in qnavd) leaves the
 //    old route intact until the new one is committed: the final name holds the old route or the
 //    complete new one, never anything in between.
-// kill -9 alone cannot tear a write (every byte written is in the page cache and survives the
-// process), so after every other kill the test also makes it a power cut before reopening: a random
+// kill -9 alone seldom tears a write (every byte written is in the page cache and survives the
+// process; only a write stopped between pages by the signal is torn), so after every other kill the
+// test also makes it a power cut before reopening: a random
 // part of what was not yet reported durable is dropped, or, when nothing was, a random part of the
 // node in progress is left on the medium. Two processes are killed:
 //  - SyntheticTeach: route_power_cut_child, a synthetic route through the route store exactly as
