@@ -192,32 +192,19 @@ void NavWorker::route_path(std::uint16_t id, const char* suffix, char* out, std:
 }
 
 ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
-  char path[1024], kept[1024];
-  route_path(id, ".new", path, sizeof path);
-  // A teach run that was cut off (power, kill -9) or too short to commit left its nodes under .new:
-  // move them aside under the first free name .kept.<n>; nothing taught is deleted or overwritten.
-  Status moved(StatusCode::kNotFound, "");
-  for (int n = 1; n < 1000; ++n) {
-    char suffix[32];
-    std::snprintf(suffix, sizeof suffix, ".new.kept.%d", n);
-    route_path(id, suffix, kept, sizeof kept);
-    Result<int> probe = store_.open(kept, hal::FileMode::kRead);
-    if (probe) {
-      store_.close(*probe);
-      continue;
-    }
-    moved = store_.rename(path, kept);
-    break;
-  }
-  if (moved.is_ok() && log_) std::fprintf(log_, "{\"event\":\"teach_previous_kept\",\"file\":\"%s\"}\n", kept);
-  if (!moved && moved.code() != StatusCode::kNotFound) {
-    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: cannot move the previous %s aside: %s\"}\n", path, moved.message());
-    return ModeReject::kStorage;
-  }
+  char final_path[1024];
+  route_path(id, "", final_path, sizeof final_path);
+  // Taught under route_<id>.qroute.new and committed over route_<id>.qroute when the teach ends (the
+  // old route stays whole until then). A run that was cut off (power, kill -9) or too short to commit
+  // left its nodes under .new: the route store moves them aside to .new.kept.<n>, never deletes them.
+  drivers::route_store::RouteWriterOptions o;
+  o.replace_existing = true;
+  drivers::route_store::RouteReplaceReport rep;
   const route::RouteParams params = pipeline::side_scan_route_params(cfg_.tiles, spacing_m_, swath_m_);
-  const Status s = writer_.create(path, params);  // the name is free now; create() never truncates
+  const Status s = writer_.create_replacement(final_path, params, o, &rep);
+  if (rep.previous_kept && log_) std::fprintf(log_, "{\"event\":\"teach_previous_kept\",\"file\":\"%s\"}\n", rep.kept_path);
   if (!s) {
-    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: %s: %s\"}\n", path, s.message());
+    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: %s.new: %s\"}\n", final_path, s.message());
     return ModeReject::kStorage;
   }
   teach_open_ = true;
