@@ -430,9 +430,12 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
     case Phase::kEndPass:
       // Let the nav worker finish the pass: every slot back (the last ping processed, not only popped).
       if (free_slots.size() + (spare_slot_ >= 0 ? 1u : 0u) < free_slots.capacity()) return StepResult::kWaiting;
+      // A fault window ends with its pass at the latest (the disk is free, the bus restarted):
+      // out of kFly no window is open.
+      phase_ = Phase::kAwaitIdle;
+      inject_bus_faults(clock_.now_ns());
       send_mode(qc::Mode::kIdle, false);
       ++pass_;
-      phase_ = Phase::kAwaitIdle;
       return StepResult::kWaiting;
     case Phase::kAwaitIdle:
       if (status_seen_since_cmd_ && reported_state_ == qc::Mode::kIdle) {
