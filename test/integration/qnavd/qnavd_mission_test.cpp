@@ -458,7 +458,7 @@ void run_with_fault(const char* kind, int pass, double length_s, FaultRun& out, 
     out.route_intact = true;
     for (std::uint32_t i = 0; i < reader.node_count(); ++i) out.route_intact = out.route_intact && reader.load_meta(i, m).is_ok();
   }
-  std::printf("fault %s %.0f s: %u injected; rejected dvl %u, can %u (error frames %u), pings %u, out of order %u; writer errors %u; "
+  std::printf("fault %s %.1f s: %u injected; rejected dvl %u, can %u (error frames %u), pings %u, out of order %u; writer errors %u; "
               "%u repeat tiles, node +/-1 on %u of %u; faults seen 0x%x, at the end 0x%x\n",
               kind, length_s, out.injected, out.dvl_rejected, out.can_rejected, out.error_frames, out.pings_rejected, out.pings_out_of_order,
               out.writer_errors, out.score.repeat_tiles, out.score.within1, out.score.scored, out.rec->faults_seen.load(), out.final_faults);
