@@ -141,9 +141,14 @@ Result<KittiCalib> read_kitti_calib(const std::string& path) noexcept {
     }
     for (const char* k : {"width", "height", "f", "cu", "cv", "baseline_m"})
       if (kv.count(k) == 0) return Status(StatusCode::kCorrupt, "kitti: calib.txt misses a key");
+    // The size is range-checked as a double before the conversion (3.3e55 cast to int is undefined
+    // behaviour; found by test/fuzz fuzz_calib, input in test/fuzz/regressions/calib/).
+    const double w = kv["width"], h = kv["height"];
+    if (!(w >= 1 && w <= kMaxImageSide && h >= 1 && h <= kMaxImageSide))
+      return Status(StatusCode::kInvalidArgument, "kitti: calib width/height out of range");
     KittiCalib c;
-    c.width = static_cast<int>(kv["width"]);
-    c.height = static_cast<int>(kv["height"]);
+    c.width = static_cast<int>(w);
+    c.height = static_cast<int>(h);
     c.f_px = kv["f"];
     c.cu_px = kv["cu"];
     c.cv_px = kv["cv"];
