@@ -200,7 +200,7 @@ TEST(RouteFormat, CrcValidRecordsWithNonFiniteOrAbsurdFieldsAreCorruptNeverUsed)
   std::vector<std::uint8_t> good(record_bytes(p.max_keypoints));
   ASSERT_TRUE(encode_node(p, node(3, 5), Span<std::uint8_t>(good.data(), good.size())).is_ok());
   const std::size_t kp2 = kRecordFixedBytes + 2 * kKeypointBytes;
-  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
   struct Case {
     const char* what;
     std::size_t at;
