@@ -4,7 +4,7 @@ out="$OUT/route"
 mkdir -p "$out"
 rm -f "$out/demo.qroute"
 # Teach a 900 m route (durable: one fdatasync per node), then check every record's CRC.
-"$QNAV" route train --sim --length-m 900 --seed 3 --out "$out/demo.qroute"
+"$QNAV" route train --sim --length-m 900 --seed 3 --out "$out/demo.qroute" --force
 "$QNAV" route info "$out/demo.qroute"
 # Repeat 20% of the swath to starboard, forwards (survey) and in reverse (emergency return).
 "$QNAV" route repeat --route "$out/demo.qroute" --sim --length-m 900 --seed 3 --offset-pct 20 --csv "$out/repeat_fwd.csv"
