@@ -247,23 +247,37 @@ struct StallRun {
   NodeScore score;
 };
 
-void run_with_stall(const char* sensor, double start_s, double length_s, StallRun& out) {
+// The mission every stall and fault run flies: teach over 1,200 m, then repeat 10 % to starboard.
+void teach_repeat_config(const std::string& dir, DaemonConfig& c) {
   SoftwareFaults::reset_for_tests();
-  DaemonConfig c = sim_config(temp_dir(), 1200.0);
+  c = sim_config(dir, 1200.0);
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
+}
+
+// Flies d's mission with rec watching the tiles and the bus: it must end by itself, complete, with
+// no software fault.
+void fly(Daemon& d, Recorder& rec, const char* what) {
+  d.set_tile_observer(on_tile, &rec);
+  d.set_bus_observer(on_frame, &rec);
+  ASSERT_TRUE(d.init(nullptr)) << what;
+  ASSERT_TRUE(d.start()) << what;
+  ASSERT_EQ(d.run(), 0) << what;
+  EXPECT_TRUE(d.mission_done()) << what;
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << what;
+}
+
+void run_with_stall(const char* sensor, double start_s, double length_s, StallRun& out) {
+  DaemonConfig c;
+  teach_repeat_config(temp_dir(), c);
+  if (::testing::Test::HasFatalFailure()) return;
   c.sim_stall = sensor;
   c.sim_stall_pass = 1;
   c.sim_stall_start_s = start_s;
   c.sim_stall_s = length_s;
-  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
-  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
   Daemon d(c);
-  d.set_tile_observer(on_tile, out.rec.get());
-  d.set_bus_observer(on_frame, out.rec.get());
-  ASSERT_TRUE(d.init(nullptr));
-  ASSERT_TRUE(d.start());
-  ASSERT_EQ(d.run(), 0);
-  EXPECT_TRUE(d.mission_done());
-  EXPECT_EQ(SoftwareFaults::count(), 0u);
+  fly(d, *out.rec, sensor);
+  if (::testing::Test::HasFatalFailure()) return;
   out.score = score_nodes(*out.rec);
   std::printf("stall %s %.0f s from %.0f s: %u repeat tiles (%u on the eq. 5 model), node +/-1 on %u of %u, faults seen 0x%x, %u hold-course frames\n",
               sensor, length_s, start_s, out.score.repeat_tiles, out.score.eq5_tiles, out.score.within1, out.score.scored,
@@ -424,23 +438,17 @@ struct FaultRun {
 };
 
 void run_with_fault(const char* kind, int pass, double length_s, FaultRun& out, double start_s = 100.0) {
-  SoftwareFaults::reset_for_tests();
   const std::string dir = temp_dir();
-  DaemonConfig c = sim_config(dir, 1200.0);
+  DaemonConfig c;
+  teach_repeat_config(dir, c);
+  if (::testing::Test::HasFatalFailure()) return;
   c.sim_fault = kind;
   c.sim_fault_pass = pass;
   c.sim_fault_start_s = start_s;
   c.sim_fault_s = length_s;
-  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
-  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
   Daemon d(c);
-  d.set_tile_observer(on_tile, out.rec.get());
-  d.set_bus_observer(on_frame, out.rec.get());
-  ASSERT_TRUE(d.init(nullptr));
-  ASSERT_TRUE(d.start());
-  ASSERT_EQ(d.run(), 0) << kind;
-  EXPECT_TRUE(d.mission_done()) << kind;
-  EXPECT_EQ(SoftwareFaults::count(), 0u) << kind;
+  fly(d, *out.rec, kind);
+  if (::testing::Test::HasFatalFailure()) return;
   out.score = score_nodes(*out.rec);
   const IoCounters& io = d.io_counters();
   out.injected = io.faults_injected.load();
