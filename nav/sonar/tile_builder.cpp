@@ -9,6 +9,14 @@ constexpr std::size_t kAlign = 16;
 std::size_t padded(std::size_t bytes) noexcept { return bytes + kAlign; }
 int side_sign(int side) noexcept { return side == 0 ? -1 : 1; }  // 0 = port (-starboard), 1 = stbd
 double lerp_angle(double a, double b, double t) noexcept { return a + t * wrap_angle_rad(b - a); }
+// floor(v) as an int, clamped to +/-2^30 (NaN to the low end): a pose far outside the tile (absurd
+// navigation in a damaged file) lands outside the raster instead of overflowing the conversion.
+int floor_to_int_clamped(double v) noexcept {
+  constexpr double kLimit = 1073741824.0;
+  if (!(v > -kLimit)) return -1073741824;
+  if (v > kLimit) return 1073741824;
+  return static_cast<int>(std::floor(v));
+}
 }  // namespace
 
 std::size_t TileBuilder::arena_bytes(const TileBuilderConfig& c) noexcept {
@@ -228,13 +236,16 @@ Status TileBuilder::build(int first, int count) noexcept {
         const double reach = a.bins * static_cast<double>(a.bin_m);
         const double dh = std::fabs(wrap_angle_rad(bslot->pose.heading_rad - a.pose.heading_rad));
         const double move = d + dh * reach;
-        steps = static_cast<int>(std::ceil(move / step_m - 1e-3));
-        if (steps < 1) steps = 1;
-        if (steps > cfg_.max_substeps) steps = cfg_.max_substeps;
+        const double want = std::ceil(move / step_m - 1e-3);
+        steps = !(want >= 1.0) ? 1 : (want > static_cast<double>(cfg_.max_substeps) ? cfg_.max_substeps : static_cast<int>(want));
       }
     }
     const int bins = a.bins;
-    const int across = static_cast<int>(std::ceil(static_cast<double>(a.bin_m) / step_m - 1e-3));  // float bin sizes
+    // Pixels across one bin (float bin sizes), at most the raster's size: a bin wider than the tile
+    // (a damaged ping's range) is not spread over more sub-steps than the tile has pixels.
+    const int across_max = W > H ? W : H;
+    const int across_px = floor_to_int_clamped(std::ceil(static_cast<double>(a.bin_m) / step_m - 1e-3));
+    const int across = across_px > across_max ? across_max : across_px;
     for (int j = 0; j < steps; ++j) {
       const float t = static_cast<float>(j) / static_cast<float>(steps);
       Pose2 p = a.pose;
@@ -260,8 +271,8 @@ Status TileBuilder::build(int first, int count) noexcept {
           // Touched box of this line of samples: its two ends (+1 pixel for the bilinear splat).
           const double reach = bins * static_cast<double>(a.bin_m);
           const double xa = c0 - 0.5, ya = r0 - 0.5, xb = c0 + reach * dc - 0.5, yb = r0 + reach * dr - 0.5;
-          const int lx = static_cast<int>(std::floor(xa < xb ? xa : xb)), hx = static_cast<int>(std::floor(xa < xb ? xb : xa)) + 1;
-          const int ly = static_cast<int>(std::floor(ya < yb ? ya : yb)), hy = static_cast<int>(std::floor(ya < yb ? yb : ya)) + 1;
+          const int lx = floor_to_int_clamped(xa < xb ? xa : xb), hx = floor_to_int_clamped(xa < xb ? xb : xa) + 1;
+          const int ly = floor_to_int_clamped(ya < yb ? ya : yb), hy = floor_to_int_clamped(ya < yb ? yb : ya) + 1;
           bb_x0_ = lx < bb_x0_ ? lx : bb_x0_;
           bb_y0_ = ly < bb_y0_ ? ly : bb_y0_;
           bb_x1_ = hx > bb_x1_ ? hx : bb_x1_;

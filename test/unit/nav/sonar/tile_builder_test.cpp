@@ -202,6 +202,38 @@ TEST(TileBuilder, NavJumpIsNotInterpolatedAcross) {
   EXPECT_EQ(t.coverage(static_cast<int>(mid.x()), static_cast<int>(mid.y())), 0);
 }
 
+// A damaged file's navigation: one pose 1e28 m away and bins 1e6 m wide (fuzz_sonar_chain_xtf found
+// the float-to-int overflow of the first). The tile is built from the sane lines, nothing lands in
+// the raster from the absurd ones, and the bins are not spread over more pixels than the tile has.
+TEST(TileBuilder, AbsurdPoseOrBinWidthLandsOutsideTheRaster) {
+  const TileBuilderConfig cfg = small_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  for (int k = 0; k < 99; ++k) {
+    const Pose2 pose{k * 0.15, 0.0, 0.0};
+    ASSERT_TRUE(tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose).is_ok());
+  }
+  const Pose2 far{-3.9e28, 1.0e28, 0.0};
+  ASSERT_TRUE(tb.push(src.make(far, 99), far).is_ok());
+  EXPECT_EQ(tb.counters().get(TileCounter::kNavJump), 1u);
+  const SonarTile& t = tb.tile();
+  const Vec2d on = t.ne_to_pixel(7.0, 5.0);
+  EXPECT_EQ(t.coverage(static_cast<int>(on.x()), static_cast<int>(on.y())), 1);
+
+  ArenaStorage wide_arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder wide;
+  ASSERT_TRUE(wide.init(cfg, wide_arena).is_ok());
+  src.bins = 4;
+  src.bin_m = 1.0e6f;
+  for (int k = 0; k < 100; ++k) {
+    const Pose2 pose{k * 0.15, 0.0, 0.0};
+    ASSERT_TRUE(wide.push(src.make(pose, static_cast<std::uint32_t>(k)), pose).is_ok());
+  }
+  EXPECT_EQ(wide.tiles_built(), 1u);
+}
+
 TEST(TileBuilder, PushAndBuildMakeNoHeapAllocation) {
   const TileBuilderConfig cfg = small_config();
   ArenaStorage arena(TileBuilder::arena_bytes(cfg));
