@@ -29,14 +29,14 @@ constexpr SignalDef kDepth[] = {
     {"AltitudeValid", 54, 1, true, false, 1, 0, 0, 1, ""},
 };
 constexpr SignalDef kModeCmd[] = {
-    {"Mode", 0, 4, false, false, 1, 0, 0, 4, ""},
+    {"Mode", 0, 4, false, false, 1, 0, 0, 5, ""},
     {"ResetNav", 4, 1, false, false, 1, 0, 0, 1, ""},
     {"Reverse", 5, 1, false, false, 1, 0, 0, 1, ""},
     {"RouteId", 8, 16, false, false, 1, 0, 0, 65535, ""},
     {"Counter", 24, 8, false, false, 1, 0, 0, 255, ""},
 };
 constexpr SignalDef kNavStatus[] = {
-    {"State", 0, 4, false, false, 1, 0, 0, 4, ""},
+    {"State", 0, 4, false, false, 1, 0, 0, 5, ""},
     {"Localised", 4, 1, false, false, 1, 0, 0, 1, ""},
     {"Confidence", 8, 8, false, false, 0.5, 0, 0, 100, "%"},
     {"NodeIndex", 16, 16, false, false, 1, 0, 0, 65535, ""},
@@ -93,7 +93,7 @@ constexpr SignalDef kHealth[] = {
 };
 constexpr SignalDef kHeartbeat[] = {
     {"Uptime", 0, 32, false, false, 1, 0, 0, 4294967295.0, "s"},
-    {"State", 32, 4, false, false, 1, 0, 0, 4, ""},
+    {"State", 32, 4, false, false, 1, 0, 0, 5, ""},
     {"SwMajor", 40, 8, false, false, 1, 0, 0, 255, ""},
     {"SwMinor", 48, 8, false, false, 1, 0, 0, 255, ""},
     {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},

@@ -20,7 +20,7 @@
 
 namespace qnav::drivers::qnavcan {
 
-enum class Mode : std::uint8_t { kIdle = 0, kTeach = 1, kRepeat = 2, kMap = 3, kHold = 4 };
+enum class Mode : std::uint8_t { kIdle = 0, kTeach = 1, kRepeat = 2, kMap = 3, kHold = 4, kVo = 5 };
 
 struct AttitudeIn {
   double roll_rad = 0, pitch_rad = 0, heading_rad = 0;

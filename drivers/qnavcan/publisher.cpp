@@ -63,6 +63,7 @@ int QnavCanPublisher::poll(std::int64_t now_ns) noexcept {
     ++counter_[i];
     counters_.increment(TxCounter::kSent);
     ++sent;
+    if (i == kVo) has_[i] = false;  // an increment: sent once
   }
   return sent;
 }

@@ -4,7 +4,11 @@
 // after its companion ROUTE_GUIDANCE), filling the rolling Counter itself. A full TX queue
 // (kCapacityExceeded from the bus) is counted as tx_busy and retried at the next poll; an encode
 // failure (a value outside the DBC range) is counted as encode_error and the message is not sent.
-// Messages never set are not sent. poll() is O(6 messages x signals); no heap.
+// Messages never set are not sent. QNAV_VO_STEP is an increment, not a state: each set() value is
+// sent once (at most one frame per DBC period; a later set() before it went out replaces it) and never
+// repeated, so a receiver that sums the frames gets the whole path; vo_pending() says whether the
+// last value is still waiting (the caller accumulates into it) or went out (the caller starts anew).
+// poll() is O(6 messages x signals); no heap.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +30,7 @@ class QnavCanPublisher {
   void set(const RouteGuidance& m) noexcept { guidance_ = m, has_[kGuidance] = true; }
   void set(const RouteStatus& m) noexcept { route_status_ = m, has_[kRouteStatus] = true; }
   void set(const VoStep& m) noexcept { vo_ = m, has_[kVo] = true; }
+  bool vo_pending() const noexcept { return has_[kVo]; }
   void set(const Health& m) noexcept { health_ = m, has_[kHealth] = true; }
   void set(const Heartbeat& m) noexcept { heartbeat_ = m, has_[kHeartbeat] = true; }
 

@@ -1,6 +1,9 @@
-// The VO configuration that matches a simulated stereo bench (drivers/stereo_sim): image size,
-// camera intrinsics, baseline and the disparity range of the Mars-yard terrain. Shared by `qnav vo`,
-// bench_vo and test_nav_vo; callers set the rest (corner cap, VME mode, matching, step limit).
+// The tuned stereo VO settings, defined once (moved here from commands/vo.cpp and tools/): the VO
+// configuration that matches a simulated stereo bench (drivers/stereo_sim: image size, camera
+// intrinsics, baseline, the disparity range of the Mars-yard terrain), the main configuration `qnav vo
+// eval` measures (docs/vo.md: 3D-VME, fc matching with fast batches, attitude drift filter, 300 corners)
+// and the attitude filter's sensor model. qnavd's [vo] keys start from default_vo_config and
+// `qnav vo`, bench_vo, the timing stages and the VO tests use the same functions.
 #pragma once
 
 #include <algorithm>
@@ -10,7 +13,7 @@
 #include "drivers/stereo_sim/noise_model.hpp"
 #include "nav/vo/stereo_vo.hpp"
 
-namespace qnav::tools {
+namespace qnav::pipeline {
 
 inline vo::VoConfig vo_config_for_bench(const sim::StereoBench& b) {
   vo::VoConfig c;
@@ -53,4 +56,21 @@ inline motion::AttitudeBiasConfig attitude_bias_config_for_noise(const sim::Nois
   return c;
 }
 
-}  // namespace qnav::tools
+// The main configuration (`qnav vo eval`'s "3D-fc-fast-att", the daemon's default): 3D-VME with the
+// attitude drift filter, fc matching in fast batches, at most 300 corners, steps up to 0.6 m, for an
+// attitude sensor with the noise model `noise` (its datasheet; the eval's default is small()).
+inline vo::VoConfig default_vo_config(const sim::StereoBench& b, const sim::NoiseConfig& noise = sim::NoiseConfig::small()) {
+  vo::VoConfig c = vo_config_for_bench(b);
+  c.max_corners = 300;
+  c.max_step_m = 0.6;
+  c.mode = vo::VmeMode::k3D;
+  c.match.score = match::MatchScoreKind::kContinuous;
+  c.match.fast = true;
+  c.match.attitude_sigma_rad = 1.5 * noise.sigma_m_rad + deg_to_rad(0.02);
+  c.estimate_attitude_bias = true;
+  c.attitude_bias = attitude_bias_config_for_noise(noise);
+  c.attitude_bias.vo_sigma_scale = kVoRotationSigmaScale;
+  return c;
+}
+
+}  // namespace qnav::pipeline

@@ -423,6 +423,64 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "dvl.stale_s", [](auto& c) -> auto& { return c.dvl_stale_s; }, 0.05, 60.0, "s",
       "DVL velocity older than this is stale"));
+  // [vo]
+  t.push_back(bool_key(
+      "vo.enabled", [](auto& c) -> auto& { return c.vo_enabled; },
+      "Read the stereo camera pair and accept Mode = Vo (sizes the frame pool and the VO arena)"));
+  t.push_back(enum_key(
+      "vo.camera", [](auto& c) -> auto& { return c.vo_camera; },
+      std::vector<std::pair<std::string, CameraSource>>{{"sim", CameraSource::kSim}, {"v4l2", CameraSource::kV4l2}},
+      "sim: the simulated rover's stereo bench (sim backend); v4l2: two V4L2 cameras (vo.left_device, vo.right_device)"));
+  t.push_back(string_key(
+      "vo.left_device", [](auto& c) -> auto& { return c.vo_left_device; }, "not empty", check_not_empty,
+      "Left camera (v4l2), rectified GREY or YUYV frames of vo.width x vo.height"));
+  t.push_back(string_key(
+      "vo.right_device", [](auto& c) -> auto& { return c.vo_right_device; }, "not empty", check_not_empty,
+      "Right camera (v4l2)"));
+  t.push_back(string_key(
+      "vo.trigger_chip", [](auto& c) -> auto& { return c.vo_trigger_chip; }, "gpiochip name or \"\"", nullptr,
+      "GPIO chip of the cameras' hardware trigger line (libgpiod); \"\" = free-running cameras"));
+  t.push_back(int_key(
+      "vo.trigger_line", [](auto& c) -> auto& { return c.vo_trigger_line; }, 0, 511, "",
+      "Line offset of the trigger on vo.trigger_chip"));
+  t.push_back(int_key(
+      "vo.width", [](auto& c) -> auto& { return c.vo.max_width; }, 64, 2048, "px",
+      "Width of one rectified camera image (sizes the frame pool and the VO buffers)"));
+  t.push_back(int_key(
+      "vo.height", [](auto& c) -> auto& { return c.vo.max_height; }, 64, 2048, "px", "Height of one rectified camera image"));
+  t.push_back(float_key(
+      "vo.focal_px", [](auto& c) -> auto& { return c.vo.camera.focal_px; }, 10.0, 20000.0, "px", "Focal length of the rectified pair"));
+  t.push_back(float_key(
+      "vo.cu_px", [](auto& c) -> auto& { return c.vo.camera.cu_px; }, 0.0, 2047.0, "px", "Principal point, column"));
+  t.push_back(float_key(
+      "vo.cv_px", [](auto& c) -> auto& { return c.vo.camera.cv_px; }, 0.0, 2047.0, "px", "Principal point, row"));
+  t.push_back(float_key(
+      "vo.baseline_m", [](auto& c) -> auto& { return c.vo.camera.baseline_m; }, 0.005, 5.0, "m", "Stereo baseline"));
+  t.push_back(float_key(
+      "vo.tilt_down_deg", [](auto& c) -> auto& { return c.vo_tilt_down_deg; }, 0.0, 90.0, "deg",
+      "Camera mount: optical axis forward, tilted down by this much (90 = looking straight down)"));
+  t.push_back(float_key(
+      "vo.mount_height_m", [](auto& c) -> auto& { return c.vo_mount_height_m; }, 0.0, 10.0, "m",
+      "Camera mount: left camera above the body origin"));
+  t.push_back(int_key(
+      "vo.max_corners", [](auto& c) -> auto& { return c.vo.max_corners; }, 32, 1000, "corners",
+      "Harris corners per frame (bounds stereo, matching and motion estimation)"));
+  t.push_back(enum_key(
+      "vo.vme", [](auto& c) -> auto& { return c.vo.mode; },
+      std::vector<std::pair<std::string, vo::VmeMode>>{{"3d", vo::VmeMode::k3D}, {"6d", vo::VmeMode::k6D}},
+      "Motion estimation: 3d = translation with the attitude sensor's rotation (Mars paper eq. 9); 6d = Arun"));
+  t.push_back(bool_key(
+      "vo.attitude_filter", [](auto& c) -> auto& { return c.vo.estimate_attitude_bias; },
+      "3d: estimate the attitude sensor's drift from the visual rotations (nav/motion AttitudeBiasFilter)"));
+  t.push_back(float_key(
+      "vo.max_step_m", [](auto& c) -> auto& { return c.vo.max_step_m; }, 0.01, 100.0, "m",
+      "Largest plausible motion between two frames (a larger step is refused as implausible)"));
+  t.push_back(queue_key(
+      "vo.frame_queue", [](auto& c) -> auto& { return c.vo_frame_queue; }, 2, 64, "pairs",
+      "Stereo pair queue depth between the camera reader and the navigation thread (frame pool slots)"));
+  t.push_back(float_key(
+      "vo.stale_s", [](auto& c) -> auto& { return c.vo_stale_s; }, 0.1, 60.0, "s",
+      "No stereo pair for this long in Mode = Vo: camera lost (FaultCameraLost)"));
   // [route]
   t.push_back(int_key(
       "route.id", [](auto& c) -> auto& { return c.route_id; }, 0, 65535, "",
@@ -502,6 +560,9 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(int_key(
       "budget.mode_us", [](auto& c) -> auto& { return c.mode_budget_us; }, 100, 10000000, "us",
       "Time budget of a mode change: route file create / open and every node's metadata read (fsync included)"));
+  t.push_back(int_key(
+      "budget.vo_us", [](auto& c) -> auto& { return c.vo_budget_us; }, 100, 10000000, "us",
+      "Time budget of one stereo pair through the visual odometry"));
   // [sim]
   t.push_back(float_key(
       "sim.length_m", [](auto& c) -> auto& { return c.sim_length_m; }, 200.0, 50000.0, "m",
@@ -537,7 +598,7 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(enum_key(
       "sim.stall", [](auto& c) -> auto& { return c.sim_stall; },
       std::vector<std::pair<std::string, std::string>>{
-          {"none", "none"}, {"dvl", "dvl"}, {"attitude", "attitude"}, {"sonar", "sonar"}},
+          {"none", "none"}, {"dvl", "dvl"}, {"attitude", "attitude"}, {"sonar", "sonar"}, {"camera", "camera"}},
       "Fault test: this simulated sensor falls silent for sim.stall_s during pass sim.stall_pass"));
   t.push_back(with_rule(
       int_key(
@@ -573,7 +634,7 @@ std::vector<KeySpec> build_key_table() {
     KeySpec mode = enum_key(
         "sim.pass.mode", [](auto& c) -> auto& { return pass_of(c).mode; },
         std::vector<std::pair<std::string, Mode>>{
-            {"teach", Mode::kTeach}, {"repeat", Mode::kRepeat}, {"hold", Mode::kHold}},
+            {"teach", Mode::kTeach}, {"repeat", Mode::kRepeat}, {"hold", Mode::kHold}, {"vo", Mode::kVo}},
         "Mode the simulated autopilot commands (QNAV_MODE_CMD) for the pass, Idle after it; one `[[sim.pass]]` "
         "table per pass, 1 to 16, at least one with the sim backend");
     mode.required = true;
@@ -585,6 +646,9 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(bool_key(
       "sim.pass.reverse", [](auto& c) -> auto& { return pass_of(c).reverse; },
       "Fly the pass from the route's last node to its first"));
+  t.push_back(float_key(
+      "sim.pass.length_m", [](auto& c) -> auto& { return pass_of(c).length_m; }, 0.5, 1000.0, "m",
+      "Mode vo: distance the simulated rover drives over the Mars yard (stereo pairs every 0.15-0.25 m)"));
   t.push_back(string_key(
       "sim.pass.file", [](auto& c) -> auto& { return pass_of(c).file; }, "XTF or JSF file; \"\" = the simulated survey", nullptr,
       "Replay this recorded side-scan file in the pass (its navigation, timing and pings) instead of the simulated survey"));
@@ -604,7 +668,7 @@ const std::vector<KeySpec>& key_table() {
 }
 
 const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "route", "budget", "sim"};
+  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "vo", "route", "budget", "sim"};
   return names;
 }
 
@@ -660,7 +724,7 @@ std::string suggest_key(const std::string& name, bool in_pass) {
   const std::string probe = in_pass ? leaf(name) : name;
   const std::string best = closest(probe, candidates);
   if (!best.empty()) return "did you mean " + best + "?";
-  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, file, first_ping, last_ping";
+  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping";
   std::vector<std::string> same_leaf;
   for (const std::string& c : candidates)
     if (leaf(c) == leaf(name)) same_leaf.push_back(c);
@@ -888,12 +952,41 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
                      "must be -1 or > first_ping (" + std::to_string(p.first_ping) + "), got " + std::to_string(p.last_ping));
     }
   }
+  if (!c.vo_enabled) {
+    for (const SimPass& p : c.sim_mission)
+      if (p.mode == drivers::qnavcan::Mode::kVo)
+        return r.error("vo.enabled", at("vo.enabled", "sim.pass.mode"), "a [[sim.pass]] with mode = \"vo\" needs vo.enabled = true");
+  }
+  if (c.backend == Backend::kLinux && c.vo_enabled && c.vo_camera == CameraSource::kSim) {
+    return r.error("vo.camera", at("vo.camera", "daemon.backend"),
+                   "daemon.backend = \"linux\" has no simulated camera: vo.camera = \"v4l2\", or vo.enabled = false");
+  }
+  if (c.backend == Backend::kSim && c.vo_camera != CameraSource::kSim) {
+    return r.error("vo.camera", at("vo.camera", "daemon.backend"), "daemon.backend = \"sim\" reads the simulated camera: vo.camera must be \"sim\"");
+  }
+  if (c.vo.camera.cu_px >= c.vo.max_width || c.vo.camera.cv_px >= c.vo.max_height) {
+    return r.error("vo.cu_px", at("vo.cu_px", "vo.width"),
+                   "the principal point must lie inside the vo.width x vo.height image");
+  }
   // Derived: the localiser's node window holds every node registered in one update (RouteLocaliser::init).
   c.localiser.window_slots =
       std::max<std::size_t>(c.localiser.window_slots, c.localiser.filter.max_registrations() + 1u);
 }
 
 }  // namespace
+
+Pose3 vo_body_T_cam(const DaemonConfig& c) noexcept {
+  // Body FRD; camera x right, y down, z along the optical axis (forward, tilted down).
+  const double a = deg_to_rad(c.vo_tilt_down_deg);
+  const Vec3d z(std::cos(a), 0.0, std::sin(a));
+  const Vec3d x(0.0, 1.0, 0.0);
+  Pose3 p;
+  p.R.col(0) = x;
+  p.R.col(1) = z.cross(x);
+  p.R.col(2) = z;
+  p.t = Vec3d(0.0, 0.0, -c.vo_mount_height_m);
+  return p;
+}
 
 std::string ConfigError::to_string() const {
   std::string s = file;

@@ -12,6 +12,7 @@
 
 #include "drivers/qnavcan/messages.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
+#include "firmware/pipeline/vo_defaults.hpp"
 #include "nav/core/fixed_vector.hpp"
 #include "nav/core/status.hpp"
 
@@ -21,6 +22,7 @@ enum class Backend : std::uint8_t { kSim, kLinux };
 enum class LogFormat : std::uint8_t { kJson, kKeyValue, kOff };
 enum class SonarSource : std::uint8_t { kSim, kJsfTcp };
 enum class SimSpeed : std::uint8_t { kFast, kRecorded };  // as fast as the pipeline takes it / in sample time
+enum class CameraSource : std::uint8_t { kSim, kV4l2 };
 
 // One pass of the simulated mission: the simulated autopilot sends QNAV_MODE_CMD (mode, reverse,
 // route id) before it and Idle after it, as a vehicle's autopilot would.
@@ -31,6 +33,7 @@ struct SimPass {
   drivers::qnavcan::Mode mode = drivers::qnavcan::Mode::kTeach;  // teach, repeat or hold
   double offset_pct = 0.0;  // lateral offset, percent of the full swath, right of the taught direction [-100, 100]
   bool reverse = false;
+  double length_m = 6.0;    // sim.pass.length_m [0.5, 1000]: distance the rover drives in a vo pass
   std::string file;         // sim.pass.file: recorded XTF / JSF; "" = the simulated survey
   std::int64_t first_ping = 0;   // sim.pass.first_ping [0, 1e9]
   std::int64_t last_ping = -1;   // sim.pass.last_ping [-1, 1e9]: -1 = to the end of the file
@@ -89,10 +92,29 @@ struct DaemonConfig {
   //   route.dead_reckon_max_m [0, 10000]    -> localiser.guidance.dead_reckon_max_m
   //   route.motion = "odometry" | "eq5"     -> localiser.filter.motion
 
+  // [vo] stereo visual odometry (Mode = Vo): the camera pair, its calibration and mount, the VO settings.
+  // The VO settings start from firmware/pipeline/vo_defaults (default_vo_config, what `qnav vo eval`
+  // measures) for the simulated bench; the keys override them.
+  bool vo_enabled = true;                     // vo.enabled: the camera pair is read and Mode = Vo accepted
+  CameraSource vo_camera = CameraSource::kSim; // vo.camera = "sim" | "v4l2"
+  std::string vo_left_device = "/dev/video0"; // vo.left_device (v4l2)
+  std::string vo_right_device = "/dev/video1";// vo.right_device (v4l2)
+  std::string vo_trigger_chip;                // vo.trigger_chip: gpiochip of the trigger line; "" = free-running cameras
+  int vo_trigger_line = 0;                    // vo.trigger_line [0, 511]
+  double vo_tilt_down_deg = 70.0;             // vo.tilt_down_deg [0, 90]: camera mount, forward-looking, tilted down
+  double vo_mount_height_m = 0.8;             // vo.mount_height_m [0, 10]: left camera above the body origin
+  vo::VoConfig vo = pipeline::default_vo_config(sim::StereoBench{});
+  //   vo.width / vo.height [64, 2048] px      -> vo.max_width / max_height (and the frame pool)
+  //   vo.focal_px, vo.cu_px, vo.cv_px, vo.baseline_m -> vo.camera
+  //   vo.max_corners [32, 1000], vo.vme = "3d" | "6d", vo.attitude_filter, vo.max_step_m
+  std::size_t vo_frame_queue = 4;             // vo.frame_queue [2, 64] pairs, power of two
+  double vo_stale_s = 2.0;                    // vo.stale_s [0.1, 60]: no pair for this long in Mode = Vo: camera lost
+
   // [budget] per-stage time budgets on the host, microseconds (docs/budgets.md)
   std::uint32_t ping_budget_us = 2000;       // budget.ping_us [10, 1000000]
   std::uint32_t tile_budget_us = 50000;      // budget.tile_us [100, 10000000]: features + localiser update
   std::uint32_t mode_budget_us = 200000;     // budget.mode_us [100, 10000000]: a mode change (route file open/close, fsync)
+  std::uint32_t vo_budget_us = 100000;       // budget.vo_us [100, 10000000]: one stereo pair through the VO
 
   // [sim] (backend = "sim")
   double sim_length_m = 2000.0;              // sim.length_m [200, 50000]
@@ -138,6 +160,10 @@ struct ConfigError {
   std::string to_string() const;  // "FILE:LINE: key: message"
   std::string file;
 };
+
+// The left camera's mount on the body (FRD) from vo.tilt_down_deg and vo.mount_height_m: optical axis
+// forward and tilted down, image x to the right; the simulated rover's bench (drivers/stereo_sim).
+Pose3 vo_body_T_cam(const DaemonConfig& c) noexcept;
 
 // Reads and validates a file. On failure returns false and fills err; out is left default.
 bool load_config(const char* path, DaemonConfig& out, ConfigError& err);

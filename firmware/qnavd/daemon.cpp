@@ -38,6 +38,7 @@ struct QueueRefs {
   SpscRing<drivers::dvl::DvlVelocity>* dvl;
   float* pool;
   std::size_t stride;
+  FramePool frames;  // stereo pairs (queues null when vo.enabled = false)
 };
 
 namespace {
@@ -96,12 +97,13 @@ class SimBackend final : public IoBackend {
  public:
   SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
       : net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q) {}
-  Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store) {
+  Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
     QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
     QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
     daemon_bus_.set_error_frames(true);  // as the SocketCAN backend subscribes to them
     vehicle_.set_bus_observer(obs, ctx);
     vehicle_.set_fault_targets(&net_, store);
+    vehicle_.set_frame_pool(frames);
     return vehicle_.init(vehicle_bus_, pipe_.a());
   }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
@@ -116,6 +118,7 @@ class SimBackend final : public IoBackend {
     did |= drain_can(daemon_bus_, *q_.can_rx, io);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
     vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
+    vehicle_.release_pair(io);
     return did;
   }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
@@ -319,12 +322,24 @@ Status Daemon::init(FILE* log) {
   QNAV_RETURN_IF_ERROR(make_ring(can_tx_store_, can_tx_, cfg_.can_tx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(dvl_store_, dvl_q_, kDvlQueueCapacity));
   for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
-  const QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, pool_.data(), stride_};
+  FramePool fp;
+  if (cfg_.vo_enabled) {
+    fp.width = cfg_.vo.max_width;
+    fp.height = cfg_.vo.max_height;
+    frame_pool_.assign(cfg_.vo_frame_queue * 2 * static_cast<std::size_t>(fp.width) * static_cast<std::size_t>(fp.height), 0);
+    QNAV_RETURN_IF_ERROR(make_ring(frame_store_, frames_, cfg_.vo_frame_queue));
+    QNAV_RETURN_IF_ERROR(make_ring(free_frame_store_, free_frames_, cfg_.vo_frame_queue));
+    for (std::uint32_t s = 0; s < cfg_.vo_frame_queue; ++s) QNAV_RETURN_IF_ERROR(free_frames_.try_push(s));
+    fp.frames = &frames_;
+    fp.free = &free_frames_;
+    fp.pool = frame_pool_.data();
+  }
+  const QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, pool_.data(), stride_, fp};
   if (cfg_.backend == Backend::kSim) {
     auto sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
     // The route store behind a switch that can make the disk full (sim.fault = "disk_full").
     fault_store_ = std::make_unique<hal::FaultFileStore>(hal::host_file_store());
-    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, fault_store_.get()));
+    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, fault_store_.get(), refs.frames));
     double range_m = 0.0;
     if (sim->vehicle().recorded_geometry(range_m, route_spacing_m_)) {
       // Recorded passes: tiles and registration as `qnav route train|repeat --sonar` sets them for
@@ -357,6 +372,10 @@ Status Daemon::init(FILE* log) {
   nq.ping_pool = pool_.data();
   nq.ping_pool_stride = stride_;
   nq.io = &io_;
+  nq.frames = fp.frames;
+  nq.free_frames = fp.free;
+  nq.frame_pool = fp.pool;
+  nav_->set_frame_observer(frame_observer_, frame_ctx_);
   return nav_->init(nq, tile_observer_, tile_ctx_, log);
 }
 

@@ -1,9 +1,10 @@
 // Daemon: qnavd's process structure (deployment.hpp): it owns the queues, the ping pool, the I/O
 // backend and the NavWorker, starts the io and nav threads, and runs the main thread's duties
 // (signals, sd_notify READY / WATCHDOG / STOPPING, bounded shutdown).
-// Backends: sim (SimVehicle on an in-process CAN network and serial line, mission time) or linux
-// (SocketCAN on can.interface, the DVL on dvl.device through termios, the sonar's JSF stream over
-// TCP from sonar.address). A device that fails or disappears is counted (device_errors), flagged
+// Backends: sim (SimVehicle on an in-process CAN network and serial line, mission time; its rover's
+// stereo bench in vo passes) or linux (SocketCAN on can.interface, the DVL on dvl.device through
+// termios, the sonar's JSF stream over TCP from sonar.address, the stereo pair on two V4L2 devices
+// with an optional GPIO trigger). A device that fails or disappears is counted (device_errors), flagged
 // (its *_device_down bit; the nav worker reports the sensor lost) and reopened once a second.
 // init() allocates everything; after start() no thread allocates (the allocation test proves it).
 #pragma once
@@ -33,6 +34,7 @@ class Daemon {
   Status init(FILE* log);
   void set_tile_observer(TileObserver f, void* ctx) noexcept { tile_observer_ = f, tile_ctx_ = ctx; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { bus_observer_ = f, bus_ctx_ = ctx; }
+  void set_frame_observer(FrameObserver f, void* ctx) noexcept { frame_observer_ = f, frame_ctx_ = ctx; }
   // Starts the io and nav threads (realtime when configured and permitted; a warning otherwise).
   Status start();
   // The main thread: until a stop signal, stop(), or (sim) the end of the mission. Returns the exit code.
@@ -59,6 +61,11 @@ class Daemon {
   std::vector<hal::CanRxFrame> can_rx_store_;
   std::vector<hal::CanFrame> can_tx_store_;
   std::vector<drivers::dvl::DvlVelocity> dvl_store_;
+  std::vector<std::uint8_t> frame_pool_;     // vo.frame_queue stereo pairs (empty when vo.enabled = false)
+  std::vector<FrameMsg> frame_store_;
+  std::vector<std::uint32_t> free_frame_store_;
+  SpscRing<FrameMsg> frames_;
+  SpscRing<std::uint32_t> free_frames_;
   SpscRing<PingMsg> pings_;
   SpscRing<std::uint32_t> free_slots_;
   SpscRing<hal::CanRxFrame> can_rx_;
@@ -73,6 +80,8 @@ class Daemon {
   void* tile_ctx_ = nullptr;
   BusObserver bus_observer_ = nullptr;
   void* bus_ctx_ = nullptr;
+  FrameObserver frame_observer_ = nullptr;
+  void* frame_ctx_ = nullptr;
   std::thread io_thread_, nav_thread_;
   std::atomic<bool> stop_{false}, io_exit_{false}, nav_exited_{false}, mission_done_{false};
   std::int64_t started_wall_ns_ = 0;

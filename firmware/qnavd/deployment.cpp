@@ -6,6 +6,7 @@
 #include "firmware/qnavd/messages.hpp"
 #include "hal/core/can.hpp"
 #include "nav/route/route_localiser.hpp"
+#include "nav/vo/stereo_vo.hpp"
 
 namespace qnav::daemon {
 
@@ -13,12 +14,14 @@ Deployment make_deployment(const DaemonConfig& c) {
   const std::size_t periodic_budget_us = 500;
   Deployment d{
       {{"io", c.io_priority, c.io_cpu, "devices: wait, read, stamp at reception, push; CAN tx"},
-       {"nav", c.nav_priority, c.nav_cpu, "modes, dead reckoning, route pipeline, outputs, health"}},
+       {"nav", c.nav_priority, c.nav_cpu, "modes, dead reckoning, route pipeline, visual odometry, outputs, health"}},
       {{"can_rx", "io", "nav", c.can_rx_queue, sizeof(hal::CanRxFrame), "drop newest, count can_rx_overflow"},
        {"can_tx", "nav", "io", c.can_tx_queue, sizeof(hal::CanFrame), "not sent now: counted (can_tx_overflow), sent at its next period"},
        {"dvl", "io", "nav", 64, sizeof(drivers::dvl::DvlVelocity), "drop newest, count dvl_overflow"},
        {"pings", "io", "nav", c.ping_queue, sizeof(PingMsg), "drop the ping, count ping_overflow (replay waits instead)"},
-       {"free_slots", "nav", "io", c.ping_queue, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"}},
+       {"free_slots", "nav", "io", c.ping_queue, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"},
+       {"frames", "io", "nav", c.vo_enabled ? c.vo_frame_queue : 0, sizeof(FrameMsg), "drop the pair, count frame_overflow (the sim waits instead)"},
+       {"free_frames", "nav", "io", c.vo_enabled ? c.vo_frame_queue : 0, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"}},
       {{"can_rx", "io", "per frame (AHRS 50 Hz, mode commands)", 0},
        {"dvl_rx", "io", "per DVL line (8 Hz)", 0},
        {"sonar_rx", "io", "per ping (5-10 Hz)", 0},
@@ -26,6 +29,7 @@ Deployment make_deployment(const DaemonConfig& c) {
        {"modes", "nav", "per accepted MODE_CMD: close / open a route file (fsync, every node's metadata read)", c.mode_budget_us},
        {"ping", "nav", "per ping: scanline correction, tile builder", c.ping_budget_us},
        {"tile", "nav", "per tile (every route.scanline_stride pings): features, teach append or repeat update", c.tile_budget_us},
+       {"vo", "nav", "per stereo pair in Mode = Vo: Harris, stereo, matching, motion, track refinement", c.vo_budget_us},
        {"outputs", "nav", "every loop: CAN outputs at their DBC periods, health at daemon.health_period_s",
         static_cast<std::uint32_t>(periodic_budget_us)}}};
   d.ping_pool_bytes = c.ping_queue * 2 * c.max_samples_per_side * sizeof(float);
@@ -34,12 +38,16 @@ Deployment make_deployment(const DaemonConfig& c) {
                           route::TileFeatureExtractor::arena_bytes(c.tiles.features);
   d.localiser_bytes = route::RouteLocaliser::arena_bytes(c.localiser);
   d.route_meta_bytes = c.max_nodes * sizeof(route::NodeMeta);
+  if (c.vo_enabled) {
+    d.frame_pool_bytes = c.vo_frame_queue * 2 * static_cast<std::size_t>(c.vo.max_width) * static_cast<std::size_t>(c.vo.max_height);
+    d.vo_bytes = vo::StereoVo::arena_bytes(c.vo);
+  }
   return d;
 }
 
 std::string deployment_text(const Deployment& d) {
   std::string out;
-  char line[256];
+  char line[512];
   out += "threads\n  name  priority  cpu  role\n";
   for (const ThreadSpec& t : d.threads) {
     std::snprintf(line, sizeof line, "  %-5s %8d  %3d  %s\n", t.name, t.priority, t.cpu, t.role);
@@ -60,9 +68,11 @@ std::string deployment_text(const Deployment& d) {
     out += line;
   }
   std::snprintf(line, sizeof line,
-                "static memory\n  ping pool %zu B, queues %zu B, tile pipeline %zu B, localiser %zu B, route metadata %zu B\n"
+                "static memory\n  ping pool %zu B, queues %zu B, tile pipeline %zu B, localiser %zu B, route metadata %zu B,\n"
+                "  frame pool %zu B, visual odometry %zu B (+ its matcher's working set, allocated at start-up)\n"
                 "  total %zu B (%.1f MB), allocated at start-up; no heap allocation after start\n",
-                d.ping_pool_bytes, d.queue_bytes, d.tile_pipeline_bytes, d.localiser_bytes, d.route_meta_bytes, d.total_static_bytes(),
+                d.ping_pool_bytes, d.queue_bytes, d.tile_pipeline_bytes, d.localiser_bytes, d.route_meta_bytes, d.frame_pool_bytes, d.vo_bytes,
+                d.total_static_bytes(),
                 static_cast<double>(d.total_static_bytes()) / 1e6);
   out += line;
   return out;

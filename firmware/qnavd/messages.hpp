@@ -9,6 +9,8 @@
 
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "hal/core/stamp.hpp"
+#include "nav/core/geometry.hpp"
+#include "nav/core/spsc_ring.hpp"
 
 namespace qnav::daemon {
 
@@ -22,6 +24,28 @@ struct PingMsg {
   hal::SampleStamp stamp;             // monotonic (linux) or simulated (sim) sample time
   bool has_truth = false;             // sim backend: the simulator's truth for evaluation
   pipeline::PingTruth truth;
+};
+
+// A stereo pair in the frame pool (bytes owned by the Daemon, sized vo.frame_queue x 2 x vo.width x
+// vo.height): slot s holds the left image at s * 2 * W * H and the right one W * H after it; the slot
+// returns through the free-frame queue when the nav worker is done with it.
+struct FrameMsg {
+  std::uint32_t slot = 0;
+  std::uint32_t sequence = 0;
+  std::uint16_t width = 0, height = 0;
+  hal::SampleStamp stamp;              // the pair's sample time (exposure)
+  bool has_truth = false;              // sim backend: the rover's true body pose (NED, from its start)
+  Pose3 truth_world_T_body;
+  double truth_path_m = 0.0;
+};
+
+// The frame pool and its queues as the producers see them.
+struct FramePool {
+  SpscRing<FrameMsg>* frames = nullptr;
+  SpscRing<std::uint32_t>* free = nullptr;
+  std::uint8_t* pool = nullptr;
+  int width = 0, height = 0;
+  std::size_t pair_bytes() const noexcept { return 2 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
 };
 
 // Counters the I/O thread owns and the nav worker reads for health (relaxed atomics, monotonic).
@@ -41,6 +65,10 @@ struct IoCounters {
   std::atomic<std::uint32_t> dvl_rejected{0};    // the DVL parser's rejections (checksum, format, stale ...)
   std::atomic<std::uint32_t> sonar_rejected{0};  // the JSF framer's and assembler's rejections
   std::atomic<std::uint32_t> device_errors{0};   // read/open failures of a device (disappeared, EOF)
+  std::atomic<std::uint64_t> frames_in{0};         // stereo pairs the camera delivered
+  std::atomic<std::uint32_t> frame_overflow{0};    // a pair arrived with no free slot / full queue: dropped
+  std::atomic<std::uint32_t> camera_rejected{0};   // the stereo driver's rejections (corrupt, unpaired, timeouts)
+  std::atomic<bool> camera_device_down{false};
   std::atomic<bool> sonar_device_down{false};
   std::atomic<bool> can_device_down{false};
   std::atomic<bool> dvl_device_down{false};

@@ -35,6 +35,7 @@ const char* mode_name(qc::Mode m) noexcept {
     case qc::Mode::kRepeat: return "repeat";
     case qc::Mode::kMap: return "map";
     case qc::Mode::kHold: return "hold";
+    case qc::Mode::kVo: return "vo";
   }
   return "?";
 }
@@ -82,6 +83,11 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   writer_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   tile_sink_ = [this](const pipeline::RouteTile& t) { return on_tile(t); };
+  if (cfg_.vo_enabled) {
+    if (!q.frames || !q.free_frames || !q.frame_pool) return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
+    QNAV_RETURN_IF_ERROR(vo_.init(cfg_.vo, vo_body_T_cam(cfg_)));
+    vo_ready_ = true;
+  }
   const Deployment d = make_deployment(cfg_);
   for (int i = 0; i < static_cast<int>(Stage::kCount); ++i) budgets_us_[i] = d.stages[i].budget_us;
   return Status::ok();
@@ -101,11 +107,17 @@ void NavWorker::stage_time(Stage s, std::int64_t t0_ns) noexcept {
 bool NavWorker::run_once() noexcept {
   if (shut_) return false;
   bool did = false;
+  // One ping or one stereo pair per loop, the earlier by sample time.
   PingMsg ping;
-  const bool have_ping = q_.pings->try_pop(ping).is_ok();
-  // Every input sampled up to this ping (mode commands, headings, velocities), and none after it:
-  // the ping is placed with the navigation of its own sample time, whatever the I/O thread queued since.
-  const std::int64_t until_ns = have_ping ? ping.stamp.sample_ns : INT64_MAX;
+  FrameMsg pair;
+  const PingMsg* next_ping = q_.pings->front();
+  const FrameMsg* next_pair = q_.frames != nullptr ? q_.frames->front() : nullptr;
+  const bool take_pair = next_pair != nullptr && (next_ping == nullptr || next_pair->stamp.sample_ns < next_ping->stamp.sample_ns);
+  const bool have_ping = !take_pair && q_.pings->try_pop(ping).is_ok();
+  const bool have_pair = take_pair && q_.frames->try_pop(pair).is_ok();
+  // Every input sampled up to this ping or pair (mode commands, attitude, velocities), and none after
+  // it: the sample is placed with the navigation of its own time, whatever the I/O thread queued since.
+  const std::int64_t until_ns = have_ping ? ping.stamp.sample_ns : (have_pair ? pair.stamp.sample_ns : INT64_MAX);
   hal::CanRxFrame rx;
   std::int64_t t0 = cpu_clock_.now_ns();
   mode_ns_ = 0;
@@ -137,6 +149,12 @@ bool NavWorker::run_once() noexcept {
     nav_now_ns_ = std::max(nav_now_ns_, ping.stamp.sample_ns);
     handle_ping(ping);
     QNAVD_CHECK(q_.free_slots->try_push(ping.slot).is_ok(), "free-slot queue full: a ping slot was returned twice");
+    did = true;
+  }
+  if (have_pair) {
+    nav_now_ns_ = std::max(nav_now_ns_, pair.stamp.sample_ns);
+    handle_pair(pair);
+    QNAVD_CHECK(q_.free_frames->try_push(pair.slot).is_ok(), "free-frame queue full: a frame slot was returned twice");
     did = true;
   }
   if (!did) {
@@ -171,6 +189,12 @@ void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
       double yaw = std::atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z);  // exact for a quaternion of any norm
       if (yaw < 0.0) yaw += 2.0 * 3.14159265358979323846;
       if (!dr_.on_heading(ahrs_.solution().stamp.sample_ns, yaw)) ++dr_rejected_;
+      const double n = std::sqrt(x * x + y * y + z * z + w * w);
+      if (std::isfinite(n) && n > 0.5 && n < 2.0) {  // the full attitude, for the visual odometry
+        att_R_ = Eigen::Quaterniond(w / n, x / n, y / n, z / n).toRotationMatrix();
+        att_ns_ = ahrs_.solution().stamp.sample_ns;
+        have_att_ = true;
+      }
     }
     return;  // rejections counted by the AHRS receiver
   }
@@ -181,7 +205,12 @@ void NavWorker::handle_frame(const hal::CanRxFrame& rx) noexcept {
   if (!receiver_.on_frame(rx)) return;  // counted by the receiver
   if (rx.frame.id == qc::kIdAttitudeIn) {
     qc::Stamped<qc::AttitudeIn> a;
-    if (receiver_.latest_attitude(rx.stamp.sample_ns, INT64_MAX / 2, a) && !dr_.on_heading(a.stamp.sample_ns, a.value.heading_rad)) ++dr_rejected_;
+    if (receiver_.latest_attitude(rx.stamp.sample_ns, INT64_MAX / 2, a)) {
+      if (!dr_.on_heading(a.stamp.sample_ns, a.value.heading_rad)) ++dr_rejected_;
+      att_R_ = rotation_from_rpy(a.value.roll_rad, a.value.pitch_rad, a.value.heading_rad);
+      att_ns_ = a.stamp.sample_ns;
+      have_att_ = true;
+    }
   } else if (rx.frame.id == qc::kIdModeCmd) {
     handle_mode(receiver_.last_mode().value);
   }
@@ -312,9 +341,10 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
   }
   const bool uses_route = cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kRepeat;
   const bool change = cmd.mode != mode_ || (uses_route && id != route_id_) || (cmd.mode == qc::Mode::kRepeat && cmd.reverse != reverse_);
-  if (cmd.mode == qc::Mode::kMap) why = ModeReject::kUnsupportedMode;
+  if (cmd.mode == qc::Mode::kMap || (cmd.mode == qc::Mode::kVo && !vo_ready_)) why = ModeReject::kUnsupportedMode;
   if (why == ModeReject::kNone && change) {
-    if (cmd.mode == qc::Mode::kTeach && dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s) why = ModeReject::kNoHeading;
+    if ((cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kVo) && dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s)
+      why = ModeReject::kNoHeading;
     if (cmd.mode == qc::Mode::kRepeat) {
       // Refused before the current mode is left when the route is not there at all.
       char path[1024];
@@ -331,6 +361,14 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
       leave_mode();
       if (cmd.mode == qc::Mode::kTeach) why = enter_teach(id);
       if (cmd.mode == qc::Mode::kRepeat) why = enter_repeat(id, cmd.reverse);
+      if (cmd.mode == qc::Mode::kVo) {
+        // A new chain: the body at the origin of this run, in the attitude of its first pair.
+        vo_.reset();
+        vo_anchor_ = vo_last_set_ = Pose3{};
+        vo_interval_inliers_ = 0;
+        vo_mode_start_ns_ = nav_now_ns_;
+        vo_prev_dr_valid_ = false;
+      }
       if (why == ModeReject::kNone) {
         mode_ = cmd.mode;
         reverse_ = cmd.reverse;
@@ -385,6 +423,96 @@ void NavWorker::handle_ping(const PingMsg& p) noexcept {
   // The ping that completes a tile runs the whole tile stage (raster, features, teach append or
   // repeat update): it is timed against the tile budget, every other ping against the ping budget.
   stage_time(tile_seq_ != tiles_before ? Stage::kTile : Stage::kPing, t0);
+}
+
+void NavWorker::handle_pair(const FrameMsg& f) noexcept {
+  const std::int64_t t0 = cpu_clock_.now_ns();
+  ++frames_;
+  // A pair stamped at or before the previous one cannot be a step forward in time: counted, dropped.
+  if (last_frame_ns_ >= 0 && f.stamp.sample_ns <= last_frame_ns_) {
+    ++frames_out_of_order_;
+    return;
+  }
+  last_frame_ns_ = f.stamp.sample_ns;
+  if (mode_ != qc::Mode::kVo || !vo_ready_) return;
+  const int W = cfg_.vo.max_width, H = cfg_.vo.max_height;
+  if (!QNAVD_CHECK(f.width == W && f.height == H, "stereo pair of another size than its pool slot")) return;
+  FrameReport& r = frame_report_;
+  r = FrameReport{};
+  r.seq = f.sequence;
+  r.stamp_ns = f.stamp.sample_ns;
+  r.has_truth = f.has_truth;
+  r.truth_world_T_body = f.truth_world_T_body;
+  r.truth_path_m = f.truth_path_m;
+  const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  const std::uint8_t* left = q_.frame_pool + static_cast<std::size_t>(f.slot) * 2 * n;
+  pipeline::VoFrameInput in;
+  in.left = ConstImageViewU8::make(left, W, H).value();
+  in.right = ConstImageViewU8::make(left + n, W, H).value();
+  in.stamp_ns = static_cast<std::uint64_t>(f.stamp.sample_ns);
+  // The newest attitude at or before the pair (inputs are taken up to its time), if not stale.
+  if (have_att_ && f.stamp.sample_ns - att_ns_ <= static_cast<std::int64_t>(cfg_.attitude_stale_s * 1e9)) {
+    in.has_attitude = true;
+    in.world_R_body = att_R_;
+  }
+  // The DVL (or wheel odometry on the DVL's interface) as the translation prior: the dead-reckoned
+  // displacement since the previous pair (level, 20 % + 2 cm).
+  const bool odo = dr_.has_velocity() && dr_.velocity_age_s(f.stamp.sample_ns) <= cfg_.dvl_stale_s;
+  const Pose2 dr_now = dr_.pose_at(f.stamp.sample_ns);
+  if (odo && vo_prev_dr_valid_) {
+    in.has_body_displacement = true;
+    in.body_displacement_world_m = Vec3d(dr_now.x_m - vo_prev_dr_.x_m, dr_now.y_m - vo_prev_dr_.y_m, 0.0);
+    in.displacement_sigma_m = 0.02 + 0.2 * in.body_displacement_world_m.norm();
+  }
+  vo_prev_dr_ = dr_now;
+  vo_prev_dr_valid_ = odo;
+  Result<vo::VoStep> step = vo_.step(in);
+  if (!step) {
+    ++vo_no_attitude_;  // 3D-VME needs the attitude: the pair is not processed (FaultAttitudeLost says why)
+  } else {
+    r.processed = true;
+    r.flags = step->flags;
+    r.visual = step->visual;
+    r.inliers = static_cast<std::uint32_t>(step->visual ? step->matches : 0);
+    publish_vo_increment(r.inliers);
+  }
+  r.world_T_body = vo_.body_pose();
+  stage_time(Stage::kVo, t0);
+  r.latency_ms = static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6;
+  if (log_ && cfg_.log == LogFormat::kJson) {
+    const Vec3d& p = r.world_T_body.t;
+    const Vec3d tp = r.has_truth ? r.truth_world_T_body.t : Vec3d::Zero();
+    std::fprintf(log_,
+                 "{\"event\":\"vo\",\"seq\":%u,\"t_s\":%.1f,\"processed\":%s,\"visual\":%s,\"flags\":%u,\"inliers\":%u,"
+                 "\"north_m\":%.4f,\"east_m\":%.4f,\"down_m\":%.4f,\"truth_north_m\":%.4f,\"truth_east_m\":%.4f,\"truth_path_m\":%.3f,"
+                 "\"latency_ms\":%.2f}\n",
+                 r.seq, static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, r.processed ? "true" : "false", r.visual ? "true" : "false",
+                 r.flags, r.inliers, p.x(), p.y(), p.z(), tp.x(), tp.y(), r.truth_path_m, r.latency_ms);
+  } else if (log_ && cfg_.log == LogFormat::kKeyValue) {
+    std::fprintf(log_, "vo seq=%u processed=%d visual=%d inliers=%u north_m=%.3f east_m=%.3f\n", r.seq, r.processed ? 1 : 0,
+                 r.visual ? 1 : 0, r.inliers, r.world_T_body.t.x(), r.world_T_body.t.y());
+  }
+  if (frame_observer_) frame_observer_(frame_ctx_, r);
+}
+
+// QNAV_VO_STEP carries the motion since the last one sent: while the publisher still holds the last
+// value, this step is added to it (the increment grows from the same anchor); once it went out, a
+// new increment starts where that one ended.
+void NavWorker::publish_vo_increment(std::uint32_t inliers) noexcept {
+  if (!publisher_->vo_pending()) {
+    vo_anchor_ = vo_last_set_;
+    vo_interval_inliers_ = inliers;
+  } else {
+    vo_interval_inliers_ = std::min(vo_interval_inliers_, inliers);
+  }
+  vo_last_set_ = vo_.body_pose();
+  const pipeline::PlanarIncrement inc = pipeline::planar_increment(vo_anchor_, vo_last_set_);
+  qc::VoStep m;
+  m.dx_m = clampd(inc.forward_m, -32.0, 32.0);
+  m.dy_m = clampd(inc.right_m, -32.0, 32.0);
+  m.dyaw_rad = clampd(inc.yaw_rad, -3.1416, 3.1416);
+  m.inliers = static_cast<std::uint8_t>(std::min<std::uint32_t>(vo_interval_inliers_, 255));
+  publisher_->set(m);
 }
 
 bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
@@ -465,14 +593,20 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
 
 void NavWorker::update_faults() noexcept {
   std::uint16_t f = faults_ & qc::fault::kRouteDamaged;
-  const bool sonar_lost = last_ping_ns_ < 0 ? (nav_now_ns_ - start_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS)
-                                            : (nav_now_ns_ - last_ping_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS);
+  // The sonar is not used in Mode = Vo and the camera only there: each is lost only where it is used.
+  const bool sonar_lost = mode_ != qc::Mode::kVo &&
+                          (last_ping_ns_ < 0 ? (nav_now_ns_ - start_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS)
+                                             : (nav_now_ns_ - last_ping_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS));
+  const std::int64_t last_pair_ns = std::max(last_frame_ns_, vo_mode_start_ns_);
+  const bool camera_lost = mode_ == qc::Mode::kVo && (nav_now_ns_ - last_pair_ns > static_cast<std::int64_t>(cfg_.vo_stale_s * kNsPerS) ||
+                                                      q_.io->camera_device_down.load(std::memory_order_relaxed));
   const bool att_lost = dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s;
   const bool dvl_lost = cfg_.dvl_enabled && dr_.velocity_age_s(nav_now_ns_) > cfg_.dvl_stale_s;
   if (sonar_lost) f |= qc::fault::kSonarLost;
   if (att_lost) f |= qc::fault::kAttitudeLost;
   if (dvl_lost) f |= qc::fault::kDvlLost;
-  if (sonar_lost || att_lost || dvl_lost) f |= qc::fault::kSensorTimeout;
+  if (camera_lost) f |= qc::fault::kCameraLost;
+  if (sonar_lost || att_lost || dvl_lost || camera_lost) f |= qc::fault::kSensorTimeout;
   if (bus_off_ || q_.io->can_device_down.load(std::memory_order_relaxed)) f |= qc::fault::kBusOff;
   if (deadline_misses_ > 0) f |= qc::fault::kDeadlineMiss;
   if (SoftwareFaults::count() > 0) f |= qc::fault::kSoftware;
@@ -512,6 +646,7 @@ void NavWorker::publish() noexcept {
   rejected += q_.io->dvl_rejected.load(std::memory_order_relaxed) + q_.io->sonar_rejected.load(std::memory_order_relaxed) + dr_rejected_;
   rejected += q_.io->can_rx_overflow.load(std::memory_order_relaxed) + q_.io->ping_overflow.load(std::memory_order_relaxed);
   rejected += pings_rejected() + pings_out_of_order_;
+  rejected += q_.io->frame_overflow.load(std::memory_order_relaxed) + q_.io->camera_rejected.load(std::memory_order_relaxed) + frames_out_of_order_;
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
   h.deadline_misses = static_cast<std::uint16_t>(std::min<std::uint32_t>(deadline_misses_, 65535));
   h.cpu_load_pct = clampd(cpu_load_pct_, 0.0, 100.0);
@@ -540,14 +675,19 @@ void NavWorker::log_health() noexcept {
                "\"ping_overflow\":%u,\"dvl_rejected\":%u,\"sonar_rejected\":%u,\"device_errors\":%u,\"can_rejected\":%u,\"dr_rejected\":%u,"
                "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
                "\"teach_no_odometry\":%u,\"nav_resets\":%u,\"pings_rejected\":%u,\"pings_out_of_order\":%u,\"bus_off\":%s,"
-               "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"outputs\":%u}}\n",
+               "\"frames\":%u,\"vo_frames\":%u,\"vo_visual\":%u,\"vo_no_attitude\":%u,\"frames_out_of_order\":%u,\"frame_overflow\":%u,"
+               "\"camera_rejected\":%u,\"vo_max_us\":%" PRId64 ","
+               "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"vo\":%u,\"outputs\":%u}}\n",
                static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
                stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
                io.can_rx_overflow.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
-               SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, pings_rejected(), pings_out_of_order_, bus_off_ ? "true" : "false", stage_misses_[static_cast<int>(Stage::kInputs)],
+               SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, pings_rejected(), pings_out_of_order_, bus_off_ ? "true" : "false",
+               frames_, vo_.frames(), vo_.visual_steps(), vo_no_attitude_, frames_out_of_order_, io.frame_overflow.load(), io.camera_rejected.load(),
+               stage_max_ns_[static_cast<int>(Stage::kVo)] / 1000, stage_misses_[static_cast<int>(Stage::kInputs)],
                stage_misses_[static_cast<int>(Stage::kModes)], stage_misses_[static_cast<int>(Stage::kPing)],
-               stage_misses_[static_cast<int>(Stage::kTile)], stage_misses_[static_cast<int>(Stage::kOutputs)]);
+               stage_misses_[static_cast<int>(Stage::kTile)], stage_misses_[static_cast<int>(Stage::kVo)],
+               stage_misses_[static_cast<int>(Stage::kOutputs)]);
   const std::uint32_t sw = SoftwareFaults::count();
   if (sw != software_faults_logged_) {
     const SoftwareFaultRecord r = SoftwareFaults::last();

@@ -8,14 +8,20 @@
 //   dead reckoning  DVL body velocity x attitude heading (pipeline::DeadReckoner); the ping's pose.
 //   ping -> tile (pipeline::RouteTilePipeline) -> teach: RouteFileWriter.append (durable per node)
 //                                               -> repeat: RouteRepeater.step -> guidance
+//   stereo pair (Mode = Vo) -> pipeline::VoOdometry with the attitude at the pair's time -> the
+//             body's motion since the last QNAV_VO_STEP sent (an increment, never repeated)
 //   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
 //             into the can_tx queue; one log line per tile and per event; health every period.
 // Leaving or changing a repeat clears what was said about the old route (guidance, status, localised).
 // Sensor loss degrades, never stops: sonar or attitude lost -> guidance "hold course" (tiles are not
 // built without a heading); DVL lost -> the route filter runs the paper's eq. 5 motion model
-// (FaultDvlLost) until velocities return.
+// (FaultDvlLost) until velocities return; in Mode = Vo no pair for vo.stale_s -> FaultCameraLost (no
+// VO_STEP is sent: the autopilot dead-reckons on its own), a pair without attitude is not processed
+// (FaultAttitudeLost), a pair the VO cannot measure is dead-reckoned from the last velocity
+// (VO_STEP Inliers = 0). Sonar loss is not a fault in Mode = Vo, camera loss only there.
 // Memory: everything is sized in init() from the configuration; run_once() does not allocate.
-// Time: run_once() handles at most one ping and at most the queue depths of frames and samples.
+// Time: run_once() handles at most one ping or one stereo pair (the earlier by sample time) and at
+// most the queue depths of CAN frames and samples.
 #pragma once
 
 #include <atomic>
@@ -31,6 +37,7 @@
 #include "firmware/pipeline/dead_reckoner.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
+#include "firmware/pipeline/vo_odometry.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/deployment.hpp"
 #include "firmware/qnavd/messages.hpp"
@@ -64,6 +71,22 @@ struct TileReport {
 };
 using TileObserver = void (*)(void* ctx, const TileReport& r);
 
+// One stereo pair as the nav worker reported it (log line, tests).
+struct FrameReport {
+  std::uint32_t seq = 0;
+  std::uint32_t flags = 0;       // nav/vo VoFlag bits (0 when not processed)
+  bool processed = false;        // false: no attitude at the pair's time
+  bool visual = false;
+  std::uint32_t inliers = 0;
+  Pose3 world_T_body;            // the VO's body pose (NED, from the start of the Vo mode)
+  bool has_truth = false;
+  Pose3 truth_world_T_body;
+  double truth_path_m = 0.0;
+  std::int64_t stamp_ns = 0;
+  double latency_ms = 0.0;       // pair popped -> outputs queued
+};
+using FrameObserver = void (*)(void* ctx, const FrameReport& r);
+
 struct NavQueues {
   SpscRing<PingMsg>* pings = nullptr;
   SpscRing<std::uint32_t>* free_slots = nullptr;
@@ -72,6 +95,9 @@ struct NavQueues {
   SpscRing<drivers::dvl::DvlVelocity>* dvl = nullptr;
   const float* ping_pool = nullptr;       // slot s: port at s * stride, starboard at s * stride + stride / 2
   std::size_t ping_pool_stride = 0;
+  SpscRing<FrameMsg>* frames = nullptr;   // null when vo.enabled = false
+  SpscRing<std::uint32_t>* free_frames = nullptr;
+  const std::uint8_t* frame_pool = nullptr;  // slot s: left at s * 2 * W * H, right W * H after it
   IoCounters* io = nullptr;
 };
 
@@ -93,6 +119,7 @@ class NavWorker {
   NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock, hal::FileStore& store) noexcept;
   ~NavWorker();
   Status init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log);
+  void set_frame_observer(FrameObserver f, void* ctx) noexcept { frame_observer_ = f, frame_ctx_ = ctx; }
   // The node spacing and swath written into the header of a route taught here (before start).
   void set_route_geometry(double spacing_m, double swath_m) noexcept { spacing_m_ = spacing_m, swath_m_ = swath_m; }
   // One pass over the queues and stages; false when there was nothing to do.
@@ -118,6 +145,12 @@ class NavWorker {
            c.get(sonar::CorrectorCounter::kNonFiniteSample) + c.get(sonar::CorrectorCounter::kBadAltitude);
   }
   std::uint32_t pings_out_of_order() const noexcept { return pings_out_of_order_; }
+  // Stereo pairs taken off the queue; of those processed by the VO; without attitude; out of order.
+  std::uint32_t frames() const noexcept { return frames_; }
+  std::uint32_t vo_frames() const noexcept { return vo_.frames(); }
+  std::uint32_t vo_visual() const noexcept { return vo_.visual_steps(); }
+  std::uint32_t vo_no_attitude() const noexcept { return vo_no_attitude_; }
+  std::uint32_t frames_out_of_order() const noexcept { return frames_out_of_order_; }
   // qnav CAN frames refused by the receiver (format, length, range, invalid, stale, error frames).
   std::uint32_t can_rejected() const noexcept {
     return receiver_.counters().total() - receiver_.counters().get(drivers::qnavcan::RxCounter::kUnknownId);
@@ -135,6 +168,8 @@ class NavWorker {
   ModeReject enter_repeat(std::uint16_t id, bool reverse) noexcept;
   void leave_mode() noexcept;
   void handle_ping(const PingMsg& p) noexcept;
+  void handle_pair(const FrameMsg& f) noexcept;
+  void publish_vo_increment(std::uint32_t inliers) noexcept;
   bool on_tile(const pipeline::RouteTile& t) noexcept;
   void update_faults() noexcept;
   void publish() noexcept;
@@ -159,6 +194,21 @@ class NavWorker {
   pipeline::RouteTilePipeline tiles_;
   pipeline::RouteRepeater repeater_;
   pipeline::RouteTileSink tile_sink_;
+  pipeline::VoOdometry vo_;
+  bool vo_ready_ = false;
+  FrameObserver frame_observer_ = nullptr;
+  void* frame_ctx_ = nullptr;
+  std::int64_t last_frame_ns_ = -1;
+  std::int64_t vo_mode_start_ns_ = 0;
+  std::uint32_t frames_ = 0, vo_no_attitude_ = 0, frames_out_of_order_ = 0;
+  Pose3 vo_anchor_, vo_last_set_;     // body poses: at the start of the pending increment, at its last update
+  std::uint32_t vo_interval_inliers_ = 0;  // smallest inlier count of the increment's steps (0 = one was not visual)
+  FrameReport frame_report_{};
+  Pose2 vo_prev_dr_{};                // dead-reckoned pose at the previous pair (the VO's odometry prior)
+  bool vo_prev_dr_valid_ = false;
+  bool have_att_ = false;             // the newest attitude sample (QNAV_ATTITUDE_IN or DroneCAN AHRS)
+  std::int64_t att_ns_ = 0;
+  Mat3d att_R_ = Mat3d::Identity();   // world (NED) <- body (FRD)
   drivers::route_store::RouteFileWriter writer_;
   drivers::route_store::RouteFileReader reader_;
   std::vector<route::NodeMeta> meta_;  // reserved for route.max_nodes at init

@@ -87,6 +87,12 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   if (cfg_.sim_mission.size() == 0) return Status(StatusCode::kInvalidArgument, "sim: the mission has no [[sim.pass]]");
   recordings_.clear();
   for (const SimPass& p : cfg_.sim_mission) {
+    if (p.mode == qc::Mode::kVo && !rover_) {
+      if (frames_.frames == nullptr) return Status(StatusCode::kInvalidArgument, "sim: a vo pass needs vo.enabled (the frame pool)");
+      if (frames_.width != SimRover().bench().width() || frames_.height != SimRover().bench().height())
+        return Status(StatusCode::kInvalidArgument, "sim: the simulated stereo bench is 320 x 256: vo.width and vo.height must match");
+      rover_ = std::make_unique<SimRover>();
+    }
     std::unique_ptr<Recording> r;
     if (!p.file.empty()) {
       r = std::make_unique<Recording>();
@@ -132,7 +138,7 @@ void SimVehicle::send_mode(qc::Mode m, bool reverse) noexcept {
   phase_start_ns_ = clock_.now_ns();
 }
 
-void SimVehicle::send_attitude(double heading_rad) noexcept {
+void SimVehicle::send_attitude(double heading_rad, double roll_rad, double pitch_rad) noexcept {
   last_heading_ = heading_rad;
   const std::int64_t now = clock_.now_ns();
   if (stalled("attitude", now) || now == last_att_ns_) return;  // one AHRS sample per instant
@@ -144,8 +150,11 @@ void SimVehicle::send_attitude(double heading_rad) noexcept {
     namespace dc = drivers::dronecan;
     dc::AhrsSolution sol;
     sol.timestamp_us = static_cast<std::uint64_t>(now / 1000);
-    sol.orientation_xyzw[2] = static_cast<float>(std::sin(h / 2));
-    sol.orientation_xyzw[3] = static_cast<float>(std::cos(h / 2));
+    const Eigen::Quaterniond q(rotation_from_rpy(roll_rad, pitch_rad, h));
+    sol.orientation_xyzw[0] = static_cast<float>(q.x());
+    sol.orientation_xyzw[1] = static_cast<float>(q.y());
+    sol.orientation_xyzw[2] = static_cast<float>(q.z());
+    sol.orientation_xyzw[3] = static_cast<float>(q.w());
     sol.linear_accel_mps2[2] = -9.81f;
     std::uint8_t payload[dc::kSolutionMaxBytes];
     const std::size_t n = dc::encode_solution(sol, true, payload, sizeof payload);
@@ -158,6 +167,8 @@ void SimVehicle::send_attitude(double heading_rad) noexcept {
   }
   qc::AttitudeIn a;
   a.heading_rad = std::fmin(h, 6.2832);
+  a.roll_rad = roll_rad;
+  a.pitch_rad = pitch_rad;
   a.valid = true;
   a.counter = att_counter_++;
   hal::CanFrame f;
@@ -224,6 +235,11 @@ Status SimVehicle::start_pass() {
   recording_ = recordings_[pass_].get();
   have_prev_ = false;
   pass_start_ns_ = clock_.now_ns();
+  if (p.mode == qc::Mode::kVo) {
+    // The rover's first pair one step after the last sample between passes.
+    rover_->start(cfg_.sim_seed + pass_, p.length_m, clock_.now_ns() + kPassLeadNs);
+    return Status::ok();
+  }
   if (recording_ != nullptr) {
     rec_next_ = static_cast<std::size_t>(p.first_ping);
     rec_end_ = p.last_ping < 0 ? recording_->data.pings.size()
@@ -375,6 +391,61 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   return StepResult::kProduced;
 }
 
+SimVehicle::StepResult SimVehicle::fly_rover(IoCounters& io) noexcept {
+  if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
+  if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
+  RoverSample s;
+  if (!rover_->next(s)) {
+    phase_ = Phase::kEndPass;
+    return StepResult::kWaiting;
+  }
+  clock_.set(s.t_ns);
+  inject_bus_faults(s.t_ns);
+  send_attitude(s.heading_rad, s.roll_rad, s.pitch_rad);
+  // The rover's wheel odometry over the last step, as the DVL's body velocities.
+  send_dvl(s.dt_s > 0.0 ? s.odo_forward_m / s.dt_s : 0.0, s.dt_s > 0.0 ? s.odo_right_m / s.dt_s : 0.0, s.t_ns);
+  if (stalled("camera", s.t_ns)) return StepResult::kProduced;
+  io.frames_in.fetch_add(1, std::memory_order_relaxed);
+  std::uint32_t slot = 0;
+  if (spare_frame_ >= 0) {
+    slot = static_cast<std::uint32_t>(spare_frame_);
+    spare_frame_ = -1;
+  } else if (!frames_.free->try_pop(slot)) {
+    io.frame_overflow.fetch_add(1, std::memory_order_relaxed);
+    return StepResult::kProduced;
+  }
+  const std::size_t n = static_cast<std::size_t>(frames_.width) * static_cast<std::size_t>(frames_.height);
+  std::uint8_t* left = frames_.pool + static_cast<std::size_t>(slot) * 2 * n;
+  const Status r = rover_->render(ImageViewU8::make(left, frames_.width, frames_.height).value(),
+                                  ImageViewU8::make(left + n, frames_.width, frames_.height).value());
+  if (!r) {
+    io.camera_rejected.fetch_add(1, std::memory_order_relaxed);
+    spare_frame_ = slot;  // kept for the next pair (the nav worker is the only producer of free frames)
+    return StepResult::kProduced;
+  }
+  FrameMsg m;
+  m.slot = slot;
+  m.sequence = s.index;
+  m.width = static_cast<std::uint16_t>(frames_.width);
+  m.height = static_cast<std::uint16_t>(frames_.height);
+  m.stamp.sample_ns = m.stamp.arrival_ns = s.t_ns;
+  m.has_truth = true;
+  m.truth_world_T_body = s.truth_world_T_body;
+  m.truth_path_m = s.path_m;
+  pending_pair_ = m;
+  has_pending_pair_ = true;
+  return StepResult::kProduced;
+}
+
+void SimVehicle::release_pair(IoCounters& io) noexcept {
+  if (!has_pending_pair_) return;
+  if (!frames_.frames->try_push(pending_pair_)) {
+    io.frame_overflow.fetch_add(1, std::memory_order_relaxed);
+    spare_frame_ = pending_pair_.slot;
+  }
+  has_pending_pair_ = false;
+}
+
 SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
                                         IoCounters& io) noexcept {
   io_ = &io;
@@ -420,6 +491,7 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
         const std::int64_t sim_elapsed = clock_.now_ns() - sim_start_ns_;
         if (wall_.now_ns() - wall_start_ns_ < sim_elapsed) return StepResult::kWaiting;
       }
+      if (cfg_.sim_mission[pass_].mode == qc::Mode::kVo) return fly_rover(io);
       Sample smp;
       if (!(recording_ ? next_recorded(smp) : next_simulated(smp))) {
         phase_ = Phase::kEndPass;
@@ -430,6 +502,8 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
     case Phase::kEndPass:
       // Let the nav worker finish the pass: every slot back (the last ping processed, not only popped).
       if (free_slots.size() + (spare_slot_ >= 0 ? 1u : 0u) < free_slots.capacity()) return StepResult::kWaiting;
+      if (frames_.free != nullptr && frames_.free->size() + (spare_frame_ >= 0 ? 1u : 0u) < frames_.free->capacity())
+        return StepResult::kWaiting;
       // A fault window ends with its pass at the latest (the disk is free, the bus restarted):
       // out of kFly no window is open.
       phase_ = Phase::kAwaitIdle;

@@ -7,7 +7,10 @@
 //     100 ms between passes;
 //   - the DVL on an in-process serial line: Water Linked "wrz" sentences (real checksums) with the
 //     dead-reckoning velocity (bias, scale error, noise of a DVL + compass), parsed by the real driver;
-//   - the side-scan: each rendered ping copied into a free slot of the ping pool.
+//   - the side-scan: each rendered ping copied into a free slot of the ping pool;
+//   - in a `vo` pass, the rover (SimRover): the Mars-yard stereo pair rendered into a free slot of the
+//     frame pool at each step, with the body's measured roll, pitch and heading on QNAV_ATTITUDE_IN
+//     (or the DroneCAN AHRS) at the pair's time; no pings and no DVL during the pass.
 // Time is simulated (SimClock): sample stamps are mission time; sim.speed = "fast" runs as fast as
 // the nav worker takes pings (at most two in flight, so nothing is dropped), "recorded" paces the
 // pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
@@ -34,6 +37,7 @@
 #include "firmware/pipeline/sim_survey.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "firmware/qnavd/sim_rover.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/clock.hpp"
 #include "hal/core/serial.hpp"
@@ -69,6 +73,10 @@ class SimVehicle {
   // Fault injection's reach: the CAN network (error frames) and the route store (a full disk).
   void set_fault_targets(hal::SimCanNetwork* net, hal::FaultFileStore* store) noexcept { net_ = net, store_ = store; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
+  // The stereo pairs' pool and queues (vo passes need them: vo.enabled).
+  void set_frame_pool(const FramePool& frames) noexcept { frames_ = frames; }
+  // A rendered pair is held back like a ping until its instant's attitude is queued.
+  void release_pair(IoCounters& io) noexcept;
   // One step: produce the next ping (with its attitude frame and DVL sentence) if the nav side has
   // room, or advance the mission's handshake. pool/stride: the ping pool (see messages.hpp).
   // A produced ping is held back until release_ping(), which the I/O thread calls after it has
@@ -103,7 +111,8 @@ class SimVehicle {
   StepResult emit(const Sample& s, SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride, IoCounters& io) noexcept;
   void drain_bus() noexcept;
   void send_mode(drivers::qnavcan::Mode m, bool reverse) noexcept;
-  void send_attitude(double heading_rad) noexcept;
+  void send_attitude(double heading_rad, double roll_rad = 0.0, double pitch_rad = 0.0) noexcept;
+  StepResult fly_rover(IoCounters& io) noexcept;
   void send_dvl(double fwd_mps, double stbd_mps, std::int64_t t_ns) noexcept;
   void idle_tick() noexcept;
   Status start_pass();
@@ -154,6 +163,11 @@ class SimVehicle {
   std::uint32_t noise_seed_ = 12345;
   void record(const hal::CanFrame& f, std::int64_t t_ns) noexcept;
   std::FILE* candump_ = nullptr;
+  FramePool frames_;
+  std::unique_ptr<SimRover> rover_;  // created at init when the mission has a vo pass
+  FrameMsg pending_pair_{};
+  bool has_pending_pair_ = false;
+  std::int64_t spare_frame_ = -1;  // a frame slot taken from the free queue but not sent
 };
 
 }  // namespace qnav::daemon

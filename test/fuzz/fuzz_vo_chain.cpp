@@ -2,7 +2,7 @@
 // (the camera replay backend), the captured frame -> nav/vision HarrisDetector + oriented descriptors
 // at the corners, and as a stereo pair (right = left shifted by the disparity in the last byte) twice
 // through nav/vo StereoVo (Harris, ZNCC stereo, geometric matching, motion, track refinement) with the
-// VO configuration of the simulated bench (tools::vo_config_for_bench, as test/timing/canned does).
+// VO configuration of the simulated bench (pipeline::vo_config_for_bench, as test/timing/canned does).
 // Frames larger than the configured 320 x 256 must be refused, not read out of bounds.
 #include <cstddef>
 #include <cstdint>
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "drivers/stereo_sim/mars_yard.hpp"
-#include "firmware/tools/vo_sim_config.hpp"
+#include "firmware/pipeline/vo_defaults.hpp"
 #include "hal/sim/pgm_sequence_camera.hpp"
 #include "nav/core/arena.hpp"
 #include "nav/vision/descriptor.hpp"
@@ -53,7 +53,7 @@ int qnav_fuzz_vo_chain(const std::uint8_t* data, std::size_t size) {
   }
 
   const sim::StereoBench bench;
-  vo::VoConfig config = tools::vo_config_for_bench(bench);
+  vo::VoConfig config = pipeline::vo_config_for_bench(bench);
   config.max_corners = 120;
   vision::HarrisConfig hc = config.harris;
   hc.max_width = config.max_width;

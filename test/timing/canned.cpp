@@ -10,7 +10,7 @@
 #include "drivers/sidescan/xtf_writer.hpp"
 #include "drivers/stereo_sim/mars_yard.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
-#include "firmware/tools/vo_sim_config.hpp"
+#include "firmware/pipeline/vo_defaults.hpp"
 #include "nav/core/arena.hpp"
 #include "nav/match/geometric_match.hpp"
 #include "nav/motion/rigid3d.hpp"
@@ -118,7 +118,7 @@ Status CannedVo::init() {
     }
   }
   // The VO benchmark's configuration: 3D-VME, fc matching with fast batches, 300 corners.
-  d.config = tools::vo_config_for_bench(d.bench);
+  d.config = pipeline::vo_config_for_bench(d.bench);
   d.config.max_corners = 300;
   d.config.mode = vo::VmeMode::k3D;
   d.config.match.score = match::MatchScoreKind::kContinuous;

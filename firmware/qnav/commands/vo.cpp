@@ -38,7 +38,7 @@
 #include "drivers/stereo_sim/noise_model.hpp"
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
-#include "firmware/tools/vo_sim_config.hpp"
+#include "firmware/pipeline/vo_defaults.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "nav/vision/rectify.hpp"
@@ -50,7 +50,7 @@ using namespace qnav;
 using Clock = std::chrono::steady_clock;
 bool g_verbose = false;
 double g_dsig = 0.15, g_nsig = 3.0, g_app = 0.0;
-double g_att_vo_scale = tools::kVoRotationSigmaScale, g_att_rate_scale = 1.0, g_lat_px = -1.0;
+double g_att_vo_scale = pipeline::kVoRotationSigmaScale, g_att_rate_scale = 1.0, g_lat_px = -1.0;
 bool g_att_step_rot = true, g_att_aniso = true, g_att_filtered = false;
 bool g_refine = true, g_refine_disp = true;
 double g_ref_lat_px = -1.0, g_track_radius = 0.0;
@@ -71,13 +71,6 @@ struct VoBox {
     return s.is_ok();
   }
 };
-
-vo::VoConfig bench_vo_config(const sim::StereoBench& b) {
-  vo::VoConfig c = tools::vo_config_for_bench(b);
-  c.max_corners = 300;
-  c.max_step_m = 0.6;
-  return c;
-}
 
 // ---------------------------------------------------------------------------------------------------
 // Synthetic evaluation
@@ -138,16 +131,14 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
   sim::NoiseModel noise(noise_cfg, seed + 2);
   std::vector<std::unique_ptr<VoBox>> vos;
   for (const EvalConfig& e : cfgs) {
-    vo::VoConfig c = bench_vo_config(bench);
+    vo::VoConfig c = pipeline::default_vo_config(bench, noise_cfg);  // the main configuration, then this one's
     c.mode = e.mode;
     c.match.score = e.score;
     c.match.fast = e.fast;
-    c.match.attitude_sigma_rad = 1.5 * noise_cfg.sigma_m_rad + deg_to_rad(0.02);
     c.stereo.disparity_sigma_px = static_cast<float>(g_dsig);
     c.match.n_sigma = g_nsig;
     c.match.appearance_weight = g_app;
     c.estimate_attitude_bias = e.attitude_bias;
-    c.attitude_bias = tools::attitude_bias_config_for_noise(noise_cfg);
     c.attitude_bias.vo_sigma_scale = g_att_vo_scale;
     c.attitude_bias.initial_rate_sigma_rad_s *= g_att_rate_scale;
     c.attitude_bias.rate_walk_rad_s_sqrt_s *= g_att_rate_scale;

@@ -2,7 +2,7 @@
 // Each iteration processes the reference frame (untimed) then the current one (timed): Harris +
 // stereo + matching + 3D/6D-VME + IRLS + ICP. Also the geometric matcher alone on the same landmarks.
 #include <benchmark/benchmark.h>
-#include "firmware/tools/vo_sim_config.hpp"
+#include "firmware/pipeline/vo_defaults.hpp"
 
 #include <memory>
 #include <string>
@@ -40,7 +40,7 @@ const Frames& frames() {
 }
 
 vo::VoConfig config(vo::VmeMode mode, match::MatchScoreKind score, bool fast) {
-  vo::VoConfig c = tools::vo_config_for_bench(sim::StereoBench{});
+  vo::VoConfig c = pipeline::vo_config_for_bench(sim::StereoBench{});
   c.max_corners = 300;
   c.mode = mode;
   c.match.score = score;

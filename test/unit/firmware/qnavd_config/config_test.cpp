@@ -103,6 +103,27 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(ping_budget_us),
       QNAV_FIELD(tile_budget_us),
       QNAV_FIELD(mode_budget_us),
+      QNAV_FIELD(vo_budget_us),
+      QNAV_FIELD(vo_enabled),
+      QNAV_FIELD(vo_camera),
+      QNAV_FIELD(vo_left_device),
+      QNAV_FIELD(vo_right_device),
+      QNAV_FIELD(vo_trigger_chip),
+      QNAV_FIELD(vo_trigger_line),
+      QNAV_FIELD(vo.max_width),
+      QNAV_FIELD(vo.max_height),
+      QNAV_FIELD(vo.camera.focal_px),
+      QNAV_FIELD(vo.camera.cu_px),
+      QNAV_FIELD(vo.camera.cv_px),
+      QNAV_FIELD(vo.camera.baseline_m),
+      QNAV_FIELD(vo_tilt_down_deg),
+      QNAV_FIELD(vo_mount_height_m),
+      QNAV_FIELD(vo.max_corners),
+      QNAV_FIELD(vo.mode),
+      QNAV_FIELD(vo.estimate_attitude_bias),
+      QNAV_FIELD(vo.max_step_m),
+      QNAV_FIELD(vo_frame_queue),
+      QNAV_FIELD(vo_stale_s),
       QNAV_FIELD(sim_length_m),
       QNAV_FIELD(sim_seed),
       QNAV_FIELD(sim_speed),
@@ -234,6 +255,7 @@ void expect_stages_init(const DaemonConfig& c) {
   expect_stage_inits<sonar::TileBuilder>(c.tiles.tiles, "tile builder");
   expect_stage_inits<route::TileFeatureExtractor>(c.tiles.features, "tile features");
   expect_stage_inits<route::RouteLocaliser>(c.localiser, "route localiser");
+  expect_stage_inits<vo::StereoVo>(c.vo, "stereo visual odometry");
 }
 
 std::string source_path(const char* relative) { return std::string(QNAV_SOURCE_DIR) + "/" + relative; }
@@ -361,6 +383,28 @@ protocol = "pd6"
 baud = 9600
 stale_s = 0.5
 
+[vo]
+enabled = false
+camera = "v4l2"
+left_device = "/dev/video4"
+right_device = "/dev/video5"
+trigger_chip = "gpiochip2"
+trigger_line = 17
+width = 640
+height = 480
+focal_px = 900.0
+cu_px = 319.5
+cv_px = 239.5
+baseline_m = 0.12
+tilt_down_deg = 45.0
+mount_height_m = 1.2
+max_corners = 500
+vme = "6d"
+attitude_filter = false
+max_step_m = 1.5
+frame_queue = 8
+stale_s = 5.0
+
 [route]
 id = 7
 max_nodes = 20000
@@ -382,6 +426,7 @@ motion = "eq5"
 ping_us = 5000
 tile_us = 100000
 mode_us = 300000
+vo_us = 250000
 
 [sim]
 length_m = 5000.0
@@ -406,6 +451,7 @@ fault_s = 5.0
 mode = "hold"
 offset_pct = -55.5
 reverse = true
+length_m = 12.5
 file = "dive.xtf"
 first_ping = 90
 last_ping = 461
@@ -455,6 +501,7 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_EQ(c.sim_mission[0].file, "dive.xtf");
   EXPECT_EQ(c.sim_mission[0].first_ping, 90);
   EXPECT_EQ(c.sim_mission[0].last_ping, 461);
+  EXPECT_EQ(c.sim_mission[0].length_m, 12.5);
   EXPECT_EQ(c.sim_mission[1].mode, drivers::qnavcan::Mode::kRepeat);
   EXPECT_EQ(c.sim_mission[1].offset_pct, 100.0);  // an integer where a float is expected
   EXPECT_FALSE(c.sim_mission[1].reverse);
@@ -523,7 +570,7 @@ const BadConfig kBadConfigs[] = {
      "unknown key (did you mean route.max_nodes?)"},
     {"unknown_key_far", "[dvl]\nbaudrate = 9600\n", "dvl.baudrate", 2, "unknown key"},
     {"unknown_key_other_table", "[can]\nstale_s = 1.0\n", "can.stale_s", 2,
-     "did you mean sonar.stale_s or dvl.stale_s?"},
+     "did you mean sonar.stale_s or dvl.stale_s or vo.stale_s?"},
     {"key_outside_tables", "backend = \"linux\"\n", "backend", 1, "did you mean daemon.backend?"},
     {"unknown_table", "[daemon]\nlog = \"off\"\n[rout]\nid = 2\n", "rout", 3, "unknown table (did you mean [route]?)"},
     {"unknown_table_far", "[logging]\nlevel = 2\n", "logging", 1, "unknown table; the tables are [daemon], [can]"},
@@ -571,9 +618,9 @@ const BadConfig kBadConfigs[] = {
     {"pass_without_mode", "[[sim.pass]]\nmode = \"teach\"\n\n[[sim.pass]]\noffset_pct = 5\n", "sim.pass[1]", 4,
      "missing mode"},
     {"pass_bad_mode", "[[sim.pass]]\nmode = \"fly\"\n", "sim.pass[0].mode", 2,
-     "must be one of teach, repeat, hold, got \"fly\""},
+     "must be one of teach, repeat, hold, vo, got \"fly\""},
     {"pass_unknown_key", "[[sim.pass]]\nmode = \"teach\"\noffset = 5\n", "sim.pass[0].offset", 3,
-     "a [[sim.pass]] has mode, offset_pct, reverse, file, first_ping, last_ping"},
+     "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping"},
     {"pass_misspelt_key", "[[sim.pass]]\nmode = \"teach\"\nreverse_ = true\n", "sim.pass[0].reverse_", 3,
      "did you mean reverse?"},
     {"pass_offset_out_of_range", "[[sim.pass]]\nmode = \"repeat\"\noffset_pct = 120\n", "sim.pass[0].offset_pct", 3,
@@ -587,7 +634,7 @@ const BadConfig kBadConfigs[] = {
      "sim.stall_pass", 3, "must be < the number of [[sim.pass]] (2), got 2"},
     {"stall_default_pass_beyond_the_mission", "[sim]\nstall = \"sonar\"\n" + std::string(kOnePass), "sim.stall_pass", 2,
      "must be < the number of [[sim.pass]] (1), got 1"},
-    {"bad_stall", "[sim]\nstall = \"gps\"\n", "sim.stall", 2, "must be one of none, dvl, attitude, sonar, got \"gps\""},
+    {"bad_stall", "[sim]\nstall = \"gps\"\n", "sim.stall", 2, "must be one of none, dvl, attitude, sonar, camera, got \"gps\""},
     // toml++ keeps a table's keys sorted by name, not by line: the error nearest the top is reported.
     {"first_error_by_line", "[daemon]\nnav_priority = 0\n[can]\nrx_queue = 3\n", "daemon.nav_priority", 2,
      "must be in [1, 99], got 0"},

@@ -1,7 +1,7 @@
 #include "nav/vo/stereo_vo.hpp"
 
 #include <gtest/gtest.h>
-#include "firmware/tools/vo_sim_config.hpp"
+#include "firmware/pipeline/vo_defaults.hpp"
 
 #include <cmath>
 #include <memory>
@@ -39,7 +39,7 @@ struct SimRun {
 };
 
 VoConfig bench_config(const sim::StereoBench& b, VmeMode mode, bool fast) {
-  VoConfig c = tools::vo_config_for_bench(b);
+  VoConfig c = pipeline::vo_config_for_bench(b);
   c.mode = mode;
   c.match.fast = fast;
   return c;
