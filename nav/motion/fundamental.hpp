@@ -10,7 +10,9 @@
 // either image (kDegenerate); NaN / inf or mismatched lengths (kInvalidArgument). When every point
 // lies on one plane of the scene (a flat seabed), F is not unique: the pairs fix only a family
 // [e]x H. The fit still satisfies every pair and is returned with unique = false (usable as an
-// epipolar outlier filter, not as motion); see robust_two_view.hpp.
+// epipolar outlier filter, not as motion); see robust_two_view.hpp. The flag sees exact
+// degeneracy only: noise lifts the ratio (measured: exact plane 3e-17, plane with 0.5 px noise and
+// 40 % outliers 1e-5, general scene 4e-4), so it is no model selection between F and H.
 // Cost O(n) + one 9 x 9 eigen-solve and one 3 x 3 SVD; no heap (fixed-size Eigen only).
 #pragma once
 
