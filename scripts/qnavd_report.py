@@ -3,7 +3,9 @@
 
 Reads qnavd's JSON log (one line per tile and per event), prints a per-tile table of every repeat
 pass (estimate vs the simulator's true node, side vs the true side, cross-track vs the true offset)
-and a summary per pass, and writes qnavd_mission.png (estimate vs truth, cross-track vs truth).
+and a summary per pass, and writes qnavd_mission.png (estimate vs truth, cross-track vs truth). A vo
+pass (the rover on the Mars yard) is summarised from its "vo" lines: pairs, visual steps, the VO
+pose's end error against the simulator's truth, and qnavd_vo.png (the VO track over the true one).
 Truth comes from the sim backend (truth_along_m / truth_lateral_m in each tile line); the true node
 is the taught node nearest along the route, as `qnav route eval` scores it. Exit 1 when the log
 holds no repeat tile.
@@ -24,6 +26,7 @@ def main():
                 continue
             rec = json.loads(line)
             (tiles if rec.get("event") == "tile" else events).append(rec)
+    vo = [e for e in events if e.get("event") == "vo"]
     taught = [t["truth_along_m"] for t in tiles if t["mode"] == "teach"]
     passes, cur = [], None
     for t in tiles:
@@ -72,6 +75,14 @@ def main():
                   f"peak RSS {e['max_rss_kb'] / 1024:.1f} MB, {e['deadline_misses']} deadline misses, {e['software_faults']} software faults")
     refused = [e for e in events if e.get("event") == "mode" and e.get("refused")]
     print(f"mode commands: {sum(1 for e in events if e.get('event') == 'mode')}, refused {len(refused)}")
+    if vo:
+        last = vo[-1]
+        err = ((last["north_m"] - last["truth_north_m"]) ** 2 + (last["east_m"] - last["truth_east_m"]) ** 2) ** 0.5
+        path = max(last["truth_path_m"], 1e-9)
+        lat = sorted(e["latency_ms"] for e in vo)
+        print(f"vo pass (rover on the Mars yard): {len(vo)} stereo pairs, {sum(1 for e in vo if e['visual'])} visual steps, "
+              f"{path:.2f} m driven, end error {err * 100:.1f} cm ({100.0 * err / path:.2f} % of the path); "
+              f"pair -> VO_STEP queued: p50 {lat[len(lat) // 2]:.1f} ms, max {lat[-1]:.1f} ms")
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -98,6 +109,25 @@ def main():
     out = sys.argv[2] + "/qnavd_mission.png"
     fig.savefig(out, dpi=90)
     print(f"plot: {out}")
+    if vo:
+        fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
+        ax.plot([e["truth_east_m"] for e in vo], [e["truth_north_m"] for e in vo], "k-", lw=4, alpha=0.25, label="truth (simulator)")
+        ax.plot([e["east_m"] for e in vo], [e["north_m"] for e in vo], "o-", ms=3, label="qnavd visual odometry")
+        ax.set_xlabel("east m (stretched: the rover wanders a few cm)")
+        ax.set_ylabel("north m")
+        ax.set_title("track")
+        ax.legend(fontsize=8, loc="best")
+        errs = [100.0 * ((e["north_m"] - e["truth_north_m"]) ** 2 + (e["east_m"] - e["truth_east_m"]) ** 2) ** 0.5 for e in vo]
+        ax2.plot([e["truth_path_m"] for e in vo], errs, "o-", ms=3)
+        ax2.set_xlabel("path driven m")
+        ax2.set_ylabel("horizontal position error cm")
+        ax2.set_title("error against the simulator's truth")
+        ax2.set_ylim(bottom=0)
+        fig.suptitle("qnavd vo mode: the rover's track from its stereo pairs (from the daemon's log)")
+        fig.tight_layout()
+        out = sys.argv[2] + "/qnavd_vo.png"
+        fig.savefig(out, dpi=90)
+        print(f"plot: {out}")
     return 0
 
 

@@ -53,9 +53,9 @@ std::string deployment_text(const Deployment& d) {
     std::snprintf(line, sizeof line, "  %-5s %8d  %3d  %s\n", t.name, t.priority, t.cpu, t.role);
     out += line;
   }
-  out += "queues (single producer, single consumer)\n  name        from -> to    depth  item B   bytes  when full\n";
+  out += "queues (single producer, single consumer)\n  name         from -> to    depth  item B   bytes  when full\n";
   for (const QueueSpec& q : d.queues) {
-    std::snprintf(line, sizeof line, "  %-10s  %-4s -> %-4s %6zu %7zu %7zu  %s\n", q.name, q.producer, q.consumer, q.depth, q.item_bytes,
+    std::snprintf(line, sizeof line, "  %-11s  %-4s -> %-4s %6zu %7zu %7zu  %s\n", q.name, q.producer, q.consumer, q.depth, q.item_bytes,
                   q.depth * q.item_bytes, q.on_full);
     out += line;
   }

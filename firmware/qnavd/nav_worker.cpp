@@ -368,6 +368,7 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
         vo_interval_inliers_ = 0;
         vo_mode_start_ns_ = nav_now_ns_;
         vo_prev_dr_valid_ = false;
+        vo_chain_started_ = false;
       }
       if (why == ModeReject::kNone) {
         mode_ = cmd.mode;
@@ -474,7 +475,13 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
     r.flags = step->flags;
     r.visual = step->visual;
     r.inliers = static_cast<std::uint32_t>(step->visual ? step->matches : 0);
-    publish_vo_increment(r.inliers);
+    if (vo_chain_started_) {
+      publish_vo_increment(r.inliers);
+    } else {
+      // The chain's first pair fixes the body's attitude: increments are measured from here.
+      vo_anchor_ = vo_last_set_ = vo_.body_pose();
+      vo_chain_started_ = true;
+    }
   }
   r.world_T_body = vo_.body_pose();
   stage_time(Stage::kVo, t0);

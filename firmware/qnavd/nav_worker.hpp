@@ -206,6 +206,7 @@ class NavWorker {
   FrameReport frame_report_{};
   Pose2 vo_prev_dr_{};                // dead-reckoned pose at the previous pair (the VO's odometry prior)
   bool vo_prev_dr_valid_ = false;
+  bool vo_chain_started_ = false;     // the first pair of this Vo mode was processed
   bool have_att_ = false;             // the newest attitude sample (QNAV_ATTITUDE_IN or DroneCAN AHRS)
   std::int64_t att_ns_ = 0;
   Mat3d att_R_ = Mat3d::Identity();   // world (NED) <- body (FRD)

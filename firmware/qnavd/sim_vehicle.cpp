@@ -1,6 +1,7 @@
 #include "firmware/qnavd/sim_vehicle.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -76,7 +77,10 @@ void SimVehicle::record(const hal::CanFrame& f, std::int64_t t_ns) noexcept {
 Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   if (!cfg_.sim_candump.empty()) {
     candump_ = std::fopen(cfg_.sim_candump.c_str(), "w");
-    if (!candump_) return Status(StatusCode::kIoError, "sim: cannot write sim.candump");
+    if (!candump_) {
+      std::fprintf(stderr, "qnavd: sim.candump %s: %s\n", cfg_.sim_candump.c_str(), std::strerror(errno));
+      return Status(StatusCode::kIoError, "sim: cannot write sim.candump (see the line above)");
+    }
   }
   bus_ = &autopilot;
   dvl_ = &dvl_out;

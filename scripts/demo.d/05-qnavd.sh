@@ -1,4 +1,4 @@
-# demo: qnavd, the flight daemon, flies a mission on the simulated vehicle (teach, repeat forwards and in reverse with lateral offsets; modes switched by CAN)
+# demo: qnavd, the flight daemon, flies a mission on the simulated vehicle (teach, repeat forwards and in reverse with lateral offsets, then visual odometry on a rover; modes switched by CAN)
 set -eu
 out="$OUT/qnavd"
 mkdir -p "$out"
@@ -6,7 +6,8 @@ rm -rf build/demo/routes build/demo/qnavd.candump
 # The daemon is configured by one TOML file; check it, and show the static pipeline it gives.
 "$QNAVD" --check-config firmware/qnavd/config/sim.toml
 "$QNAVD" --print-deployment --config firmware/qnavd/config/sim.toml
-# The real daemon on the sim backend: the simulated autopilot commands teach, then three repeat passes,
+# The real daemon on the sim backend: the simulated autopilot commands teach, then three repeat passes
+# and a visual-odometry pass (a rover with a stereo pair),
 # over an in-process CAN bus; the AHRS, the DVL (Water Linked sentences) and the side-scan feed it.
 start=$(date +%s.%N)
 "$QNAVD" --config firmware/qnavd/config/sim.toml > "$out/qnavd.jsonl"
@@ -19,6 +20,8 @@ echo "qnavd flew the mission in $(awk -v a="$start" -v b="$end" 'BEGIN { printf 
 # (ROUTE_STATUS with Tracking + Starboard starts 203#20; NAV_STATUS in Repeat and localised, 200#12)
 grep -m 1 ' 203#20' build/demo/qnavd.candump > "$out/route_status.log"
 grep -m 1 ' 200#12' build/demo/qnavd.candump >> "$out/route_status.log"
+# (QNAV_VO_STEP, 0x202: the rover's motion since the previous one, from the vo pass)
+grep -m 2 ' 202#' build/demo/qnavd.candump >> "$out/route_status.log"
 "$QNAV" can decode "$out/route_status.log"
 # A recorded dive through the same daemon: the Iver2's XTF replayed as its sonar, AHRS and DVL would
 # deliver it (teach on pings 0-300, repeat on 90-460: the tool's own demo below does the same).
