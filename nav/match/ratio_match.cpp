@@ -185,10 +185,11 @@ Status RatioMatcher::match_predicted(Span<const vision::OrientedDescriptor> quer
       continue;
     }
     ++usable;
-    x0 = std::fmin(x0, train[j].x);
-    y0 = std::fmin(y0, train[j].y);
-    x1 = std::fmax(x1, train[j].x);
-    y1 = std::fmax(y1, train[j].y);
+    // Plain comparisons, not fminf / fmaxf (the freestanding LEON3 libm does not carry them).
+    if (train[j].x < x0) x0 = train[j].x;
+    if (train[j].y < y0) y0 = train[j].y;
+    if (train[j].x > x1) x1 = train[j].x;
+    if (train[j].y > y1) y1 = train[j].y;
   }
   if (invalid_train > 0) counters_.increment(RatioMatchCounter::kInvalidDescriptor, invalid_train);
   const float radius = config_.search_radius_px;
@@ -196,7 +197,7 @@ Status RatioMatcher::match_predicted(Span<const vision::OrientedDescriptor> quer
   std::size_t nx = 1, ny = 1;
   float cell = radius;
   if (usable > 0) {
-    const float ext = std::fmax(x1 - x0, y1 - y0);
+    const float ext = (x1 - x0) > (y1 - y0) ? (x1 - x0) : (y1 - y0);
     if (ext / static_cast<float>(side) > cell) cell = ext / static_cast<float>(side);
     nx = static_cast<std::size_t>((x1 - x0) / cell) + 1;
     ny = static_cast<std::size_t>((y1 - y0) / cell) + 1;
