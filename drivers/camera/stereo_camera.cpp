@@ -7,8 +7,12 @@ namespace qnav::drivers::camera {
 Status StereoCamera::allocate(int width, int height, int sides) {
   if (width <= 0 || height <= 0 || width > kMaxImageSide || height > kMaxImageSide)
     return Status(StatusCode::kInvalidArgument, "camera size out of range");
+  busy_[0] = busy_[1] = 0;
+  // Reopened with the same geometry (a device that came back): the slots are reused, not reallocated.
+  if (pixels_ && width == width_ && height == height_ && sides == sides_) return Status::ok();
   width_ = width;
   height_ = height;
+  sides_ = sides;
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * kSlots * static_cast<std::size_t>(sides);
   pixels_.reset(new (std::nothrow) std::uint8_t[n]);
   if (!pixels_) return Status(StatusCode::kCapacityExceeded, "cannot allocate stereo frame slots");

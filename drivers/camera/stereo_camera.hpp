@@ -2,7 +2,8 @@
 // pair_tolerance_ns through StereoPairer) or from one side-by-side camera (left half / right half of
 // one frame, same stamp). Optional hardware trigger (a GpioOutput pulsed before each capture) and
 // strobe (a GpioInput whose edge time is reported as the exposure time of the pair).
-// open() allocates kSlots grey images per side once (the only heap use); step() never allocates.
+// open() allocates kSlots grey images per side once (the only heap use; a reopen with the same
+// geometry reuses them); step() never allocates.
 // step(): [trigger] -> capture left -> capture right -> pair. A view returned in StereoFrame stays
 // valid until the next step(). Counters: capture errors, corrupt frames, pairing drops, strobe misses.
 // Worst case per step: 2 captures (each bounded by capture_timeout_ms) + a strobe wait + O(kDepth).
@@ -64,7 +65,7 @@ class StereoCamera {
   hal::GpioInput* strobe_ = nullptr;
   StereoConfig config_;
   StereoPairer pairer_;
-  int width_ = 0, height_ = 0;
+  int width_ = 0, height_ = 0, sides_ = 0;
   std::unique_ptr<std::uint8_t[]> pixels_;
   std::uint32_t busy_[2] = {0, 0};  // slots held by the last returned pair
   CounterSet<CamCounter> counters_{kCamCounterNames};

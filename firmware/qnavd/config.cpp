@@ -443,6 +443,9 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(int_key(
       "vo.trigger_line", [](auto& c) -> auto& { return c.vo_trigger_line; }, 0, 511, "",
       "Line offset of the trigger on vo.trigger_chip"));
+  t.push_back(float_key(
+      "vo.rate_hz", [](auto& c) -> auto& { return c.vo_rate_hz; }, 0.5, 60.0, "Hz",
+      "Pairs per second the trigger line asks for (free-running cameras keep their own rate)"));
   t.push_back(int_key(
       "vo.width", [](auto& c) -> auto& { return c.vo.max_width; }, 64, 2048, "px",
       "Width of one rectified camera image (sizes the frame pool and the VO buffers)"));

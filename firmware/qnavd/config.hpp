@@ -101,6 +101,7 @@ struct DaemonConfig {
   std::string vo_right_device = "/dev/video1";// vo.right_device (v4l2)
   std::string vo_trigger_chip;                // vo.trigger_chip: gpiochip of the trigger line; "" = free-running cameras
   int vo_trigger_line = 0;                    // vo.trigger_line [0, 511]
+  double vo_rate_hz = 10.0;                   // vo.rate_hz [0.5, 60]: trigger rate (with vo.trigger_chip)
   double vo_tilt_down_deg = 70.0;             // vo.tilt_down_deg [0, 90]: camera mount, forward-looking, tilted down
   double vo_mount_height_m = 0.8;             // vo.mount_height_m [0, 10]: left camera above the body origin
   vo::VoConfig vo = pipeline::default_vo_config(sim::StereoBench{});

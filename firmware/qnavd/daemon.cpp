@@ -7,6 +7,7 @@
 
 #include "drivers/dvl/dvl_driver.hpp"
 #include "firmware/qnavd/deployment.hpp"
+#include "firmware/qnavd/linux_stereo.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
 #include "hal/linux/monotonic_clock.hpp"
@@ -159,6 +160,7 @@ class LinuxBackend final : public IoBackend {
     if (end == colon + 1 || *end != '\0' || port < 1 || port > 65535)
       return Status(StatusCode::kInvalidArgument, "sonar.address port must be a number in 1..65535");
     sonar_port_ = static_cast<std::uint16_t>(port);
+    if (cfg_.vo_enabled) stereo_ = std::make_unique<LinuxStereoSource>(cfg_, q_.frames, log_);
     // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
     return open_can(true);
   }
@@ -197,14 +199,15 @@ class LinuxBackend final : public IoBackend {
         sonar_rejects_ = rej;
       }
     }
+    if (stereo_) did |= stereo_->poll(now, io);
     return did;
   }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
     if (!can_.is_open() || !can_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
   }
   void wait(int timeout_ms) noexcept override {
-    const int fds[3] = {can_.fd(), dvl_port_.fd(), sonar_.fd()};
-    hal::wait_readable(fds, 3, timeout_ms);
+    const int fds[5] = {can_.fd(), dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1};
+    hal::wait_readable(fds, 5, timeout_ms);
   }
 
  private:
@@ -286,6 +289,7 @@ class LinuxBackend final : public IoBackend {
   std::int64_t next_retry_ns_ = 0;
   std::uint32_t dvl_rejects_ = 0, sonar_rejects_ = 0;
   bool dvl_warned_ = false, sonar_warned_ = false;
+  std::unique_ptr<LinuxStereoSource> stereo_;  // vo.enabled: the V4L2 pair
 };
 
 template <typename T>

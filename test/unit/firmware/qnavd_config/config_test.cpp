@@ -110,6 +110,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(vo_right_device),
       QNAV_FIELD(vo_trigger_chip),
       QNAV_FIELD(vo_trigger_line),
+      QNAV_FIELD(vo_rate_hz),
       QNAV_FIELD(vo.max_width),
       QNAV_FIELD(vo.max_height),
       QNAV_FIELD(vo.camera.focal_px),
@@ -276,15 +277,18 @@ TEST(QnavdConfig, SimExampleLoadsAndFliesTheDocumentedMission) {
   EXPECT_EQ(c.sim_seed, 1u);
   EXPECT_EQ(c.sim_speed, SimSpeed::kFast);
   using drivers::qnavcan::Mode;
-  ASSERT_EQ(c.sim_mission.size(), 4u);
-  const Mode modes[] = {Mode::kTeach, Mode::kRepeat, Mode::kRepeat, Mode::kRepeat};
-  const double offsets[] = {0.0, 10.0, -20.0, 30.0};
-  const bool reverse[] = {false, false, true, false};
-  for (std::size_t i = 0; i < 4; ++i) {
+  ASSERT_EQ(c.sim_mission.size(), 5u);
+  const Mode modes[] = {Mode::kTeach, Mode::kRepeat, Mode::kRepeat, Mode::kRepeat, Mode::kVo};
+  const double offsets[] = {0.0, 10.0, -20.0, 30.0, 0.0};
+  const bool reverse[] = {false, false, true, false, false};
+  for (std::size_t i = 0; i < 5; ++i) {
     EXPECT_EQ(c.sim_mission[i].mode, modes[i]) << i;
     EXPECT_EQ(c.sim_mission[i].offset_pct, offsets[i]) << i;
     EXPECT_EQ(c.sim_mission[i].reverse, reverse[i]) << i;
   }
+  EXPECT_EQ(c.sim_mission[4].length_m, 10.0);
+  EXPECT_TRUE(c.vo_enabled);
+  EXPECT_EQ(c.vo_camera, CameraSource::kSim);
   expect_stages_init(c);
 }
 
@@ -302,6 +306,10 @@ TEST(QnavdConfig, VehicleExampleLoads) {
   EXPECT_EQ(c.route_dir, "/var/lib/qnav/routes");
   EXPECT_TRUE(c.realtime);
   EXPECT_TRUE(c.sim_mission.empty());
+  EXPECT_EQ(c.vo_camera, CameraSource::kV4l2);
+  EXPECT_EQ(c.vo_left_device, "/dev/video0");
+  EXPECT_EQ(c.vo_right_device, "/dev/video1");
+  EXPECT_EQ(c.vo_trigger_chip, "gpiochip0");
   expect_stages_init(c);
 }
 
@@ -390,6 +398,7 @@ left_device = "/dev/video4"
 right_device = "/dev/video5"
 trigger_chip = "gpiochip2"
 trigger_line = 17
+rate_hz = 15.0
 width = 640
 height = 480
 focal_px = 900.0
