@@ -240,8 +240,16 @@ class LinuxBackend final : public IoBackend {
     if (!s && log_ && !dvl_warned_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", cfg_.dvl_device.c_str(), s.message());
     dvl_warned_ = !s;
   }
+  // Never waits: a connection started here is finished at the next retry (a second later), or
+  // abandoned and started again when it is still in progress then (a topside that does not answer).
   void open_sonar() noexcept {
-    const Status s = sonar_.open(sonar_host_, sonar_port_, 200);
+    Status s = sonar_.connecting() ? sonar_.poll_connect() : sonar_.begin_connect(sonar_host_, sonar_port_);
+    if (s.code() == StatusCode::kNotReady && sonar_.connecting() && connect_started_) {
+      s = Status(StatusCode::kTimeout, "TCP connect: no answer within a second");
+      sonar_.close();
+    }
+    connect_started_ = sonar_.connecting();
+    if (connect_started_) return;
     if (!s && log_ && !sonar_warned_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", cfg_.sonar_address.c_str(), s.message());
     sonar_warned_ = !s;
   }
@@ -289,6 +297,7 @@ class LinuxBackend final : public IoBackend {
   std::int64_t next_retry_ns_ = 0;
   std::uint32_t dvl_rejects_ = 0, sonar_rejects_ = 0;
   bool dvl_warned_ = false, sonar_warned_ = false;
+  bool connect_started_ = false;  // the sonar's connect was in progress at the last retry
   std::unique_ptr<LinuxStereoSource> stereo_;  // vo.enabled: the V4L2 pair
 };
 

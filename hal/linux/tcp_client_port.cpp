@@ -17,10 +17,11 @@ TcpClientPort::~TcpClientPort() { close(); }
 
 void TcpClientPort::close() noexcept {
   if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
+  if (pending_ >= 0) ::close(pending_);
+  fd_ = pending_ = -1;
 }
 
-Status TcpClientPort::open(const char* ipv4, std::uint16_t port, int connect_timeout_ms) noexcept {
+Status TcpClientPort::begin_connect(const char* ipv4, std::uint16_t port) noexcept {
   close();
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -31,23 +32,48 @@ Status TcpClientPort::open(const char* ipv4, std::uint16_t port, int connect_tim
   if (s < 0) return Status(StatusCode::kIoError, "socket() failed");
   const int one = 1;
   (void)::setsockopt(s, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-  if (::connect(s, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0) {
-    if (errno != EINPROGRESS) {
-      ::close(s);
-      return Status(StatusCode::kIoError, "connect() failed");
-    }
-    pollfd p{s, POLLOUT, 0};
-    const int pr = ::poll(&p, 1, connect_timeout_ms < 0 ? 0 : connect_timeout_ms);
-    int err = 0;
-    socklen_t len = sizeof err;
-    if (pr <= 0 || ::getsockopt(s, SOL_SOCKET, SO_ERROR, &err, &len) < 0 || err != 0) {
-      ::close(s);
-      return Status(pr == 0 ? StatusCode::kTimeout : StatusCode::kIoError, "TCP connect failed or timed out");
-    }
+  if (::connect(s, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0) {
+    fd_ = s;
+    stats_ = SerialStats{};
+    return Status::ok();
   }
-  fd_ = s;
+  if (errno != EINPROGRESS) {
+    const int e = errno;
+    ::close(s);
+    return Status(StatusCode::kIoError, e == ECONNREFUSED ? "TCP connection refused" : "connect() failed");
+  }
+  pending_ = s;
+  return Status(StatusCode::kNotReady, "TCP connect in progress");
+}
+
+Status TcpClientPort::finish_connect(int timeout_ms) noexcept {
+  if (fd_ >= 0) return Status::ok();
+  if (pending_ < 0) return Status(StatusCode::kNotReady, "TCP port not connecting");
+  pollfd p{pending_, POLLOUT, 0};
+  const int pr = ::poll(&p, 1, timeout_ms < 0 ? 0 : timeout_ms);
+  if (pr == 0) return Status(StatusCode::kNotReady, "TCP connect in progress");
+  int err = 0;
+  socklen_t len = sizeof err;
+  if (pr < 0 || ::getsockopt(pending_, SOL_SOCKET, SO_ERROR, &err, &len) < 0 || err != 0) {
+    ::close(pending_);
+    pending_ = -1;
+    return Status(StatusCode::kIoError, err == ECONNREFUSED ? "TCP connection refused" : "TCP connect failed");
+  }
+  fd_ = pending_;
+  pending_ = -1;
   stats_ = SerialStats{};
   return Status::ok();
+}
+
+Status TcpClientPort::open(const char* ipv4, std::uint16_t port, int connect_timeout_ms) noexcept {
+  const Status s = begin_connect(ipv4, port);
+  if (s.code() != StatusCode::kNotReady) return s;
+  const Status f = finish_connect(connect_timeout_ms);
+  if (f.code() == StatusCode::kNotReady) {
+    close();
+    return Status(StatusCode::kTimeout, "TCP connect timed out");
+  }
+  return f;
 }
 
 Result<SerialRead> TcpClientPort::read(Span<std::uint8_t> buf, int timeout_ms) noexcept {

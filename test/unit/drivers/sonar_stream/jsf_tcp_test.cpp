@@ -56,3 +56,38 @@ TEST(JsfStreamTcp, PingsOverLoopback) {
   hal::TcpClientPort bad;
   EXPECT_EQ(bad.open("not-an-ip", 1037, 10), StatusCode::kInvalidArgument);
 }
+
+// The daemon's way to connect: begin_connect() returns at once, poll_connect() finishes the
+// connection without waiting; a port nobody listens on is refused, never a hang.
+TEST(JsfStreamTcp, ConnectWithoutWaiting) {
+  const int srv = socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(srv, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(bind(srv, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(listen(srv, 1), 0);
+  socklen_t len = sizeof a;
+  ASSERT_EQ(getsockname(srv, reinterpret_cast<sockaddr*>(&a), &len), 0);
+  hal::TcpClientPort port;
+  Status s = port.begin_connect("127.0.0.1", ntohs(a.sin_port));
+  ASSERT_TRUE(s.is_ok() || s == StatusCode::kNotReady) << s.message();
+  for (int i = 0; i < 100 && s == StatusCode::kNotReady; ++i) {
+    usleep(10000);
+    s = port.poll_connect();
+  }
+  EXPECT_TRUE(s.is_ok()) << s.message();
+  EXPECT_TRUE(port.is_open());
+  EXPECT_FALSE(port.connecting());
+  port.close();
+  // The listener gone: the port is closed, the connection is refused (at once or at the next poll).
+  close(srv);
+  s = port.begin_connect("127.0.0.1", ntohs(a.sin_port));
+  for (int i = 0; i < 100 && s == StatusCode::kNotReady; ++i) {
+    usleep(10000);
+    s = port.poll_connect();
+  }
+  EXPECT_EQ(s, StatusCode::kIoError) << s.message();
+  EXPECT_FALSE(port.is_open());
+  EXPECT_FALSE(port.connecting());
+}
