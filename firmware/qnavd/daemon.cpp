@@ -10,6 +10,7 @@
 #include "firmware/qnavd/linux_stereo.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
+#include "hal/linux/log_ring.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/posix_file_store.hpp"
 #include "hal/linux/process.hpp"
@@ -316,6 +317,32 @@ Daemon::~Daemon() {
   io_exit_.store(true);  // a started daemon destroyed without run() must not hang in join
   if (io_thread_.joinable()) io_thread_.join();
   if (nav_thread_.joinable()) nav_thread_.join();
+  if (nav_) nav_->shutdown();  // a daemon destroyed without run(): the route closed, its lines logged
+  flush_logs(true);
+}
+
+// Main thread: the rings' lines to the log's descriptor, without blocking (what the descriptor does
+// not take now stays for the next call; `final` waits for it, bounded by daemon.shutdown_timeout_s).
+// A change in the dropped-line count is reported.
+void Daemon::flush_logs(bool final) noexcept {
+  if (log_ == nullptr || !nav_log_) return;
+  std::fflush(log_);
+  const int fd = fileno(log_);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<long>(cfg_.shutdown_timeout_s * 1000));
+  for (;;) {
+    std::fflush(nav_log_->stream());
+    std::fflush(io_log_->stream());
+    io_log_->drain(fd);
+    nav_log_->drain(fd);
+    if (!final || (nav_log_->pending() == 0 && io_log_->pending() == 0) || std::chrono::steady_clock::now() > deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const std::uint64_t dropped = nav_log_->dropped_lines() + io_log_->dropped_lines();
+  if (dropped != log_dropped_reported_) {
+    std::fprintf(log_, "{\"event\":\"log_dropped\",\"lines\":%llu}\n", static_cast<unsigned long long>(dropped));
+    std::fflush(log_);
+    log_dropped_reported_ = dropped;
+  }
 }
 
 const hal::Clock& Daemon::sample_clock() const noexcept {
@@ -325,6 +352,20 @@ const hal::Clock& Daemon::sample_clock() const noexcept {
 
 Status Daemon::init(FILE* log) {
   log_ = log;
+  if (log_ != nullptr) {
+    // The io and nav threads log through rings the main thread drains: a slow or full log pipe
+    // (journald) costs lines (counted), never a deadline.
+    nav_log_ = std::make_unique<hal::LogRing>();
+    io_log_ = std::make_unique<hal::LogRing>();
+    QNAV_RETURN_IF_ERROR(nav_log_->open(kNavLogBytes));
+    QNAV_RETURN_IF_ERROR(io_log_->open(kIoLogBytes));
+  }
+  const Status s = init_pipeline();
+  flush_logs();
+  return s;
+}
+
+Status Daemon::init_pipeline() {
   wall_ = std::make_unique<hal::MonotonicClock>();
   if (cfg_.backend == Backend::kSim) sim_clock_ = std::make_unique<SimClock>();
   stride_ = 2 * cfg_.max_samples_per_side;
@@ -368,7 +409,7 @@ Status Daemon::init(FILE* log) {
     }
     backend_ = std::move(sim);
   } else {
-    auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, log);
+    auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, io_log_ ? io_log_->stream() : nullptr);
     QNAV_RETURN_IF_ERROR(lb->init());
     backend_ = std::move(lb);
   }
@@ -389,13 +430,13 @@ Status Daemon::init(FILE* log) {
   nq.free_frames = fp.free;
   nq.frame_pool = fp.pool;
   nav_->set_frame_observer(frame_observer_, frame_ctx_);
-  return nav_->init(nq, tile_observer_, tile_ctx_, log);
+  return nav_->init(nq, tile_observer_, tile_ctx_, nav_log_ ? nav_log_->stream() : nullptr);
 }
 
 void Daemon::io_loop() noexcept {
   if (cfg_.realtime) {
     const Status s = hal::set_thread_realtime(cfg_.io_priority, cfg_.io_cpu);
-    if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"thread\":\"io\",\"what\":\"realtime not set: %s\"}\n", s.message());
+    if (!s && io_log_) std::fprintf(io_log_->stream(), "{\"event\":\"warning\",\"thread\":\"io\",\"what\":\"realtime not set: %s\"}\n", s.message());
   }
   while (!io_exit_.load(std::memory_order_relaxed)) {
     bool did = backend_->poll_devices(*this, io_);
@@ -412,7 +453,7 @@ void Daemon::io_loop() noexcept {
 void Daemon::nav_loop() noexcept {
   if (cfg_.realtime) {
     const Status s = hal::set_thread_realtime(cfg_.nav_priority, cfg_.nav_cpu);
-    if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"thread\":\"nav\",\"what\":\"realtime not set: %s\"}\n", s.message());
+    if (!s && nav_log_) std::fprintf(nav_log_->stream(), "{\"event\":\"warning\",\"thread\":\"nav\",\"what\":\"realtime not set: %s\"}\n", s.message());
   }
   while (!stop_.load(std::memory_order_relaxed)) {
     if (!nav_->run_once()) std::this_thread::sleep_for(microseconds(200));
@@ -450,6 +491,7 @@ int Daemon::run() {
   auto next_pet = std::chrono::steady_clock::now();
   while (!stop_.load() && !hal::StopSignals::requested() && !(cfg_.backend == Backend::kSim && cfg_.sim_exit_at_end && mission_done_.load())) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    flush_logs();
     if (wd_us > 0 && std::chrono::steady_clock::now() >= next_pet) {
       // Pet the watchdog only when the nav worker made progress since the last pet.
       const std::uint64_t p = nav_->progress();
@@ -473,9 +515,11 @@ int Daemon::run() {
       std::fprintf(log_, "{\"event\":\"error\",\"what\":\"nav worker did not stop within %.1f s; exiting\"}\n", cfg_.shutdown_timeout_s);
       std::fflush(log_);
     }
+    flush_logs();
     hal::exit_now(1);
   }
   if (nav_thread_.joinable()) nav_thread_.join();
+  flush_logs(true);
   const int sig = hal::StopSignals::signal_number();
   if (log_) {
     const hal::ProcessUsage u = hal::process_usage();

@@ -6,6 +6,8 @@
 // termios, the sonar's JSF stream over TCP from sonar.address, the stereo pair on two V4L2 devices
 // with an optional GPIO trigger). A device that fails or disappears is counted (device_errors), flagged
 // (its *_device_down bit; the nav worker reports the sensor lost) and reopened once a second.
+// Logging: the io and nav threads write their lines into LogRings (hal/linux/log_ring.hpp) that the
+// main thread drains to the log without blocking, so a slow journald pipe never stalls them.
 // init() allocates everything; after start() no thread allocates (the allocation test proves it).
 #pragma once
 
@@ -18,6 +20,7 @@
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/nav_worker.hpp"
 #include "firmware/qnavd/sim_vehicle.hpp"
+#include "hal/linux/log_ring.hpp"
 
 namespace qnav::daemon {
 
@@ -50,9 +53,14 @@ class Daemon {
  private:
   void io_loop() noexcept;
   void nav_loop() noexcept;
+  Status init_pipeline();
+  void flush_logs(bool final = false) noexcept;
 
   DaemonConfig cfg_;  // a copy: recorded passes set the tile and localiser geometry from their files
   FILE* log_ = nullptr;
+  static constexpr std::size_t kNavLogBytes = 256 * 1024, kIoLogBytes = 64 * 1024;
+  std::unique_ptr<hal::LogRing> nav_log_, io_log_;  // the threads' log lines, drained by the main thread
+  std::uint64_t log_dropped_reported_ = 0;
   std::unique_ptr<hal::Clock> wall_;
   std::unique_ptr<SimClock> sim_clock_;
   std::vector<float> pool_;
