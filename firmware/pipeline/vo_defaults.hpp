@@ -73,4 +73,58 @@ inline vo::VoConfig default_vo_config(const sim::StereoBench& b, const sim::Nois
   return c;
 }
 
+
+// A car's rectified stereo pair without an attitude sensor (KITTI layout: 1242 x 375, 0.54 m baseline,
+// depths to 40 m): 6D-VME with a constant-velocity prior, wide gates. The settings `qnav vo --kitti`
+// measured against libviso2 (docs/vo.md).
+inline vo::VoConfig kitti_vo_config(int width, int height, double focal_px, double cu_px, double cv_px, double baseline_m) {
+  vo::VoConfig c;
+  c.max_width = width;
+  c.max_height = height;
+  c.max_corners = 400;
+  c.camera.focal_px = focal_px;
+  c.camera.cu_px = cu_px;
+  c.camera.cv_px = cv_px;
+  c.camera.baseline_m = baseline_m;
+  c.stereo.min_disparity_px = 2;
+  c.stereo.max_disparity_px = 120;
+  c.max_depth_m = 40.0;
+  c.mode = vo::VmeMode::k6D;
+  c.lateral_sigma_px = 0.7;
+  c.match.attitude_sigma_rad = deg_to_rad(0.7);
+  c.match.max_gate_m = 3.0;
+  c.match.max_candidates_per_landmark = 16;
+  c.match.eps_n_floor_m = 0.05;
+  c.match.fast = true;
+  c.match.batch_size = 80;
+  c.match.min_matches = 40;
+  c.irls_config.huber_m = 0.1;
+  c.irls_config.inlier_m = 0.3;
+  return c;
+}
+
+// A hand-held / drone stereo rig indoors without an attitude sensor (EuRoC: 752 x 480 rectified by
+// nav/vision, 0.11 m baseline, depths to 8 m): 6D-VME with a zero-motion prior. What `qnav vo --euroc`
+// measures against the motion-capture ground truth (docs/vo.md).
+inline vo::VoConfig euroc_vo_config(int width, int height, double focal_px, double cu_px, double cv_px, double baseline_m) {
+  vo::VoConfig c;
+  c.max_width = width;
+  c.max_height = height;
+  c.max_corners = 300;
+  c.camera.focal_px = focal_px;
+  c.camera.cu_px = cu_px;
+  c.camera.cv_px = cv_px;
+  c.camera.baseline_m = baseline_m;
+  c.stereo.min_disparity_px = 1;
+  c.stereo.max_disparity_px = 80;
+  c.max_depth_m = 8.0;
+  c.mode = vo::VmeMode::k6D;
+  c.match.attitude_sigma_rad = deg_to_rad(0.3);
+  c.match.fast = true;
+  c.irls_config.huber_m = 0.02;
+  c.irls_config.inlier_m = 0.06;
+  c.max_rms_residual_m = 0.1;
+  return c;
+}
+
 }  // namespace qnav::pipeline

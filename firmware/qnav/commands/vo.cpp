@@ -48,12 +48,16 @@ namespace {
 
 using namespace qnav;
 using Clock = std::chrono::steady_clock;
-bool g_verbose = false;
-double g_dsig = 0.15, g_nsig = 3.0, g_app = 0.0;
-double g_att_vo_scale = pipeline::kVoRotationSigmaScale, g_att_rate_scale = 1.0, g_lat_px = -1.0;
-bool g_att_step_rot = true, g_att_aniso = true, g_att_filtered = false;
-bool g_refine = true, g_refine_disp = true;
-double g_ref_lat_px = -1.0, g_track_radius = 0.0;
+// `qnav vo eval`'s tuning knobs: each starts at the value of pipeline::default_vo_config (what the
+// daemon runs); the command line moves them for an experiment.
+struct EvalKnobs {
+  bool verbose = false;
+  double dsig = 0.15, nsig = 3.0, app = 0.0;
+  double att_vo_scale = pipeline::kVoRotationSigmaScale, att_rate_scale = 1.0, lat_px = -1.0;
+  bool att_step_rot = true, att_aniso = true, att_filtered = false;
+  bool refine = true, refine_disp = true;
+  double ref_lat_px = -1.0, track_radius = 0.0;
+};
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -119,7 +123,7 @@ struct Scenario {
 };
 
 // Renders the run once and feeds every configuration.
-bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const sim::NoiseConfig& noise_cfg,
+bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const sim::NoiseConfig& noise_cfg, const EvalKnobs& knobs,
                   std::uint64_t seed, std::vector<RunResult>& results) {
   sim::MarsYardConfig yard;
   yard.seed = seed;
@@ -135,21 +139,21 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     c.mode = e.mode;
     c.match.score = e.score;
     c.match.fast = e.fast;
-    c.stereo.disparity_sigma_px = static_cast<float>(g_dsig);
-    c.match.n_sigma = g_nsig;
-    c.match.appearance_weight = g_app;
+    c.stereo.disparity_sigma_px = static_cast<float>(knobs.dsig);
+    c.match.n_sigma = knobs.nsig;
+    c.match.appearance_weight = knobs.app;
     c.estimate_attitude_bias = e.attitude_bias;
-    c.attitude_bias.vo_sigma_scale = g_att_vo_scale;
-    c.attitude_bias.initial_rate_sigma_rad_s *= g_att_rate_scale;
-    c.attitude_bias.rate_walk_rad_s_sqrt_s *= g_att_rate_scale;
-    c.corrected_step_rotation = g_att_step_rot;
-    c.anisotropic_vo_rotation = g_att_aniso;
-    c.use_filtered_orientation = g_att_filtered;
-    if (g_lat_px > 0.0) c.lateral_sigma_px = g_lat_px;
-    c.refine_tracks = g_refine;
-    c.refine_disparity = g_refine_disp;
-    if (g_ref_lat_px > 0.0) c.refined_lateral_sigma_px = g_ref_lat_px;
-    if (g_track_radius > 0.0) c.track_refine.align.radius = static_cast<int>(g_track_radius);
+    c.attitude_bias.vo_sigma_scale = knobs.att_vo_scale;
+    c.attitude_bias.initial_rate_sigma_rad_s *= knobs.att_rate_scale;
+    c.attitude_bias.rate_walk_rad_s_sqrt_s *= knobs.att_rate_scale;
+    c.corrected_step_rotation = knobs.att_step_rot;
+    c.anisotropic_vo_rotation = knobs.att_aniso;
+    c.use_filtered_orientation = knobs.att_filtered;
+    if (knobs.lat_px > 0.0) c.lateral_sigma_px = knobs.lat_px;
+    c.refine_tracks = knobs.refine;
+    c.refine_disparity = knobs.refine_disp;
+    if (knobs.ref_lat_px > 0.0) c.refined_lateral_sigma_px = knobs.ref_lat_px;
+    if (knobs.track_radius > 0.0) c.track_refine.align.radius = static_cast<int>(knobs.track_radius);
     std::unique_ptr<VoBox> b(new VoBox);
     if (!b->init(c)) return false;
     vos.push_back(std::move(b));
@@ -197,7 +201,7 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
       RunResult& rr = results[k];
       ++rr.frames;
       if (frame > 0) rr.step_ms.push_back(ms);
-      if (g_verbose && frame > 0 && r) {
+      if (knobs.verbose && frame > 0 && r) {
         const Pose3 ts = prev_cam.inverse().compose(cam);
         const Vec3d d = r->prev_T_cur.t - ts.t;
         const Mat3d& Rv = r->has_vo_rotation ? r->vo_R_prev_cur : r->prev_T_cur.R;
@@ -237,7 +241,7 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     prev_cam = cam;
     prev_meas = meas;
   }
-  if (g_verbose) {
+  if (knobs.verbose) {
     for (std::size_t k = 0; k < vos.size(); ++k) {
       std::printf("%s %s counters:", cfgs[k].name, sc.name);
       const auto& vc = vos[k]->vo.counters();
@@ -255,7 +259,8 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
 int run_eval(int argc, char** argv) {
   const bool json = cli::flag(argc, argv, "--json");
   const bool quick = cli::flag(argc, argv, "--quick");
-  g_verbose = cli::flag(argc, argv, "--verbose");
+  EvalKnobs knobs;
+  knobs.verbose = cli::flag(argc, argv, "--verbose");
   const char* noise_name = cli::option(argc, argv, "--noise", "small");
   const char* configs = cli::option(argc, argv, "--configs", "main");
   const char* traj_dir = cli::option(argc, argv, "--traj-dir");
@@ -274,17 +279,17 @@ int run_eval(int argc, char** argv) {
   double nt = noise.translation_noise, sm_deg = rad_to_deg(noise.sigma_m_rad);
   if (!cli::option_double(argc, argv, "--nt", nt) || !cli::option_double(argc, argv, "--sigma-m-deg", sm_deg)) return 2;
   noise.translation_noise = nt;
-  if (!cli::option_double(argc, argv, "--dsig", g_dsig) || !cli::option_double(argc, argv, "--nsig", g_nsig) ||
-      !cli::option_double(argc, argv, "--app", g_app) || !cli::option_double(argc, argv, "--att-vo-scale", g_att_vo_scale) ||
-      !cli::option_double(argc, argv, "--att-rate-scale", g_att_rate_scale) ||
-      !cli::option_double(argc, argv, "--lat-px", g_lat_px) || !cli::option_double(argc, argv, "--ref-lat-px", g_ref_lat_px) ||
-      !cli::option_double(argc, argv, "--track-radius", g_track_radius))
+  if (!cli::option_double(argc, argv, "--dsig", knobs.dsig) || !cli::option_double(argc, argv, "--nsig", knobs.nsig) ||
+      !cli::option_double(argc, argv, "--app", knobs.app) || !cli::option_double(argc, argv, "--att-vo-scale", knobs.att_vo_scale) ||
+      !cli::option_double(argc, argv, "--att-rate-scale", knobs.att_rate_scale) ||
+      !cli::option_double(argc, argv, "--lat-px", knobs.lat_px) || !cli::option_double(argc, argv, "--ref-lat-px", knobs.ref_lat_px) ||
+      !cli::option_double(argc, argv, "--track-radius", knobs.track_radius))
     return 2;
-  g_refine = !cli::flag(argc, argv, "--no-refine");
-  g_refine_disp = !cli::flag(argc, argv, "--no-refine-disparity");
-  g_att_step_rot = !cli::flag(argc, argv, "--att-no-step-rot");
-  g_att_aniso = !cli::flag(argc, argv, "--att-iso");
-  g_att_filtered = cli::flag(argc, argv, "--att-filtered");
+  knobs.refine = !cli::flag(argc, argv, "--no-refine");
+  knobs.refine_disp = !cli::flag(argc, argv, "--no-refine-disparity");
+  knobs.att_step_rot = !cli::flag(argc, argv, "--att-no-step-rot");
+  knobs.att_aniso = !cli::flag(argc, argv, "--att-iso");
+  knobs.att_filtered = cli::flag(argc, argv, "--att-filtered");
   noise.sigma_m_rad = deg_to_rad(sm_deg);
   std::vector<EvalConfig> cfgs;
   if (std::strcmp(configs, "main") == 0) {
@@ -334,7 +339,7 @@ int run_eval(int argc, char** argv) {
   std::vector<std::array<std::vector<RunResult>, 2>> res(seeds.size());
   for (std::size_t si = 0; si < seeds.size(); ++si) {
     for (int i = 0; i < 2; ++i) {
-      if (!run_scenario(scen[i], cfgs, noise, static_cast<std::uint64_t>(seeds[si]) + 10 * static_cast<std::uint64_t>(i),
+      if (!run_scenario(scen[i], cfgs, noise, knobs, static_cast<std::uint64_t>(seeds[si]) + 10 * static_cast<std::uint64_t>(i),
                         res[si][i])) {
         std::fprintf(stderr, "vo eval: scenario %s failed\n", scen[i].name);
         return 1;
@@ -551,28 +556,7 @@ int run_kitti(int argc, char** argv) {
     return 1;
   }
   const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
-  vo::VoConfig c;
-  c.max_width = calib->width;
-  c.max_height = calib->height;
-  c.max_corners = 400;
-  c.camera.focal_px = calib->f_px;
-  c.camera.cu_px = calib->cu_px;
-  c.camera.cv_px = calib->cv_px;
-  c.camera.baseline_m = calib->baseline_m;
-  c.stereo.min_disparity_px = 2;
-  c.stereo.max_disparity_px = 120;
-  c.max_depth_m = 40.0;
-  c.mode = vo::VmeMode::k6D;
-  c.lateral_sigma_px = 0.7;
-  c.match.attitude_sigma_rad = deg_to_rad(0.7);
-  c.match.max_gate_m = 3.0;
-  c.match.max_candidates_per_landmark = 16;
-  c.match.eps_n_floor_m = 0.05;
-  c.match.fast = true;
-  c.match.batch_size = 80;
-  c.match.min_matches = 40;
-  c.irls_config.huber_m = 0.1;
-  c.irls_config.inlier_m = 0.3;
+  vo::VoConfig c = pipeline::kitti_vo_config(calib->width, calib->height, calib->f_px, calib->cu_px, calib->cv_px, calib->baseline_m);
   if (!cli::option_double(argc, argv, "--max-depth", c.max_depth_m)) return 2;
   // Unweighted (eq. 8 as printed) by default here: 1/sigma^2 weights let the near road points dominate,
   // and their stereo errors pitch the trajectory (measured: 15.5 m end-point difference weighted vs
@@ -654,23 +638,7 @@ int run_euroc(int argc, char** argv) {
     return 1;
   }
   const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
-  vo::VoConfig c;
-  c.max_width = w;
-  c.max_height = h;
-  c.max_corners = 300;
-  c.camera.focal_px = rect->K(0, 0);
-  c.camera.cu_px = rect->K(0, 2);
-  c.camera.cv_px = rect->K(1, 2);
-  c.camera.baseline_m = rect->baseline_m;
-  c.stereo.min_disparity_px = 1;
-  c.stereo.max_disparity_px = 80;
-  c.max_depth_m = 8.0;
-  c.mode = vo::VmeMode::k6D;
-  c.match.attitude_sigma_rad = deg_to_rad(0.3);
-  c.match.fast = true;
-  c.irls_config.huber_m = 0.02;
-  c.irls_config.inlier_m = 0.06;
-  c.max_rms_residual_m = 0.1;
+  const vo::VoConfig c = pipeline::euroc_vo_config(w, h, rect->K(0, 0), rect->K(0, 2), rect->K(1, 2), rect->baseline_m);
   SequenceRun run;
   auto load = [&](std::size_t i, ImageU8& l, ImageU8& r) {
     Result<ImageU8> a = tools::read_image_gray8(frames[i].left_path.c_str());
