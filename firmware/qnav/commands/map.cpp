@@ -1,0 +1,593 @@
+// qnav map: downward-camera mapping (underwater SLAM paper): the homography chain of nav/topo over a
+// directory of frames, with the navigation poses when given.
+//
+//   qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]
+//            [--no-undistort] [--fundamental] [--frames N] [--no-plot]
+//       Frames: every .png/.jpg/.jpeg/.pgm in DIR, in name order, read as 8-bit grey. --camera: OpenCV
+//       style YAML (image_width/height, camera_matrix data, distortion_coefficients k1 k2 p1 p2 [k3]);
+//       frames are undistorted with nav/vision's RemapTable unless --no-undistort, and fx gives metric
+//       scale with --altitude (metres above the seabed, constant). --poses: a CSV with columns file,
+//       x, y, yaw_deg (optional t_video_s, pose_note; the sparus_snippet frames.csv layout), matched to
+//       frames by file name. --fundamental: the paper's F both-accept outlier rule before H.
+//       Writes DIR_OUT/map_trajectory.csv (per frame: status, keyframe, keypoints, matches, inliers,
+//       pose in mosaic pixels, heading, metres, the chain aligned to the navigation, nav pose, time) and
+//       DIR_OUT/map_trajectory.png (scripts/map_plot.py through /usr/bin/python3; skipped with a note
+//       when either is missing). Prints pairs registered / total, inliers per pair, chained image
+//       rotation vs the navigation's yaw change, path vs the navigation path, frame time; --json: one
+//       object. Exit 1 when no frame could be read or a pair did not register.
+#include <dirent.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "firmware/qnav/args.hpp"
+#include "firmware/qnav/command.hpp"
+#include "firmware/tools/image_reader.hpp"
+#include "firmware/tools/text_file.hpp"
+#include "nav/topo/homography_chain.hpp"
+#include "nav/vision/rectify.hpp"
+
+namespace {
+
+using namespace qnav;
+using Clock = std::chrono::steady_clock;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string basename_of(const std::string& p) {
+  const std::size_t s = p.find_last_of('/');
+  return s == std::string::npos ? p : p.substr(s + 1);
+}
+
+bool has_image_ext(const std::string& n) {
+  const std::size_t d = n.find_last_of('.');
+  if (d == std::string::npos) return false;
+  std::string e = n.substr(d + 1);
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e == "png" || e == "jpg" || e == "jpeg" || e == "pgm";
+}
+
+bool list_images(const char* dir, std::vector<std::string>& out, std::string& err) {
+  DIR* d = opendir(dir);
+  if (d == nullptr) {
+    err = std::string("cannot open directory ") + dir + ": " + std::strerror(errno);
+    return false;
+  }
+  while (dirent* e = readdir(d)) {
+    const std::string n = e->d_name;
+    if (n.empty() || n[0] == '.' || !has_image_ext(n)) continue;
+    const std::string p = std::string(dir) + "/" + n;
+    struct stat st {};
+    if (stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode)) out.push_back(p);
+  }
+  closedir(d);
+  std::sort(out.begin(), out.end());
+  if (out.empty()) err = std::string("no .png/.jpg/.pgm frames in ") + dir;
+  return !out.empty();
+}
+
+// Numbers of the first `[...]` after key (OpenCV-style YAML "data: [a, b, ...]").
+bool yaml_list(const std::string& text, const char* key, std::vector<double>& out) {
+  std::size_t k = text.find(key);
+  if (k == std::string::npos) return false;
+  const std::size_t open = text.find('[', k), close = text.find(']', k);
+  if (open == std::string::npos || close == std::string::npos || close < open) return false;
+  std::string body = text.substr(open + 1, close - open - 1);
+  for (char& c : body)
+    if (c == ',' || c == '\n') c = ' ';
+  const char* p = body.c_str();
+  while (*p != '\0') {
+    char* end = nullptr;
+    const double v = std::strtod(p, &end);
+    if (end == p) {
+      ++p;
+      continue;
+    }
+    if (!std::isfinite(v)) return false;
+    out.push_back(v);
+    p = end;
+  }
+  return true;
+}
+bool yaml_int(const std::string& text, const char* key, int& out) {
+  const std::size_t k = text.find(key);
+  if (k == std::string::npos) return false;
+  const std::size_t colon = text.find(':', k);
+  if (colon == std::string::npos) return false;
+  char* end = nullptr;
+  const long v = std::strtol(text.c_str() + colon + 1, &end, 10);
+  if (end == text.c_str() + colon + 1 || v <= 0 || v > kMaxImageSide) return false;
+  out = static_cast<int>(v);
+  return true;
+}
+
+bool read_camera(const char* path, vision::PinholeRadTan& cam, std::string& err) {
+  std::string text;
+  const Status s = tools::read_text_file(path, 1 << 20, text);
+  if (!s) {
+    err = s.message();
+    return false;
+  }
+  std::vector<double> K, D;
+  if (!yaml_int(text, "image_width", cam.width) || !yaml_int(text, "image_height", cam.height) ||
+      !yaml_list(text, "camera_matrix", K) || K.size() != 9 || !yaml_list(text, "distortion_coefficients", D) || D.size() < 4) {
+    err = std::string(path) + ": needs image_width, image_height, camera_matrix data (9) and distortion_coefficients (4-5)";
+    return false;
+  }
+  cam.fx = K[0];
+  cam.cx = K[2];
+  cam.fy = K[4];
+  cam.cy = K[5];
+  cam.k1 = D[0];
+  cam.k2 = D[1];
+  cam.p1 = D[2];
+  cam.p2 = D[3];
+  if (D.size() >= 5 && D[4] != 0.0) {
+    err = std::string(path) + ": k3 != 0 is not supported by nav/vision's PinholeRadTan";
+    return false;
+  }
+  const Status v = vision::validate(cam);
+  if (!v) {
+    err = std::string(path) + ": " + v.message();
+    return false;
+  }
+  return true;
+}
+
+struct NavPose {
+  bool valid = false;
+  double x = 0.0, y = 0.0, yaw_deg = 0.0, t = std::nan("");
+  bool interpolated = true;  // pose_note == interpolated (or no note column)
+};
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> f;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      f.push_back(cur);
+      cur.clear();
+    } else if (c != '\r') {
+      cur += c;
+    }
+  }
+  f.push_back(cur);
+  return f;
+}
+
+bool read_poses(const char* path, std::vector<std::pair<std::string, NavPose>>& out, std::string& err) {
+  std::string text;
+  const Status s = tools::read_text_file(path, 16 << 20, text);
+  if (!s) {
+    err = s.message();
+    return false;
+  }
+  std::size_t pos = 0;
+  std::vector<std::string> header;
+  int c_file = -1, c_x = -1, c_y = -1, c_yaw = -1, c_t = -1, c_note = -1;
+  int line_no = 0;
+  while (pos < text.size()) {
+    std::size_t nl = text.find('\n', pos);
+    if (nl == std::string::npos) nl = text.size();
+    const std::string line = text.substr(pos, nl - pos);
+    pos = nl + 1;
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    const std::vector<std::string> f = split_csv(line);
+    if (header.empty()) {
+      header = f;
+      for (int i = 0; i < static_cast<int>(f.size()); ++i) {
+        if (f[i] == "file") c_file = i;
+        if (f[i] == "x") c_x = i;
+        if (f[i] == "y") c_y = i;
+        if (f[i] == "yaw_deg") c_yaw = i;
+        if (f[i] == "t_video_s") c_t = i;
+        if (f[i] == "pose_note") c_note = i;
+      }
+      if (c_file < 0 || c_x < 0 || c_y < 0 || c_yaw < 0) {
+        err = std::string(path) + ": header needs the columns file, x, y, yaw_deg";
+        return false;
+      }
+      continue;
+    }
+    if (f.size() != header.size()) {
+      err = std::string(path) + ": line " + std::to_string(line_no) + " has " + std::to_string(f.size()) + " fields, header " +
+            std::to_string(header.size());
+      return false;
+    }
+    NavPose p;
+    char* e1 = nullptr;
+    char* e2 = nullptr;
+    char* e3 = nullptr;
+    p.x = std::strtod(f[c_x].c_str(), &e1);
+    p.y = std::strtod(f[c_y].c_str(), &e2);
+    p.yaw_deg = std::strtod(f[c_yaw].c_str(), &e3);
+    if (*e1 != '\0' || *e2 != '\0' || *e3 != '\0' || f[c_x].empty() || !std::isfinite(p.x) || !std::isfinite(p.y) ||
+        !std::isfinite(p.yaw_deg)) {
+      err = std::string(path) + ": line " + std::to_string(line_no) + ": x, y or yaw_deg is not a finite number";
+      return false;
+    }
+    if (c_t >= 0) p.t = std::strtod(f[c_t].c_str(), nullptr);
+    if (c_note >= 0) p.interpolated = f[c_note] == "interpolated";
+    p.valid = true;
+    out.emplace_back(basename_of(f[c_file]), p);
+  }
+  if (out.empty()) err = std::string(path) + ": no poses";
+  return !out.empty();
+}
+
+double wrap_deg(double d) {
+  while (d > 180.0) d -= 360.0;
+  while (d <= -180.0) d += 360.0;
+  return d;
+}
+
+struct FrameRecord {
+  std::string file;
+  topo::ChainStep step;
+  double ms = 0.0;
+  NavPose nav;
+  Vec2d aligned = Vec2d::Zero();  // chain position in the navigation frame (metres), when aligned
+};
+
+// Least-squares 2D rotation + scale (+ optional reflection) about the start, mapping chain positions
+// a (pixels from frame 0's principal point) onto nav positions b (metres from the first nav pose):
+// b ~ s R F a; both start at the origin, so the aligned chain starts where the navigation does.
+// fixed_scale > 0 fixes s (metres per pixel from the altitude). The mirror (F = diag(1, -1)) is chosen
+// by the residual: image axes (x right, y down, camera z down) seen in a z-up world are mirrored.
+struct Alignment {
+  bool valid = false;
+  bool mirrored = false;
+  double scale = 0.0, rotation_rad = 0.0, rms_m = 0.0;
+  Vec2d apply(const Vec2d& a) const {
+    const Vec2d m(a.x(), mirrored ? -a.y() : a.y());
+    const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
+    return scale * Vec2d(c * m.x() - s * m.y(), s * m.x() + c * m.y());
+  }
+};
+Alignment align(const std::vector<Vec2d>& a, const std::vector<Vec2d>& b, double fixed_scale) {
+  Alignment best;
+  if (a.size() < 3) return best;
+  for (int mirror = 0; mirror < 2; ++mirror) {
+    double sxx = 0.0, sxy = 0.0, va = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const Vec2d p(a[i].x(), mirror ? -a[i].y() : a[i].y());
+      const Vec2d& q = b[i];
+      sxx += p.dot(q);
+      sxy += p.x() * q.y() - p.y() * q.x();
+      va += p.squaredNorm();
+    }
+    if (!(va > 0.0)) return best;
+    Alignment al;
+    al.valid = true;
+    al.mirrored = mirror == 1;
+    al.rotation_rad = std::atan2(sxy, sxx);
+    al.scale = fixed_scale > 0.0 ? fixed_scale : std::hypot(sxx, sxy) / va;
+    double ss = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) ss += (al.apply(a[i]) - b[i]).squaredNorm();
+    al.rms_m = std::sqrt(ss / static_cast<double>(a.size()));
+    if (!best.valid || al.rms_m < best.rms_m) best = al;
+  }
+  return best;
+}
+
+std::string source_root() {
+  std::string f = __FILE__;  // .../firmware/qnav/commands/map.cpp
+  for (int i = 0; i < 4; ++i) {
+    const std::size_t s = f.find_last_of('/');
+    if (s == std::string::npos) return ".";
+    f = f.substr(0, s);
+  }
+  return f.empty() ? "." : f;
+}
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]\n"
+               "                [--no-undistort] [--fundamental] [--frames N] [--no-plot]\n");
+  return 2;
+}
+
+int run_map(int argc, char** argv) {
+  if (cli::flag(argc, argv, "--help") || cli::flag(argc, argv, "-h")) {
+    usage();
+    return 0;
+  }
+  const char* images = cli::option(argc, argv, "--images");
+  const char* poses_path = cli::option(argc, argv, "--poses");
+  const char* camera_path = cli::option(argc, argv, "--camera");
+  const char* out_dir = cli::option(argc, argv, "--out");
+  const bool json = cli::flag(argc, argv, "--json");
+  const bool undistort = !cli::flag(argc, argv, "--no-undistort");
+  double altitude = -1.0;
+  long max_frames = 100000;
+  if (images == nullptr) return usage();
+  if (!cli::option_double(argc, argv, "--altitude", altitude) || (cli::option(argc, argv, "--altitude") && !(altitude > 0.0))) {
+    std::fprintf(stderr, "map: --altitude wants a positive number of metres\n");
+    return 2;
+  }
+  if (!cli::option_long(argc, argv, "--frames", max_frames) || max_frames < 2) {
+    std::fprintf(stderr, "map: --frames wants an integer >= 2\n");
+    return 2;
+  }
+
+  std::vector<std::string> files;
+  std::string err;
+  if (!list_images(images, files, err)) {
+    std::fprintf(stderr, "map: %s\n", err.c_str());
+    return 1;
+  }
+  if (static_cast<long>(files.size()) > max_frames) files.resize(static_cast<std::size_t>(max_frames));
+
+  vision::PinholeRadTan cam;
+  const bool have_camera = camera_path != nullptr;
+  if (have_camera && !read_camera(camera_path, cam, err)) {
+    std::fprintf(stderr, "map: %s\n", err.c_str());
+    return 1;
+  }
+  if (altitude > 0.0 && !have_camera) {
+    std::fprintf(stderr, "map: --altitude needs --camera (fx for metres per pixel)\n");
+    return 2;
+  }
+  std::vector<std::pair<std::string, NavPose>> poses;
+  if (poses_path != nullptr && !read_poses(poses_path, poses, err)) {
+    std::fprintf(stderr, "map: %s\n", err.c_str());
+    return 1;
+  }
+
+  // The first frame fixes the size.
+  Result<ImageU8> first = tools::read_image_gray8(files[0].c_str());
+  if (!first) {
+    std::fprintf(stderr, "map: %s: %s\n", files[0].c_str(), first.status().message());
+    return 1;
+  }
+  const int W = first->width(), H = first->height();
+  if (have_camera && (cam.width != W || cam.height != H)) {
+    std::fprintf(stderr, "map: camera is %dx%d, frames are %dx%d\n", cam.width, cam.height, W, H);
+    return 1;
+  }
+  topo::HomographyChainConfig config;
+  config.max_width = W;
+  config.max_height = H;
+  config.fundamental_filter = cli::flag(argc, argv, "--fundamental");
+  if (have_camera) {
+    config.camera.fx = cam.fx;
+    config.camera.fy = cam.fy;
+    config.camera.cx = cam.cx;
+    config.camera.cy = cam.cy;
+  }
+  ArenaStorage arena(topo::HomographyChain::arena_bytes(config) +
+                     (have_camera && undistort ? vision::RemapTable::arena_bytes(vision::RemapConfig{W, H, 0}) : 0));
+  topo::HomographyChain chain;
+  Status s = chain.init(config, arena);
+  if (!s) {
+    std::fprintf(stderr, "map: chain init: %s\n", s.message());
+    return 1;
+  }
+  vision::RemapTable remap;
+  Result<ImageU8> rectified = ImageU8::allocate(W, H);
+  if (have_camera && undistort) {
+    vision::RemapConfig rc;
+    rc.max_width = W;
+    rc.max_height = H;
+    s = remap.init(rc, arena);
+    if (s) s = remap.build_undistort(cam, vision::FlatPortRefraction{});
+    if (!s || !rectified) {
+      std::fprintf(stderr, "map: undistortion table: %s\n", s ? "no memory" : s.message());
+      return 1;
+    }
+  }
+
+  std::vector<FrameRecord> rec;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    FrameRecord r;
+    r.file = basename_of(files[i]);
+    for (const auto& p : poses)
+      if (p.first == r.file) r.nav = p.second;
+    Result<ImageU8> img = i == 0 ? std::move(first) : tools::read_image_gray8(files[i].c_str());
+    const auto t0 = Clock::now();
+    if (!img) {
+      std::fprintf(stderr, "map: %s: %s (frame counted as bad input)\n", files[i].c_str(), img.status().message());
+      s = chain.process(ConstImageViewU8(), r.step);
+    } else if (img->width() != W || img->height() != H) {
+      s = chain.process(img->view(), r.step);  // refused as kBadInput (size)
+    } else if (have_camera && undistort) {
+      s = remap.apply(img->view(), rectified->view());
+      if (s) s = chain.process(ConstImageViewU8(rectified->view()), altitude, r.step);
+    } else {
+      s = chain.process(img->view(), altitude, r.step);
+    }
+    r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (!s) {
+      std::fprintf(stderr, "map: %s: %s\n", files[i].c_str(), s.message());
+      return 1;
+    }
+    rec.push_back(r);
+  }
+
+  // Summary.
+  const std::size_t n = rec.size();
+  int registered = 0;
+  std::vector<double> inliers, keypoints, ms;
+  for (std::size_t i = 0; i < n; ++i) {
+    keypoints.push_back(rec[i].step.keypoints);
+    ms.push_back(rec[i].ms);
+    if (i > 0 && rec[i].step.status == topo::StepStatus::kOk && !rec[i].step.reference) {
+      ++registered;
+      inliers.push_back(rec[i].step.inliers);
+    }
+  }
+  // Image rotation (content, clockwise on screen positive) = -heading of the chain.
+  auto image_rot_deg = [&](std::size_t i) { return -rad_to_deg(rec[i].step.pose.heading_rad); };
+  const double rot_chain = image_rot_deg(n - 1) - image_rot_deg(0);
+  const bool have_nav = rec[0].nav.valid && rec[n - 1].nav.valid;
+  const double rot_nav = have_nav ? wrap_deg(rec[n - 1].nav.yaw_deg - rec[0].nav.yaw_deg) : std::nan("");
+  // Inside the navigation's own span (pose_note == interpolated): first and last such frame.
+  std::size_t span_a = n, span_b = n;
+  for (std::size_t i = 0; i < n; ++i)
+    if (rec[i].nav.valid && rec[i].nav.interpolated) {
+      if (span_a == n) span_a = i;
+      span_b = i;
+    }
+  double span_chain = std::nan(""), span_nav = std::nan(""), span_rms = std::nan(""), span_max = std::nan("");
+  if (span_a < n && span_b > span_a) {
+    span_chain = image_rot_deg(span_b) - image_rot_deg(span_a);
+    span_nav = wrap_deg(rec[span_b].nav.yaw_deg - rec[span_a].nav.yaw_deg);
+    double ss = 0.0, mx = 0.0;
+    int cnt = 0;
+    for (std::size_t i = span_a; i <= span_b; ++i) {
+      if (!rec[i].nav.valid) continue;
+      const double d = (image_rot_deg(i) - image_rot_deg(span_a)) - wrap_deg(rec[i].nav.yaw_deg - rec[span_a].nav.yaw_deg);
+      ss += d * d;
+      mx = std::max(mx, std::abs(d));
+      ++cnt;
+    }
+    span_rms = std::sqrt(ss / std::max(cnt, 1));
+    span_max = mx;
+  }
+  // Paths.
+  const topo::ChainPose& p0 = rec[0].step.pose;
+  double path_px = 0.0, nav_path = 0.0;
+  Vec2d last_px = p0.position_px;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (rec[i].step.status == topo::StepStatus::kOk) {
+      path_px += (rec[i].step.pose.position_px - last_px).norm();
+      last_px = rec[i].step.pose.position_px;
+    }
+    if (rec[i].nav.valid && rec[i - 1].nav.valid) nav_path += std::hypot(rec[i].nav.x - rec[i - 1].nav.x, rec[i].nav.y - rec[i - 1].nav.y);
+  }
+  const double net_px = (last_px - p0.position_px).norm();
+  const double nav_net = have_nav ? std::hypot(rec[n - 1].nav.x - rec[0].nav.x, rec[n - 1].nav.y - rec[0].nav.y) : std::nan("");
+  const double mpp = chain.metres_per_px();
+  // Alignment of the chain to the navigation (rotation [+ scale when no altitude], mirror chosen by fit).
+  std::vector<Vec2d> a, b;
+  for (std::size_t i = 0; i < n; ++i)
+    if (rec[i].step.status == topo::StepStatus::kOk && rec[i].nav.valid) {
+      a.push_back(rec[i].step.pose.position_px - p0.position_px);
+      b.push_back(Vec2d(rec[i].nav.x - rec[0].nav.x, rec[i].nav.y - rec[0].nav.y));
+    }
+  const Alignment al = have_nav ? align(a, b, mpp > 0.0 ? mpp : 0.0) : Alignment{};
+  for (std::size_t i = 0; i < n; ++i)
+    if (al.valid) rec[i].aligned = al.apply(rec[i].step.pose.position_px - p0.position_px) + Vec2d(rec[0].nav.x, rec[0].nav.y);
+  // Only when the scale was fitted (no --altitude): the altitude that scale stands for.
+  const double implied_alt = (al.valid && have_camera && !(mpp > 0.0)) ? al.scale * cam.fx : std::nan("");
+
+  // Outputs.
+  std::string csv_path, png_path;
+  if (out_dir != nullptr) {
+    mkdir(out_dir, 0755);
+    csv_path = std::string(out_dir) + "/map_trajectory.csv";
+    png_path = std::string(out_dir) + "/map_trajectory.png";
+    FILE* f = std::fopen(csv_path.c_str(), "w");
+    if (f == nullptr) {
+      std::fprintf(stderr, "map: cannot write %s: %s\n", csv_path.c_str(), std::strerror(errno));
+      return 1;
+    }
+    std::fprintf(f, "frame,file,status,new_keyframe,keyframe,keypoints,matches,f_inliers,inliers,rms_px,overlap,x_px,y_px,"
+                    "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms\n");
+    for (std::size_t i = 0; i < n; ++i) {
+      const topo::ChainStep& st = rec[i].step;
+      const bool ok = st.status == topo::StepStatus::kOk;
+      std::fprintf(f, "%zu,%s,%s,%d,%u,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,", i, rec[i].file.c_str(), topo::to_string(st.status),
+                   st.new_keyframe ? 1 : 0, st.keyframe_index, st.keypoints, st.matches, st.fundamental_inliers, st.inliers, st.rms_px,
+                   st.overlap, st.pose.position_px.x(), st.pose.position_px.y(), rad_to_deg(st.pose.heading_rad), image_rot_deg(i));
+      if (st.pose.metric) std::fprintf(f, "%.4f,%.4f,", st.pose.position_m.x(), st.pose.position_m.y());
+      else std::fprintf(f, ",,");
+      if (al.valid && ok) std::fprintf(f, "%.4f,%.4f,", rec[i].aligned.x(), rec[i].aligned.y());
+      else std::fprintf(f, ",,");
+      if (rec[i].nav.valid) std::fprintf(f, "%.4f,%.4f,%.4f,%d,", rec[i].nav.x, rec[i].nav.y, rec[i].nav.yaw_deg, rec[i].nav.interpolated ? 1 : 0);
+      else std::fprintf(f, ",,,,");
+      std::fprintf(f, "%.3f\n", rec[i].ms);
+    }
+    const bool write_ok = std::fflush(f) == 0;
+    std::fclose(f);
+    if (!write_ok) {
+      std::fprintf(stderr, "map: writing %s failed\n", csv_path.c_str());
+      return 1;
+    }
+    const std::string script = source_root() + "/scripts/map_plot.py";
+    struct stat st {};
+    if (cli::flag(argc, argv, "--no-plot")) {
+      png_path.clear();
+    } else if (stat("/usr/bin/python3", &st) != 0 || stat(script.c_str(), &st) != 0) {
+      std::fprintf(stderr, "map: no plot (%s or /usr/bin/python3 missing)\n", script.c_str());
+      png_path.clear();
+    } else {
+      const std::string cmd = "/usr/bin/python3 '" + script + "' '" + csv_path + "' '" + png_path + "'";
+      if (std::system(cmd.c_str()) != 0) {
+        std::fprintf(stderr, "map: plot failed: %s\n", cmd.c_str());
+        png_path.clear();
+      }
+    }
+  }
+
+  const int pairs = static_cast<int>(n) - 1;
+  auto num = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("null"); };
+  if (json) {
+    std::printf("{\"frames\": %zu, \"pairs_registered\": %d, \"pairs_total\": %d, \"keyframes\": %u, "
+                "\"keypoints_median\": %s, \"inliers_median\": %s, \"inliers_min\": %s, "
+                "\"yaw_chain_deg\": %s, \"yaw_nav_deg\": %s, \"yaw_error_deg\": %s, "
+                "\"span_first\": %d, \"span_last\": %d, \"yaw_span_chain_deg\": %s, \"yaw_span_nav_deg\": %s, "
+                "\"yaw_span_error_deg\": %s, \"yaw_span_rms_deg\": %s, \"yaw_span_max_deg\": %s, "
+                "\"path_px\": %s, \"net_px\": %s, \"metres_per_px\": %s, \"path_m\": %s, \"nav_path_m\": %s, \"nav_net_m\": %s, "
+                "\"align_scale_m_per_px\": %s, \"align_rotation_deg\": %s, \"align_mirrored\": %s, \"align_rms_m\": %s, "
+                "\"implied_altitude_m\": %s, \"frame_ms_median\": %s, \"frame_ms_max\": %s, \"undistorted\": %s, "
+                "\"fundamental_filter\": %s, \"csv\": \"%s\", \"png\": \"%s\"}\n",
+                n, registered, pairs, chain.keyframes(), num(median(keypoints)).c_str(), num(median(inliers)).c_str(),
+                num(inliers.empty() ? std::nan("") : *std::min_element(inliers.begin(), inliers.end())).c_str(),
+                num(rot_chain).c_str(), num(rot_nav).c_str(), num(rot_chain - rot_nav).c_str(),
+                span_a < n ? static_cast<int>(span_a) : -1, span_b < n ? static_cast<int>(span_b) : -1, num(span_chain).c_str(),
+                num(span_nav).c_str(), num(span_chain - span_nav).c_str(), num(span_rms).c_str(), num(span_max).c_str(),
+                num(path_px).c_str(), num(net_px).c_str(), num(mpp > 0 ? mpp : std::nan("")).c_str(),
+                num(mpp > 0 ? path_px * mpp : (al.valid ? path_px * al.scale : std::nan(""))).c_str(), num(have_nav ? nav_path : std::nan("")).c_str(),
+                num(nav_net).c_str(), num(al.valid ? al.scale : std::nan("")).c_str(),
+                num(al.valid ? rad_to_deg(al.rotation_rad) : std::nan("")).c_str(), al.valid ? (al.mirrored ? "true" : "false") : "null",
+                num(al.valid ? al.rms_m : std::nan("")).c_str(), num(implied_alt).c_str(), num(median(ms)).c_str(),
+                num(*std::max_element(ms.begin(), ms.end())).c_str(), (have_camera && undistort) ? "true" : "false",
+                config.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str());
+  } else {
+    std::printf("frames %zu (%dx%d)%s%s\n", n, W, H, (have_camera && undistort) ? ", undistorted" : "",
+                config.fundamental_filter ? ", F both-accept filter" : "");
+    std::printf("pairs registered      %d / %d (keyframes %u)\n", registered, pairs, chain.keyframes());
+    std::printf("keypoints per frame   median %.0f\n", median(keypoints));
+    if (!inliers.empty())
+      std::printf("inliers per pair      median %.0f, min %.0f\n", median(inliers), *std::min_element(inliers.begin(), inliers.end()));
+    std::printf("image rotation        frame 0 -> %zu: chain %+.2f deg", n - 1, rot_chain);
+    if (have_nav) std::printf(", navigation yaw %+.2f deg, error %+.2f deg", rot_nav, rot_chain - rot_nav);
+    std::printf("\n");
+    if (std::isfinite(span_chain))
+      std::printf("  inside the nav span frames %zu -> %zu: chain %+.2f deg, nav %+.2f deg, error %+.2f deg; per frame RMS %.2f, max %.2f deg\n",
+                  span_a, span_b, span_chain, span_nav, span_chain - span_nav, span_rms, span_max);
+    std::printf("path                  chain %.1f px (net %.1f px)", path_px, net_px);
+    if (mpp > 0) std::printf(" = %.3f m at %.5f m/px", path_px * mpp, mpp);
+    std::printf("\n");
+    if (have_nav) {
+      std::printf("navigation path       %.3f m (sum of frame-to-frame steps; net %.3f m)\n", nav_path, nav_net);
+      if (al.valid)
+        std::printf("chain aligned to nav  %.5f m/px %s, rotation %.1f deg%s, RMS %.3f m; chain path %.3f m\n", al.scale,
+                    mpp > 0 ? "(from altitude)" : std::isfinite(implied_alt) ? ("(fitted: implied altitude " + std::to_string(implied_alt).substr(0, 4) + " m)").c_str() : "(fitted)",
+                    rad_to_deg(al.rotation_rad),
+                    al.mirrored ? ", mirrored" : "", al.rms_m, path_px * al.scale);
+    }
+    std::printf("frame time            median %.2f ms, max %.2f ms (undistortion + chain)\n", median(ms), *std::max_element(ms.begin(), ms.end()));
+    if (!csv_path.empty()) std::printf("wrote %s%s%s\n", csv_path.c_str(), png_path.empty() ? "" : ", ", png_path.c_str());
+  }
+  return registered == pairs ? 0 : 1;
+}
+
+}  // namespace
+
+QNAV_COMMAND("map", "downward-camera mapping: homography chain over a frame directory, vs navigation poses", run_map);
