@@ -238,7 +238,8 @@ double wrap_deg(double d) {
 struct FrameRecord {
   std::string file;
   topo::ChainStep step;
-  double ms = 0.0;
+  double ms = 0.0;        // undistortion + chain
+  double chain_ms = 0.0;  // HomographyChain::process alone
   NavPose nav;
   Vec2d aligned = Vec2d::Zero();  // chain position in the navigation frame (metres), when aligned
 };
@@ -406,11 +407,14 @@ int run_map(int argc, char** argv) {
       s = chain.process(img->view(), r.step);  // refused as kBadInput (size)
     } else if (have_camera && undistort) {
       s = remap.apply(img->view(), rectified->view());
+      const auto t1 = Clock::now();
       if (s) s = chain.process(ConstImageViewU8(rectified->view()), altitude, r.step);
+      r.chain_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
     } else {
       s = chain.process(img->view(), altitude, r.step);
     }
     r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (r.chain_ms == 0.0) r.chain_ms = r.ms;
     if (!s) {
       std::fprintf(stderr, "map: %s: %s\n", files[i].c_str(), s.message());
       return 1;
@@ -421,17 +425,18 @@ int run_map(int argc, char** argv) {
   // Summary.
   const std::size_t n = rec.size();
   int registered = 0;
-  std::vector<double> inliers, keypoints, ms;
+  std::vector<double> inliers, keypoints, ms, chain_ms;
   for (std::size_t i = 0; i < n; ++i) {
     keypoints.push_back(rec[i].step.keypoints);
     ms.push_back(rec[i].ms);
+    chain_ms.push_back(rec[i].chain_ms);
     if (i > 0 && rec[i].step.status == topo::StepStatus::kOk && !rec[i].step.reference) {
       ++registered;
       inliers.push_back(rec[i].step.inliers);
     }
   }
   // Image rotation (content, clockwise on screen positive) = -heading of the chain.
-  auto image_rot_deg = [&](std::size_t i) { return -rad_to_deg(rec[i].step.pose.heading_rad); };
+  auto image_rot_deg = [&](std::size_t i) { return 0.0 - rad_to_deg(rec[i].step.pose.heading_rad) + 0.0; };
   const double rot_chain = image_rot_deg(n - 1) - image_rot_deg(0);
   const bool have_nav = rec[0].nav.valid && rec[n - 1].nav.valid;
   const double rot_nav = have_nav ? wrap_deg(rec[n - 1].nav.yaw_deg - rec[0].nav.yaw_deg) : std::nan("");
@@ -497,7 +502,7 @@ int run_map(int argc, char** argv) {
       return 1;
     }
     std::fprintf(f, "frame,file,status,new_keyframe,keyframe,keypoints,matches,f_inliers,inliers,rms_px,overlap,x_px,y_px,"
-                    "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms\n");
+                    "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms,chain_ms\n");
     for (std::size_t i = 0; i < n; ++i) {
       const topo::ChainStep& st = rec[i].step;
       const bool ok = st.status == topo::StepStatus::kOk;
@@ -510,7 +515,7 @@ int run_map(int argc, char** argv) {
       else std::fprintf(f, ",,");
       if (rec[i].nav.valid) std::fprintf(f, "%.4f,%.4f,%.4f,%d,", rec[i].nav.x, rec[i].nav.y, rec[i].nav.yaw_deg, rec[i].nav.interpolated ? 1 : 0);
       else std::fprintf(f, ",,,,");
-      std::fprintf(f, "%.3f\n", rec[i].ms);
+      std::fprintf(f, "%.3f,%.3f\n", rec[i].ms, rec[i].chain_ms);
     }
     const bool write_ok = std::fflush(f) == 0;
     std::fclose(f);
@@ -544,7 +549,7 @@ int run_map(int argc, char** argv) {
                 "\"yaw_span_error_deg\": %s, \"yaw_span_rms_deg\": %s, \"yaw_span_max_deg\": %s, "
                 "\"path_px\": %s, \"net_px\": %s, \"metres_per_px\": %s, \"path_m\": %s, \"nav_path_m\": %s, \"nav_net_m\": %s, "
                 "\"align_scale_m_per_px\": %s, \"align_rotation_deg\": %s, \"align_mirrored\": %s, \"align_rms_m\": %s, "
-                "\"implied_altitude_m\": %s, \"frame_ms_median\": %s, \"frame_ms_max\": %s, \"undistorted\": %s, "
+                "\"implied_altitude_m\": %s, \"frame_ms_median\": %s, \"frame_ms_max\": %s, \"chain_ms_median\": %s, \"undistorted\": %s, "
                 "\"fundamental_filter\": %s, \"csv\": \"%s\", \"png\": \"%s\"}\n",
                 n, registered, pairs, chain.keyframes(), num(median(keypoints)).c_str(), num(median(inliers)).c_str(),
                 num(inliers.empty() ? std::nan("") : *std::min_element(inliers.begin(), inliers.end())).c_str(),
@@ -556,7 +561,7 @@ int run_map(int argc, char** argv) {
                 num(nav_net).c_str(), num(al.valid ? al.scale : std::nan("")).c_str(),
                 num(al.valid ? rad_to_deg(al.rotation_rad) : std::nan("")).c_str(), al.valid ? (al.mirrored ? "true" : "false") : "null",
                 num(al.valid ? al.rms_m : std::nan("")).c_str(), num(implied_alt).c_str(), num(median(ms)).c_str(),
-                num(*std::max_element(ms.begin(), ms.end())).c_str(), (have_camera && undistort) ? "true" : "false",
+                num(*std::max_element(ms.begin(), ms.end())).c_str(), num(median(chain_ms)).c_str(), (have_camera && undistort) ? "true" : "false",
                 config.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str());
   } else {
     std::printf("frames %zu (%dx%d)%s%s\n", n, W, H, (have_camera && undistort) ? ", undistorted" : "",
@@ -582,7 +587,8 @@ int run_map(int argc, char** argv) {
                     rad_to_deg(al.rotation_rad),
                     al.mirrored ? ", mirrored" : "", al.rms_m, path_px * al.scale);
     }
-    std::printf("frame time            median %.2f ms, max %.2f ms (undistortion + chain)\n", median(ms), *std::max_element(ms.begin(), ms.end()));
+    std::printf("frame time            median %.2f ms, max %.2f ms (undistortion + chain); chain alone median %.2f ms\n", median(ms),
+                *std::max_element(ms.begin(), ms.end()), median(chain_ms));
     if (!csv_path.empty()) std::printf("wrote %s%s%s\n", csv_path.c_str(), png_path.empty() ? "" : ", ", png_path.c_str());
   }
   return registered == pairs ? 0 : 1;
