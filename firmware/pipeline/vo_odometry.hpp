@@ -8,8 +8,11 @@
 // Per frame: world_R_cam = world_R_body(attitude) * mount.R (3D-VME's absolute attitude); the relative
 // attitude since the previous frame; the translation prior from the caller's odometry (the body's
 // displacement turned into the previous camera frame through the mount) or else constant velocity (the
-// last visual step, sigma 0.1 m + 20 % of it; none before the first visual step: the matcher's
-// default gate). A frame without attitude is not processed (3D-VME needs it; counted by the caller).
+// last visual step, sigma 0.1 m + 20 % of it; before the first visual step VoPriorConfig says). A
+// frame without attitude: with 3D-VME it is not processed (kNotReady; the caller counts it); with
+// 6D-VME (a rig with no attitude sensor: `qnav vo --kitti/--euroc`, or vo.vme = "6d") the VO measures
+// the rotation itself and the rotation prior is the last visual step's (or none, for a rig that barely
+// moves: VoPriorConfig::zero_motion).
 // Outputs: the body pose world_T_body (the camera pose through the mount) and, for QNAV_VO_STEP, the
 // planar increment between two body poses in the level frame of the first's heading.
 // Memory: init() allocates the StereoVo arena once (StereoVo::arena_bytes); step() allocates nothing.
@@ -26,6 +29,13 @@
 #include "nav/vo/stereo_vo.hpp"
 
 namespace qnav::pipeline {
+
+// How the translation prior is formed when the caller gives no odometry.
+struct VoPriorConfig {
+  bool zero_motion = false;      // the rig barely moves (a hover): zero motion within zero_sigma_m
+  double zero_sigma_m = 0.02;
+  double first_sigma_m = 0.0;    // before the first visual step: zero within this (0: none, the matcher's own gate)
+};
 
 struct VoFrameInput {
   ConstImageViewU8 left, right;
@@ -56,11 +66,11 @@ class VoOdometry {
   VoOdometry(const VoOdometry&) = delete;
   VoOdometry& operator=(const VoOdometry&) = delete;
   // Allocates the StereoVo arena and initialises it (kInvalidArgument for a bad configuration).
-  Status init(const vo::VoConfig& config, const Pose3& body_T_cam);
+  Status init(const vo::VoConfig& config, const Pose3& body_T_cam, const VoPriorConfig& prior = VoPriorConfig{});
   // Starts a new chain with the body at world_T_body.
   void reset(const Pose3& world_T_body = Pose3{}) noexcept;
   // Processes one pair. Returns the StereoVo step (flags say visual / lost / dead-reckoned), or
-  // kNotReady when the frame has no attitude (nothing integrated).
+  // kNotReady when a 3D-VME frame has no attitude (nothing integrated).
   Result<vo::VoStep> step(const VoFrameInput& in) noexcept;
 
   Pose3 body_pose() const noexcept { return vo_.pose().compose(cam_T_body_); }
@@ -74,11 +84,13 @@ class VoOdometry {
   std::unique_ptr<ArenaStorage> arena_;
   vo::StereoVo vo_;
   Pose3 body_T_cam_, cam_T_body_;
+  VoPriorConfig prior_;
   bool started_ = false;
   Mat3d prev_world_R_cam_ = Mat3d::Identity();
   Mat3d prev_world_R_body_ = Mat3d::Identity();
   bool have_velocity_ = false;
-  Vec3d velocity_t_ = Vec3d::Zero();  // last visual step's translation (previous camera frame)
+  Vec3d velocity_t_ = Vec3d::Zero();  // last visual step (previous camera frame)
+  Mat3d velocity_R_ = Mat3d::Identity();
   std::uint32_t frames_ = 0, visual_ = 0;
 };
 

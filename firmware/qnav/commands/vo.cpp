@@ -39,6 +39,7 @@
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/pipeline/vo_defaults.hpp"
+#include "firmware/pipeline/vo_odometry.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "nav/vision/rectify.hpp"
@@ -485,42 +486,38 @@ struct SequenceRun {
   std::size_t lost = 0;
 };
 
-// Runs 6D-VME over rectified pairs with a constant-velocity prior (no attitude sensor on these rigs).
+// Runs 6D-VME over rectified pairs with no attitude sensor, through pipeline::VoOdometry (the wiring
+// qnavd runs; the camera is the body): a constant-velocity prior (or zero motion for a hover), and
+// before the first visual step zero motion within first_sigma_m.
 template <typename LoadPair>
 bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_motion_prior, double first_sigma_m,
                   bool verbose, SequenceRun& run) {
-  VoBox box;
-  if (!box.init(c)) return false;
-  Pose3 velocity;  // last visual step
-  bool have_velocity = false;
+  pipeline::VoPriorConfig prior;
+  prior.zero_motion = zero_motion_prior;
+  prior.first_sigma_m = first_sigma_m;
+  pipeline::VoOdometry odo;
+  const Status init = odo.init(c, Pose3{}, prior);
+  if (!init) {
+    std::fprintf(stderr, "vo: init failed: %s\n", init.message());
+    return false;
+  }
   for (std::size_t i = 0; i < frames; ++i) {
     ImageU8 l, r;
     if (!load(i, l, r)) return false;
-    vo::VoInput in;
+    pipeline::VoFrameInput in;
     in.left = l.view();
     in.right = r.view();
-    if (i > 0) {
-      in.R_prev_cur = zero_motion_prior ? Mat3d::Identity() : velocity.R;
-      in.has_translation_prior = true;
-      in.t_prev_cur_prior_m = zero_motion_prior ? Vec3d::Zero() : velocity.t;
-      // Constant velocity; before the first visual step the prior is "somewhere within first_sigma_m".
-      in.t_prior_sigma_m = zero_motion_prior ? 0.02 : (have_velocity ? 0.1 + 0.2 * velocity.t.norm() : first_sigma_m);
-    }
     const Clock::time_point t0 = Clock::now();
-    Result<vo::VoStep> s = box.vo.process(in);
+    Result<vo::VoStep> s = odo.step(in);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (!s) return false;
     if (i > 0) run.ms.push_back(ms);
     if (i > 0 && !s->visual) ++run.lost;
-    if (s->visual) {
-      velocity = s->prev_T_cur;
-      have_velocity = true;
-    }
-    run.poses.push_back(box.vo.pose());
+    run.poses.push_back(odo.vo().pose());
     if (verbose)
       std::printf("frame %3zu  %6.2f ms  corners %3zu stereo %3zu matches %3zu  rms %.4f m  flags 0x%03x  t %.3f %.3f %.3f\n",
-                  i, ms, s->corners, s->stereo_points, s->matches, s->rms_residual_m, s->flags, box.vo.pose().t.x(),
-                  box.vo.pose().t.y(), box.vo.pose().t.z());
+                  i, ms, s->corners, s->stereo_points, s->matches, s->rms_residual_m, s->flags, odo.vo().pose().t.x(),
+                  odo.vo().pose().t.y(), odo.vo().pose().t.z());
   }
   return true;
 }
