@@ -2,13 +2,14 @@
 // directory of frames, with the navigation poses when given.
 //
 //   qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]
-//            [--no-undistort] [--fundamental] [--frames N] [--no-plot]
+//            [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]
 //       Frames: every .png/.jpg/.jpeg/.pgm in DIR, in name order, read as 8-bit grey. --camera: OpenCV
 //       style YAML (image_width/height, camera_matrix data, distortion_coefficients k1 k2 p1 p2 [k3]);
 //       frames are undistorted with nav/vision's RemapTable unless --no-undistort, and fx gives metric
 //       scale with --altitude (metres above the seabed, constant). --poses: a CSV with columns file,
 //       x, y, yaw_deg (optional t_video_s, pose_note; the sparus_snippet frames.csv layout), matched to
 //       frames by file name. --fundamental: the paper's F both-accept outlier rule before H.
+//       --keyframe-gap N: a new keyframe at least every N frames (default 30; 1 = frame-to-frame chain).
 //       Writes DIR_OUT/map_trajectory.csv (per frame: status, keyframe, keypoints, matches, inliers,
 //       pose in mosaic pixels, heading, metres, the chain aligned to the navigation, nav pose, time) and
 //       DIR_OUT/map_trajectory.png (scripts/map_plot.py through /usr/bin/python3; skipped with a note
@@ -306,7 +307,7 @@ std::string source_root() {
 int usage() {
   std::fprintf(stderr,
                "usage: qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]\n"
-               "                [--no-undistort] [--fundamental] [--frames N] [--no-plot]\n");
+               "                [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]\n");
   return 2;
 }
 
@@ -372,6 +373,12 @@ int run_map(int argc, char** argv) {
   config.max_width = W;
   config.max_height = H;
   config.fundamental_filter = cli::flag(argc, argv, "--fundamental");
+  long gap = static_cast<long>(config.max_keyframe_gap);
+  if (!cli::option_long(argc, argv, "--keyframe-gap", gap) || gap < 1 || gap > 100000) {
+    std::fprintf(stderr, "map: --keyframe-gap wants an integer >= 1 (1 = every frame a keyframe: the frame-to-frame chain)\n");
+    return 2;
+  }
+  config.max_keyframe_gap = static_cast<std::uint32_t>(gap);
   if (have_camera) {
     config.camera.fx = cam.fx;
     config.camera.fy = cam.fy;
