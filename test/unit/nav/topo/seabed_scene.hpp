@@ -69,7 +69,8 @@ struct Seabed {
     const int q = static_cast<int>(u), r = static_cast<int>(v);
     const double tx = u - q, ty = v - r;
     const float* t = &tex[static_cast<std::size_t>(r) * side + q];
-    const double a = t[0], b = t[1], c = t[side], d = t[side + 1];
+    const double a = static_cast<double>(t[0]), b = static_cast<double>(t[1]), c = static_cast<double>(t[side]),
+                 d = static_cast<double>(t[side + 1]);
     return (a * (1 - tx) + b * tx) * (1 - ty) + (c * (1 - tx) + d * tx) * ty;
   }
 };
