@@ -15,14 +15,20 @@
 
 namespace qnav::pipeline {
 
-inline vo::VoConfig vo_config_for_bench(const sim::StereoBench& b) {
+// A VO configuration for a rectified pair of this size and calibration (the rest at VoConfig's defaults).
+inline vo::VoConfig vo_config_for_camera(int width, int height, double focal_px, double cu_px, double cv_px, double baseline_m) {
   vo::VoConfig c;
-  c.max_width = b.width();
-  c.max_height = b.height();
-  c.camera.focal_px = b.focal_px();
-  c.camera.cu_px = b.cu_px();
-  c.camera.cv_px = b.cv_px();
-  c.camera.baseline_m = b.baseline_m;
+  c.max_width = width;
+  c.max_height = height;
+  c.camera.focal_px = focal_px;
+  c.camera.cu_px = cu_px;
+  c.camera.cv_px = cv_px;
+  c.camera.baseline_m = baseline_m;
+  return c;
+}
+
+inline vo::VoConfig vo_config_for_bench(const sim::StereoBench& b) {
+  vo::VoConfig c = vo_config_for_camera(b.width(), b.height(), b.focal_px(), b.cu_px(), b.cv_px(), b.baseline_m);
   c.stereo.min_disparity_px = 8;  // terrain at 0.55 .. 1.4 m: d = f b / Z = 12 .. 30 px
   c.stereo.max_disparity_px = 36;
   c.stereo.disparity_sigma_px = 0.15f;
@@ -78,14 +84,8 @@ inline vo::VoConfig default_vo_config(const sim::StereoBench& b, const sim::Nois
 // depths to 40 m): 6D-VME with a constant-velocity prior, wide gates. The settings `qnav vo --kitti`
 // measured against libviso2 (docs/vo.md).
 inline vo::VoConfig kitti_vo_config(int width, int height, double focal_px, double cu_px, double cv_px, double baseline_m) {
-  vo::VoConfig c;
-  c.max_width = width;
-  c.max_height = height;
+  vo::VoConfig c = vo_config_for_camera(width, height, focal_px, cu_px, cv_px, baseline_m);
   c.max_corners = 400;
-  c.camera.focal_px = focal_px;
-  c.camera.cu_px = cu_px;
-  c.camera.cv_px = cv_px;
-  c.camera.baseline_m = baseline_m;
   c.stereo.min_disparity_px = 2;
   c.stereo.max_disparity_px = 120;
   c.max_depth_m = 40.0;
@@ -107,14 +107,8 @@ inline vo::VoConfig kitti_vo_config(int width, int height, double focal_px, doub
 // nav/vision, 0.11 m baseline, depths to 8 m): 6D-VME with a zero-motion prior. What `qnav vo --euroc`
 // measures against the motion-capture ground truth (docs/vo.md).
 inline vo::VoConfig euroc_vo_config(int width, int height, double focal_px, double cu_px, double cv_px, double baseline_m) {
-  vo::VoConfig c;
-  c.max_width = width;
-  c.max_height = height;
+  vo::VoConfig c = vo_config_for_camera(width, height, focal_px, cu_px, cv_px, baseline_m);
   c.max_corners = 300;
-  c.camera.focal_px = focal_px;
-  c.camera.cu_px = cu_px;
-  c.camera.cv_px = cv_px;
-  c.camera.baseline_m = baseline_m;
   c.stereo.min_disparity_px = 1;
   c.stereo.max_disparity_px = 80;
   c.max_depth_m = 8.0;

@@ -102,29 +102,9 @@ void BM_KittiStep(benchmark::State& state) {
     state.SkipWithError("KITTI data not found");
     return;
   }
-  vo::VoConfig c;
-  c.max_width = 1242;
-  c.max_height = 375;
-  c.max_corners = 400;
-  c.camera.focal_px = 721.5377;
-  c.camera.cu_px = 609.5593;
-  c.camera.cv_px = 172.8540;
-  c.camera.baseline_m = 0.537150;
-  c.stereo.min_disparity_px = 2;
-  c.stereo.max_disparity_px = 120;
-  c.max_depth_m = 40.0;
-  c.mode = vo::VmeMode::k6D;
+  // The KITTI preset of `qnav vo --kitti` (pipeline/vo_defaults), unweighted as the tool runs it.
+  vo::VoConfig c = pipeline::kitti_vo_config(1242, 375, 721.5377, 609.5593, 172.8540, 0.537150);
   c.weighted = false;
-  c.lateral_sigma_px = 0.7;
-  c.match.attitude_sigma_rad = deg_to_rad(0.7);
-  c.match.max_gate_m = 3.0;
-  c.match.max_candidates_per_landmark = 16;
-  c.match.eps_n_floor_m = 0.05;
-  c.match.fast = true;
-  c.match.batch_size = 80;
-  c.match.min_matches = 40;
-  c.irls_config.huber_m = 0.1;
-  c.irls_config.inlier_m = 0.3;
   c.max_rms_residual_m = 0.5;
   c.max_step_m = 4.0;
   ArenaStorage arena(vo::StereoVo::arena_bytes(c));
