@@ -177,6 +177,30 @@ def main():
             f = write(w(f"bad{k}.jpg"), data[: rng.randrange(len(data))])
             pr.run(["stereo", "disparity", "--left", f, "--right", jpeg, "--out", w("d.png")], "JPEG cut short", must_fail=True)
 
+    # The downward-camera mapping (qnav map): the real sparus frames with some of them damaged (cut
+    # short, garbage, empty), a damaged navigation CSV and camera calibration.
+    sparus = os.path.join(a.shared, "data", "downward", "sparus_snippet")
+    if os.path.isdir(os.path.join(sparus, "frames")):
+        frames = sorted(f for f in os.listdir(os.path.join(sparus, "frames")) if f.endswith(".png"))[:8]
+        for k in range(max(2, a.runs // 3)):
+            d = w(f"frames{k}")
+            os.makedirs(d, exist_ok=True)
+            for i, name in enumerate(frames):
+                data = open(os.path.join(sparus, "frames", name), "rb").read()
+                if i == 1 + k % 5:
+                    data = data[: rng.randrange(len(data))]
+                elif i == 2 + k % 5:
+                    data = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 4096)))
+                elif i == 6:
+                    data = b""
+                write(os.path.join(d, name), data)
+            pr.run(["map", "--images", d, "--out", w("map"), "--no-plot"], "frames cut short / garbage / empty")
+            for src, opt in ((os.path.join(sparus, "frames.csv"), "--poses"), (os.path.join(sparus, "camera.yaml"), "--camera")):
+                bad, what = mutate(open(src, "rb").read(), rng)
+                f = write(w(f"bad{k}_{os.path.basename(src)}"), bad)
+                pr.run(["map", "--images", os.path.join(sparus, "frames"), opt, f, "--out", w("map"), "--no-plot", "--frames", "6"],
+                       f"{os.path.basename(src)}: {what}")
+
     # Input that cannot be valid: must be refused, with a reason.
     os.makedirs(w("adir"), exist_ok=True)
     write(w("empty"), b"")
@@ -184,7 +208,7 @@ def main():
                        (w("missing"), "no such file")):
         for cmd in (["xtf", "info", path], ["sonar", "tiles", path, "--out", w("tiles")], ["route", "info", path],
                     ["route", "train", "--sonar", path, "--out", w("t.qroute"), "--force"], ["can", "decode", path],
-                    ["can", "dbc", path], ["dvl", "parse", path]):
+                    ["can", "dbc", path], ["dvl", "parse", path], ["map", "--images", path, "--out", w("map"), "--no-plot"]):
             pr.run(cmd, what, must_fail=True)
     for value in ("nan", "inf", "-inf", "1e400", "-1", "0", "abc", ""):
         pr.run(["dvl", "simulate", w("x.dvl"), "--seconds", value], f"--seconds {value!r}", must_fail=True)
