@@ -155,6 +155,29 @@ TEST(QnavdVo, VoStepFramesSumToTheRoversPath) {
   }
 }
 
+// The attitude from a DroneCAN AHRS (uavcan.equipment.ahrs.Solution: the full quaternion) instead of
+// QNAV_ATTITUDE_IN: the same odometry.
+TEST(QnavdVo, DroneCanAhrsGivesTheAttitude) {
+  SoftwareFaults::reset_for_tests();
+  DaemonConfig c = vo_config(4.0);
+  c.sim_ahrs = "dronecan";
+  auto rec = std::make_unique<VoRecorder>();
+  Daemon d(c);
+  d.set_frame_observer(on_pair, rec.get());
+  d.set_bus_observer(on_bus, rec.get());
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  ASSERT_EQ(d.run(), 0);
+  EXPECT_EQ(SoftwareFaults::count(), 0u);
+  ASSERT_TRUE(rec->have_first);
+  const double err = (rec->last_vo.t - rec->last_truth.t).norm();
+  std::printf("qnavd vo, DroneCAN AHRS: %u pairs (%u visual), %.2f m path, end error %.4f m\n", rec->pairs, rec->visual,
+              rec->last_path_m, err);
+  EXPECT_EQ(d.nav().vo_no_attitude(), 0u);
+  EXPECT_GE(rec->visual, rec->pairs * 9 / 10);
+  EXPECT_LT(err, 0.005 * rec->last_path_m);
+}
+
 TEST(QnavdVo, CameraLossIsReportedAndVisualStepsResume) {
   SoftwareFaults::reset_for_tests();
   DaemonConfig c = vo_config(8.0);
