@@ -330,8 +330,13 @@ void Daemon::flush_logs(bool final) noexcept {
   const int fd = fileno(log_);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<long>(cfg_.shutdown_timeout_s * 1000));
   for (;;) {
-    std::fflush(nav_log_->stream());
-    std::fflush(io_log_->stream());
+    if (final) {
+      // The threads have stopped: a line they left unfinished goes out too. (While they run, their
+      // streams are line-buffered and hand over every finished line themselves; flushing here would
+      // make a realtime thread wait for this one on the stream's lock.)
+      std::fflush(nav_log_->stream());
+      std::fflush(io_log_->stream());
+    }
     io_log_->drain(fd);
     nav_log_->drain(fd);
     if (!final || (nav_log_->pending() == 0 && io_log_->pending() == 0) || std::chrono::steady_clock::now() > deadline) break;
