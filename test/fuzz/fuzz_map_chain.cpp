@@ -79,9 +79,11 @@ static void seeds_map_chain(qnav::fuzz::Seeds& out) {
     const double v = 128.0 + 50.0 * std::sin(x * 0.31) * std::cos(y * 0.23) + 30.0 * std::sin((x + 2 * y) * 0.11) + ((r >> 24) % 40) - 20.0;
     tex[i] = static_cast<char>(static_cast<unsigned char>(static_cast<int>(v < 0 ? 0 : (v > 255 ? 255 : v))));
   }
-  const char motions[][6] = {{8, 0, 0, 0, 32, 2}, {-6, 5, 5, 0, 0, 3}, {3, -3, -10, 6, 40, 1}, {0, 0, 0, 0, 16, 0}};
+  // signed char: plain char is unsigned on ARM.
+  const signed char motions[][6] = {{8, 0, 0, 0, 32, 2}, {-6, 5, 5, 0, 0, 3}, {3, -3, -10, 6, 40, 1}, {0, 0, 0, 0, 16, 0}};
   int k = 0;
-  for (const auto& m : motions) out.push_back(qnav::fuzz::Seed{"motion" + std::to_string(k++), std::string(m, 6) + tex});
+  for (const auto& m : motions)
+    out.push_back(qnav::fuzz::Seed{"motion" + std::to_string(k++), std::string(reinterpret_cast<const char*>(m), 6) + tex});
   out.push_back(qnav::fuzz::Seed{"flat", std::string("\x08\x00\x00\x00\x20\x02", 6) + std::string(512, '\x80')});
 }
 QNAV_FUZZ_TARGET(map_chain, 4)
