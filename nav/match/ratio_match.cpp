@@ -123,12 +123,8 @@ Status RatioMatcher::finish(std::size_t nq, BoundedVector<DescriptorMatch>& out)
   return status;
 }
 
-Status RatioMatcher::match(Span<const vision::OrientedDescriptor> query, Span<const vision::OrientedDescriptor> train,
-                           BoundedVector<DescriptorMatch>& out) noexcept {
-  out.clear();
-  stats_ = RatioMatchStats{};
-  if (!ready_) return Status(StatusCode::kNotReady, "ratio_match: not initialised");
-  std::size_t nq = query.size(), nt = train.size();
+// Queries and train descriptors beyond the configured capacities are ignored, and counted.
+void RatioMatcher::clamp_sizes(std::size_t& nq, std::size_t& nt) noexcept {
   if (nq > config_.max_query) {
     counters_.increment(RatioMatchCounter::kQueryIgnored, static_cast<std::uint32_t>(nq - config_.max_query));
     nq = config_.max_query;
@@ -137,6 +133,15 @@ Status RatioMatcher::match(Span<const vision::OrientedDescriptor> query, Span<co
     counters_.increment(RatioMatchCounter::kTrainIgnored, static_cast<std::uint32_t>(nt - config_.max_train));
     nt = config_.max_train;
   }
+}
+
+Status RatioMatcher::match(Span<const vision::OrientedDescriptor> query, Span<const vision::OrientedDescriptor> train,
+                           BoundedVector<DescriptorMatch>& out) noexcept {
+  out.clear();
+  stats_ = RatioMatchStats{};
+  if (!ready_) return Status(StatusCode::kNotReady, "ratio_match: not initialised");
+  std::size_t nq = query.size(), nt = train.size();
+  clamp_sizes(nq, nt);
   std::uint32_t invalid_train = 0;
   for (std::size_t j = 0; j < nt; ++j) invalid_train += train[j].valid ? 0u : 1u;
   if (invalid_train > 0) counters_.increment(RatioMatchCounter::kInvalidDescriptor, invalid_train);
@@ -167,14 +172,7 @@ Status RatioMatcher::match_predicted(Span<const vision::OrientedDescriptor> quer
   if (!ready_) return Status(StatusCode::kNotReady, "ratio_match: not initialised");
   if (predicted_px.size() != query.size()) return Status(StatusCode::kInvalidArgument, "ratio_match: one prediction per query");
   std::size_t nq = query.size(), nt = train.size();
-  if (nq > config_.max_query) {
-    counters_.increment(RatioMatchCounter::kQueryIgnored, static_cast<std::uint32_t>(nq - config_.max_query));
-    nq = config_.max_query;
-  }
-  if (nt > config_.max_train) {
-    counters_.increment(RatioMatchCounter::kTrainIgnored, static_cast<std::uint32_t>(nt - config_.max_train));
-    nt = config_.max_train;
-  }
+  clamp_sizes(nq, nt);
   reset_train(nt);
   // Grid over the usable train positions: bounding box, cell side >= the search radius.
   float x0 = kHuge, y0 = kHuge, x1 = -kHuge, y1 = -kHuge;

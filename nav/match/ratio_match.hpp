@@ -102,6 +102,7 @@ class RatioMatcher {
                 const vision::OrientedDescriptor& t, Best& best) noexcept;
   Status finish(std::size_t nq, BoundedVector<DescriptorMatch>& out) noexcept;
   void reset_train(std::size_t nt) noexcept;
+  void clamp_sizes(std::size_t& nq, std::size_t& nt) noexcept;
 
   RatioMatchConfig config_{};
   bool ready_ = false;

@@ -106,6 +106,23 @@ DaemonConfig vo_config(double length_m) {
   return c;
 }
 
+// Watches d's stereo pairs and bus frames with rec, and starts it.
+void start_watched(Daemon& d, VoRecorder& rec) {
+  d.set_frame_observer(on_pair, &rec);
+  d.set_bus_observer(on_bus, &rec);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+}
+
+// Flies d's whole mission: it must end by itself, with no software fault.
+void fly(Daemon& d, VoRecorder& rec) {
+  start_watched(d, rec);
+  if (::testing::Test::HasFatalFailure()) return;
+  ASSERT_EQ(d.run(), 0);
+  EXPECT_TRUE(d.mission_done());
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
+}
+
 // The autopilot starts its sum at the rover's true heading (it knows where it points at the start).
 double start_heading(const Pose3& truth) { return std::atan2(truth.R(1, 0), truth.R(0, 0)); }
 
@@ -114,10 +131,8 @@ TEST(QnavdVo, VoStepFramesSumToTheRoversPath) {
   const DaemonConfig c = vo_config(8.0);
   auto rec = std::make_unique<VoRecorder>();
   Daemon d(c);
-  d.set_frame_observer(on_pair, rec.get());
-  d.set_bus_observer(on_bus, rec.get());
-  ASSERT_TRUE(d.init(nullptr));
-  ASSERT_TRUE(d.start());
+  start_watched(d, *rec);
+  if (HasFatalFailure()) return;
   test::AllocationGuard guard;
   std::uint64_t allocs = 0;
   {
@@ -163,12 +178,8 @@ TEST(QnavdVo, DroneCanAhrsGivesTheAttitude) {
   c.sim_ahrs = "dronecan";
   auto rec = std::make_unique<VoRecorder>();
   Daemon d(c);
-  d.set_frame_observer(on_pair, rec.get());
-  d.set_bus_observer(on_bus, rec.get());
-  ASSERT_TRUE(d.init(nullptr));
-  ASSERT_TRUE(d.start());
-  ASSERT_EQ(d.run(), 0);
-  EXPECT_EQ(SoftwareFaults::count(), 0u);
+  fly(d, *rec);
+  if (HasFatalFailure()) return;
   ASSERT_TRUE(rec->have_first);
   const double err = (rec->last_vo.t - rec->last_truth.t).norm();
   std::printf("qnavd vo, DroneCAN AHRS: %u pairs (%u visual), %.2f m path, end error %.4f m\n", rec->pairs, rec->visual,
@@ -187,13 +198,8 @@ TEST(QnavdVo, CameraLossIsReportedAndVisualStepsResume) {
   c.sim_stall_s = 4.0;        // longer than vo.stale_s (2 s)
   auto rec = std::make_unique<VoRecorder>();
   Daemon d(c);
-  d.set_frame_observer(on_pair, rec.get());
-  d.set_bus_observer(on_bus, rec.get());
-  ASSERT_TRUE(d.init(nullptr));
-  ASSERT_TRUE(d.start());
-  ASSERT_EQ(d.run(), 0);
-  EXPECT_TRUE(d.mission_done());
-  EXPECT_EQ(SoftwareFaults::count(), 0u);
+  fly(d, *rec);
+  if (HasFatalFailure()) return;
   std::printf("qnavd vo, camera silent 4 s: %u pairs (%u visual, %u after the loss), %u NAV_STATUS frames with FaultCameraLost\n",
               rec->pairs, rec->visual, rec->visual_after_loss, rec->camera_lost_in_vo);
   EXPECT_TRUE(rec->camera_lost_seen) << "no pair for longer than vo.stale_s must be reported";
