@@ -9,6 +9,8 @@
 #include <set>
 #include <sstream>
 
+#include "firmware/tools/text_file.hpp"
+
 namespace qnav::tools {
 namespace {
 
@@ -240,6 +242,42 @@ Result<EurocCamera> read_euroc_camera(const std::string& path) noexcept {
     return cam;
   } catch (...) {
     return Status(StatusCode::kIoError, "euroc: error reading sensor.yaml");
+  }
+}
+
+Result<vision::PinholeRadTan> read_opencv_camera(const std::string& path) noexcept {
+  try {
+    std::string text;
+    QNAV_RETURN_IF_ERROR(read_text_file(path.c_str(), 1 << 20, text));
+    vision::PinholeRadTan cam;
+    std::vector<double> K, D;
+    const std::size_t pw = find_key(text, "image_width"), ph = find_key(text, "image_height");
+    double w = 0.0, h = 0.0;
+    const std::size_t pk = find_key(text, "camera_matrix"), pd = find_key(text, "distortion_coefficients");
+    if (pw == std::string::npos || ph == std::string::npos || !parse_double(scalar_after(text, pw), w) ||
+        !parse_double(scalar_after(text, ph), h) || !(w >= 1.0 && w <= kMaxImageSide) || !(h >= 1.0 && h <= kMaxImageSide) ||
+        pk == std::string::npos || !parse_list(text, pk, K) || K.size() != 9 || pd == std::string::npos || !parse_list(text, pd, D) ||
+        D.size() < 4 || D.size() > 5)
+      return Status(StatusCode::kCorrupt,
+                    "camera YAML needs image_width, image_height, camera_matrix data (9) and distortion_coefficients (4-5)");
+    const std::size_t pm = find_key(text, "distortion_model");
+    if (pm != std::string::npos && scalar_after(text, pm) != "plumb_bob")
+      return Status(StatusCode::kUnsupported, "camera YAML: distortion_model is not plumb_bob");
+    if (D.size() == 5 && D[4] != 0.0) return Status(StatusCode::kUnsupported, "camera YAML: k3 != 0 is not supported by nav/vision's PinholeRadTan");
+    cam.width = static_cast<int>(w);
+    cam.height = static_cast<int>(h);
+    cam.fx = K[0];
+    cam.cx = K[2];
+    cam.fy = K[4];
+    cam.cy = K[5];
+    cam.k1 = D[0];
+    cam.k2 = D[1];
+    cam.p1 = D[2];
+    cam.p2 = D[3];
+    QNAV_RETURN_IF_ERROR(vision::validate(cam));
+    return cam;
+  } catch (...) {
+    return Status(StatusCode::kIoError, "camera YAML: cannot read");
   }
 }
 

@@ -48,6 +48,11 @@ Status read_euroc_sequence(const std::string& dir, std::vector<StereoFrame>& fra
 // Reads one camera's sensor.yaml. Errors: kIoError, kCorrupt, kUnsupported, kInvalidArgument (NaN,
 // non-positive focal length, T_BS rotation not orthonormal).
 Result<EurocCamera> read_euroc_camera(const std::string& path) noexcept;
+// Reads an OpenCV / ROS camera_info YAML (image_width, image_height, camera_matrix data (9),
+// distortion_model plumb_bob, distortion_coefficients data (4 or 5; k3 must be 0)), read bounded at
+// 1 MiB. Errors: kIoError, kCorrupt (a key missing or not numbers), kUnsupported (k3 != 0, another
+// distortion model), kInvalidArgument (vision::validate refuses the model).
+Result<vision::PinholeRadTan> read_opencv_camera(const std::string& path) noexcept;
 // Stereo extrinsics from two sensor.yaml: T_left_right = inv(T_BS_left) * T_BS_right.
 Pose3 euroc_stereo_extrinsics(const EurocCamera& left, const EurocCamera& right) noexcept;
 

@@ -35,6 +35,7 @@
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
+#include "firmware/tools/sequence_reader.hpp"
 #include "firmware/tools/text_file.hpp"
 #include "nav/topo/homography_chain.hpp"
 #include "nav/vision/rectify.hpp"
@@ -84,73 +85,6 @@ bool list_images(const char* dir, std::vector<std::string>& out, std::string& er
 }
 
 // Numbers of the first `[...]` after key (OpenCV-style YAML "data: [a, b, ...]").
-bool yaml_list(const std::string& text, const char* key, std::vector<double>& out) {
-  std::size_t k = text.find(key);
-  if (k == std::string::npos) return false;
-  const std::size_t open = text.find('[', k), close = text.find(']', k);
-  if (open == std::string::npos || close == std::string::npos || close < open) return false;
-  std::string body = text.substr(open + 1, close - open - 1);
-  for (char& c : body)
-    if (c == ',' || c == '\n') c = ' ';
-  const char* p = body.c_str();
-  while (*p != '\0') {
-    char* end = nullptr;
-    const double v = std::strtod(p, &end);
-    if (end == p) {
-      ++p;
-      continue;
-    }
-    if (!std::isfinite(v)) return false;
-    out.push_back(v);
-    p = end;
-  }
-  return true;
-}
-bool yaml_int(const std::string& text, const char* key, int& out) {
-  const std::size_t k = text.find(key);
-  if (k == std::string::npos) return false;
-  const std::size_t colon = text.find(':', k);
-  if (colon == std::string::npos) return false;
-  char* end = nullptr;
-  const long v = std::strtol(text.c_str() + colon + 1, &end, 10);
-  if (end == text.c_str() + colon + 1 || v <= 0 || v > kMaxImageSide) return false;
-  out = static_cast<int>(v);
-  return true;
-}
-
-bool read_camera(const char* path, vision::PinholeRadTan& cam, std::string& err) {
-  std::string text;
-  const Status s = tools::read_text_file(path, 1 << 20, text);
-  if (!s) {
-    err = s.message();
-    return false;
-  }
-  std::vector<double> K, D;
-  if (!yaml_int(text, "image_width", cam.width) || !yaml_int(text, "image_height", cam.height) ||
-      !yaml_list(text, "camera_matrix", K) || K.size() != 9 || !yaml_list(text, "distortion_coefficients", D) || D.size() < 4) {
-    err = std::string(path) + ": needs image_width, image_height, camera_matrix data (9) and distortion_coefficients (4-5)";
-    return false;
-  }
-  cam.fx = K[0];
-  cam.cx = K[2];
-  cam.fy = K[4];
-  cam.cy = K[5];
-  cam.k1 = D[0];
-  cam.k2 = D[1];
-  cam.p1 = D[2];
-  cam.p2 = D[3];
-  if (D.size() >= 5 && D[4] != 0.0) {
-    err = std::string(path) + ": k3 != 0 is not supported by nav/vision's PinholeRadTan";
-    return false;
-  }
-  const Status v = vision::validate(cam);
-  if (!v) {
-    err = std::string(path) + ": " + v.message();
-    return false;
-  }
-  return true;
-}
-
 struct NavPose {
   bool valid = false;
   double x = 0.0, y = 0.0, yaw_deg = 0.0, t = std::nan("");
@@ -346,9 +280,13 @@ int run_map(int argc, char** argv) {
 
   vision::PinholeRadTan cam;
   const bool have_camera = camera_path != nullptr;
-  if (have_camera && !read_camera(camera_path, cam, err)) {
-    std::fprintf(stderr, "map: %s\n", err.c_str());
-    return 1;
+  if (have_camera) {
+    Result<vision::PinholeRadTan> c = tools::read_opencv_camera(camera_path);
+    if (!c) {
+      std::fprintf(stderr, "map: %s: %s\n", camera_path, c.status().message());
+      return 1;
+    }
+    cam = c.value();
   }
   if (altitude > 0.0 && !have_camera) {
     std::fprintf(stderr, "map: --altitude needs --camera (fx for metres per pixel)\n");
