@@ -423,6 +423,15 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "dvl.stale_s", [](auto& c) -> auto& { return c.dvl_stale_s; }, 0.05, 60.0, "s",
       "DVL velocity older than this is stale"));
+  // [leak]
+  t.push_back(string_key(
+      "leak.chip", [](auto& c) -> auto& { return c.leak_chip; }, "gpiochip name or \"\"", nullptr,
+      "GPIO chip of the leak detector's line (libgpiod, linux backend); \"\" = no leak detector"));
+  t.push_back(int_key(
+      "leak.line", [](auto& c) -> auto& { return c.leak_line; }, 0, 511, "", "Line offset of the leak detector on leak.chip"));
+  t.push_back(bool_key(
+      "leak.active_low", [](auto& c) -> auto& { return c.leak_active_low; },
+      "The detector pulls the line low when wet (false: high when wet)"));
   // [vo]
   t.push_back(bool_key(
       "vo.enabled", [](auto& c) -> auto& { return c.vo_enabled; },
@@ -671,7 +680,7 @@ const std::vector<KeySpec>& key_table() {
 }
 
 const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "vo", "route", "budget", "sim"};
+  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "leak", "vo", "route", "budget", "sim"};
   return names;
 }
 

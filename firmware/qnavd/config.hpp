@@ -111,6 +111,13 @@ struct DaemonConfig {
   std::size_t vo_frame_queue = 4;             // vo.frame_queue [2, 64] pairs, power of two
   double vo_stale_s = 2.0;                    // vo.stale_s [0.1, 60]: no pair for this long in Mode = Vo: camera lost
 
+  // [leak] the leak detector: a GPIO input line (linux backend, libgpiod). Latched: the first edge to
+  // the active level (or the level already active at start) sets HEALTH.Leak and FaultLeak until the
+  // daemon restarts. The sim backend has a simulated line (sim.fault = "leak").
+  std::string leak_chip;                      // leak.chip: gpiochip name or path; "" = no leak detector
+  int leak_line = 0;                          // leak.line [0, 511]
+  bool leak_active_low = false;               // leak.active_low: the detector pulls the line low when wet
+
   // [budget] per-stage time budgets on the host, microseconds (docs/budgets.md)
   std::uint32_t ping_budget_us = 2000;       // budget.ping_us [10, 1000000]
   std::uint32_t tile_budget_us = 50000;      // budget.tile_us [100, 10000000]: features + localiser update
@@ -151,7 +158,7 @@ struct DaemonConfig {
 inline constexpr const char* kSimFaultKinds[] = {
     "none",          "dvl_nan",          "dvl_time_back",      "dvl_duplicate",   "dvl_line_noise",
     "attitude_out_of_range", "attitude_duplicate", "can_error_frames", "can_bus_off",
-    "sonar_nan",     "sonar_bad_range",  "ping_time_back",     "disk_full"};
+    "sonar_nan",     "sonar_bad_range",  "ping_time_back",     "disk_full",       "leak"};
 
 // Where a configuration error is: key (dotted), line (0 if unknown) and a message with the allowed range.
 struct ConfigError {

@@ -4,12 +4,17 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 
+#include "drivers/camera/leak_monitor.hpp"
 #include "drivers/dvl/dvl_driver.hpp"
 #include "firmware/qnavd/deployment.hpp"
 #include "firmware/qnavd/linux_stereo.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
+#ifdef QNAV_HAVE_GPIOD
+#include "hal/linux/gpiod_line.hpp"
+#endif
 #include "hal/linux/log_ring.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/posix_file_store.hpp"
@@ -18,6 +23,7 @@
 #include "hal/linux/tcp_client_port.hpp"
 #include "hal/linux/termios_serial.hpp"
 #include "hal/sim/sim_can.hpp"
+#include "hal/sim/sim_gpio.hpp"
 #include "hal/sim/sim_serial.hpp"
 
 namespace qnav::daemon {
@@ -94,11 +100,26 @@ bool drain_dvl(drivers::dvl::DvlSerialDriver& dvl, SpscRing<drivers::dvl::DvlVel
   return did;
 }
 
+// The leak detector's line (either backend): a latched LeakMonitor. Returns true on a new leak.
+bool poll_leak(drivers::camera::LeakMonitor& leak, IoCounters& io) noexcept {
+  const Result<bool> r = leak.poll(0);
+  if (!r) {
+    io.device_errors.fetch_add(1, std::memory_order_relaxed);
+    io.leak_device_down.store(true);
+    return false;
+  }
+  io.leak_device_down.store(false);
+  io.leak_events.store(leak.leak_events(), std::memory_order_relaxed);
+  if (leak.fault()) io.leak.store(true);
+  return r.value();
+}
+
 // ---- sim: the simulated vehicle on in-process buses, mission time ----
 class SimBackend final : public IoBackend {
  public:
   SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
-      : net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q) {}
+      : net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
+        leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
   Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
     QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
     QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
@@ -106,6 +127,8 @@ class SimBackend final : public IoBackend {
     vehicle_.set_bus_observer(obs, ctx);
     vehicle_.set_fault_targets(&net_, store);
     vehicle_.set_frame_pool(frames);
+    vehicle_.set_leak_line(&leak_line_);
+    QNAV_RETURN_IF_ERROR(leak_.start());
     return vehicle_.init(vehicle_bus_, pipe_.a());
   }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
@@ -119,6 +142,7 @@ class SimBackend final : public IoBackend {
     }
     did |= drain_can(daemon_bus_, *q_.can_rx, io);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
+    did |= poll_leak(leak_, io);
     vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
     vehicle_.release_pair(io);
     return did;
@@ -138,6 +162,8 @@ class SimBackend final : public IoBackend {
   SimVehicle vehicle_;
   drivers::dvl::DvlSerialDriver dvl_;
   QueueRefs q_;
+  hal::SimGpioLine leak_line_;  // the simulated leak detector (sim.fault = "leak" wets it)
+  drivers::camera::LeakMonitor leak_;
   std::uint32_t dvl_rejects_ = 0;
   bool done_ = false;
 };
@@ -162,6 +188,8 @@ class LinuxBackend final : public IoBackend {
       return Status(StatusCode::kInvalidArgument, "sonar.address port must be a number in 1..65535");
     sonar_port_ = static_cast<std::uint16_t>(port);
     if (cfg_.vo_enabled) stereo_ = std::make_unique<LinuxStereoSource>(cfg_, q_.frames, log_);
+    // The leak detector is opened here and, when that fails, retried once a second like the other
+    // devices (leak_device_down, FaultSensorTimeout meanwhile).
     // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
     return open_can(true);
   }
@@ -171,6 +199,7 @@ class LinuxBackend final : public IoBackend {
       if (!can_.is_open() && open_can(false)) io.can_device_down.store(false);
       if (cfg_.dvl_enabled && !dvl_port_.is_open()) open_dvl();
       if (!sonar_.is_open()) open_sonar();
+      if (!cfg_.leak_chip.empty() && !leak_open_) open_leak(io);
       next_retry_ns_ = now + 1000000000;
     }
     bool did = false;
@@ -201,17 +230,61 @@ class LinuxBackend final : public IoBackend {
       }
     }
     if (stereo_) did |= stereo_->poll(now, io);
+#ifdef QNAV_HAVE_GPIOD
+    if (leak_open_) {
+      did |= poll_leak(*leak_, io);
+      if (io.leak_device_down.load()) close_leak();  // reopened within a second
+    }
+#endif
     return did;
   }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
     if (!can_.is_open() || !can_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
   }
   void wait(int timeout_ms) noexcept override {
-    const int fds[5] = {can_.fd(), dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1};
-    hal::wait_readable(fds, 5, timeout_ms);
+    int leak_fd = -1;
+#ifdef QNAV_HAVE_GPIOD
+    if (leak_open_) leak_fd = leak_line_.fd();
+#endif
+    const int fds[6] = {can_.fd(), dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1, leak_fd};
+    hal::wait_readable(fds, 6, timeout_ms);
   }
 
  private:
+  // The leak detector's line: both edges, the active level from leak.active_low; a level already
+  // active when it opens latches the leak at once.
+  void open_leak(IoCounters& io) noexcept {
+#ifdef QNAV_HAVE_GPIOD
+    hal::GpioLineConfig gc;
+    gc.chip = cfg_.leak_chip.c_str();
+    gc.offset = static_cast<unsigned>(cfg_.leak_line);
+    gc.active_low = cfg_.leak_active_low;
+    gc.consumer = "qnavd-leak";
+    Status s = leak_line_.open(gc, hal::GpioEdge::kBoth);
+    if (s) {
+      leak_.emplace(leak_line_, true);
+      s = leak_->start();
+      if (s && leak_->fault()) io.leak.store(true);
+    }
+    leak_open_ = s.is_ok();
+    if (!s) leak_line_.close();
+    const char* why = s ? "" : s.message();
+#else
+    const char* why = "this build has no libgpiod: the leak line cannot be read";
+#endif
+    io.leak_device_down.store(!leak_open_);
+    if (!leak_open_) io.device_errors.fetch_add(1, std::memory_order_relaxed);
+    if (!leak_open_ && log_ && !leak_warned_)
+      std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s line %d\",\"error\":\"%s\"}\n", cfg_.leak_chip.c_str(), cfg_.leak_line, why);
+    leak_warned_ = !leak_open_;
+  }
+#ifdef QNAV_HAVE_GPIOD
+  void close_leak() noexcept {
+    leak_.reset();
+    leak_line_.close();
+    leak_open_ = false;
+  }
+#endif
   Status open_can(bool report) noexcept {
     hal::SocketCanConfig sc;
     sc.interface = cfg_.can_interface.c_str();
@@ -300,6 +373,11 @@ class LinuxBackend final : public IoBackend {
   bool dvl_warned_ = false, sonar_warned_ = false;
   bool connect_started_ = false;  // the sonar's connect was in progress at the last retry
   std::unique_ptr<LinuxStereoSource> stereo_;  // vo.enabled: the V4L2 pair
+#ifdef QNAV_HAVE_GPIOD
+  hal::GpiodInputLine leak_line_;
+  std::optional<drivers::camera::LeakMonitor> leak_;
+#endif
+  bool leak_open_ = false, leak_warned_ = false;
 };
 
 template <typename T>

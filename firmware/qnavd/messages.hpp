@@ -69,6 +69,9 @@ struct IoCounters {
   std::atomic<std::uint32_t> frame_overflow{0};    // a pair arrived with no free slot / full queue: dropped
   std::atomic<std::uint32_t> camera_rejected{0};   // the stereo driver's rejections (corrupt, unpaired, timeouts)
   std::atomic<bool> camera_device_down{false};
+  std::atomic<bool> leak{false};                   // the leak detector latched (HEALTH.Leak, FaultLeak)
+  std::atomic<std::uint32_t> leak_events{0};       // edges to the active level the detector saw
+  std::atomic<bool> leak_device_down{false};       // leak.chip set and its line cannot be read
   std::atomic<bool> sonar_device_down{false};
   std::atomic<bool> can_device_down{false};
   std::atomic<bool> dvl_device_down{false};

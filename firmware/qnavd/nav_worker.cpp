@@ -617,6 +617,16 @@ void NavWorker::update_faults() noexcept {
   if (bus_off_ || q_.io->can_device_down.load(std::memory_order_relaxed)) f |= qc::fault::kBusOff;
   if (deadline_misses_ > 0) f |= qc::fault::kDeadlineMiss;
   if (SoftwareFaults::count() > 0) f |= qc::fault::kSoftware;
+  // The leak detector is latched by the io thread (drivers/camera LeakMonitor); a configured detector
+  // whose line cannot be read is a sensor that does not report.
+  const bool leak = q_.io->leak.load(std::memory_order_relaxed);
+  if (leak) f |= qc::fault::kLeak;
+  if (q_.io->leak_device_down.load(std::memory_order_relaxed)) f |= qc::fault::kSensorTimeout;
+  if (leak && !leak_logged_ && log_ && cfg_.log != LogFormat::kOff) {
+    std::fprintf(log_, "{\"event\":\"leak\",\"t_s\":%.3f,\"edges\":%u}\n", static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9,
+                 q_.io->leak_events.load(std::memory_order_relaxed));
+    leak_logged_ = true;
+  }
   faults_ = f;
   // Degraded repeat: without sonar or heading there is no fix; the autopilot is told to hold course.
   if (mode_ == qc::Mode::kRepeat && (sonar_lost || att_lost)) {
@@ -658,6 +668,7 @@ void NavWorker::publish() noexcept {
   h.deadline_misses = static_cast<std::uint16_t>(std::min<std::uint32_t>(deadline_misses_, 65535));
   h.cpu_load_pct = clampd(cpu_load_pct_, 0.0, 100.0);
   h.bus_off = bus_off_ || q_.io->can_device_down.load(std::memory_order_relaxed);
+  h.leak = (faults_ & qc::fault::kLeak) != 0;
   publisher_->set(h);
   qc::Heartbeat hb;
   hb.uptime_s = static_cast<std::uint32_t>(std::max<std::int64_t>(0, nav_now_ns_ - start_ns_) / kNsPerS);

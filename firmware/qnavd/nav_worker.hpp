@@ -231,6 +231,7 @@ class NavWorker {
   std::uint64_t can_frames_ = 0, dvl_samples_ = 0;
   std::uint32_t pings_out_of_order_ = 0;
   bool bus_off_ = false;
+  bool leak_logged_ = false;  // the `leak` event is logged once, when the detector latches
   bool teach_stopped_ = false;  // an append failed: this teach ends at its last durable node
   std::uint32_t stage_misses_[static_cast<int>(Stage::kCount)] = {};
   std::int64_t stage_max_ns_[static_cast<int>(Stage::kCount)] = {};

@@ -56,6 +56,14 @@ void SimVehicle::inject_bus_faults(std::int64_t t) noexcept {
     }
     bus_off_ = off;
   }
+  if (leak_line_ != nullptr && cfg_.sim_fault == "leak") {  // water at the detector for the window
+    const bool wet = faulty("leak", t);
+    if (wet != wet_) {
+      leak_line_->inject_level(wet, t);
+      if (wet) io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
+      wet_ = wet;
+    }
+  }
   if (store_ != nullptr && cfg_.sim_fault == "disk_full") {
     const bool full = faulty("disk_full", t);
     if (full && !store_->full()) io_->faults_injected.fetch_add(1, std::memory_order_relaxed);

@@ -43,6 +43,7 @@
 #include "hal/core/serial.hpp"
 #include "hal/sim/fault_file_store.hpp"
 #include "hal/sim/sim_can.hpp"
+#include "hal/sim/sim_gpio.hpp"
 #include "nav/core/spsc_ring.hpp"
 
 namespace qnav::daemon {
@@ -73,6 +74,8 @@ class SimVehicle {
   // Fault injection's reach: the CAN network (error frames) and the route store (a full disk).
   void set_fault_targets(hal::SimCanNetwork* net, hal::FaultFileStore* store) noexcept { net_ = net, store_ = store; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
+  // The leak detector's line (sim.fault = "leak" wets it for the fault's window).
+  void set_leak_line(hal::SimGpioLine* line) noexcept { leak_line_ = line; }
   // The stereo pairs' pool and queues (vo passes need them: vo.enabled).
   void set_frame_pool(const FramePool& frames) noexcept { frames_ = frames; }
   // A rendered pair is held back like a ping until its instant's attitude is queued.
@@ -158,6 +161,8 @@ class SimVehicle {
   void inject_bus_faults(std::int64_t t_ns) noexcept;
   hal::SimCanNetwork* net_ = nullptr;
   hal::FaultFileStore* store_ = nullptr;
+  hal::SimGpioLine* leak_line_ = nullptr;
+  bool wet_ = false;
   IoCounters* io_ = nullptr;       // for faults_injected (set by step())
   bool bus_off_ = false;           // can_bus_off: the bus is off; a restart frame follows the window
   std::uint32_t noise_seed_ = 12345;

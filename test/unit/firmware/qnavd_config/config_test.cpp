@@ -104,6 +104,9 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(tile_budget_us),
       QNAV_FIELD(mode_budget_us),
       QNAV_FIELD(vo_budget_us),
+      QNAV_FIELD(leak_chip),
+      QNAV_FIELD(leak_line),
+      QNAV_FIELD(leak_active_low),
       QNAV_FIELD(vo_enabled),
       QNAV_FIELD(vo_camera),
       QNAV_FIELD(vo_left_device),
@@ -390,6 +393,11 @@ device = "/dev/ttyS1"
 protocol = "pd6"
 baud = 9600
 stale_s = 0.5
+
+[leak]
+chip = "gpiochip3"
+line = 5
+active_low = true
 
 [vo]
 enabled = false
