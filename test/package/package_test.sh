@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# The .deb from cpack, checked the way a flight computer would take it:
+#   package_test.sh BUILD_DIR WORK_DIR VERSION DEB_ARCH
+# builds the package (cpack, the build's CPackConfig.cmake), unpacks it with dpkg-deb -x into a scratch
+# root, checks the file list, runs the unpacked qnavd (--version, --check-config on the packaged
+# configurations, and a refusal of a file that is no configuration), and checks the control fields
+# and the maintainer scripts. Exit 0 pass, 1 fail (every failure printed), 77 skip (no dpkg-deb).
+set -u
+BUILD=$1 WORK=$2 VERSION=$3 ARCH=$4
+command -v dpkg-deb >/dev/null || { echo "SKIP: no dpkg-deb on this machine"; exit 77; }
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+mark=0
+ok() { [ $fails -eq $mark ] && echo "ok: $*"; mark=$fails; }  # "ok" only when its section failed nothing
+
+rm -rf "$WORK" && mkdir -p "$WORK"
+if ! cpack --config "$BUILD/CPackConfig.cmake" -B "$WORK/out" >"$WORK/cpack.log" 2>&1; then
+  cat "$WORK/cpack.log"; echo "FAIL: cpack"; exit 1
+fi
+debs=("$WORK"/out/*.deb)
+[ ${#debs[@]} -eq 1 ] && [ -f "${debs[0]}" ] || { ls -l "$WORK/out"; echo "FAIL: expected one .deb"; exit 1; }
+deb=${debs[0]}
+[ "$(basename "$deb")" = "qnav_${VERSION}_${ARCH}.deb" ] || fail "file name $(basename "$deb"), expected qnav_${VERSION}_${ARCH}.deb"
+echo "package: $(basename "$deb"), $(stat -c %s "$deb") bytes"
+
+root=$WORK/root
+dpkg-deb -x "$deb" "$root" || { echo "FAIL: dpkg-deb -x"; exit 1; }
+dpkg-deb -e "$deb" "$WORK/control" || { echo "FAIL: dpkg-deb -e"; exit 1; }
+
+# The file list: everything the install promises, and nothing else at the top.
+for f in usr/bin/qnavd usr/bin/qnav; do
+  [ -f "$root/$f" ] && [ -x "$root/$f" ] || fail "$f missing or not executable"
+done
+for f in usr/lib/systemd/system/qnavd.service etc/qnav/qnavd.toml usr/share/qnav/examples/vehicle.toml \
+         usr/share/qnav/examples/sim.toml usr/share/qnav/qnav.dbc usr/share/man/man1/qnavd.1.gz \
+         usr/share/man/man1/qnav.1.gz usr/share/doc/qnav/qnavd.md usr/share/doc/qnav/install.md; do
+  [ -f "$root/$f" ] || fail "$f missing"
+done
+top=$(cd "$root" && ls -A | tr '\n' ' ')
+[ "$top" = "etc usr " ] || fail "top-level entries '$top', expected 'etc usr '"
+stray=$(cd "$root" && find . -name '*.a' -o -name '*.h' -o -name '*.hpp' -o -name '*.cmake' | head -5)
+[ -z "$stray" ] || fail "build or development files in the package: $stray"
+# The unit starts what the package holds.
+exec_path=$(sed -n 's/^ExecStart=\([^ ]*\).*/\1/p' "$root/usr/lib/systemd/system/qnavd.service")
+conf_path=$(sed -n 's/^ExecStart=.*--config \([^ ]*\).*/\1/p' "$root/usr/lib/systemd/system/qnavd.service")
+[ -n "$exec_path" ] && [ -x "$root$exec_path" ] || fail "the unit's ExecStart '$exec_path' is not in the package"
+[ -n "$conf_path" ] && [ -f "$root$conf_path" ] || fail "the unit's configuration '$conf_path' is not in the package"
+for m in qnavd qnav; do
+  page=$(gzip -dc "$root/usr/share/man/man1/$m.1.gz" 2>/dev/null) || fail "$m.1.gz is not gzip"
+  echo "$page" | grep -q "^\.TH ${m^^} 1" || fail "$m.1.gz has no .TH header"
+done
+gzip -dc "$root/usr/share/man/man1/qnavd.1.gz" | grep -q -- "--check-config" || fail "qnavd.1 lacks the --help text"
+ok "file list ($(cd "$root" && find . -type f | wc -l) files)"
+
+# The unpacked programs run.
+qnavd=$root/usr/bin/qnavd
+out=$("$qnavd" --version 2>&1); rc=$?
+[ $rc -eq 0 ] && [ "$out" = "qnavd $VERSION" ] || fail "qnavd --version: exit $rc, '$out' (expected 'qnavd $VERSION')"
+for c in usr/share/qnav/examples/sim.toml usr/share/qnav/examples/vehicle.toml etc/qnav/qnavd.toml; do
+  out=$("$qnavd" --check-config "$root/$c" 2>&1); rc=$?
+  [ $rc -eq 0 ] && [ "$out" = "$root/$c: valid" ] || fail "qnavd --check-config $c: exit $rc, '$out'"
+done
+out=$("$qnavd" --check-config "$root/usr/share/qnav/qnav.dbc" 2>&1); rc=$?
+[ $rc -ne 0 ] || fail "qnavd --check-config accepted qnav.dbc: '$out'"
+out=$("$root/usr/bin/qnav" version 2>&1); rc=$?
+[ $rc -eq 0 ] && echo "$out" | grep -q "$VERSION" || fail "qnav version: exit $rc, '$out'"
+ok "unpacked qnavd --version, --check-config on 3 configurations, refusal of a DBC; qnav version"
+
+# The control file and the maintainer scripts.
+field() { dpkg-deb -f "$deb" "$1"; }
+[ "$(field Package)" = qnav ] || fail "Package '$(field Package)'"
+[ "$(field Version)" = "$VERSION" ] || fail "Version '$(field Version)'"
+[ "$(field Architecture)" = "$ARCH" ] || fail "Architecture '$(field Architecture)', expected $ARCH"
+deps=$(field Depends)
+[ -n "$deps" ] || fail "Depends empty"
+for d in libc6 adduser; do echo "$deps" | grep -qw "$d" || fail "Depends lacks $d: '$deps'"; done
+for s in postinst prerm postrm; do
+  [ -f "$WORK/control/$s" ] && [ -x "$WORK/control/$s" ] || { fail "$s missing or not executable"; continue; }
+  sh -n "$WORK/control/$s" || fail "$s: sh -n"
+done
+sed 's/#.*//' "$WORK/control/postinst" | grep -Eq 'systemctl.*(enable|[[:space:]]start)|deb-systemd-invoke start' &&
+  fail "postinst enables or starts the service"
+grep -q 'adduser --system' "$WORK/control/postinst" || fail "postinst does not create the system user"
+grep -qx /etc/qnav/qnavd.toml "$WORK/control/conffiles" 2>/dev/null || fail "/etc/qnav/qnavd.toml is not a conffile"
+ok "control: Package $(field Package), Version $(field Version), Architecture $(field Architecture), Depends: $deps"
+
+[ $fails -eq 0 ] || { echo "qnav_package_deb: $fails failure(s)"; exit 1; }
+echo "qnav_package_deb: pass"
