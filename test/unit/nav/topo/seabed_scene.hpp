@@ -118,4 +118,19 @@ inline CameraPose path_pose(int k) {
   return p;
 }
 
+// A closed loop for the topological map: a circle of radius_m about the seabed centre, frames_per_lap
+// frames a lap, starting at angle 0 and going counter-clockwise in ground axes (X right, Y down);
+// the camera looks along its -y axis in the direction of travel (yaw = angle + pi), at a constant
+// altitude. Frame k and frame k + frames_per_lap see the same place from the same pose.
+inline CameraPose loop_pose(int k, int frames_per_lap, double radius_m = 0.8, double altitude_m = 2.0) {
+  const double kTwoPi = 6.283185307179586;
+  const double a = kTwoPi * k / frames_per_lap;
+  CameraPose p;
+  p.x_m = radius_m * std::cos(a);
+  p.y_m = radius_m * std::sin(a);
+  p.yaw_rad = a + 0.5 * kTwoPi;
+  p.altitude_m = altitude_m;
+  return p;
+}
+
 }  // namespace qnav::topo::test
