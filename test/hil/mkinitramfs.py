@@ -2,13 +2,18 @@
 """The bench's initramfs: busybox-static, the guest init and the kernel modules it loads.
 
   mkinitramfs.py --modules-root ROOT --kver KVER --busybox /bin/busybox --init test/hil/init \
-                 --out initramfs.cpio.gz MODULE...
+                 --out initramfs.cpio.gz [--ship MODULE]... [--extra-ko PATH.ko]... \
+                 [--file NAME=PATH]... MODULE...
 
 ROOT is the unpacked kernel package (`dpkg -x`): ROOT/lib/modules/KVER/kernel/**.ko. Each MODULE and
 every module it depends on (the `depends=` field of the module's own .modinfo section, as depmod reads
 it; the package has no modules.dep, depmod runs at install) is copied into the archive, and
-/modules.load lists them in load order (dependencies first). A module the kernel has built in
-(modules.builtin) is left out. Written as a newc cpio (what the kernel unpacks), gzip-compressed, every
+/modules.load lists them in load order (dependencies first), /modules.ship the ones only shipped. A module the kernel has built in
+(modules.builtin) is left out.
+--ship MODULE: the module is copied but not listed in /modules.load (a scenario loads it with its own
+parameters, e.g. vivid); its dependencies are loaded at boot. --extra-ko PATH: a module built out of
+tree (gpio-sim); its depends= are resolved in the package, and it is loaded after them. --file
+NAME=PATH: PATH's content as /NAME (e.g. the reason gpio-sim could not be built). Written as a newc cpio (what the kernel unpacks), gzip-compressed, every
 entry owned by root, so no cpio tool and no root are needed to build it.
 """
 import argparse
@@ -120,6 +125,9 @@ def main():
     ap.add_argument("--busybox", required=True)
     ap.add_argument("--init", required=True)
     ap.add_argument("--out", required=True)
+    ap.add_argument("--ship", action="append", default=[])
+    ap.add_argument("--extra-ko", action="append", default=[])
+    ap.add_argument("--file", action="append", default=[])
     ap.add_argument("modules", nargs="+")
     a = ap.parse_args()
 
@@ -127,7 +135,16 @@ def main():
     index = index_modules(moddir)
     if not index:
         sys.exit(f"mkinitramfs: no module below {moddir}/kernel")
-    order = load_order(a.modules, index, builtin_modules(moddir))
+    builtin = builtin_modules(moddir)
+    extra = {}
+    for path in a.extra_ko:
+        n = norm(os.path.basename(path)[:-3])
+        if n in index:
+            sys.exit(f"mkinitramfs: {path}: the package has a module of that name already")
+        extra[n] = path
+    index.update(extra)
+    order = load_order(a.modules + list(extra) + a.ship, index, builtin)
+    shipped_only = {norm(m) for m in a.ship} - set(load_order(a.modules + list(extra), index, builtin))
 
     c = Cpio()
     for d in ("bin", "dev", "proc", "sys", "host", "lib", "lib/modules"):
@@ -139,20 +156,26 @@ def main():
     c.symlink("bin/sh", "busybox")
     with open(a.init, "rb") as fh:
         c.file("init", fh.read(), 0o755)
-    load = []
+    load, ship = [], []
     for n in order:
         base = os.path.basename(index[n])
         with open(index[n], "rb") as fh:
             c.file("lib/modules/" + base, fh.read())
-        load.append(base)
+        (ship if n in shipped_only else load).append(base)
     c.file("modules.load", ("\n".join(load) + "\n").encode())
+    c.file("modules.ship", ("\n".join(ship) + "\n").encode())
+    for spec in a.file:
+        name, path = spec.split("=", 1)
+        with open(path, "rb") as fh:
+            c.file(name, fh.read())
     c.file("kver", (a.kver + "\n").encode())
 
     tmp = a.out + ".tmp"
     with open(tmp, "wb") as fh:
         fh.write(gzip.compress(c.bytes(), compresslevel=6, mtime=0))
     os.replace(tmp, a.out)
-    print(f"mkinitramfs: {a.out}: busybox + {len(load)} modules: {' '.join(load)}")
+    print(f"mkinitramfs: {a.out}: busybox + {len(load)} modules loaded at boot: {' '.join(load)}"
+          + (f"; shipped for the scenarios: {' '.join(ship)}" if ship else ""))
 
 
 if __name__ == "__main__":
