@@ -181,7 +181,10 @@ class TopoMap {
   // do not fit; the caller then clear()s.
   Status restore_node(std::uint16_t id, const TopoNode& node) noexcept;
   Status restore_edge(std::uint16_t a, std::uint16_t b, std::uint16_t age) noexcept;
-  void restore_progress(std::uint32_t observations) noexcept { observations_ = observations; }
+  void restore_progress(std::uint32_t observations, std::uint32_t revisits) noexcept {
+    observations_ = observations;
+    revisits_ = revisits;
+  }
 
   // Inspection.
   bool ready() const noexcept { return ready_; }
