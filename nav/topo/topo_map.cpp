@@ -140,10 +140,14 @@ std::size_t TopoMap::edge_count() const noexcept {
 }
 
 double TopoMap::centred_cosine(const float* a, const float* b) const noexcept {
+  // Until the background has seen min_background observations it is mostly the first nodes' own
+  // signatures (centring would leave noise): the plain cosine then.
+  const bool centre = background_n_ >= config_.min_background;
   double ab = 0.0, aa = 0.0, bb = 0.0;
   for (int i = 0; i < kSignatureBins; ++i) {
-    const double x = static_cast<double>(a[i]) - static_cast<double>(background_[i]);
-    const double y = static_cast<double>(b[i]) - static_cast<double>(background_[i]);
+    const double m = centre ? static_cast<double>(background_[i]) : 0.0;
+    const double x = static_cast<double>(a[i]) - m;
+    const double y = static_cast<double>(b[i]) - m;
     ab += x * y;
     aa += x * x;
     bb += y * y;

@@ -11,7 +11,9 @@
 // frame, is a real vector so the SOM update w += eps (x - w) applies to it directly, and is fixed
 // size (64 floats per node). Similarity = cosine of the two histograms after subtracting the map's
 // running mean histogram (the words every place has say nothing about which place it is: tf-idf in
-// its simplest form). It is a weak place descriptor on its own; the position gate carries the
+// its simplest form); before min_background observations the background is mostly the first nodes
+// themselves, so the plain cosine is used (no appearance refusal in practice). It is a weak place
+// descriptor on its own; the position gate carries the
 // geometry and the signature confirms (or refuses) the place.
 //
 // Per observation (signature, position, heading; position in metres when the chain is metric, else
@@ -83,6 +85,7 @@ struct TopoMapConfig {
   double gate = 0.3;              // candidates for the winner within this (>= node_spacing)
   double min_similarity = 0.0;    // centred cosine below this: not the same place
   double distance_weight = 1.0;   // winner score = similarity - distance_weight (d / gate)^2
+  std::uint32_t min_background = 30;  // observations before similarities are centred on the background
   double eps_winner = 0.05;       // SOM learning rate of the winner (signature, position, heading)
   double eps_neighbour = 0.005;   // ... of its edge neighbours
   std::uint32_t max_edge_age = 60;   // edges older than this (in arrivals at their node) are removed

@@ -35,9 +35,11 @@
 #include "firmware/qnav/args.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
+#include "firmware/tools/map_file.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "firmware/tools/text_file.hpp"
 #include "nav/topo/homography_chain.hpp"
+#include "nav/topo/topo_map.hpp"
 #include "nav/vision/rectify.hpp"
 
 namespace {
@@ -187,6 +189,83 @@ struct FrameRecord {
   double chain_cpu_ms = 0.0;  // the same in process CPU time (less sensitive to a loaded machine)
   NavPose nav;
   Vec2d aligned = Vec2d::Zero();  // chain position in the navigation frame (metres), when aligned
+  topo::ObserveResult place;      // the topological map's answer (kBadInput when not observed)
+  bool observed = false;
+  double map_ms = 0.0;            // signature + map update (in ms)
+};
+
+// The topological map beside the chain: the frame's place signature from the chain's keypoints, the
+// map updated with the chain's pose (metres when metric, else mosaic pixels), the map file rewritten
+// (durably) after each new node.
+struct MapBuilder {
+  topo::TopoMapConfig config;
+  topo::PlaceEncoder encoder;
+  topo::TopoMap map;
+  std::unique_ptr<ArenaStorage> arena;
+  const char* path = nullptr;  // --map-out
+  bool metric = false;
+  int saves = 0;
+  std::vector<double> save_ms;
+  Status status;  // the first save failure
+
+  Status init(double spacing, bool metric_units, std::size_t max_nodes) {
+    metric = metric_units;
+    config.max_nodes = max_nodes;
+    config.node_spacing = spacing;
+    config.gate = 1.5 * spacing;
+    config.max_edge_length = 3.0 * spacing;
+    arena = std::make_unique<ArenaStorage>(topo::TopoMap::arena_bytes(config));
+    encoder.init();
+    return map.init(config, *arena);
+  }
+  void observe(const topo::HomographyChain& chain, const topo::ChainStep& step, FrameRecord& r) {
+    if (step.status != topo::StepStatus::kOk) return;
+    const auto t0 = Clock::now();
+    topo::PlaceSignature sig;
+    encoder.encode(chain.current_keypoints(), sig);
+    const Vec2d p = metric ? step.pose.position_m : step.pose.position_px;
+    if (map.observe(sig, p, step.pose.heading_rad, r.place)) r.observed = true;
+    r.map_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  }
+  void save() {
+    const auto t0 = Clock::now();
+    const Status s = tools::save_map(path, map, metric);
+    save_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    ++saves;
+    if (!s && status) status = s;
+  }
+  int revisit_frames(const std::vector<FrameRecord>& rec) const {
+    int n = 0;
+    for (const FrameRecord& r : rec) n += r.observed && r.place.revisit ? 1 : 0;
+    return n;
+  }
+  bool write_csv(const std::string& dir, double mpp) const {
+    const std::string np = dir + "/map_nodes.csv", ep = dir + "/map_edges.csv";
+    FILE* f = std::fopen(np.c_str(), "w");
+    if (f == nullptr) return false;
+    std::fprintf(f, "id,x,y,units,x_px,y_px,heading_deg,created,last_seen,visits,revisits,edges\n");
+    for (std::uint16_t i = 0; i < map.capacity(); ++i) {
+      if (!map.active(i)) continue;
+      const topo::TopoNode& n = map.node(i);
+      const double to_px = metric && mpp > 0.0 ? 1.0 / mpp : 1.0;
+      std::fprintf(f, "%u,%.4f,%.4f,%s,%.3f,%.3f,%.3f,%u,%u,%u,%u,%u\n", i, n.position.x(), n.position.y(), metric ? "m" : "px",
+                   n.position.x() * to_px, n.position.y() * to_px, rad_to_deg(n.heading_rad), n.created, n.last_seen, n.visits,
+                   n.revisits, n.edge_count);
+    }
+    bool ok = std::fflush(f) == 0;
+    std::fclose(f);
+    f = std::fopen(ep.c_str(), "w");
+    if (f == nullptr) return false;
+    std::fprintf(f, "a,b,age,length\n");
+    for (std::uint16_t i = 0; i < map.capacity(); ++i) {
+      if (!map.active(i)) continue;
+      for (const topo::TopoEdge& e : map.edges(i))
+        if (e.to > i) std::fprintf(f, "%u,%u,%u,%.4f\n", i, e.to, e.age, (map.node(e.to).position - map.node(i).position).norm());
+    }
+    ok = std::fflush(f) == 0 && ok;
+    std::fclose(f);
+    return ok;
+  }
 };
 
 // Least-squares 2D rotation + scale (+ optional reflection) about the start, mapping chain positions
@@ -243,11 +322,79 @@ std::string source_root() {
 int usage() {
   std::fprintf(stderr,
                "usage: qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]\n"
-               "                [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]\n");
+               "                [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]\n"
+               "                [--map-out FILE] [--node-spacing D] [--max-nodes N]\n"
+               "       qnav map route --map FILE --from A --to B [--astar] [--json]\n");
   return 2;
 }
 
+// qnav map route --map FILE --from A --to B [--astar] [--json]: the shortest path over the map's
+// edges (Dijkstra, or A* with the Euclidean heuristic), node ids and cost.
+int run_route(int argc, char** argv) {
+  const char* path = cli::option(argc, argv, "--map");
+  long from = -1, to = -1;
+  if (path == nullptr || !cli::option_long(argc, argv, "--from", from) || !cli::option_long(argc, argv, "--to", to) ||
+      cli::option(argc, argv, "--from") == nullptr || cli::option(argc, argv, "--to") == nullptr) {
+    std::fprintf(stderr, "usage: qnav map route --map FILE --from A --to B [--astar] [--json]\n");
+    return 2;
+  }
+  const bool astar = cli::flag(argc, argv, "--astar");
+  const bool json = cli::flag(argc, argv, "--json");
+  topo::MapHeader h;
+  Status s = tools::read_map_header(path, h);
+  if (!s) {
+    std::fprintf(stderr, "map route: %s: refused: %s (%s)\n", path, s.message(), to_string(s.code()));
+    return 1;
+  }
+  topo::TopoMapConfig c;
+  c.max_nodes = std::max<std::size_t>(h.capacity, 2);
+  c.max_edges_per_node = h.max_edges_per_node;
+  c.node_spacing = h.node_spacing;
+  c.gate = 1.5 * h.node_spacing;
+  c.max_edge_length = 3.0 * h.node_spacing;
+  ArenaStorage arena(topo::TopoMap::arena_bytes(c));
+  topo::TopoMap map;
+  s = map.init(c, arena);
+  if (s) s = tools::load_map(path, map, nullptr);
+  if (!s) {
+    std::fprintf(stderr, "map route: %s: refused: %s (%s)\n", path, s.message(), to_string(s.code()));
+    return 1;
+  }
+  if (from < 0 || to < 0 || from >= static_cast<long>(map.capacity()) || to >= static_cast<long>(map.capacity()) ||
+      !map.active(static_cast<std::uint16_t>(from)) || !map.active(static_cast<std::uint16_t>(to))) {
+    std::fprintf(stderr, "map route: node %ld or %ld is not in the map (%zu nodes, ids < %zu)\n", from, to, map.node_count(),
+                 map.capacity());
+    return 1;
+  }
+  std::vector<std::uint16_t> nodes(map.capacity());
+  const Span<std::uint16_t> out(nodes.data(), nodes.size());
+  const auto a = static_cast<std::uint16_t>(from), b = static_cast<std::uint16_t>(to);
+  const auto t0 = Clock::now();
+  const topo::PathResult r = astar ? map.astar(a, b, out) : map.dijkstra(a, b, out);
+  const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  const char* units = h.metric ? "m" : "px";
+  if (json) {
+    std::printf("{\"algorithm\": \"%s\", \"status\": \"%s\", \"from\": %ld, \"to\": %ld, \"cost\": %.6f, \"units\": \"%s\", "
+                "\"expansions\": %zu, \"ms\": %.4f, \"path\": [",
+                astar ? "astar" : "dijkstra", topo::to_string(r.status), from, to, r.cost, units, r.expansions, ms);
+    for (std::size_t i = 0; r.status == topo::PathStatus::kFound && i < r.length; ++i) std::printf(i ? ", %u" : "%u", nodes[i]);
+    std::printf("]}\n");
+  } else {
+    std::printf("map %s: %zu nodes, %zu edges (%s)\n", path, map.node_count(), map.edge_count(), units);
+    if (r.status == topo::PathStatus::kFound) {
+      std::printf("path %ld -> %ld (%s): ", from, to, astar ? "A*" : "Dijkstra");
+      for (std::size_t i = 0; i < r.length; ++i) std::printf(i ? " %u" : "%u", nodes[i]);
+      std::printf("\ncost %.4f %s, %zu nodes, %zu expansions, %.3f ms\n", r.cost, units, r.length, r.expansions, ms);
+    } else {
+      std::printf("no path %ld -> %ld (%s): %s after %zu expansions\n", from, to, astar ? "A*" : "Dijkstra", topo::to_string(r.status),
+                  r.expansions);
+    }
+  }
+  return r.status == topo::PathStatus::kFound ? 0 : 1;
+}
+
 int run_map(int argc, char** argv) {
+  if (argc > 1 && std::strcmp(argv[1], "route") == 0) return run_route(argc - 1, argv + 1);
   if (cli::flag(argc, argv, "--help") || cli::flag(argc, argv, "-h")) {
     usage();
     return 0;
@@ -333,6 +480,28 @@ int run_map(int argc, char** argv) {
     std::fprintf(stderr, "map: chain init: %s\n", s.message());
     return 1;
   }
+  // The topological map (when --map-out or --node-spacing is given).
+  const char* map_out = cli::option(argc, argv, "--map-out");
+  const bool metric = altitude > 0.0 && have_camera;
+  double spacing = metric ? 0.2 : 30.0;
+  long max_nodes = 1024;
+  if (!cli::option_double(argc, argv, "--node-spacing", spacing) || !(spacing > 0.0) || !std::isfinite(spacing) ||
+      !cli::option_long(argc, argv, "--max-nodes", max_nodes) || max_nodes < 2 || max_nodes > 65534) {
+    std::fprintf(stderr, "map: --node-spacing wants a positive number (%s), --max-nodes an integer 2..65534\n",
+                 metric ? "metres" : "mosaic pixels: no --altitude");
+    return 2;
+  }
+  const bool mapping = map_out != nullptr || cli::option(argc, argv, "--node-spacing") != nullptr;
+  if (out_dir != nullptr) mkdir(out_dir, 0755);  // the map file may live there and is written from the first node
+  MapBuilder builder;
+  if (mapping) {
+    s = builder.init(spacing, metric, static_cast<std::size_t>(max_nodes));
+    if (!s) {
+      std::fprintf(stderr, "map: topological map init: %s\n", s.message());
+      return 1;
+    }
+    builder.path = map_out;
+  }
   vision::RemapTable remap;
   Result<ImageU8> rectified = ImageU8::allocate(W, H);
   if (have_camera && undistort) {
@@ -372,12 +541,14 @@ int run_map(int argc, char** argv) {
       s = chain.process(img->view(), altitude, r.step);
       r.chain_cpu_ms = cpu_ms() - c1;
     }
+    if (s && mapping) builder.observe(chain, r.step, r);
     r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    if (r.chain_ms == 0.0) r.chain_ms = r.ms;
+    if (r.chain_ms == 0.0) r.chain_ms = r.ms - r.map_ms;
     if (!s) {
       std::fprintf(stderr, "map: %s: %s\n", files[i].c_str(), s.message());
       return 1;
     }
+    if (mapping && builder.path != nullptr && r.place.kind == topo::ObserveKind::kCreated) builder.save();  // not timed in ms
     rec.push_back(r);
   }
 
@@ -462,7 +633,8 @@ int run_map(int argc, char** argv) {
       return 1;
     }
     std::fprintf(f, "frame,file,status,new_keyframe,keyframe,keypoints,matches,f_inliers,inliers,rms_px,overlap,x_px,y_px,"
-                    "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms,chain_ms\n");
+                    "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms,chain_ms,"
+                    "map_node,map_kind,map_revisit,map_similarity\n");
     for (std::size_t i = 0; i < n; ++i) {
       const topo::ChainStep& st = rec[i].step;
       const bool ok = st.status == topo::StepStatus::kOk;
@@ -475,12 +647,22 @@ int run_map(int argc, char** argv) {
       else std::fprintf(f, ",,");
       if (rec[i].nav.valid) std::fprintf(f, "%.4f,%.4f,%.4f,%d,", rec[i].nav.x, rec[i].nav.y, rec[i].nav.yaw_deg, rec[i].nav.interpolated ? 1 : 0);
       else std::fprintf(f, ",,,,");
-      std::fprintf(f, "%.3f,%.3f\n", rec[i].ms, rec[i].chain_ms);
+      std::fprintf(f, "%.3f,%.3f,", rec[i].ms, rec[i].chain_ms);
+      if (rec[i].observed) {
+        std::fprintf(f, "%d,%s,%d,%.4f\n", rec[i].place.node == topo::kNoNode ? -1 : static_cast<int>(rec[i].place.node),
+                     topo::to_string(rec[i].place.kind), rec[i].place.revisit ? 1 : 0, rec[i].place.similarity);
+      } else {
+        std::fprintf(f, ",,,\n");
+      }
     }
     const bool write_ok = std::fflush(f) == 0;
     std::fclose(f);
     if (!write_ok) {
       std::fprintf(stderr, "map: writing %s failed\n", csv_path.c_str());
+      return 1;
+    }
+    if (mapping && !builder.write_csv(out_dir, mpp)) {
+      std::fprintf(stderr, "map: writing %s/map_nodes.csv or map_edges.csv failed\n", out_dir);
       return 1;
     }
     const std::string script = source_root() + "/scripts/map_plot.py";
@@ -501,8 +683,31 @@ int run_map(int argc, char** argv) {
 
   const int pairs = static_cast<int>(n) - 1;
   auto num = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("null"); };
+  // The map as it ends (adapted since the last new node), and its figures.
+  if (mapping && builder.path != nullptr) builder.save();
+  if (mapping && !builder.status) {
+    std::fprintf(stderr, "map: writing the map file %s: %s\n", map_out, builder.status.message());
+    return 1;
+  }
+  std::vector<double> map_ms;
+  for (const FrameRecord& r : rec)
+    if (r.observed) map_ms.push_back(r.map_ms);
+  std::string map_json = "\"map\": null, ";
+  if (mapping) {
+    const topo::TopoCounters& c = builder.map.counters();
+    char buf[1024];
+    std::snprintf(buf, sizeof buf,
+                  "\"map\": {\"nodes\": %zu, \"edges\": %zu, \"units\": \"%s\", \"node_spacing\": %g, \"revisits\": %u, "
+                  "\"revisit_frames\": %d, \"mismatch\": %u, \"full\": %u, \"pruned\": %u, \"edges_aged\": %u, \"edge_too_long\": %u, "
+                  "\"map_ms_median\": %s, \"file\": \"%s\", \"saves\": %d, \"save_ms_median\": %s}, ",
+                  builder.map.node_count(), builder.map.edge_count(), metric ? "m" : "px", spacing, builder.map.revisits(),
+                  builder.revisit_frames(rec), c.get(topo::TopoCounter::kMismatch), c.get(topo::TopoCounter::kNodeCapacity),
+                  c.get(topo::TopoCounter::kNodesPruned), c.get(topo::TopoCounter::kEdgesAged), c.get(topo::TopoCounter::kEdgeTooLong),
+                  num(median(map_ms)).c_str(), map_out ? map_out : "", builder.saves, num(median(builder.save_ms)).c_str());
+    map_json = buf;
+  }
   if (json) {
-    std::printf("{\"frames\": %zu, \"pairs_registered\": %d, \"pairs_total\": %d, \"keyframes\": %u, "
+    std::printf("{%s\"frames\": %zu, \"pairs_registered\": %d, \"pairs_total\": %d, \"keyframes\": %u, "
                 "\"keypoints_median\": %s, \"inliers_median\": %s, \"inliers_min\": %s, "
                 "\"yaw_chain_deg\": %s, \"yaw_nav_deg\": %s, \"yaw_error_deg\": %s, "
                 "\"span_first\": %d, \"span_last\": %d, \"yaw_span_chain_deg\": %s, \"yaw_span_nav_deg\": %s, "
@@ -511,7 +716,7 @@ int run_map(int argc, char** argv) {
                 "\"align_scale_m_per_px\": %s, \"align_rotation_deg\": %s, \"align_mirrored\": %s, \"align_rms_m\": %s, "
                 "\"implied_altitude_m\": %s, \"frame_ms_median\": %s, \"frame_ms_max\": %s, \"chain_ms_median\": %s, \"chain_cpu_ms_median\": %s, \"undistorted\": %s, "
                 "\"fundamental_filter\": %s, \"csv\": \"%s\", \"png\": \"%s\"}\n",
-                n, registered, pairs, chain.keyframes(), num(median(keypoints)).c_str(), num(median(inliers)).c_str(),
+                map_json.c_str(), n, registered, pairs, chain.keyframes(), num(median(keypoints)).c_str(), num(median(inliers)).c_str(),
                 num(inliers.empty() ? std::nan("") : *std::min_element(inliers.begin(), inliers.end())).c_str(),
                 num(rot_chain).c_str(), num(rot_nav).c_str(), num(rot_chain - rot_nav).c_str(),
                 span_a < n ? static_cast<int>(span_a) : -1, span_b < n ? static_cast<int>(span_b) : -1, num(span_chain).c_str(),
@@ -549,6 +754,15 @@ int run_map(int argc, char** argv) {
     }
     std::printf("frame time            median %.2f ms, max %.2f ms (undistortion + chain); chain alone median %.2f ms (CPU %.2f ms)\n",
                 median(ms), *std::max_element(ms.begin(), ms.end()), median(chain_ms), median(chain_cpu));
+    if (mapping) {
+      const topo::TopoCounters& c = builder.map.counters();
+      std::printf("topological map       %zu nodes, %zu edges (node spacing %g %s); revisits %u; refused: appearance mismatch %u, "
+                  "map full %u; pruned %u\n",
+                  builder.map.node_count(), builder.map.edge_count(), spacing, metric ? "m" : "px", builder.map.revisits(),
+                  c.get(topo::TopoCounter::kMismatch), c.get(topo::TopoCounter::kNodeCapacity), c.get(topo::TopoCounter::kNodesPruned));
+      std::printf("map update            median %.3f ms per frame (signature + map); file %s rewritten %d times, median %.2f ms\n",
+                  median(map_ms), map_out ? map_out : "(none)", builder.saves, median(builder.save_ms));
+    }
     if (!csv_path.empty()) std::printf("wrote %s%s%s\n", csv_path.c_str(), png_path.empty() ? "" : ", ", png_path.c_str());
   }
   return registered == pairs ? 0 : 1;
