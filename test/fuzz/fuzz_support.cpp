@@ -1,4 +1,5 @@
 #include "test/fuzz/fuzz_support.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 #include <dirent.h>
 #include <sys/stat.h>
@@ -105,7 +106,7 @@ std::vector<std::string> list_files(const std::string& dir) {
   return out;
 }
 
-std::string shared_dir() { return QNAV_SHARED_DIR; }
+std::string shared_dir() { return tools::shared_dir(); }
 std::string source_dir() { return QNAV_SOURCE_DIR; }
 
 }  // namespace qnav::fuzz

@@ -23,6 +23,7 @@
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/sequence_reader.hpp"
+#include "firmware/tools/shared_dir.hpp"
 #include "firmware/tools/stereo_eval.hpp"
 #include "nav/vision/degrade.hpp"
 #include "nav/vision/harris.hpp"
@@ -157,11 +158,19 @@ int cmd_disparity(int argc, char** argv) {
   return 0;
 }
 
+// A default input under the sample data failed to load: say where the data was looked for (1).
+int missing_sample_data(bool used_default) {
+  const std::string why = used_default ? tools::shared_dir_missing() : std::string();
+  if (!why.empty()) std::fprintf(stderr, "qnav stereo: %s\n", why.c_str());
+  return 1;
+}
+
 int cmd_aloe(int argc, char** argv) {
-  const std::string dir = cli::option(argc, argv, "--dir", QNAV_SHARED_DIR "/data/stereo/middlebury_aloe_opencv");
+  const std::string fallback = tools::shared_dir() + "/data/stereo/middlebury_aloe_opencv";
+  const std::string dir = cli::option(argc, argv, "--dir", fallback.c_str());
   ImageU8 l, r, gt;
   if (!load((dir + "/aloeL.jpg").c_str(), l) || !load((dir + "/aloeR.jpg").c_str(), r) || !load((dir + "/aloeGT.png").c_str(), gt))
-    return 1;
+    return missing_sample_data(dir == fallback);
   Detector d(l.width(), l.height(), 1000);
   StereoMatcher m;
   std::vector<StereoPoint> pts;
@@ -190,7 +199,7 @@ std::vector<double> row_offsets(const ImageU8& L, const ImageU8& R) {
 
 int cmd_euroc_rectify(int argc, char** argv) {
   const char* dp = cli::positional(argc, argv, 2, 0, kValued);
-  const std::string dir = dp ? dp : QNAV_SHARED_DIR "/data/stereo/euroc_v1_01_hover40";
+  const std::string dir = dp ? dp : tools::shared_dir() + "/data/stereo/euroc_v1_01_hover40";
   Result<tools::EurocCamera> c0 = tools::read_euroc_camera(dir + "/cam0/sensor.yaml");
   Result<tools::EurocCamera> c1 = tools::read_euroc_camera(dir + "/cam1/sensor.yaml");
   std::vector<tools::StereoFrame> frames;
@@ -198,7 +207,7 @@ int cmd_euroc_rectify(int argc, char** argv) {
   if (!c0.is_ok() || !c1.is_ok() || !fs.is_ok()) {
     std::fprintf(stderr, "qnav stereo: %s: %s\n", dir.c_str(),
                  !c0.is_ok() ? c0.status().message() : (!c1.is_ok() ? c1.status().message() : fs.message()));
-    return 1;
+    return missing_sample_data(dp == nullptr);
   }
   ImageU8 rl, rr;
   if (!load(frames[0].left_path.c_str(), rl) || !load(frames[0].right_path.c_str(), rr)) return 1;

@@ -18,6 +18,7 @@
 #include "nav/vision/harris.hpp"
 #include "nav/vision/rectify.hpp"
 #include "nav/vision/stereo.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 #ifdef QNAV_HAVE_OPENCV
 #include <opencv2/calib3d.hpp>
@@ -31,7 +32,7 @@ namespace {
 using namespace qnav;
 using namespace qnav::vision;
 
-const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+const std::string kStereo = qnav::tools::shared_dir() + "/data/stereo/";
 
 struct Pair {
   ImageU8 left, right;

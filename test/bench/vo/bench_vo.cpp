@@ -3,6 +3,7 @@
 // stereo + matching + 3D/6D-VME + IRLS + ICP. Also the geometric matcher alone on the same landmarks.
 #include <benchmark/benchmark.h>
 #include "firmware/pipeline/vo_defaults.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 #include <memory>
 #include <string>
@@ -93,7 +94,7 @@ BENCHMARK_CAPTURE(BM_VoStep, 3D_fb, vo::VmeMode::k3D, match::MatchScoreKind::kBi
 // One KITTI step (1242x375, 400 corners, 6D-VME, the `qnav vo --kitti` configuration) on frames 10 -> 11
 // of the shared city sequence; skipped when the data is absent.
 void BM_KittiStep(benchmark::State& state) {
-  const std::string dir = std::string(QNAV_SHARED_DIR) + "/data/stereo/kitti_raw_2011_09_26_0013_city100/";
+  const std::string dir = qnav::tools::shared_dir() + "/data/stereo/kitti_raw_2011_09_26_0013_city100/";
   Result<ImageU8> l0 = tools::read_image_gray8((dir + "left/0000000010.png").c_str());
   Result<ImageU8> r0 = tools::read_image_gray8((dir + "right/0000000010.png").c_str());
   Result<ImageU8> l1 = tools::read_image_gray8((dir + "left/0000000011.png").c_str());

@@ -12,12 +12,13 @@
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
 #include "nav/sonar/tile_builder.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 namespace qnav::sidescan {
 namespace {
 
 TEST(RealIver2, WreckIsVisibleInTheNorthUpTile) {
-  const std::string path = std::string(QNAV_SHARED_DIR) + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
+  const std::string path = qnav::tools::shared_dir() + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
   FileSource src;
   if (!src.open(path.c_str())) GTEST_SKIP() << "missing " << path;
   XtfReader reader;

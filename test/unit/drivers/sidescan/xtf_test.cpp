@@ -14,6 +14,7 @@
 #include "drivers/sidescan/xtf_writer.hpp"
 #include "nav/core/byte_order.hpp"
 #include "test/support/alloc_guard.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 namespace qnav::sidescan {
 namespace {
@@ -365,7 +366,7 @@ std::vector<std::uint8_t> load(const std::string& path) {
 }
 
 TEST(XtfRealData, ScotsmanIver2AllPingsWithNavigation) {
-  const std::string path = std::string(QNAV_SHARED_DIR) + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
+  const std::string path = qnav::tools::shared_dir() + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
   const std::vector<std::uint8_t> f = load(path);
   if (f.empty()) GTEST_SKIP() << "missing " << path;
   ASSERT_EQ(f.size(), 2066304u);
@@ -410,7 +411,7 @@ TEST(XtfRealData, ScotsmanIver2AllPingsWithNavigation) {
 }
 
 TEST(XtfRealData, ScotsmanSampleValues) {
-  const std::string path = std::string(QNAV_SHARED_DIR) + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
+  const std::string path = qnav::tools::shared_dir() + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
   const std::vector<std::uint8_t> f = load(path);
   if (f.empty()) GTEST_SKIP() << "missing " << path;
   const Result<XtfFileHeader> h = parse_xtf_file_header(Span<const std::uint8_t>(f.data(), f.size()));
@@ -431,7 +432,7 @@ TEST(XtfRealData, ScotsmanSampleValues) {
 }
 
 TEST(XtfRealData, MultibeamFileIsReadToTheEndWithPacketsSkipped) {
-  const std::string path = std::string(QNAV_SHARED_DIR) + "/data/sidescan/cidco-r2sonic-multibeam-xtf/0009-150708_R2Testing-0001.xtf";
+  const std::string path = qnav::tools::shared_dir() + "/data/sidescan/cidco-r2sonic-multibeam-xtf/0009-150708_R2Testing-0001.xtf";
   const std::vector<std::uint8_t> f = load(path);
   if (f.empty()) GTEST_SKIP() << "missing " << path;
   XtfReader reader = make_reader();

@@ -1,4 +1,5 @@
 #include "firmware/tools/image_reader.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -87,7 +88,7 @@ TEST(ImageReader, BadFilesGiveClearErrors) {
 }
 
 TEST(ImageReader, ReadsTheRealJpegAndPngSamples) {
-  const std::string base = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+  const std::string base = qnav::tools::shared_dir() + "/data/stereo/";
   Result<ImageU8> aloe = read_image_gray8((base + "middlebury_aloe_opencv/aloeL.jpg").c_str());
   if (!aloe.is_ok() && aloe.status() == StatusCode::kIoError) GTEST_SKIP() << "sample data missing: " << base;
   ASSERT_TRUE(aloe.is_ok()) << aloe.status().message();
@@ -108,7 +109,7 @@ TEST(ImageReader, ReadsTheRealJpegAndPngSamples) {
 // Regression (issue #19): a JPEG cut short was decoded with its missing part grey and no error.
 // Every cut of the real JPEG (and of the real PNG) is refused as corrupt or truncated.
 TEST(ImageReader, TruncatedRealImagesAreRefusedNotGreyFilled) {
-  const std::string base = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+  const std::string base = qnav::tools::shared_dir() + "/data/stereo/";
   for (const char* name : {"middlebury_aloe_opencv/aloeL.jpg", "kitti_raw_2011_09_26_0013_city100/left/0000000000.png"}) {
     std::FILE* f = std::fopen((base + name).c_str(), "rb");
     if (f == nullptr) GTEST_SKIP() << "sample data missing: " << base;

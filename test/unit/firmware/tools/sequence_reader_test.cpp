@@ -1,4 +1,5 @@
 #include "firmware/tools/sequence_reader.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +11,7 @@
 namespace qnav::tools {
 namespace {
 
-const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+const std::string kStereo = qnav::tools::shared_dir() + "/data/stereo/";
 
 std::string write_tmp(const char* name, const std::string& text) {
   const std::string p = ::testing::TempDir() + "/qnav_seq_" + name;

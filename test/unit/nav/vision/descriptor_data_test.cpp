@@ -13,11 +13,12 @@
 #include "nav/vision/downsample.hpp"
 #include "nav/vision/harris.hpp"
 #include "test_images.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 namespace qnav::vision {
 namespace {
 
-const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+const std::string kStereo = qnav::tools::shared_dir() + "/data/stereo/";
 
 // Corners of each pyramid level with descriptors at sample scale `base` on that level; positions
 // and scales in level-0 pixels.

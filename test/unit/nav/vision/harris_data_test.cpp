@@ -11,11 +11,12 @@
 #include "nav/vision/downsample.hpp"
 #include "nav/vision/harris.hpp"
 #include "test_images.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 namespace qnav::vision {
 namespace {
 
-const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+const std::string kStereo = qnav::tools::shared_dir() + "/data/stereo/";
 
 // Fraction of corners of `a` that, mapped by the same transform, have a corner of `b` within tol px.
 double repeatability(ConstImageViewU8 img, double angle, double scale, double noise, int cap, double tol) {

@@ -1,4 +1,5 @@
-// Real-data checks of the vision front end (host only: reads the sample images in QNAV_SHARED_DIR).
+// Real-data checks of the vision front end (host only: reads the sample images under
+// qnav::tools::shared_dir(): $QNAV_SHARED_DIR, else the build's ../shared).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,11 +14,12 @@
 #include "nav/vision/harris.hpp"
 #include "nav/vision/rectify.hpp"
 #include "nav/vision/stereo.hpp"
+#include "firmware/tools/shared_dir.hpp"
 
 namespace qnav::vision {
 namespace {
 
-const std::string kStereo = std::string(QNAV_SHARED_DIR) + "/data/stereo/";
+const std::string kStereo = qnav::tools::shared_dir() + "/data/stereo/";
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return std::nan("");
