@@ -40,7 +40,11 @@
 #include "firmware/tools/text_file.hpp"
 #include "nav/topo/homography_chain.hpp"
 #include "nav/topo/topo_map.hpp"
+#include "nav/vision/degrade.hpp"
 #include "nav/vision/rectify.hpp"
+// The synthetic seabed and its downward camera (header-only, deterministic on every target): the same
+// sequence the nav/topo tests use, for `qnav map eval`.
+#include "test/unit/nav/topo/seabed_scene.hpp"
 
 namespace {
 
@@ -324,7 +328,8 @@ int usage() {
                "usage: qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]\n"
                "                [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]\n"
                "                [--map-out FILE] [--node-spacing D] [--max-nodes N]\n"
-               "       qnav map route --map FILE --from A --to B [--astar] [--json]\n");
+               "       qnav map route --map FILE --from A --to B [--astar] [--json]\n"
+               "       qnav map eval [--json] [--laps L] [--frames-per-lap N] [--map-out FILE] [--out DIR]\n");
   return 2;
 }
 
@@ -393,8 +398,154 @@ int run_route(int argc, char** argv) {
   return r.status == topo::PathStatus::kFound ? 0 : 1;
 }
 
+// qnav map eval [--json] [--laps L] [--frames-per-lap N] [--map-out FILE] [--out DIR]: the synthetic
+// loop of the nav/topo tests (seabed_scene.hpp: radius 0.8 m, 320x240, f 300 px, 2 m altitude) run
+// through the chain and the topological map without degradation and under each of the paper's five
+// Table-1 filters (vision::table1_filter, seeded per frame). Per run: trajectory error (max and final,
+// % of path), pairs registered, keypoints / inliers, map nodes, revisits recognised (second-pass
+// frames matched to a first-lap node within the gate of the true position), frame time (chain +
+// signature + map; rendering and degradation not counted).
+int run_eval(int argc, char** argv) {
+  const bool json = cli::flag(argc, argv, "--json");
+  double laps = 1.35;
+  long per_lap = 90;
+  if (!cli::option_double(argc, argv, "--laps", laps) || !(laps >= 1.05 && laps <= 5.0) ||
+      !cli::option_long(argc, argv, "--frames-per-lap", per_lap) || per_lap < 40 || per_lap > 1000) {
+    std::fprintf(stderr, "usage: qnav map eval [--json] [--laps 1.05..5] [--frames-per-lap 40..1000] [--map-out FILE] [--out DIR]\n");
+    return 2;
+  }
+  const char* map_out = cli::option(argc, argv, "--map-out");
+  const char* out_dir = cli::option(argc, argv, "--out");
+  const int frames = static_cast<int>(std::lround(laps * static_cast<double>(per_lap)));
+  const int lap = static_cast<int>(per_lap);
+  const double radius = 0.8, altitude = 2.0, spacing = 0.2;
+  const topo::test::Seabed seabed;
+  const topo::test::Camera cam;
+  const topo::test::CameraPose p0 = topo::test::loop_pose(0, lap, radius, altitude);
+  auto truth = [&](int k) {
+    const topo::test::CameraPose pk = topo::test::loop_pose(k, lap, radius, altitude);
+    const double c = std::cos(p0.yaw_rad), sn = std::sin(p0.yaw_rad);
+    const Vec2d d(pk.x_m - p0.x_m, pk.y_m - p0.y_m);
+    return Vec2d(c * d.x() + sn * d.y(), -sn * d.x() + c * d.y());
+  };
+  const double path_m = 2.0 * 3.14159265358979323846 * radius * frames / lap;
+  Result<ImageU8> clean = ImageU8::allocate(cam.width, cam.height);
+  Result<ImageU8> frame = ImageU8::allocate(cam.width, cam.height);
+  if (!clean || !frame) return 1;
+  std::string out, errs;  // per-run objects; traj_error_pct per filter
+  if (!json) std::printf("synthetic loop: %d frames (%.2f laps of r = %.1f m), path %.2f m, node spacing %.2f m\n", frames, laps, radius, path_m, spacing);
+  std::vector<double> all_ms, all_cpu;
+  double recognised_none = std::nan("");
+  int worst_rc = 0;
+  for (int filter = 0; filter <= 5; ++filter) {
+    topo::HomographyChainConfig config;
+    config.max_width = cam.width;
+    config.max_height = cam.height;
+    config.camera.fx = config.camera.fy = cam.f;
+    config.camera.cx = cam.cx;
+    config.camera.cy = cam.cy;
+    ArenaStorage arena(topo::HomographyChain::arena_bytes(config));
+    topo::HomographyChain chain;
+    MapBuilder builder;
+    Status s = chain.init(config, arena);
+    if (s) s = builder.init(spacing, true, 1024);
+    if (!s) {
+      std::fprintf(stderr, "map eval: init: %s\n", s.message());
+      return 1;
+    }
+    if (filter == 0) builder.path = map_out;
+    if (filter == 0 && out_dir != nullptr) mkdir(out_dir, 0755);
+    std::vector<FrameRecord> rec;
+    std::vector<int> created_frame(1024, -1);
+    std::vector<double> ms, kps, inl, cpu;
+    double max_err = 0.0, final_err = std::nan("");
+    int ok = 0, second = 0, recognised = 0;
+    for (int k = 0; k < frames; ++k) {
+      topo::test::render(seabed, cam, topo::test::loop_pose(k, lap, radius, altitude), clean->view());
+      if (filter > 0) {
+        vision::UnderwaterDegradation d = vision::table1_filter(filter);
+        d.seed = static_cast<std::uint64_t>(filter) * 100003u + static_cast<std::uint64_t>(k);
+        s = vision::degrade_underwater(clean->view(), d, frame->view());
+      }
+      const ConstImageViewU8 input = filter > 0 ? ConstImageViewU8(frame->view()) : ConstImageViewU8(clean->view());
+      if (!s) {
+        std::fprintf(stderr, "map eval: degrade: %s\n", s.message());
+        return 1;
+      }
+      FrameRecord r;
+      const auto t0 = Clock::now();
+      const double c0 = cpu_ms();
+      s = chain.process(input, altitude, r.step);
+      if (s) builder.observe(chain, r.step, r);
+      r.chain_cpu_ms = cpu_ms() - c0;
+      r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      if (!s) return 1;
+      cpu.push_back(r.chain_cpu_ms);
+      all_cpu.push_back(r.chain_cpu_ms);
+      if (builder.path != nullptr && r.place.kind == topo::ObserveKind::kCreated) builder.save();
+      ms.push_back(r.ms);
+      all_ms.push_back(r.ms);
+      kps.push_back(r.step.keypoints);
+      if (r.step.status == topo::StepStatus::kOk) {
+        ++ok;
+        if (k > 0) inl.push_back(r.step.inliers);
+        const double e = (r.step.pose.position_m - truth(k)).norm();
+        max_err = std::max(max_err, e);
+        final_err = e;
+      }
+      if (r.observed && r.place.kind == topo::ObserveKind::kCreated && r.place.node < created_frame.size())
+        created_frame[r.place.node] = k;
+      if (k >= lap + 3) {
+        ++second;
+        const topo::TopoMap& m = builder.map;
+        if (r.observed && r.place.kind == topo::ObserveKind::kMatched && m.active(r.place.node) &&
+            created_frame[r.place.node] >= 0 && created_frame[r.place.node] < lap &&
+            (m.node(r.place.node).position - truth(k)).norm() <= m.config().gate)
+          ++recognised;
+      }
+      rec.push_back(r);
+    }
+    if (builder.path != nullptr) builder.save();
+    if (filter == 0 && out_dir != nullptr && !builder.write_csv(out_dir, altitude / cam.f)) {
+      std::fprintf(stderr, "map eval: writing the map CSVs in %s failed\n", out_dir);
+      return 1;
+    }
+    if (!builder.status) {
+      std::fprintf(stderr, "map eval: writing %s: %s\n", map_out, builder.status.message());
+      return 1;
+    }
+    const char* name[] = {"none", "filter1", "filter2", "filter3", "filter4", "filter5"};
+    const double err_pct = 100.0 * max_err / path_m, final_pct = 100.0 * final_err / path_m;
+    const double rec_pct = second > 0 ? 100.0 * recognised / second : std::nan("");
+    if (filter == 0) recognised_none = rec_pct;
+    if (ok < frames) worst_rc = 1;
+    const topo::TopoCounters& c = builder.map.counters();
+    char buf[768];
+    std::snprintf(buf, sizeof buf,
+                  "%s\"%s\": {\"traj_error_pct\": %.4f, \"final_error_pct\": %.4f, \"frames_ok\": %d, \"frames\": %d, "
+                  "\"keypoints_median\": %.0f, \"inliers_median\": %.0f, \"nodes\": %zu, \"edges\": %zu, \"mismatch\": %u, "
+                  "\"revisits_recognised_pct\": %.1f, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
+                  filter ? ", " : "", name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map.node_count(),
+                  builder.map.edge_count(), c.get(topo::TopoCounter::kMismatch), rec_pct, median(ms), median(cpu));
+    out += buf;
+    std::snprintf(buf, sizeof buf, "%s\"%s\": %.4f", filter ? ", " : "", name[filter], err_pct);
+    errs += buf;
+    if (!json)
+      std::printf("%-8s traj error max %.3f %% (final %.3f %%) of path; %d/%d frames ok; keypoints %.0f, inliers %.0f; map %zu nodes, "
+                  "%zu edges, %u mismatches; revisits recognised %.1f %% (%d/%d); frame %.2f ms median (CPU %.2f ms)\n",
+                  name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map.node_count(), builder.map.edge_count(),
+                  c.get(topo::TopoCounter::kMismatch), rec_pct, recognised, second, median(ms), median(cpu));
+  }
+  char tail[256];
+  std::snprintf(tail, sizeof tail, ", \"path_m\": %.4f, \"node_spacing_m\": %.2f, \"revisits_recognised_pct\": %.1f, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
+                path_m, spacing, recognised_none, median(all_ms), median(all_cpu));
+  if (json) std::printf("{\"traj_error_pct\": {%s}, \"runs\": {%s}%s\n", errs.c_str(), out.c_str(), tail);
+  return worst_rc;
+}
+
 int run_map(int argc, char** argv) {
   if (argc > 1 && std::strcmp(argv[1], "route") == 0) return run_route(argc - 1, argv + 1);
+  if (argc > 1 && std::strcmp(argv[1], "eval") == 0) return run_eval(argc - 1, argv + 1);
   if (cli::flag(argc, argv, "--help") || cli::flag(argc, argv, "-h")) {
     usage();
     return 0;
