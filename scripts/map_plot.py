@@ -4,10 +4,13 @@
   map_plot.py DIR/map_trajectory.csv OUT.png
 
 Left: the chained trajectory (aligned to the navigation frame by the fit `qnav map` prints) and the
-navigation positions, metres, equal axes, keyframes marked. Right: the image rotation of the chain and
-the navigation's yaw change since frame 0, per frame.
+navigation positions, metres, equal axes, keyframes marked. Middle: the image rotation of the chain and
+the navigation's yaw change since frame 0, per frame. Right (when `qnav map --map-out` wrote
+map_nodes.csv / map_edges.csv beside the trajectory): the topological map in the chain's frame (metres
+with an altitude, else mosaic pixels): nodes (revisited ones red) with their ids, edges, the chain.
 """
 import csv
+import os
 import sys
 
 import matplotlib
@@ -25,7 +28,14 @@ def fnum(s):
 
 def main(path, out):
     rows = list(csv.DictReader(open(path)))
-    fig, (ax, ay) = plt.subplots(1, 2, figsize=(12, 5.2))
+    nodes_path = os.path.join(os.path.dirname(path), "map_nodes.csv")
+    edges_path = os.path.join(os.path.dirname(path), "map_edges.csv")
+    have_map = os.path.isfile(nodes_path) and os.path.isfile(edges_path)
+    if have_map:
+        fig, (ax, ay, am) = plt.subplots(1, 3, figsize=(18, 5.2))
+        plot_map(am, rows, list(csv.DictReader(open(nodes_path))), list(csv.DictReader(open(edges_path))))
+    else:
+        fig, (ax, ay) = plt.subplots(1, 2, figsize=(12, 5.2))
     cx = [fnum(r["aligned_x_m"]) for r in rows if r["status"] == "ok" and fnum(r["aligned_x_m"]) is not None]
     cy = [fnum(r["aligned_y_m"]) for r in rows if r["status"] == "ok" and fnum(r["aligned_y_m"]) is not None]
     nx = [fnum(r["nav_x_m"]) for r in rows if fnum(r["nav_x_m"]) is not None]
@@ -62,6 +72,35 @@ def main(path, out):
     ay.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     fig.savefig(out, dpi=100)
+
+
+def plot_map(am, rows, nodes, edges):
+    metric = bool(nodes) and nodes[0]["units"] == "m"
+    kx, ky = ("x_m", "y_m") if metric else ("x_px", "y_px")
+    tx = [fnum(r[kx]) for r in rows if r["status"] == "ok" and fnum(r[kx]) is not None]
+    ty = [fnum(r[ky]) for r in rows if r["status"] == "ok" and fnum(r[ky]) is not None]
+    am.plot(tx, ty, "-", color="tab:blue", lw=1, alpha=0.6, label="homography chain")
+    pos = {n["id"]: (fnum(n["x"]), fnum(n["y"])) for n in nodes}
+    for e in edges:
+        if e["a"] in pos and e["b"] in pos:
+            (x0, y0), (x1, y1) = pos[e["a"]], pos[e["b"]]
+            am.plot([x0, x1], [y0, y1], "-", color="k", lw=1.5)
+    rev = [n for n in nodes if int(n["revisits"]) > 0]
+    once = [n for n in nodes if int(n["revisits"]) == 0]
+    am.plot([fnum(n["x"]) for n in once], [fnum(n["y"]) for n in once], "o", color="tab:green", ms=7, label="node")
+    if rev:
+        am.plot([fnum(n["x"]) for n in rev], [fnum(n["y"]) for n in rev], "o", color="tab:red", ms=8, label="node revisited")
+    for n in nodes:
+        am.annotate(n["id"], (fnum(n["x"]), fnum(n["y"])), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    am.set_aspect("equal", adjustable="datalim")
+    if not metric:
+        am.invert_yaxis()
+    unit = "m" if metric else "mosaic px"
+    am.set_xlabel("x [%s]" % unit)
+    am.set_ylabel("y [%s]" % unit)
+    am.set_title("topological map: %d nodes, %d edges" % (len(nodes), len(edges)))
+    am.grid(True, alpha=0.3)
+    am.legend(fontsize=8, loc="best", framealpha=0.8)
 
 
 if __name__ == "__main__":

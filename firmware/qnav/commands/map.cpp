@@ -16,6 +16,12 @@
 //       when either is missing). Prints pairs registered / total, inliers per pair, chained image
 //       rotation vs the navigation's yaw change, path vs the navigation path, frame time; --json: one
 //       object. Exit 1 when no frame could be read or a pair did not register.
+//       --map-out FILE [--node-spacing D] [--max-nodes N]: the topological map (nav/topo TopoMap) beside
+//       the chain, in metres with --altitude (default spacing 0.2 m) else mosaic pixels (30 px); the map
+//       file (firmware/tools/map_file) rewritten durably after every new node and at the end;
+//       DIR_OUT/map_nodes.csv and map_edges.csv; per frame the node, kind and revisit in the CSV.
+//   qnav map route --map FILE --from A --to B [--astar] [--json]: shortest path over the map's edges.
+//   qnav map eval [--json] ...: the synthetic loop under the Table-1 filters (see run_eval).
 #include <dirent.h>
 #include <time.h>
 #include <sys/stat.h>
@@ -329,7 +335,7 @@ int usage() {
                "                [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]\n"
                "                [--map-out FILE] [--node-spacing D] [--max-nodes N]\n"
                "       qnav map route --map FILE --from A --to B [--astar] [--json]\n"
-               "       qnav map eval [--json] [--laps L] [--frames-per-lap N] [--map-out FILE] [--out DIR]\n");
+               "       qnav map eval [--json] [--laps L] [--frames-per-lap N] [--filters 0..5] [--map-out FILE] [--out DIR]\n");
   return 2;
 }
 
@@ -398,20 +404,22 @@ int run_route(int argc, char** argv) {
   return r.status == topo::PathStatus::kFound ? 0 : 1;
 }
 
-// qnav map eval [--json] [--laps L] [--frames-per-lap N] [--map-out FILE] [--out DIR]: the synthetic
+// qnav map eval [--json] [--laps L] [--frames-per-lap N] [--filters K] [--map-out FILE] [--out DIR]: the synthetic
 // loop of the nav/topo tests (seabed_scene.hpp: radius 0.8 m, 320x240, f 300 px, 2 m altitude) run
 // through the chain and the topological map without degradation and under each of the paper's five
-// Table-1 filters (vision::table1_filter, seeded per frame). Per run: trajectory error (max and final,
+// Table-1 filters (vision::table1_filter, seeded per frame; --filters K: only the first K). Per run: trajectory error (max and final,
 // % of path), pairs registered, keypoints / inliers, map nodes, revisits recognised (second-pass
 // frames matched to a first-lap node within the gate of the true position), frame time (chain +
 // signature + map; rendering and degradation not counted).
 int run_eval(int argc, char** argv) {
   const bool json = cli::flag(argc, argv, "--json");
   double laps = 1.35;
-  long per_lap = 90;
+  long per_lap = 90, filters = 5;
   if (!cli::option_double(argc, argv, "--laps", laps) || !(laps >= 1.05 && laps <= 5.0) ||
-      !cli::option_long(argc, argv, "--frames-per-lap", per_lap) || per_lap < 40 || per_lap > 1000) {
-    std::fprintf(stderr, "usage: qnav map eval [--json] [--laps 1.05..5] [--frames-per-lap 40..1000] [--map-out FILE] [--out DIR]\n");
+      !cli::option_long(argc, argv, "--frames-per-lap", per_lap) || per_lap < 40 || per_lap > 1000 ||
+      !cli::option_long(argc, argv, "--filters", filters) || filters < 0 || filters > 5) {
+    std::fprintf(stderr, "usage: qnav map eval [--json] [--laps 1.05..5] [--frames-per-lap 40..1000] [--filters 0..5] [--map-out FILE] "
+                         "[--out DIR]\n");
     return 2;
   }
   const char* map_out = cli::option(argc, argv, "--map-out");
@@ -437,7 +445,7 @@ int run_eval(int argc, char** argv) {
   std::vector<double> all_ms, all_cpu;
   double recognised_none = std::nan("");
   int worst_rc = 0;
-  for (int filter = 0; filter <= 5; ++filter) {
+  for (int filter = 0; filter <= static_cast<int>(filters); ++filter) {
     topo::HomographyChainConfig config;
     config.max_width = cam.width;
     config.max_height = cam.height;
