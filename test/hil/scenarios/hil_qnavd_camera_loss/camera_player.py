@@ -1,0 +1,90 @@
+#!/usr/bin/python3
+"""The camera side of hil_qnavd_camera_loss (guest): unplugs and replugs the vivid stereo rig while
+qnavd runs in Mode = Vo, watching the live bus (candump of NAV_STATUS, 0x200) for FaultCameraLost
+(bit 41: byte 5, bit 1). One process, so the watching costs no fork per sample under emulation.
+
+vivid's two instances run free, each on its own jiffies grid from its STREAMON: their stamps are
+k x 4 ms apart, and qnavd pairs within 2 ms, so only k = 0 gives pairs. `in_phase` replugs (unbind +
+bind of vivid.0) until FaultCameraLost has been clear for 3 s (longer than vo.stale_s; at most 6
+times), before the unplug under test and after the replug under test. Timeline: in phase (3 s of
+pairs), unplug, UNPLUG_S, replug, in phase (3 s of pairs), 0.5 s. Event times (CLOCK_REALTIME, as candump's) go to events.txt; exit status 1 when the cameras never
+came in phase.
+"""
+import os
+import subprocess
+import sys
+import threading
+import time
+
+UNPLUG_S = float(sys.argv[1]) if len(sys.argv) > 1 else 5.0
+DRIVER = "/sys/bus/platform/drivers/vivid"
+state = {"lost": None, "clear_run": 0}
+
+
+def event(name):
+    with open("events.txt", "a") as f:
+        f.write(f"{name} {time.time():.6f}\n")
+
+
+def watch():
+    p = subprocess.Popen(["candump", "-L", "vcan0,200:7FF"], stdout=subprocess.PIPE, text=True)
+    for line in p.stdout:
+        data = line.strip().rpartition("#")[2]
+        if len(data) >= 12:
+            lost = (int(data[10:12], 16) >> 1) & 1
+            state["lost"] = lost
+            state["clear_run"] = 0 if lost else state["clear_run"] + 1
+
+
+def write(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def unplug(name):
+    event(name)  # before the write: the daemon may see the device fail while unbind is still running
+    write(f"{DRIVER}/unbind", "vivid.0")
+
+
+def plug(name):
+    event(name)
+    write(f"{DRIVER}/bind", "vivid.0")
+
+
+def wait_clear(seconds):
+    t_end = time.time() + seconds
+    while time.time() < t_end:
+        if state["clear_run"] >= 30:  # 3 s (> vo.stale_s) of NAV_STATUS frames without FaultCameraLost
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def in_phase(stage):
+    for k in range(6):
+        if wait_clear(6.0):
+            print(f"camera_player: {stage}: cameras in phase after {k} replugs", flush=True)
+            return True
+        print(f"camera_player: {stage}: no stereo pairs (cameras out of phase): replug", flush=True)
+        unplug("rephase_unplugged")
+        time.sleep(0.5)
+        plug("rephase_replugged")
+    print(f"camera_player: {stage}: the cameras never came in phase", flush=True)
+    return False
+
+
+# Started before the daemon (python's start-up costs seconds of the one emulated CPU): wait for the
+# guest's Vo command.
+event("player_started")
+while "vo_cmd" not in (open("events.txt").read() if os.path.exists("events.txt") else ""):
+    time.sleep(0.05)
+threading.Thread(target=watch, daemon=True).start()
+if not in_phase("before the unplug"):
+    sys.exit(1)
+unplug("camera_unplugged")
+time.sleep(UNPLUG_S)
+plug("camera_replugged")
+if not in_phase("after the replug"):
+    sys.exit(1)
+time.sleep(0.5)
+event("player_done")
