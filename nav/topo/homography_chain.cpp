@@ -142,6 +142,7 @@ Status HomographyChain::init(const HomographyChainConfig& c, Arena& arena) noexc
   desc_b_ = BoundedVector<vision::OrientedDescriptor>(db);
   key_ = &desc_a_;
   cur_ = &desc_b_;
+  last_ = cur_;
   matches_ = BoundedVector<match::DescriptorMatch>(ms);
   ready_ = true;
   reset();
@@ -301,6 +302,7 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     step.status = StepStatus::kBadInput;
     return Status::ok();
   }
+  last_ = cur_;
   if (!extract(frame, *cur_)) {
     step.status = StepStatus::kBadInput;
     step.bad_input = kFrameSize;
@@ -314,6 +316,7 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
 
   if (!have_reference_) {
     std::swap(key_, cur_);
+    last_ = key_;
     key_w_ = frame.width();
     key_h_ = frame.height();
     have_reference_ = true;
@@ -440,6 +443,7 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
   if (step.overlap < config_.min_overlap || step.inliers < config_.keyframe_min_inliers ||
       step.frame_index - key_frame_index_ >= config_.max_keyframe_gap) {
     std::swap(key_, cur_);
+    last_ = key_;
     H_0_key_ = H0;
     H_key_last_ = Mat3d::Identity();
     key_frame_index_ = step.frame_index;

@@ -146,9 +146,11 @@ class HomographyChain {
   double metres_per_px() const noexcept { return mpp_count_ > 0 ? mpp_sum_ / mpp_count_ : 0.0; }
   std::uint32_t keyframes() const noexcept { return keyframes_; }
   const HomographyChainConfig& config() const noexcept { return config_; }
-  // Keypoints of the last frame that got as far as description (level-0 positions), for plots/tests.
+  // Keypoints of the last frame that got as far as description (level-0 positions), for plots, tests
+  // and the topological map's place signature. A frame that became the keyframe had its descriptors
+  // swapped into the keyframe set: last_ follows them.
   Span<const vision::OrientedDescriptor> current_keypoints() const noexcept {
-    return Span<const vision::OrientedDescriptor>(cur_->data(), cur_->size());
+    return Span<const vision::OrientedDescriptor>(last_->data(), last_->size());
   }
 
  private:
@@ -171,6 +173,7 @@ class HomographyChain {
   BoundedVector<vision::OrientedDescriptor> desc_a_, desc_b_;
   BoundedVector<vision::OrientedDescriptor>* key_ = &desc_a_;  // keyframe's descriptors
   BoundedVector<vision::OrientedDescriptor>* cur_ = &desc_b_;  // the frame being processed
+  const BoundedVector<vision::OrientedDescriptor>* last_ = &desc_b_;  // the last described frame's (cur_ or, after a swap, key_)
   BoundedVector<match::DescriptorMatch> matches_;
   Span<Vec2d> predicted_, src_, dst_, src_f_, dst_f_;
   Span<std::uint8_t> mask_, mask2_;

@@ -72,21 +72,32 @@ void PlaceEncoder::init(std::uint32_t seed) noexcept {
 
 void PlaceEncoder::encode(Span<const vision::OrientedDescriptor> ds, PlaceSignature& out) const noexcept {
   out = PlaceSignature{};
-  std::uint32_t counts[kSignatureBins] = {};
+  // Soft votes: half to the descriptor's word, half to the word with its least certain bit (the
+  // hyperplane it lies closest to) flipped, so a descriptor near a boundary still shares a word with
+  // its noisy twin in another view.
+  float votes[kSignatureBins] = {};
   for (const vision::OrientedDescriptor& d : ds) {
     if (!d.valid) continue;
     unsigned word = 0;
+    int weakest = 0;
+    float weakest_abs = 0.0f;
     for (int b = 0; b < kSignatureBits; ++b) {
       float dot = 0.0f;
       for (int k = 0; k < vision::kOrientedDims; ++k) dot += planes_[b][k] * d.v[k];
       word = (word << 1) | (dot > 0.0f ? 1u : 0u);
+      const float a = std::fabs(dot);
+      if (b == 0 || a < weakest_abs) {
+        weakest_abs = a;
+        weakest = kSignatureBits - 1 - b;
+      }
     }
-    ++counts[word];
+    votes[word] += 0.5f;
+    votes[word ^ (1u << weakest)] += 0.5f;
     ++out.words;
   }
   if (out.words == 0) return;
   const float inv = 1.0f / static_cast<float>(out.words);
-  for (int i = 0; i < kSignatureBins; ++i) out.bins[i] = static_cast<float>(counts[i]) * inv;
+  for (int i = 0; i < kSignatureBins; ++i) out.bins[i] = votes[i] * inv;
 }
 
 // ---- TopoMap ----

@@ -5,8 +5,10 @@
 // Place signature (PlaceEncoder): a fixed-length bag of binary words. Each 128-d oriented descriptor
 // is hashed by kSignatureBits random hyperplanes (locality-sensitive hashing; the normals are drawn
 // from an integer hash at init and made zero-sum, so they split descriptors about the uniform
-// vector around which SIFT-like descriptors lie) into one of kSignatureBins words; the signature is
-// the L1-normalised histogram of the frame's words. Why this and not a trained codebook: it needs no
+// vector around which SIFT-like descriptors lie) into one of kSignatureBins words, with a soft vote:
+// half to its word, half to the word with its least certain bit flipped (the plane it lies closest
+// to), so a descriptor near a boundary still meets its noisy twin from another view; the signature
+// is the L1-normalised histogram of the votes. Why this and not a trained codebook: it needs no
 // training data or stored vocabulary (same words on every target, no file), costs O(K bits 128) per
 // frame, is a real vector so the SOM update w += eps (x - w) applies to it directly, and is fixed
 // size (64 floats per node). Similarity = cosine of the two histograms after subtracting the map's

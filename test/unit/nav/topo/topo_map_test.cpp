@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include "nav/topo/homography_chain.hpp"
@@ -263,6 +264,39 @@ TEST(TopoMap, LocalisationFindsTheFrameNodeAndRefusesAForeignPlace) {
   }
   std::printf("topo loop: own signature closer to its node than the far side's: %d / %d\n", closer, pairs);
   EXPECT_GE(closer, pairs * 8 / 10);
+}
+
+// The place signature is made from the frame's own keypoints, also on frames that become the keyframe
+// (HomographyChain swaps their descriptors into the keyframe set): the same as a fresh chain's
+// reference frame from the same image.
+TEST(TopoMap, SignatureComesFromTheFramesOwnKeypoints) {
+  const Camera cam;
+  const HomographyChainConfig cc = chain_config(cam);
+  std::vector<std::byte> block(2 * HomographyChain::arena_bytes(cc));
+  Arena arena(Span<std::byte>(block.data(), block.size()));
+  HomographyChain run, fresh;
+  ASSERT_TRUE(run.init(cc, arena).is_ok());
+  ASSERT_TRUE(fresh.init(cc, arena).is_ok());
+  PlaceEncoder enc;
+  enc.init();
+  ImageU8 frame = ImageU8::allocate(cam.width, cam.height).value();
+  int keyframes = 0;
+  for (int k = 0; k < 24; ++k) {
+    test::render(seabed(), cam, test::loop_pose(k, kPerLap, kRadius), frame.view());
+    ChainStep a, b;
+    ASSERT_TRUE(run.process(frame.view(), 2.0, a).is_ok());
+    fresh.reset();
+    ASSERT_TRUE(fresh.process(frame.view(), 2.0, b).is_ok());
+    ASSERT_EQ(a.status, StepStatus::kOk);
+    keyframes += a.new_keyframe ? 1 : 0;
+    PlaceSignature sa, sb;
+    enc.encode(run.current_keypoints(), sa);
+    enc.encode(fresh.current_keypoints(), sb);
+    ASSERT_EQ(run.current_keypoints().size(), a.keypoints) << "frame " << k;
+    EXPECT_EQ(sa.words, sb.words) << "frame " << k;
+    EXPECT_EQ(std::memcmp(sa.bins, sb.bins, sizeof sa.bins), 0) << "frame " << k << (a.new_keyframe ? " (new keyframe)" : "");
+  }
+  EXPECT_GE(keyframes, 3);  // the check covered frames that became keyframes
 }
 
 // Hand-made signatures for the graph tests: a one-hot-ish histogram per place id.
