@@ -455,6 +455,12 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "vo.rate_hz", [](auto& c) -> auto& { return c.vo_rate_hz; }, 0.5, 60.0, "Hz",
       "Pairs per second the trigger line asks for (free-running cameras keep their own rate)"));
+  t.push_back(enum_key(
+      "vo.preset", [](auto& c) -> auto& { return c.vo_preset; },
+      std::vector<std::pair<std::string, VoPreset>>{{"bench", VoPreset::kBench}, {"kitti", VoPreset::kKitti}, {"euroc", VoPreset::kEuroc}},
+      "Tuned settings the VO starts from (firmware/pipeline/vo_defaults): bench = the simulated rover with an attitude sensor; "
+      "kitti = a car's stereo pair without one (6D, constant velocity); euroc = a hovering rig (6D, zero motion). The vo.* keys the "
+      "file sets override it"));
   t.push_back(int_key(
       "vo.width", [](auto& c) -> auto& { return c.vo.max_width; }, 64, 2048, "px",
       "Width of one rectified camera image (sizes the frame pool and the VO buffers)"));
@@ -671,6 +677,19 @@ std::vector<KeySpec> build_key_table() {
                             "sim.pass.last_ping", [](auto& c) -> auto& { return pass_of(c).last_ping; }, -1, 1000000000, "",
                             "End of the pass in the recorded file (exclusive); -1 = the end of the file"),
                         "-1 or > first_ping"));
+  t.push_back(string_key(
+      "sim.pass.candump", [](auto& c) -> auto& { return pass_of(c).candump; }, "candump -l log or \"\"", nullptr,
+      "Replay the CAN sensors of this candump -l log in the pass (attitude, DroneCAN AHRS) instead of the simulated AHRS; "
+      "mode commands and qnavd's own frames in it are skipped"));
+  t.push_back(string_key(
+      "sim.pass.dvl_log", [](auto& c) -> auto& { return pass_of(c).dvl_log; }, "DVL capture or \"\"", nullptr,
+      "Replay this capture of the DVL's serial output (dvl.protocol, timed by its own sentences) instead of the simulated DVL"));
+  t.push_back(string_key(
+      "sim.pass.images", [](auto& c) -> auto& { return pass_of(c).images; }, "stereo sequence folder or \"\"", nullptr,
+      "Mode vo: replay this rectified stereo sequence (KITTI layout left/ right/, or EuRoC cam0/ cam1/) instead of the simulated rover"));
+  t.push_back(int_key(
+      "sim.pass.max_frames", [](auto& c) -> auto& { return pass_of(c).max_frames; }, 0, 1000000, "pairs",
+      "Pairs of sim.pass.images replayed; 0 = all"));
   return t;
 }
 
@@ -926,8 +945,24 @@ class Reader {
 
 // Rules between keys, once every key is read. Reports the first broken one at the line of the key
 // it names (or of the other key, when the first keeps its default).
+// vo.preset: the preset's settings for the camera the keys give; the vo.* keys the file sets win.
+void apply_vo_preset(const Reader& r, DaemonConfig& c) {
+  if (c.vo_preset == VoPreset::kBench) return;
+  const vo::VoConfig keyed = c.vo;
+  const vision::StereoCamera& k = keyed.camera;
+  const bool kitti = c.vo_preset == VoPreset::kKitti;
+  c.vo = kitti ? pipeline::kitti_vo_config(keyed.max_width, keyed.max_height, k.focal_px, k.cu_px, k.cv_px, k.baseline_m)
+               : pipeline::euroc_vo_config(keyed.max_width, keyed.max_height, k.focal_px, k.cu_px, k.cv_px, k.baseline_m);
+  c.vo_prior = kitti ? pipeline::kitti_vo_prior() : pipeline::euroc_vo_prior();
+  if (r.line("vo.max_corners") > 0) c.vo.max_corners = keyed.max_corners;
+  if (r.line("vo.vme") > 0) c.vo.mode = keyed.mode;
+  if (r.line("vo.attitude_filter") > 0) c.vo.estimate_attitude_bias = keyed.estimate_attitude_bias;
+  if (r.line("vo.max_step_m") > 0) c.vo.max_step_m = keyed.max_step_m;
+}
+
 void check_across_keys(Reader& r, DaemonConfig& c) {
   const auto at = [&r](const char* key, const char* other) { return r.line(key) > 0 ? r.line(key) : r.line(other); };
+  apply_vo_preset(r, c);
   if (c.tiles.tiles.scanline_stride > c.tiles.tiles.scanlines_per_tile) {
     return r.error("route.scanline_stride", at("route.scanline_stride", "route.scanlines_per_tile"),
                    "must be <= route.scanlines_per_tile (" + std::to_string(c.tiles.tiles.scanlines_per_tile) +
@@ -963,6 +998,11 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
       return r.error("sim.pass.last_ping", at("sim.pass.last_ping", "sim.pass.first_ping"),
                      "must be -1 or > first_ping (" + std::to_string(p.first_ping) + "), got " + std::to_string(p.last_ping));
     }
+    if (c.backend != Backend::kSim) continue;  // the mission is the sim backend's
+    if (!p.images.empty() && p.mode != drivers::qnavcan::Mode::kVo)
+      return r.error("sim.pass.images", at("sim.pass.images", "sim.pass.mode"), "a stereo sequence is replayed in a pass with mode = \"vo\"");
+    if (p.mode == drivers::qnavcan::Mode::kVo && !p.file.empty())
+      return r.error("sim.pass.file", at("sim.pass.file", "sim.pass.mode"), "a side-scan file is replayed in a teach, repeat or hold pass, not in mode = \"vo\"");
   }
   if (!c.vo_enabled) {
     for (const SimPass& p : c.sim_mission)

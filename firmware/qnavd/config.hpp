@@ -23,6 +23,10 @@ enum class LogFormat : std::uint8_t { kJson, kKeyValue, kOff };
 enum class SonarSource : std::uint8_t { kSim, kJsfTcp };
 enum class SimSpeed : std::uint8_t { kFast, kRecorded };  // as fast as the pipeline takes it / in sample time
 enum class CameraSource : std::uint8_t { kSim, kV4l2 };
+// The tuned VO settings a rig starts from (firmware/pipeline/vo_defaults): the simulated Mars-yard
+// bench with an attitude sensor (3D-VME), a car's stereo pair without one (KITTI), a hand-held or
+// hovering rig indoors (EuRoC).
+enum class VoPreset : std::uint8_t { kBench, kKitti, kEuroc };
 
 // One pass of the simulated mission: the simulated autopilot sends QNAV_MODE_CMD (mode, reverse,
 // route id) before it and Idle after it, as a vehicle's autopilot would.
@@ -37,6 +41,11 @@ struct SimPass {
   std::string file;         // sim.pass.file: recorded XTF / JSF; "" = the simulated survey
   std::int64_t first_ping = 0;   // sim.pass.first_ping [0, 1e9]
   std::int64_t last_ping = -1;   // sim.pass.last_ping [-1, 1e9]: -1 = to the end of the file
+  // Recorded sensors (firmware/qnavd/sim_replay.hpp); each replaces its simulated counterpart:
+  std::string candump;      // sim.pass.candump: candump -l log of the CAN sensors (attitude, DroneCAN AHRS)
+  std::string dvl_log;      // sim.pass.dvl_log: capture of the DVL's serial output (dvl.protocol)
+  std::string images;       // sim.pass.images: stereo sequence folder (KITTI or EuRoC layout), mode = "vo"
+  std::int64_t max_frames = 0;  // sim.pass.max_frames [0, 1e6]: pairs of sim.pass.images replayed; 0 = all
 };
 
 struct DaemonConfig {
@@ -104,7 +113,9 @@ struct DaemonConfig {
   double vo_rate_hz = 10.0;                   // vo.rate_hz [0.5, 60]: trigger rate (with vo.trigger_chip)
   double vo_tilt_down_deg = 70.0;             // vo.tilt_down_deg [0, 90]: camera mount, forward-looking, tilted down
   double vo_mount_height_m = 0.8;             // vo.mount_height_m [0, 10]: left camera above the body origin
+  VoPreset vo_preset = VoPreset::kBench;      // vo.preset = "bench" | "kitti" | "euroc"
   vo::VoConfig vo = pipeline::default_vo_config(sim::StereoBench{});
+  pipeline::VoPriorConfig vo_prior{};         // the preset's translation prior (derived, not a key)
   //   vo.width / vo.height [64, 2048] px      -> vo.max_width / max_height (and the frame pool)
   //   vo.focal_px, vo.cu_px, vo.cv_px, vo.baseline_m -> vo.camera
   //   vo.max_corners [32, 1000], vo.vme = "3d" | "6d", vo.attitude_filter, vo.max_step_m

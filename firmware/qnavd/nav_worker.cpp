@@ -85,7 +85,7 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   tile_sink_ = [this](const pipeline::RouteTile& t) { return on_tile(t); };
   if (cfg_.vo_enabled) {
     if (!q.frames || !q.free_frames || !q.frame_pool) return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
-    QNAV_RETURN_IF_ERROR(vo_.init(cfg_.vo, vo_body_T_cam(cfg_)));
+    QNAV_RETURN_IF_ERROR(vo_.init(cfg_.vo, vo_body_T_cam(cfg_), cfg_.vo_prior));
     vo_ready_ = true;
   }
   const Deployment d = make_deployment(cfg_);
@@ -343,8 +343,9 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
   const bool change = cmd.mode != mode_ || (uses_route && id != route_id_) || (cmd.mode == qc::Mode::kRepeat && cmd.reverse != reverse_);
   if (cmd.mode == qc::Mode::kMap || (cmd.mode == qc::Mode::kVo && !vo_ready_)) why = ModeReject::kUnsupportedMode;
   if (why == ModeReject::kNone && change) {
-    if ((cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kVo) && dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s)
-      why = ModeReject::kNoHeading;
+    // Teach and 3D-VME need the heading; 6D-VME (a rig without an attitude sensor) measures its own rotation.
+    const bool needs_heading = cmd.mode == qc::Mode::kTeach || (cmd.mode == qc::Mode::kVo && cfg_.vo.mode == vo::VmeMode::k3D);
+    if (needs_heading && dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s) why = ModeReject::kNoHeading;
     if (cmd.mode == qc::Mode::kRepeat) {
       // Refused before the current mode is left when the route is not there at all.
       char path[1024];

@@ -9,6 +9,7 @@
 #include "drivers/dronecan/ahrs.hpp"
 #include "drivers/dronecan/transfer.hpp"
 #include "drivers/dvl/wl_parser.hpp"
+#include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/candump.hpp"
 #include "nav/core/geometry.hpp"
@@ -98,8 +99,16 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar, &survey_->seabed));  // sized here; each pass re-seeds it without allocating
   if (cfg_.sim_mission.size() == 0) return Status(StatusCode::kInvalidArgument, "sim: the mission has no [[sim.pass]]");
   recordings_.clear();
+  sensors_.clear();
   for (const SimPass& p : cfg_.sim_mission) {
-    if (p.mode == qc::Mode::kVo && !rover_) {
+    QNAV_RETURN_IF_ERROR(load_sensors(p, sensors_.size()));
+    // A stereo sequence replayed without its CAN log is a rig without an attitude sensor: the
+    // simulated AHRS stays silent for the whole mission (the VO runs as `qnav vo --kitti` does).
+    if (!p.images.empty() && p.candump.empty()) no_ahrs_ = true;
+    // A recorded DVL stamps its sentences with its own clock: the simulated one (mission time) stays
+    // silent between passes, or its sentences would step that clock back.
+    if (!p.dvl_log.empty()) no_sim_dvl_ = true;
+    if (p.mode == qc::Mode::kVo && p.images.empty() && !rover_) {
       if (frames_.frames == nullptr) return Status(StatusCode::kInvalidArgument, "sim: a vo pass needs vo.enabled (the frame pool)");
       if (frames_.width != SimRover().bench().width() || frames_.height != SimRover().bench().height())
         return Status(StatusCode::kInvalidArgument, "sim: the simulated stereo bench is 320 x 256: vo.width and vo.height must match");
@@ -120,6 +129,51 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   sim_start_ns_ = clock_.now_ns();
   next_idle_att_ns_ = clock_.now_ns();
   return Status::ok();
+}
+
+// A pass's recorded sensors (sim_replay.hpp), loaded whole here; a stereo sequence must fit the frame pool.
+Status SimVehicle::load_sensors(const SimPass& p, std::size_t index) {
+  if (p.candump.empty() && p.dvl_log.empty() && p.images.empty()) {
+    sensors_.push_back(nullptr);
+    return Status::ok();
+  }
+  auto rs = std::make_unique<RecordedSensors>();
+  if (!p.candump.empty()) QNAV_RETURN_IF_ERROR(rs->load_candump(p.candump));
+  if (!p.dvl_log.empty()) QNAV_RETURN_IF_ERROR(rs->load_dvl(p.dvl_log, cfg_.dvl_protocol == "pd6"));
+  if (!p.images.empty()) {
+    if (frames_.frames == nullptr) return Status(StatusCode::kInvalidArgument, "sim: a vo pass needs vo.enabled (the frame pool)");
+    QNAV_RETURN_IF_ERROR(rs->load_images(p.images, static_cast<std::size_t>(p.max_frames)));
+    const Result<ImageU8> first = tools::read_image_gray8(rs->pairs.front().left_path.c_str());
+    if (!first) {
+      std::fprintf(stderr, "qnavd sim: sim.pass.images: %s: %s\n", rs->pairs.front().left_path.c_str(), first.status().message());
+      return Status(StatusCode::kInvalidArgument, "sim: the stereo sequence's first image cannot be read (see the line above)");
+    }
+    if (first->width() != frames_.width || first->height() != frames_.height) {
+      std::fprintf(stderr, "qnavd sim: sim.pass.images %s: the images are %d x %d, vo.width x vo.height is %d x %d\n", p.images.c_str(),
+                   first->width(), first->height(), frames_.width, frames_.height);
+      return Status(StatusCode::kInvalidArgument, "sim: vo.width and vo.height must be the size of the replayed images (see the line above)");
+    }
+  }
+  std::fprintf(stderr, "qnavd sim: pass %zu replays %s\n", index, rs->what.c_str());
+  sensors_.push_back(std::move(rs));
+  return Status::ok();
+}
+
+// Recorded time -> mission time for the pass starting now: the earliest absolute sample of the pass's
+// sources (its side-scan file's first ping included) at kPassLeadNs after now; sources with relative
+// times start there too.
+void SimVehicle::align_sensors() noexcept {
+  const std::int64_t base = clock_.now_ns() + kPassLeadNs;
+  std::int64_t abs0 = INT64_MAX, rel0 = INT64_MAX;
+  const auto take = [&](std::int64_t t) { (t >= kEpochFloorNs ? abs0 : rel0) = std::min(t >= kEpochFloorNs ? abs0 : rel0, t); };
+  if (!rs_->can.empty()) take(rs_->can.front().t_ns);
+  if (!rs_->dvl.empty()) take(rs_->dvl.front().t_ns);
+  if (!rs_->pairs.empty()) take(rs_->pairs.front().stamp_ns);
+  std::int64_t ping0 = 0;
+  if (recording_ != nullptr && peek_recorded(ping0)) take(ping0);
+  abs_offset_ns_ = abs0 == INT64_MAX ? 0 : base - abs0;
+  rel_offset_ns_ = rel0 == INT64_MAX ? 0 : base - rel0;
+  can_i_ = dvl_i_ = pair_i_ = 0;
 }
 
 void SimVehicle::drain_bus() noexcept {
@@ -152,6 +206,7 @@ void SimVehicle::send_mode(qc::Mode m, bool reverse) noexcept {
 
 void SimVehicle::send_attitude(double heading_rad, double roll_rad, double pitch_rad) noexcept {
   last_heading_ = heading_rad;
+  if (no_ahrs_) return;
   const std::int64_t now = clock_.now_ns();
   if (stalled("attitude", now) || now == last_att_ns_) return;  // one AHRS sample per instant
   last_att_ns_ = now;
@@ -237,7 +292,7 @@ void SimVehicle::idle_tick() noexcept {
   clock_.set(t);
   if (t >= next_idle_att_ns_) {
     send_attitude(last_heading_);
-    send_dvl(0.0, 0.0, t);  // the DVL streams too (the vehicle waits between passes)
+    if (!no_sim_dvl_) send_dvl(0.0, 0.0, t);  // the DVL streams too (the vehicle waits between passes)
     next_idle_att_ns_ = t + kIdleTickNs;
   }
 }
@@ -245,8 +300,15 @@ void SimVehicle::idle_tick() noexcept {
 Status SimVehicle::start_pass() {
   const SimPass& p = cfg_.sim_mission[pass_];
   recording_ = recordings_[pass_].get();
+  rs_ = sensors_[pass_].get();
+  replay_attitude_ = rs_ != nullptr && !rs_->can.empty();
+  replay_dvl_ = rs_ != nullptr && !rs_->dvl.empty();
   have_prev_ = false;
   pass_start_ns_ = clock_.now_ns();
+  if (p.mode == qc::Mode::kVo && rs_ != nullptr && !rs_->pairs.empty()) {
+    align_sensors();
+    return Status::ok();
+  }
   if (p.mode == qc::Mode::kVo) {
     // The rover's first pair one step after the last sample between passes.
     rover_->start(cfg_.sim_seed + pass_, p.length_m, clock_.now_ns() + kPassLeadNs);
@@ -259,6 +321,11 @@ Status SimVehicle::start_pass() {
     if (rec_next_ >= rec_end_) return Status(StatusCode::kOutOfRange, "sim: the pass's ping range is outside its file");
     rec_prev_stamp_ = recording_->data.pings[rec_next_].ping.stamp_ns;
     rec_started_ = false;
+    if (rs_ != nullptr) align_sensors();
+    return Status::ok();
+  }
+  if (rs_ != nullptr) {  // recorded sensors without a side-scan file: no pings in this pass
+    align_sensors();
     return Status::ok();
   }
   const std::uint64_t seed = pass_ == 0 ? pipeline::teach_pass_seed(cfg_.sim_seed) : pipeline::repeat_pass_seed(cfg_.sim_seed) + pass_;
@@ -324,10 +391,12 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   const std::int64_t t = smp.t_ns;
   clock_.set(t);
   inject_bus_faults(t);
-  // AHRS: the compass heading (with the DVL + compass errors of the pass) at the ping time.
-  send_attitude(smp.nav.heading_rad);
+  // AHRS: the compass heading (with the DVL + compass errors of the pass) at the ping time, unless
+  // the pass replays the recorded one (sim.pass.candump), or the DVL (sim.pass.dvl_log).
+  if (!replay_attitude_) send_attitude(smp.nav.heading_rad);
   // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
-  if (have_prev_ && t > last_sample_ns_) {
+  if (replay_dvl_) {
+  } else if (have_prev_ && t > last_sample_ns_) {
     const double dt = static_cast<double>(t - last_sample_ns_) * 1e-9;
     const double dn = (smp.nav.x_m - prev_nav_.x_m) / dt, de = (smp.nav.y_m - prev_nav_.y_m) / dt;
     const double c = std::cos(smp.nav.heading_rad), sn = std::sin(smp.nav.heading_rad);
@@ -449,6 +518,112 @@ SimVehicle::StepResult SimVehicle::fly_rover(IoCounters& io) noexcept {
   return StepResult::kProduced;
 }
 
+bool SimVehicle::peek_recorded(std::int64_t& stamp_ns) noexcept {
+  const Recording& r = *recording_;
+  while (rec_next_ < rec_end_ && !r.track.ok[rec_next_]) ++rec_next_;
+  if (rec_next_ >= rec_end_) return false;
+  stamp_ns = static_cast<std::int64_t>(r.data.pings[rec_next_].ping.stamp_ns);
+  return true;
+}
+
+// A pass with recorded sensors: the next sample of any source, in time order, on the mission clock
+// (never backwards: a source whose clock steps back plays at the current time).
+SimVehicle::StepResult SimVehicle::fly_replay(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool,
+                                              std::size_t stride, IoCounters& io) noexcept {
+  enum Source { kNone, kPing, kCan, kDvl, kPair };
+  Source which = kNone;
+  std::int64_t best = INT64_MAX, stamp = 0;
+  const auto consider = [&](Source s, std::int64_t t) {
+    if (replay_time(t) < best) best = replay_time(t), which = s;
+  };
+  // At equal times the navigation goes first: a ping or pair arrives with the navigation of its instant.
+  if (can_i_ < rs_->can.size()) consider(kCan, rs_->can[can_i_].t_ns);
+  if (dvl_i_ < rs_->dvl.size()) consider(kDvl, rs_->dvl[dvl_i_].t_ns);
+  if (recording_ != nullptr && peek_recorded(stamp)) consider(kPing, stamp);
+  if (pair_i_ < rs_->pairs.size()) consider(kPair, rs_->pairs[pair_i_].stamp_ns);
+  if (which == kNone) {
+    phase_ = Phase::kEndPass;
+    return StepResult::kWaiting;
+  }
+  const std::int64_t t = std::max(best, clock_.now_ns());
+  switch (which) {
+    case kPing: {
+      Sample smp;
+      if (!next_recorded(smp)) return StepResult::kWaiting;
+      smp.t_ns = std::max(t, last_sample_ns_ + 1000);  // the recorded timing, aligned with the logs
+      return emit(smp, free_slots, pool, stride, io);
+    }
+    case kCan: {
+      clock_.set(t);
+      inject_bus_faults(t);
+      const hal::CanFrame& f = rs_->can[can_i_++].frame;
+      if (f.error && net_ != nullptr) {
+        std::uint8_t data[8] = {};
+        std::memcpy(data, f.data, 8);
+        net_->inject_error(f.id, data);
+      } else if (!stalled("attitude", t) && bus_->send(f)) {
+        record(f, t);
+      }
+      return StepResult::kProduced;
+    }
+    case kDvl: {
+      clock_.set(t);
+      const ReplayDvlReport& r = rs_->dvl[dvl_i_++];
+      if (!stalled("dvl", t))
+        static_cast<void>(dvl_->write(Span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(rs_->dvl_text.data()) + r.offset, r.length)));
+      return StepResult::kProduced;
+    }
+    case kPair: return replay_pair(t, io);
+    case kNone: break;
+  }
+  static_cast<void>(pings);
+  return StepResult::kWaiting;
+}
+
+// The next recorded stereo pair into a free slot of the frame pool (decoded here, on the sim's io
+// thread: replay only). A pair that cannot be read or has the wrong size is counted and skipped.
+SimVehicle::StepResult SimVehicle::replay_pair(std::int64_t t, IoCounters& io) noexcept {
+  if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
+  if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
+  clock_.set(t);
+  inject_bus_faults(t);
+  const tools::StereoFrame& pf = rs_->pairs[pair_i_];
+  const std::uint32_t seq = static_cast<std::uint32_t>(pair_i_++);
+  if (stalled("camera", t)) return StepResult::kProduced;
+  io.frames_in.fetch_add(1, std::memory_order_relaxed);
+  const Result<ImageU8> l = tools::read_image_gray8(pf.left_path.c_str());
+  const Result<ImageU8> r = tools::read_image_gray8(pf.right_path.c_str());
+  if (!l || !r || l->width() != frames_.width || l->height() != frames_.height || r->width() != frames_.width ||
+      r->height() != frames_.height) {
+    io.camera_rejected.fetch_add(1, std::memory_order_relaxed);
+    return StepResult::kProduced;
+  }
+  std::uint32_t slot = 0;
+  if (spare_frame_ >= 0) {
+    slot = static_cast<std::uint32_t>(spare_frame_);
+    spare_frame_ = -1;
+  } else if (!frames_.free->try_pop(slot)) {
+    io.frame_overflow.fetch_add(1, std::memory_order_relaxed);
+    return StepResult::kProduced;
+  }
+  const std::size_t n = static_cast<std::size_t>(frames_.width) * static_cast<std::size_t>(frames_.height);
+  std::uint8_t* left = frames_.pool + static_cast<std::size_t>(slot) * 2 * n;
+  for (int y = 0; y < frames_.height; ++y) {
+    std::memcpy(left + static_cast<std::size_t>(y) * static_cast<std::size_t>(frames_.width), l->view().row(y), static_cast<std::size_t>(frames_.width));
+    std::memcpy(left + n + static_cast<std::size_t>(y) * static_cast<std::size_t>(frames_.width), r->view().row(y),
+                static_cast<std::size_t>(frames_.width));
+  }
+  FrameMsg m;
+  m.slot = slot;
+  m.sequence = seq;
+  m.width = static_cast<std::uint16_t>(frames_.width);
+  m.height = static_cast<std::uint16_t>(frames_.height);
+  m.stamp.sample_ns = m.stamp.arrival_ns = t;
+  pending_pair_ = m;
+  has_pending_pair_ = true;
+  return StepResult::kProduced;
+}
+
 void SimVehicle::release_pair(IoCounters& io) noexcept {
   if (!has_pending_pair_) return;
   if (!frames_.frames->try_push(pending_pair_)) {
@@ -503,6 +678,7 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
         const std::int64_t sim_elapsed = clock_.now_ns() - sim_start_ns_;
         if (wall_.now_ns() - wall_start_ns_ < sim_elapsed) return StepResult::kWaiting;
       }
+      if (rs_ != nullptr) return fly_replay(free_slots, pings, pool, stride, io);
       if (cfg_.sim_mission[pass_].mode == qc::Mode::kVo) return fly_rover(io);
       Sample smp;
       if (!(recording_ ? next_recorded(smp) : next_simulated(smp))) {

@@ -15,7 +15,10 @@
 // the nav worker takes pings (at most two in flight, so nothing is dropped), "recorded" paces the
 // pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
 // A [[sim.pass]] with a file replays a recorded XTF/JSF pass instead: its pings, its navigation (the
-// file's fixes or dead reckoning) as the AHRS heading and DVL velocities, its timing.
+// file's fixes or dead reckoning) as the AHRS heading and DVL velocities, its timing. Recorded sensor
+// logs (sim_replay.hpp: a candump log, a DVL capture, a stereo sequence in a vo pass) replace the
+// simulated AHRS, DVL and rover; a pass's sources play in the order of their own times, aligned on
+// the earliest of them (fly_replay).
 // Fault injection (sim.stall): the DVL, the AHRS or the sonar falls silent for a stretch of a pass;
 // (sim.fault) damaged or disordered input for a stretch of a pass: NaN, duplicated, backwards or
 // noisy DVL sentences, out-of-range or duplicated attitude frames, CAN error frames and
@@ -37,6 +40,7 @@
 #include "firmware/pipeline/sim_survey.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "firmware/qnavd/sim_replay.hpp"
 #include "firmware/qnavd/sim_rover.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/clock.hpp"
@@ -109,6 +113,9 @@ class SimVehicle {
     const tools::PingRec* recorded = nullptr;
   };
   static constexpr std::int64_t kPassLeadNs = 200000000;  // a pass's first ping after its mode command
+  // Sample times before this (1973) are relative to their recording's start (a KITTI copy's 10 Hz
+  // index), later ones are absolute (ns since the epoch) and shared by a pass's sources.
+  static constexpr std::int64_t kEpochFloorNs = 100000000000000000LL;
   bool next_simulated(Sample& out) noexcept;
   bool next_recorded(Sample& out) noexcept;
   StepResult emit(const Sample& s, SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride, IoCounters& io) noexcept;
@@ -116,6 +123,13 @@ class SimVehicle {
   void send_mode(drivers::qnavcan::Mode m, bool reverse) noexcept;
   void send_attitude(double heading_rad, double roll_rad = 0.0, double pitch_rad = 0.0) noexcept;
   StepResult fly_rover(IoCounters& io) noexcept;
+  StepResult fly_replay(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
+                        IoCounters& io) noexcept;
+  StepResult replay_pair(std::int64_t t, IoCounters& io) noexcept;
+  bool peek_recorded(std::int64_t& stamp_ns) noexcept;
+  Status load_sensors(const SimPass& p, std::size_t index);
+  void align_sensors() noexcept;
+  std::int64_t replay_time(std::int64_t t) const noexcept { return t + (t >= kEpochFloorNs ? abs_offset_ns_ : rel_offset_ns_); }
   void send_dvl(double fwd_mps, double stbd_mps, std::int64_t t_ns) noexcept;
   void idle_tick() noexcept;
   Status start_pass();
@@ -169,7 +183,14 @@ class SimVehicle {
   void record(const hal::CanFrame& f, std::int64_t t_ns) noexcept;
   std::FILE* candump_ = nullptr;
   FramePool frames_;
-  std::unique_ptr<SimRover> rover_;  // created at init when the mission has a vo pass
+  std::unique_ptr<SimRover> rover_;  // created at init when the mission has a simulated vo pass
+  std::vector<std::unique_ptr<RecordedSensors>> sensors_;  // one per [[sim.pass]]; null without recorded sensors
+  const RecordedSensors* rs_ = nullptr;                   // the pass being flown
+  std::size_t can_i_ = 0, dvl_i_ = 0, pair_i_ = 0;
+  std::int64_t abs_offset_ns_ = 0, rel_offset_ns_ = 0;   // recorded time -> mission time
+  bool replay_attitude_ = false, replay_dvl_ = false;     // the pass's AHRS / DVL come from logs
+  bool no_ahrs_ = false;                                   // the simulated AHRS never sends (see init)
+  bool no_sim_dvl_ = false;                                // the simulated DVL never sends (see init)
   FrameMsg pending_pair_{};
   bool has_pending_pair_ = false;
   std::int64_t spare_frame_ = -1;  // a frame slot taken from the free queue but not sent

@@ -9,10 +9,15 @@
 //       Altitude: the first return detected in the ping by default; `file` uses the altimeter field
 //       (on the Iver2 file it reads 15-20 % short of the first return, leaving water column in the tile).
 //   qnav sonar simulate --out FILE.xtf|FILE.jsf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1] [--pass-seed N]
-//       [--samples 1024] [--range-m 40] [--truth PNG]
+//       [--samples 1024] [--range-m 40] [--truth PNG] [--candump FILE] [--dvl-log FILE] [--start-s 1700000000]
 //       flies the simulator along a straight route (metric nav) and writes an XTF or JSF file; --truth
-//       writes the ground-truth reflectivity under the swath at 0.1 m.
+//       writes the ground-truth reflectivity under the swath at 0.1 m. --candump / --dvl-log also
+//       record the dive's navigation sensors at each ping, as a vehicle logs them: the AHRS heading as
+//       QNAV_ATTITUDE_IN in a `candump -l` log, the DVL's body velocities as Water Linked wrz sentences
+//       (qnavd replays them: sim.pass.candump, sim.pass.dvl_log). --start-s: the first ping's time
+//       (s since the epoch), so that passes recorded one after the other have their own times.
 #include <algorithm>
+#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "drivers/dvl/wl_parser.hpp"
+#include "drivers/qnavcan/messages.hpp"
 #include "drivers/sidescan/jsf_framer.hpp"
 #include "drivers/sidescan/sim_seabed.hpp"
 #include "drivers/sidescan/sim_sidescan.hpp"
@@ -30,6 +37,7 @@
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/sonar_file.hpp"
+#include "hal/core/candump.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
 #include "nav/sonar/tile_builder.hpp"
 
@@ -229,18 +237,77 @@ int tiles(int argc, char** argv) {
   return written > 0 ? 0 : 1;
 }
 
+// The simulated dive's navigation sensors, logged at each ping (qnav sonar simulate --candump/--dvl-log).
+class SensorLogs {
+ public:
+  ~SensorLogs() {
+    if (can_) std::fclose(can_);
+    if (dvl_) std::fclose(dvl_);
+  }
+  bool open(const char* can_path, const char* dvl_path) {
+    if (can_path != nullptr && (can_ = std::fopen(can_path, "w")) == nullptr) return report(can_path);
+    if (dvl_path != nullptr && (dvl_ = std::fopen(dvl_path, "w")) == nullptr) return report(dvl_path);
+    return true;
+  }
+  // t_ns: ns since the epoch; nav: the vehicle's navigation (NED metres, heading) at that time.
+  void write(std::uint64_t t_ns, const Pose2& nav) {
+    const double h = nav.heading_rad < 0 ? nav.heading_rad + 2 * kPi : nav.heading_rad;
+    if (can_ != nullptr) {
+      drivers::qnavcan::AttitudeIn a;
+      a.heading_rad = std::fmin(h, 6.2832);
+      a.valid = true;
+      a.counter = counter_++;
+      hal::CanLogRecord r;
+      r.has_time = true;
+      r.time_us = static_cast<std::int64_t>(t_ns / 1000);
+      std::memcpy(r.interface, "can0", 5);
+      char line[hal::kMaxCanLogLine];
+      if (drivers::qnavcan::encode(a, r.frame) && hal::format_can_log_line(r, line, sizeof line) > 0) std::fprintf(can_, "%s\n", line);
+    }
+    if (dvl_ != nullptr) {
+      double fwd = 0.0, stbd = 0.0;
+      if (have_prev_ && t_ns > prev_t_ns_) {
+        const double dt = static_cast<double>(t_ns - prev_t_ns_) * 1e-9;
+        const double dn = (nav.x_m - prev_.x_m) / dt, de = (nav.y_m - prev_.y_m) / dt;
+        fwd = std::cos(nav.heading_rad) * dn + std::sin(nav.heading_rad) * de;
+        stbd = -std::sin(nav.heading_rad) * dn + std::cos(nav.heading_rad) * de;
+      }
+      const long long t_us = static_cast<long long>(t_ns / 1000);
+      char body[200], line[240];
+      std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", fwd, stbd, 10.0,
+                    t_us, t_us);
+      if (drivers::dvl::wl_with_checksum(body, line, sizeof line) > 0) std::fputs(line, dvl_);
+    }
+    prev_ = nav, prev_t_ns_ = t_ns, have_prev_ = true;
+  }
+
+ private:
+  static bool report(const char* path) {
+    std::fprintf(stderr, "qnav sonar simulate: cannot write %s: %s\n", path, std::strerror(errno));
+    return false;
+  }
+  std::FILE* can_ = nullptr;
+  std::FILE* dvl_ = nullptr;
+  std::uint8_t counter_ = 0;
+  bool have_prev_ = false;
+  Pose2 prev_{};
+  std::uint64_t prev_t_ns_ = 0;
+};
+
 int simulate(int argc, char** argv) {
-  static const char* const valued[] = {"--out", "--length-m", "--offset-m", "--seed", "--pass-seed", "--samples", "--range-m", "--truth", nullptr};
+  static const char* const valued[] = {"--out", "--length-m", "--offset-m", "--seed", "--pass-seed", "--samples", "--range-m", "--truth",
+                                       "--candump", "--dvl-log", "--start-s", nullptr};
   const char* out = cli::option(argc, argv, "--out");
   double length = 200.0, offset = 0.0, range = 40.0;
-  long seed = 1, samples = 1024, pass_seed = -1;
+  long seed = 1, samples = 1024, pass_seed = -1, start_s = 1700000000;
   if (out == nullptr || !cli::option_double(argc, argv, "--length-m", length) || !cli::option_double(argc, argv, "--offset-m", offset) ||
       !cli::option_long(argc, argv, "--seed", seed) || !cli::option_long(argc, argv, "--pass-seed", pass_seed) ||
-      !cli::option_long(argc, argv, "--samples", samples) ||
+      !cli::option_long(argc, argv, "--samples", samples) || !cli::option_long(argc, argv, "--start-s", start_s) || start_s < 0 ||
+      start_s > 4000000000L ||
       !cli::option_double(argc, argv, "--range-m", range) || !(length > 1.0) || samples < 16 || samples > 16384) {
     std::fprintf(stderr,
                  "usage: qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1] [--pass-seed N] "
-                 "[--samples 1024] [--range-m 40] [--truth PNG]\n");
+                 "[--samples 1024] [--range-m 40] [--truth PNG] [--candump FILE] [--dvl-log FILE] [--start-s 1700000000]\n");
     return 2;
   }
   (void)valued;
@@ -277,6 +344,8 @@ int simulate(int argc, char** argv) {
     std::fprintf(stderr, "qnav sonar simulate: %s\n", s.message());
     return 2;
   }
+  SensorLogs logs;
+  if (!logs.open(cli::option(argc, argv, "--candump"), cli::option(argc, argv, "--dvl-log"))) return 1;
   std::FILE* f = std::fopen(out, "wb");
   if (f == nullptr) {
     std::fprintf(stderr, "qnav sonar simulate: cannot write %s\n", out);
@@ -290,6 +359,7 @@ int simulate(int argc, char** argv) {
     (void)encode_xtf_file_header(Span<std::uint8_t>(buf.data(), buf.size()), 0, "QNAV-SIM");
     std::fwrite(buf.data(), 1, kXtfFileHeaderBytes, f);
   }
+  const std::uint64_t t0_ns = static_cast<std::uint64_t>(start_s) * 1000000000ull;
   TrajectorySample ts;
   std::uint32_t n = 0;
   float peak = 0.0f;
@@ -298,6 +368,7 @@ int simulate(int argc, char** argv) {
   while (traj.next(ts)) {
     (void)sim.ping(ts.truth, ts.altitude_m, ts.index, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
     for (float v : port) peak = v > peak ? v : peak;
+    logs.write(t0_ns + ts.stamp_ns, ts.nav);
     if (jsf) {
       // Two message-80 records per ping (port, starboard), positions in mm (coordinate units 1).
       bool ok = true;
@@ -305,7 +376,7 @@ int simulate(int argc, char** argv) {
         JsfWriteSonar j;
         j.channel = ch;
         j.ping_number = ts.index;
-        j.stamp_ns = 1700000000000000000ull + ts.stamp_ns;
+        j.stamp_ns = t0_ns + ts.stamp_ns;
         j.sample_interval_ns = static_cast<std::uint32_t>(std::lround(2.0 * range / 1500.0 / static_cast<double>(samples) * 1e9));
         j.altitude_m = ts.altitude_m;
         j.heading_deg = static_cast<float>(rad_to_deg(ts.nav.heading_rad));
@@ -326,7 +397,7 @@ int simulate(int argc, char** argv) {
       continue;
     }
     XtfWritePing w;
-    w.stamp_ns = 1700000000000000000ull + ts.stamp_ns;
+    w.stamp_ns = t0_ns + ts.stamp_ns;
     w.ping_number = ts.index;
     // A UTM-like false origin: (0, 0) is the "no fix" placeholder of XTF files.
     w.sensor_y = kFalseNorth_m + ts.nav.x_m;

@@ -487,14 +487,11 @@ struct SequenceRun {
 };
 
 // Runs 6D-VME over rectified pairs with no attitude sensor, through pipeline::VoOdometry (the wiring
-// qnavd runs; the camera is the body): a constant-velocity prior (or zero motion for a hover), and
-// before the first visual step zero motion within first_sigma_m.
+// qnavd runs; the camera is the body) with the preset's prior (pipeline/vo_defaults: constant velocity
+// for the car, zero motion for a hover).
 template <typename LoadPair>
-bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, bool zero_motion_prior, double first_sigma_m,
-                  bool verbose, SequenceRun& run) {
-  pipeline::VoPriorConfig prior;
-  prior.zero_motion = zero_motion_prior;
-  prior.first_sigma_m = first_sigma_m;
+bool run_sequence(vo::VoConfig c, std::size_t frames, LoadPair load, const pipeline::VoPriorConfig& prior, bool verbose,
+                  SequenceRun& run) {
   pipeline::VoOdometry odo;
   const Status init = odo.init(c, Pose3{}, prior);
   if (!init) {
@@ -555,12 +552,7 @@ int run_kitti(int argc, char** argv) {
   const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
   vo::VoConfig c = pipeline::kitti_vo_config(calib->width, calib->height, calib->f_px, calib->cu_px, calib->cv_px, calib->baseline_m);
   if (!cli::option_double(argc, argv, "--max-depth", c.max_depth_m)) return 2;
-  // Unweighted (eq. 8 as printed) by default here: 1/sigma^2 weights let the near road points dominate,
-  // and their stereo errors pitch the trajectory (measured: 15.5 m end-point difference weighted vs
-  // 2.45 m unweighted against libviso2 over the 100 frames).
-  c.weighted = cli::flag(argc, argv, "--weighted");
-  c.max_rms_residual_m = 0.5;
-  c.max_step_m = 4.0;
+  if (cli::flag(argc, argv, "--weighted")) c.weighted = true;  // the preset is unweighted (vo_defaults)
   SequenceRun run;
   auto load = [&](std::size_t i, ImageU8& l, ImageU8& r) {
     Result<ImageU8> a = tools::read_image_gray8(frames[i].left_path.c_str());
@@ -573,7 +565,7 @@ int run_kitti(int argc, char** argv) {
     r = std::move(b.value());
     return true;
   };
-  if (!run_sequence(c, n, load, false, 1.0, true, run)) return 1;
+  if (!run_sequence(c, n, load, pipeline::kitti_vo_prior(), true, run)) return 1;
   if (!write_poses(out, run.poses)) {
     std::fprintf(stderr, "vo: cannot write %s\n", out);
     return 1;
@@ -649,7 +641,7 @@ int run_euroc(int argc, char** argv) {
     r = std::move(ra.value());
     return true;
   };
-  if (!run_sequence(c, n, load, true, 0.02, true, run)) return 1;
+  if (!run_sequence(c, n, load, pipeline::euroc_vo_prior(), true, run)) return 1;
   if (!write_poses(out, run.poses)) {
     std::fprintf(stderr, "vo: cannot write %s\n", out);
     return 1;

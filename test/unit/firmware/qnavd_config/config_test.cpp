@@ -114,6 +114,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(vo_trigger_chip),
       QNAV_FIELD(vo_trigger_line),
       QNAV_FIELD(vo_rate_hz),
+      QNAV_FIELD(vo_preset),
       QNAV_FIELD(vo.max_width),
       QNAV_FIELD(vo.max_height),
       QNAV_FIELD(vo.camera.focal_px),
@@ -401,6 +402,7 @@ active_low = true
 
 [vo]
 enabled = false
+preset = "euroc"
 camera = "v4l2"
 left_device = "/dev/video4"
 right_device = "/dev/video5"
@@ -472,6 +474,10 @@ length_m = 12.5
 file = "dive.xtf"
 first_ping = 90
 last_ping = 461
+candump = "dive.can"
+dvl_log = "dive.dvl"
+images = "dive_stereo"
+max_frames = 30
 
 [[sim.pass]]
 mode = "repeat"
@@ -519,6 +525,14 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_EQ(c.sim_mission[0].first_ping, 90);
   EXPECT_EQ(c.sim_mission[0].last_ping, 461);
   EXPECT_EQ(c.sim_mission[0].length_m, 12.5);
+  EXPECT_EQ(c.sim_mission[0].candump, "dive.can");
+  EXPECT_EQ(c.sim_mission[0].dvl_log, "dive.dvl");
+  EXPECT_EQ(c.sim_mission[0].images, "dive_stereo");
+  EXPECT_EQ(c.sim_mission[0].max_frames, 30);
+  EXPECT_EQ(c.vo_preset, VoPreset::kEuroc);
+  EXPECT_EQ(c.vo.stereo.max_disparity_px, pipeline::euroc_vo_config(64, 64, 100.0, 10.0, 10.0, 0.1).stereo.max_disparity_px)
+      << "the preset's settings that have no key";
+  EXPECT_TRUE(c.vo_prior.zero_motion);
   EXPECT_EQ(c.sim_mission[1].mode, drivers::qnavcan::Mode::kRepeat);
   EXPECT_EQ(c.sim_mission[1].offset_pct, 100.0);  // an integer where a float is expected
   EXPECT_FALSE(c.sim_mission[1].reverse);
