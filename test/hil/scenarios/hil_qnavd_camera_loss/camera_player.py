@@ -5,8 +5,8 @@ qnavd runs in Mode = Vo, watching the live bus (candump of NAV_STATUS, 0x200) fo
 
 vivid's two instances run free, each on its own jiffies grid from its STREAMON: their stamps are
 k x 4 ms apart, and qnavd pairs within 2 ms, so only k = 0 gives pairs. `in_phase` replugs (unbind +
-bind of vivid.0) until FaultCameraLost has been clear for 3 s (longer than vo.stale_s; at most 6
-times), before the unplug under test and after the replug under test. Timeline: in phase (3 s of
+bind of vivid.0) until FaultCameraLost has been clear for 3 s (longer than vo.stale_s; at most 20
+times; an out-of-phase open shows no clear frame within 2 s and costs about 3 s), before the unplug under test and after the replug under test. Timeline: in phase (3 s of
 pairs), unplug, UNPLUG_S, replug, in phase (3 s of pairs), 0.5 s. Event times (CLOCK_REALTIME, as candump's) go to events.txt; exit status 1 when the cameras never
 came in phase.
 """
@@ -17,8 +17,9 @@ import threading
 import time
 
 UNPLUG_S = float(sys.argv[1]) if len(sys.argv) > 1 else 5.0
+TRIES = 20  # 30-45 % of the opens come out in phase: 20 in a row fail about once in 10^3-10^5
 DRIVER = "/sys/bus/platform/drivers/vivid"
-state = {"lost": None, "clear_run": 0}
+state = {"lost": None, "clear_run": 0, "clear_total": 0}
 
 
 def event(name):
@@ -34,6 +35,7 @@ def watch():
             lost = (int(data[10:12], 16) >> 1) & 1
             state["lost"] = lost
             state["clear_run"] = 0 if lost else state["clear_run"] + 1
+            state["clear_total"] += 0 if lost else 1
 
 
 def write(path, text):
@@ -51,25 +53,30 @@ def plug(name):
     write(f"{DRIVER}/bind", "vivid.0")
 
 
-def wait_clear(seconds):
-    t_end = time.time() + seconds
-    while time.time() < t_end:
-        if state["clear_run"] >= 30:  # 3 s (> vo.stale_s) of NAV_STATUS frames without FaultCameraLost
+def wait_clear(first_s, total_s):
+    """True once FaultCameraLost has been clear for 3 s (> vo.stale_s: pairs keep coming); False when
+    no clear frame came within first_s (the cameras reopen within 1 s and pair at once when in phase),
+    or no 3 s run within total_s (pairs only now and then: the phase is at the tolerance's edge)."""
+    t0, seen0 = time.time(), state["clear_total"]
+    while True:
+        if state["clear_run"] >= 30:
             return True
+        now = time.time()
+        if (now - t0 > first_s and state["clear_total"] == seen0) or now - t0 > total_s:
+            return False
         time.sleep(0.05)
-    return False
 
 
 def in_phase(stage):
-    for k in range(6):
-        if wait_clear(6.0):
+    for k in range(TRIES):
+        if wait_clear(2.0, 6.5):
             print(f"camera_player: {stage}: cameras in phase after {k} replugs", flush=True)
             return True
         print(f"camera_player: {stage}: no stereo pairs (cameras out of phase): replug", flush=True)
         unplug("rephase_unplugged")
         time.sleep(0.5)
         plug("rephase_replugged")
-    print(f"camera_player: {stage}: the cameras never came in phase", flush=True)
+    print(f"camera_player: {stage}: the cameras never came in phase in {TRIES} replugs", flush=True)
     return False
 
 
