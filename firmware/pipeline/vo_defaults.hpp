@@ -11,7 +11,7 @@
 
 #include "drivers/stereo_sim/mars_yard.hpp"
 #include "drivers/stereo_sim/noise_model.hpp"
-#include "firmware/pipeline/vo_odometry.hpp"
+#include "firmware/pipeline/vo_prior.hpp"
 #include "nav/vo/stereo_vo.hpp"
 
 namespace qnav::pipeline {

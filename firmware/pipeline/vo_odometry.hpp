@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "firmware/pipeline/vo_prior.hpp"
 #include "nav/core/arena.hpp"
 #include "nav/core/geometry.hpp"
 #include "nav/core/image.hpp"
@@ -30,12 +31,6 @@
 
 namespace qnav::pipeline {
 
-// How the translation prior is formed when the caller gives no odometry.
-struct VoPriorConfig {
-  bool zero_motion = false;      // the rig barely moves (a hover): zero motion within zero_sigma_m
-  double zero_sigma_m = 0.02;
-  double first_sigma_m = 0.0;    // before the first visual step: zero within this (0: none, the matcher's own gate)
-};
 
 struct VoFrameInput {
   ConstImageViewU8 left, right;
