@@ -6,7 +6,9 @@
 //   qnavd --print-config-keys      every configuration key (markdown table)
 //   qnavd --help | --version
 #include <cstdio>
-#include <cstring>
+#include <string>
+
+#include "firmware/cli/cli_app.hpp"
 
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/daemon.hpp"
@@ -21,18 +23,6 @@ namespace {
 
 constexpr const char* kDefaultConfig = "/etc/qnav/qnavd.toml";
 
-void usage(FILE* f) {
-  std::fprintf(f,
-               "usage: qnavd [--config FILE]                 run the daemon (default config %s)\n"
-               "       qnavd --check-config FILE             validate FILE: errors name the key, line and allowed range\n"
-               "       qnavd --print-deployment [--config F] threads, queues, stage budgets (us) and static memory for F\n"
-               "       qnavd --print-config-keys             every key with type, default, unit and bounds\n"
-               "       qnavd --help | --version\n"
-               "Signals: SIGTERM/SIGINT finish or discard the route node in progress, fsync, close the route, exit 0.\n"
-               "Under systemd (Type=notify) it sends READY=1, pets WatchdogSec on the nav worker's progress, STOPPING=1.\n",
-               kDefaultConfig);
-}
-
 bool load(const char* path, qnav::daemon::DaemonConfig& cfg) {
   qnav::daemon::ConfigError err;
   if (!qnav::daemon::load_config(path, cfg, err)) {
@@ -45,30 +35,36 @@ bool load(const char* path, qnav::daemon::DaemonConfig& cfg) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const char* config_path = kDefaultConfig;
-  const char* check = nullptr;
-  bool print_deployment = false;
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    if (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0) {
-      usage(stdout);
-      return 0;
-    } else if (std::strcmp(a, "--version") == 0) {
-      std::printf("qnavd %s\n", QNAV_VERSION);
-      return 0;
-    } else if (std::strcmp(a, "--print-config-keys") == 0) {
-      std::fputs(qnav::daemon::config_keys_markdown().c_str(), stdout);
-      return 0;
-    } else if (std::strcmp(a, "--print-deployment") == 0) {
-      print_deployment = true;
-    } else if ((std::strcmp(a, "--config") == 0 || std::strcmp(a, "--check-config") == 0) && i + 1 < argc) {
-      if (std::strcmp(a, "--check-config") == 0) check = argv[i + 1];
-      config_path = argv[++i];
-    } else {
-      std::fprintf(stderr, "qnavd: unknown or incomplete option '%s' (qnavd --help)\n", a);
-      return 2;
-    }
+  std::string config = kDefaultConfig, check_path;
+  bool print_deployment = false, print_keys = false, version = false;
+  CLI::App app(
+      "qnavd: the qnav navigation daemon (docs/qnavd.md; every configuration key: docs/configuration.md).\n"
+      "Signals: SIGTERM/SIGINT finish or discard the route node in progress, fsync, close the route, exit 0.\n"
+      "Under systemd (Type=notify) it sends READY=1, pets WatchdogSec on the nav worker's progress, STOPPING=1.\n"
+      "Exit codes: 0 done, 1 configuration or start-up failed, 2 usage error (unknown option, missing value).",
+      "qnavd");
+  qnav::cli::configure(app);
+  qnav::cli::add_text(app, "--config", config, "the configuration to run (or to print the deployment of)")->type_name("FILE");
+  qnav::cli::add_text(app, "--check-config", check_path,
+                      "validate FILE and exit (0 valid, 1 not): errors name the key, line and allowed range")
+      ->type_name("FILE");
+  qnav::cli::add_flag(app, "--print-deployment", print_deployment,
+                      "print threads, queues, stage budgets (us) and static memory for --config, and exit");
+  qnav::cli::add_flag(app, "--print-config-keys", print_keys,
+                      "print every configuration key with type, default, unit and bounds (markdown), and exit");
+  qnav::cli::add_flag(app, "--version", version, "print the version and exit");
+  const int rc = qnav::cli::parse(app, argc, argv);
+  if (rc >= 0) return rc;
+  if (version) {
+    std::printf("qnavd %s\n", QNAV_VERSION);
+    return 0;
   }
+  if (print_keys) {
+    std::fputs(qnav::daemon::config_keys_markdown().c_str(), stdout);
+    return 0;
+  }
+  const char* check = check_path.empty() ? nullptr : check_path.c_str();
+  const char* config_path = check != nullptr ? check : config.c_str();
   qnav::daemon::DaemonConfig cfg;
   if (!load(config_path, cfg)) return 1;
   if (check) {

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -23,7 +24,7 @@
 #include <time.h>
 #include <vector>
 
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/route_file.hpp"
@@ -43,9 +44,19 @@ namespace {
 using namespace qnav;
 using Clock = std::chrono::steady_clock;
 
-const char* const kValued[] = {"--out", "--length-m", "--seed", "--xtf", "--first-ping", "--pings", "--route", "--offset-pct",
-                               "--csv", "--kidnap-at", "--dump-tile", "--train", "--repeat", "--seabeds", "--sonar", "--nav",
-                               "--heading-offset-deg", "--lines", "--stride", nullptr};
+// The options of every route subcommand (one invocation per process), filled by the strict parser
+// (setup_route at the end of this file declares them with their units, defaults and ranges).
+struct RouteOptions {
+  std::string out, route, sonar, csv, xtf, pings, train, repeat, nav = "fix", info_file;
+  std::string eval_out = "route_eval";
+  double length_m = 2000.0, offset_pct = 0.0, heading_offset_deg = 0.0;
+  double camera_length_m = 12.0;
+  long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
+  bool sim = false, force = false, reverse = false, json = false, quick = false;
+};
+RouteOptions g_opt;
+
+const char* opt_or_null(const std::string& s) { return s.empty() ? nullptr : s.c_str(); }
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // CPU time of this thread (the machine is shared: wall time includes other people's work).
@@ -83,16 +94,9 @@ class VectorNodeSource final : public route::NodeSource {
 };
 using TileSource = VectorNodeSource<pipeline::RouteTile>;
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: qnav route train --sim --out FILE [--length-m M] [--seed N] [--force]\n"
-               "       qnav route info FILE\n"
-               "       qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]\n"
-               "       qnav route eval [--json] [--out DIR] [--length-m M] [--seabeds N (3)] [--quick]\n"
-               "       qnav route xtf --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]\n"
-               "       qnav route train --sonar FILE.xtf|.jsf --out FILE [--pings A:B] [--nav fix|dr] [--lines N] [--stride N] [--force]\n"
-               "       qnav route repeat --route FILE --sonar FILE.xtf|.jsf [--pings A:B] [--reverse] [--csv OUT]\n"
-               "       qnav route camera [--json] [--length-m M (2-200)] [--seed N]\n");
+// A usage error the parser cannot see (a combination of options): named, exit 2.
+int usage(const char* cmd, const char* what) {
+  std::fprintf(stderr, "qnav route %s: %s (qnav help route %s)\n", cmd, what, cmd);
   return 2;
 }
 
@@ -211,18 +215,15 @@ bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std
   return true;
 }
 
-int cmd_train_file(const char* path, int argc, char** argv);
-int cmd_repeat_file(const char* path, int argc, char** argv);
+int cmd_train_file(const char* path);
+int cmd_repeat_file(const char* path);
 
-int cmd_train(int argc, char** argv) {
-  const char* out = cli::option(argc, argv, "--out");
-  double length_m = 2000.0;
-  long seed = 1;
-  if (out == nullptr || !cli::option_double(argc, argv, "--length-m", length_m) || !cli::option_long(argc, argv, "--seed", seed) ||
-      !(length_m >= 200.0 && length_m <= 50000.0))
-    return usage();
-  if (const char* file = cli::option(argc, argv, "--sonar")) return cmd_train_file(file, argc, argv);
-  if (!cli::flag(argc, argv, "--sim")) {
+int cmd_train() {
+  const char* out = g_opt.out.c_str();
+  const double length_m = g_opt.length_m;
+  const long seed = g_opt.seed;
+  if (const char* file = opt_or_null(g_opt.sonar)) return cmd_train_file(file);
+  if (!g_opt.sim) {
     std::fprintf(stderr, "qnav route train: give --sim or --sonar FILE (XTF or JSF)\n");
     return 2;
   }
@@ -237,7 +238,7 @@ int cmd_train(int argc, char** argv) {
   const auto& tc = pipe.config();
   const double spacing = tc.tiles.scanline_stride * w.route.speed_mps / w.route.ping_rate_hz;
   tools::RouteFileWriter writer;
-  if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(tc, spacing, w.swath_m), cli::flag(argc, argv, "--force"))) return 1;
+  if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(tc, spacing, w.swath_m), g_opt.force)) return 1;
   const auto t0 = Clock::now();
   std::size_t kps = 0;
   Status ws;
@@ -255,9 +256,8 @@ int cmd_train(int argc, char** argv) {
   return 0;
 }
 
-int cmd_info(int argc, char** argv) {
-  const char* path = cli::positional(argc, argv, 2, 0, kValued);
-  if (path == nullptr) return usage();
+int cmd_info() {
+  const char* path = g_opt.info_file.c_str();
   tools::RouteFileReader r;
   const Status s = r.open(path);
   if (!s) {
@@ -295,11 +295,18 @@ int cmd_info(int argc, char** argv) {
 
 // The per-tile CSV of `route repeat`: --csv FILE or stdout, header written. nullptr (reported) if FILE
 // cannot be opened; close with close_csv.
-FILE* open_repeat_csv(int argc, char** argv) {
-  const char* csv = cli::option(argc, argv, "--csv");
+FILE* open_repeat_csv() {
+  const char* csv = opt_or_null(g_opt.csv);
+  if (csv != nullptr) {
+    const std::string e = qnav::cli::make_parent_dirs(csv);
+    if (!e.empty()) {
+      std::fprintf(stderr, "qnav route repeat: %s\n", e.c_str());
+      return nullptr;
+    }
+  }
   FILE* f = csv ? std::fopen(csv, "w") : stdout;
   if (f == nullptr) {
-    std::fprintf(stderr, "qnav route repeat: cannot write %s\n", csv);
+    std::fprintf(stderr, "qnav route repeat: cannot write %s: %s\n", csv, std::strerror(errno));
     return nullptr;
   }
   std::fprintf(f, "tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,along_track_m,heading_error_rad,"
@@ -344,22 +351,19 @@ route::RouteSide expected_side(double lateral_m, bool reverse, double deadband) 
   return (right_of_forward != reverse) ? route::RouteSide::kStarboard : route::RouteSide::kPort;
 }
 
-int cmd_repeat(int argc, char** argv) {
-  const char* path = cli::option(argc, argv, "--route");
-  double offset_pct = 0.0, length_m = 2000.0;
-  long seed = 1;
-  if (path == nullptr || !cli::option_double(argc, argv, "--offset-pct", offset_pct) || !cli::option_long(argc, argv, "--seed", seed) ||
-      !cli::option_double(argc, argv, "--length-m", length_m) || !(std::abs(offset_pct) <= 100.0) || !(length_m >= 200.0 && length_m <= 50000.0))
-    return usage();
-  if (const char* file = cli::option(argc, argv, "--sonar")) return cmd_repeat_file(file, argc, argv);
-  if (!cli::flag(argc, argv, "--sim")) {
+int cmd_repeat() {
+  const char* path = g_opt.route.c_str();
+  const double offset_pct = g_opt.offset_pct, length_m = g_opt.length_m;
+  const long seed = g_opt.seed;
+  if (const char* file = opt_or_null(g_opt.sonar)) return cmd_repeat_file(file);
+  if (!g_opt.sim) {
     std::fprintf(stderr, "qnav route repeat: give --sim or --sonar FILE (XTF or JSF)\n");
     return 2;
   }
   tools::RouteFileReader reader;
   std::vector<route::NodeMeta> meta;
   if (!open_route_for_repeat(path, reader, meta)) return 1;
-  const bool reverse = cli::flag(argc, argv, "--reverse");
+  const bool reverse = g_opt.reverse;
   pipeline::SimSurvey w;
   pipeline::RouteTilePipeline pipe;
   Status s = w.init(length_m, static_cast<std::uint64_t>(seed));
@@ -375,7 +379,7 @@ int cmd_repeat(int argc, char** argv) {
   // Node truth: trained on the route at zero offset, node i's tile centre is at along_m (nav) ~ truth.
   std::vector<double> node_along;
   for (const route::NodeMeta& m : meta) node_along.push_back(m.along_m);
-  FILE* f = open_repeat_csv(argc, argv);
+  FILE* f = open_repeat_csv();
   if (f == nullptr) return 1;
   const bool csv = f != stdout;
   const double lateral = offset_pct / 100.0 * w.swath_m;
@@ -385,8 +389,7 @@ int cmd_repeat(int argc, char** argv) {
   ArenaStorage diag_arena(route::Registrar::arena_bytes(lc.registration));
   auto diag_reg = std::make_unique<route::Registrar>();
   if (diag) diag_reg->init(lc.registration, diag_arena).ignore();
-  long dump = -1;
-  if (!cli::option_long(argc, argv, "--dump-tile", dump)) return usage();
+  const long dump = g_opt.dump_tile;
   const sidescan::TrajectoryConfig tcr = w.pass(lateral, reverse, pipeline::repeat_pass_seed(static_cast<std::uint64_t>(seed)));
   Status step_status;
   s = pipe.run_sim_pass(w.seabed, w.sonar_for(tcr.seed), tcr, [&](const pipeline::RouteTile& t) {
@@ -441,25 +444,12 @@ int cmd_repeat(int argc, char** argv) {
   return 0;
 }
 
-int cmd_eval(int argc, char** argv);
-int cmd_xtf(int argc, char** argv);
-int cmd_camera(int argc, char** argv);
-
-int run_route(int argc, char** argv) {
-  if (argc < 2) return usage();
-  if (std::strcmp(argv[1], "train") == 0) return cmd_train(argc, argv);
-  if (std::strcmp(argv[1], "info") == 0) return cmd_info(argc, argv);
-  if (std::strcmp(argv[1], "repeat") == 0) return cmd_repeat(argc, argv);
-  if (std::strcmp(argv[1], "eval") == 0) return cmd_eval(argc, argv);
-  if (std::strcmp(argv[1], "xtf") == 0) return cmd_xtf(argc, argv);
-  if (std::strcmp(argv[1], "camera") == 0) return cmd_camera(argc, argv);
-  return usage();
-}
-
+int cmd_eval();
+int cmd_xtf();
+int cmd_camera();
 
 }  // namespace
 
-QNAV_COMMAND("route", "route teach and repeat: train, info, repeat, eval, xtf, camera (route-following paper)", run_route);
 
 // ---------------------------------------------------------------------------------------------------
 // qnav route eval
@@ -641,16 +631,15 @@ bool ensure_dir(const std::string& d) {
 }  // namespace
 
 namespace {
-int cmd_eval(int argc, char** argv) {
-  double length_m = 2000.0;
-  if (!cli::option_double(argc, argv, "--length-m", length_m) || !(length_m >= 400.0 && length_m <= 20000.0)) return usage();
-  const bool json = cli::flag(argc, argv, "--json");
-  const bool quick = cli::flag(argc, argv, "--quick");
-  long seabeds = quick ? 1 : 3;
-  if (!cli::option_long(argc, argv, "--seabeds", seabeds) || seabeds < 1 || seabeds > 20) return usage();
-  const std::string out_dir = cli::option(argc, argv, "--out", "route_eval");
-  if (!ensure_dir(out_dir)) {
-    std::fprintf(stderr, "qnav route eval: cannot create %s\n", out_dir.c_str());
+int cmd_eval() {
+  const double length_m = g_opt.length_m;
+  if (!(length_m >= 400.0 && length_m <= 20000.0)) return usage("eval", "--length-m: eval needs 400..20000 m");
+  const bool json = g_opt.json;
+  const bool quick = g_opt.quick;
+  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : quick ? 1 : 3;
+  const std::string out_dir = g_opt.eval_out;
+  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty() || !ensure_dir(out_dir)) {
+    std::fprintf(stderr, "qnav route eval: %s\n", e.empty() ? ("cannot create " + out_dir).c_str() : e.c_str());
     return 1;
   }
   FILE* log = json ? stderr : stdout;
@@ -1019,14 +1008,12 @@ struct FilePass {
 // (0.1 m for the Iver2's 30 m), 800 x 800 px rasters at the bin size, --lines pings per tile every
 // --stride pings (defaults 100 / 50). Navigation from the fixes (--nav fix) or dead reckoning
 // (--nav dr), --heading-offset-deg added to the compass; the bottom is detected in each ping.
-int open_file_pass(const char* path, int argc, char** argv, FilePass& out) {
-  double hoff_deg = 0.0;
-  long lines = 100, stride = 50;
-  const char* nav = cli::option(argc, argv, "--nav", "fix");
-  if (!cli::option_double(argc, argv, "--heading-offset-deg", hoff_deg) || !cli::option_long(argc, argv, "--lines", lines) ||
-      !cli::option_long(argc, argv, "--stride", stride) || lines < 10 || lines > 2000 || stride < 1 || stride > lines ||
-      (std::strcmp(nav, "fix") != 0 && std::strcmp(nav, "dr") != 0)) {
-    usage();
+int open_file_pass(const char* path, FilePass& out) {
+  const double hoff_deg = g_opt.heading_offset_deg;
+  const long lines = g_opt.lines, stride = g_opt.stride;
+  const char* nav = g_opt.nav.c_str();
+  if (stride > lines) {
+    std::fprintf(stderr, "qnav route: --stride %ld is more than --lines %ld (a tile every --stride pings of --lines pings)\n", stride, lines);
     return 2;
   }
   if (tools::load_sonar_file(path, out.fd) != 0) return 1;
@@ -1076,13 +1063,13 @@ bool parse_range(const char* s, long& a, long& b) {
   return end != t && *end == '\0' && a >= 0 && b > a;
 }
 
-int cmd_xtf(int argc, char** argv) {
-  const char* path = cli::option(argc, argv, "--xtf");
+int cmd_xtf() {
+  const char* path = g_opt.xtf.c_str();
   long ta = 0, tb = 301, ra = 90, rb = 461;  // ping 0 of the Iver2 file has no fix: 300 taught pings
-  if (path == nullptr || !parse_range(cli::option(argc, argv, "--train"), ta, tb) || !parse_range(cli::option(argc, argv, "--repeat"), ra, rb))
-    return usage();
+  if (!parse_range(opt_or_null(g_opt.train), ta, tb)) return usage("xtf", "--train: give A:B, pings A to B-1 with 0 <= A < B");
+  if (!parse_range(opt_or_null(g_opt.repeat), ra, rb)) return usage("xtf", "--repeat: give C:D, pings C to D-1 with 0 <= C < D");
   FilePass fp;
-  if (open_file_pass(path, argc, argv, fp) != 0) return 1;
+  if (const int rc = open_file_pass(path, fp); rc != 0) return rc;
   const long n = static_cast<long>(fp.fd.pings.size());
   if (n < 100) {
     std::fprintf(stderr, "qnav route xtf: %s: only %ld pings\n", path, n);
@@ -1126,8 +1113,19 @@ int cmd_xtf(int argc, char** argv) {
     std::fprintf(stderr, "qnav route xtf: %s\n", s.message());
     return 1;
   }
-  const char* csv = cli::option(argc, argv, "--csv");
+  const char* csv = opt_or_null(g_opt.csv);
+  if (csv != nullptr) {
+    const std::string e = qnav::cli::make_parent_dirs(csv);
+    if (!e.empty()) {
+      std::fprintf(stderr, "qnav route xtf: %s\n", e.c_str());
+      return 1;
+    }
+  }
   FILE* f = csv ? std::fopen(csv, "w") : nullptr;
+  if (csv != nullptr && f == nullptr) {
+    std::fprintf(stderr, "qnav route xtf: cannot write %s: %s\n", csv, std::strerror(errno));
+    return 1;
+  }
   if (f) std::fprintf(f, "tile,centre_ping,true_node,estimate,probability,entropy,inliers,status,cross_track_m,along_track_m\n");
   double kp = 0.0;
   for (const pipeline::RouteTile& t : train) kp += static_cast<double>(t.node.keypoints.size());
@@ -1159,12 +1157,12 @@ int cmd_xtf(int argc, char** argv) {
 
 // qnav route train --sonar FILE: teach a route on pings [A, B) of a recorded pass. The nodes are
 // written durably one by one (fdatasync each) once the pass's node spacing is known.
-int cmd_train_file(const char* path, int argc, char** argv) {
-  const char* out = cli::option(argc, argv, "--out");
+int cmd_train_file(const char* path) {
+  const char* out = g_opt.out.c_str();
   long a = 0, b = 1L << 40;
-  if (out == nullptr || !parse_range(cli::option(argc, argv, "--pings"), a, b)) return usage();
+  if (!parse_range(opt_or_null(g_opt.pings), a, b)) return usage("train", "--pings: give A:B, pings A to B-1 with 0 <= A < B");
   FilePass fp;
-  if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
+  if (const int rc = open_file_pass(path, fp); rc != 0) return rc;
   b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
   pipeline::RouteTilePipeline pipe;
   std::vector<pipeline::RouteTile> tiles;
@@ -1188,7 +1186,7 @@ int cmd_train_file(const char* path, int argc, char** argv) {
                  tiles.size(), min_kp);
   const double spacing = (tiles.back().node.meta.along_m - tiles.front().node.meta.along_m) / static_cast<double>(tiles.size() - 1);
   tools::RouteFileWriter writer;
-  if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(fp.tiles, spacing, fp.swath_m), cli::flag(argc, argv, "--force"))) return 1;
+  if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(fp.tiles, spacing, fp.swath_m), g_opt.force)) return 1;
   std::size_t kps = 0;
   for (const pipeline::RouteTile& t : tiles) {
     if (!s) break;
@@ -1203,17 +1201,17 @@ int cmd_train_file(const char* path, int argc, char** argv) {
 
 // qnav route repeat --sonar FILE: localise the tiles of pings [C, D) of a recorded pass on a route.
 // No ground truth: the CSV's true_node is -1.
-int cmd_repeat_file(const char* path, int argc, char** argv) {
-  const char* route_path = cli::option(argc, argv, "--route");
+int cmd_repeat_file(const char* path) {
+  const char* route_path = g_opt.route.c_str();
   long a = 0, b = 1L << 40;
-  if (route_path == nullptr || !parse_range(cli::option(argc, argv, "--pings"), a, b)) return usage();
+  if (!parse_range(opt_or_null(g_opt.pings), a, b)) return usage("repeat", "--pings: give A:B, pings A to B-1 with 0 <= A < B");
   tools::RouteFileReader reader;
   std::vector<route::NodeMeta> meta;
   if (!open_route_for_repeat(route_path, reader, meta)) return 1;
   FilePass fp;
-  if (const int rc = open_file_pass(path, argc, argv, fp); rc != 0) return rc;
+  if (const int rc = open_file_pass(path, fp); rc != 0) return rc;
   b = std::min<long>(b, static_cast<long>(fp.fd.pings.size()));
-  const bool reverse = cli::flag(argc, argv, "--reverse");
+  const bool reverse = g_opt.reverse;
   route::LocaliserConfig lc = pipeline::file_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8,
                                                     meta.size(), static_cast<double>(reader.params().node_spacing_m));
   auto loc = std::make_unique<pipeline::RouteRepeater>();
@@ -1229,7 +1227,7 @@ int cmd_repeat_file(const char* path, int argc, char** argv) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
   }
-  FILE* f = open_repeat_csv(argc, argv);
+  FILE* f = open_repeat_csv();
   if (f == nullptr) return 1;
   const bool csv = f != stdout;
   int tracking = 0;
@@ -1345,13 +1343,10 @@ Status camera_pass(const CameraWorld& w, route::CameraTileProjector& proj, route
   return Status::ok();
 }
 
-int cmd_camera(int argc, char** argv) {
-  double length_m = 12.0, spacing_m = 0.3;
-  long seed = 7;
-  if (!cli::option_double(argc, argv, "--length-m", length_m) || !cli::option_long(argc, argv, "--seed", seed) ||
-      !(length_m >= 2.0 && length_m <= 200.0) || seed < 0)
-    return usage();
-  const bool json = cli::flag(argc, argv, "--json");
+int cmd_camera() {
+  const double length_m = g_opt.camera_length_m, spacing_m = 0.3;
+  const long seed = g_opt.camera_seed;
+  const bool json = g_opt.json;
   CameraWorld w(static_cast<std::uint64_t>(seed));
   route::CameraTileConfig pc;  // 4 mm raster, 192 x 192 (0.77 m square)
   route::TileFeatureConfig fc;
@@ -1470,3 +1465,75 @@ int cmd_camera(int argc, char** argv) {
 }
 
 }  // namespace
+
+namespace {
+// The options a recorded pass (--sonar / --xtf FILE) is cut into tiles with (open_file_pass).
+void add_file_pass_options(CLI::App& c) {
+  qnav::cli::add_text(c, "--nav", g_opt.nav, "navigation of a recorded pass: the position fixes, or dead reckoning", {"fix", "dr"});
+  qnav::cli::add_number(c, "--lines", g_opt.lines, "pings per tile of a recorded pass", "pings", 10, 2000);
+  qnav::cli::add_number(c, "--stride", g_opt.stride, "a tile every N pings of a recorded pass (<= --lines)", "pings", 1, 2000);
+  qnav::cli::add_number(c, "--heading-offset-deg", g_opt.heading_offset_deg, "added to the recorded compass heading", "deg", -360, 360);
+}
+
+void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_flag;
+  using qnav::cli::add_number;
+  using qnav::cli::add_text;
+  cmd.require_subcommand(1);
+  CLI::App* t = cmd.add_subcommand("train", "teach a route (simulated survey with --sim, or a recorded XTF/JSF pass with --sonar FILE)\n"
+                                            "into FILE.new, renamed over --out only when complete (the old route survives a kill)");
+  add_text(*t, "--out", g_opt.out, "the route file to write")->required()->type_name("FILE");
+  add_flag(*t, "--sim", g_opt.sim, "teach on the side-scan simulator's survey");
+  add_text(*t, "--sonar", g_opt.sonar, "teach on a recorded pass (XTF or JSF) instead of --sim")->type_name("FILE");
+  add_number(*t, "--length-m", g_opt.length_m, "length of the simulated route", "m", 200, 50000);
+  add_number(*t, "--seed", g_opt.seed, "seed of the simulated seabed and pass", "", 0, 2147483647);
+  add_flag(*t, "--force", g_opt.force, "replace an existing --out (the old route stays until the new one is complete)");
+  add_text(*t, "--pings", g_opt.pings, "with --sonar: teach on pings A to B-1 (default: all)")->type_name("A:B");
+  add_file_pass_options(*t);
+  run.on(t, cmd_train);
+
+  CLI::App* i = cmd.add_subcommand("info", "a route file's header, end (closed / cut off), torn tail and every damaged node; exit 1 if damaged");
+  qnav::cli::add_positional(*i, "FILE", g_opt.info_file, "the route file");
+  run.on(i, cmd_info);
+
+  CLI::App* r = cmd.add_subcommand("repeat", "follow a taught route (simulated pass with --sim, or a recorded pass with --sonar FILE);\n"
+                                             "a CSV row per tile (stdout, or --csv)");
+  add_text(*r, "--route", g_opt.route, "the taught route file")->required()->type_name("FILE");
+  add_flag(*r, "--sim", g_opt.sim, "repeat on a simulated pass");
+  add_text(*r, "--sonar", g_opt.sonar, "repeat on a recorded pass (XTF or JSF) instead of --sim")->type_name("FILE");
+  add_number(*r, "--offset-pct", g_opt.offset_pct, "lateral offset of the simulated pass", "% of the swath", -100, 100);
+  add_flag(*r, "--reverse", g_opt.reverse, "the pass runs the route backwards");
+  add_text(*r, "--csv", g_opt.csv, "write the per-tile CSV here (folders created) instead of stdout")->type_name("FILE");
+  add_number(*r, "--seed", g_opt.seed, "seed of the simulated seabed and pass", "", 0, 2147483647);
+  add_number(*r, "--length-m", g_opt.length_m, "length of the simulated route (as taught)", "m", 200, 50000);
+  add_number(*r, "--dump-tile", g_opt.dump_tile, "debug: write tile N's raster and keypoints (route_dump_*); -1 none", "", -1, 1e9);
+  add_text(*r, "--pings", g_opt.pings, "with --sonar: repeat on pings A to B-1 (default: all)")->type_name("A:B");
+  add_file_pass_options(*r);
+  run.on(r, cmd_repeat);
+
+  CLI::App* e = cmd.add_subcommand("eval", "the route-following paper's evaluation on the simulator (Table I, Fig. 5/7/9/10 data)");
+  add_flag(*e, "--json", g_opt.json, "one JSON summary on stdout (the log on stderr)");
+  add_text(*e, "--out", g_opt.eval_out, "folder for the CSV data (created as needed)")->type_name("DIR");
+  add_number(*e, "--length-m", g_opt.length_m, "length of each simulated route", "m", 400, 20000);
+  add_number(*e, "--seabeds", g_opt.seabeds, "simulated seabeds", "", 1, 20)
+      ->description("simulated seabeds (default 3, 1 with --quick; 1..20)");
+  add_flag(*e, "--quick", g_opt.quick, "fewer passes and one seabed (a smoke run)");
+  run.on(e, cmd_eval);
+
+  CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");
+  add_text(*x, "--xtf", g_opt.xtf, "the recorded pass (XTF or JSF)")->required()->type_name("FILE");
+  add_text(*x, "--train", g_opt.train, "taught pings A to B-1 (default 0:301)")->type_name("A:B");
+  add_text(*x, "--repeat", g_opt.repeat, "repeated pings C to D-1 (default 90:461)")->type_name("C:D");
+  add_text(*x, "--csv", g_opt.csv, "write a CSV row per repeated tile here (folders created)")->type_name("FILE");
+  add_file_pass_options(*x);
+  run.on(x, cmd_xtf);
+
+  CLI::App* c = cmd.add_subcommand("camera", "teach and repeat on a downward camera over the synthetic Mars yard (forwards / reverse, 0-40 % offsets)");
+  add_flag(*c, "--json", g_opt.json, "one JSON summary on stdout");
+  add_number(*c, "--length-m", g_opt.camera_length_m, "length of the route", "m", 2, 200);
+  add_number(*c, "--seed", g_opt.camera_seed, "seed of the synthetic yard", "", 0, 2147483647);
+  run.on(c, cmd_camera);
+}
+}  // namespace
+
+QNAV_CLI_COMMAND("route", "route teach and repeat: train, info, repeat, eval, xtf, camera (route-following paper)", setup_route);

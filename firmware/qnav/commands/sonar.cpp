@@ -33,7 +33,7 @@
 #include "drivers/sidescan/sim_trajectory.hpp"
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "drivers/sidescan/xtf_writer.hpp"
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/sonar_file.hpp"
@@ -51,6 +51,17 @@ constexpr std::size_t kMaxSamples = 16384;
 constexpr double kFalseNorth_m = 5000000.0;  // simulated files: metric nav around a false origin
 constexpr double kFalseEast_m = 500000.0;
 
+// Every sonar subcommand's options (one invocation per process), declared in setup_sonar below.
+struct SonarOptions {
+  std::string file, out, nav = "fix", altitude = "detect", truth, candump, dvl_log;
+  bool corrected = false, reverse = false;
+  double res = 0.1, heading_off_deg = 0.0, nadir_gap = 1.0;
+  long lines = 500, stride = -1, size = 1024;
+  double length = 200.0, offset = 0.0, range = 40.0;
+  long seed = 1, samples = 1024, pass_seed = -1, start_s = 1700000000;
+};
+SonarOptions g_opt;
+
 // Percentile of the finite values (copy; tool side).
 float percentile(std::vector<float> v, double q) {
   if (v.empty()) return 1.0f;
@@ -59,17 +70,21 @@ float percentile(std::vector<float> v, double q) {
   return v[k];
 }
 
-int waterfall(int argc, char** argv) {
-  static const char* const valued[] = {"--out", nullptr};
-  const char* file = cli::positional(argc, argv, 2, 0, valued);
-  const char* out = cli::option(argc, argv, "--out");
-  if (file == nullptr || out == nullptr) {
-    std::fprintf(stderr, "usage: qnav sonar waterfall FILE --out PNG [--corrected]\n");
-    return 2;
-  }
+// Creates the folder the output file goes in; false (reported) when it cannot.
+bool make_out_parent(const char* cmd, const std::string& out) {
+  const std::string e = qnav::cli::make_parent_dirs(out);
+  if (e.empty()) return true;
+  std::fprintf(stderr, "qnav sonar %s: %s\n", cmd, e.c_str());
+  return false;
+}
+
+int waterfall() {
+  const char* file = g_opt.file.c_str();
+  const char* out = g_opt.out.c_str();
+  if (!make_out_parent("waterfall", out)) return 1;
   FileData fd;
   if (load_sonar_file(file, fd) != 0) return 1;
-  const bool corrected = cli::flag(argc, argv, "--corrected");
+  const bool corrected = g_opt.corrected;
   const int rows = static_cast<int>(fd.pings.size());
   int side = static_cast<int>(fd.pings[0].port.size());
   std::vector<float> img;
@@ -127,24 +142,17 @@ int waterfall(int argc, char** argv) {
   return 0;
 }
 
-int tiles(int argc, char** argv) {
-  static const char* const valued[] = {"--out", "--res", "--lines", "--stride", "--size", "--nav", "--heading-offset-deg", "--altitude",
-                                       "--nadir-gap-m", nullptr};
-  const char* file = cli::positional(argc, argv, 2, 0, valued);
-  const char* out = cli::option(argc, argv, "--out");
-  double res = 0.1, heading_off_deg = 0.0, nadir_gap = 1.0;
-  long lines = 500, stride = -1, size = 1024;
-  if (file == nullptr || out == nullptr || !cli::option_double(argc, argv, "--res", res) ||
-      !cli::option_long(argc, argv, "--lines", lines) || !cli::option_long(argc, argv, "--stride", stride) ||
-      !cli::option_long(argc, argv, "--size", size) || !cli::option_double(argc, argv, "--heading-offset-deg", heading_off_deg) ||
-      !cli::option_double(argc, argv, "--nadir-gap-m", nadir_gap)) {
-    std::fprintf(stderr,
-                 "usage: qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] "
-                 "[--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]\n");
-    return 2;
+int tiles() {
+  const char* file = g_opt.file.c_str();
+  const char* out = g_opt.out.c_str();
+  const double res = g_opt.res, heading_off_deg = g_opt.heading_off_deg, nadir_gap = g_opt.nadir_gap;
+  const long lines = g_opt.lines, stride = g_opt.stride, size = g_opt.size;
+  const std::string nav = g_opt.nav;
+  const std::string alt = g_opt.altitude;
+  if (const std::string e = qnav::cli::make_dirs(out); !e.empty()) {
+    std::fprintf(stderr, "qnav sonar tiles: %s\n", e.c_str());
+    return 1;
   }
-  const std::string nav = cli::option(argc, argv, "--nav", "fix");
-  const std::string alt = cli::option(argc, argv, "--altitude", "detect");
   FileData fd;
   if (load_sonar_file(file, fd) != 0) return 1;
   const NavTrack track = build_track(fd, nav == "dr", deg_to_rad(heading_off_deg));
@@ -176,7 +184,7 @@ int tiles(int argc, char** argv) {
   const std::string csv_path = dir + "/tiles.csv";
   std::FILE* csv = std::fopen(csv_path.c_str(), "w");
   if (csv == nullptr) {
-    std::fprintf(stderr, "qnav sonar tiles: cannot write %s (does the directory exist?)\n", csv_path.c_str());
+    std::fprintf(stderr, "qnav sonar tiles: cannot write %s: %s\n", csv_path.c_str(), std::strerror(errno));
     return 1;
   }
   std::fprintf(csv,
@@ -294,23 +302,16 @@ class SensorLogs {
   std::uint64_t prev_t_ns_ = 0;
 };
 
-int simulate(int argc, char** argv) {
-  static const char* const valued[] = {"--out", "--length-m", "--offset-m", "--seed", "--pass-seed", "--samples", "--range-m", "--truth",
-                                       "--candump", "--dvl-log", "--start-s", nullptr};
-  const char* out = cli::option(argc, argv, "--out");
-  double length = 200.0, offset = 0.0, range = 40.0;
-  long seed = 1, samples = 1024, pass_seed = -1, start_s = 1700000000;
-  if (out == nullptr || !cli::option_double(argc, argv, "--length-m", length) || !cli::option_double(argc, argv, "--offset-m", offset) ||
-      !cli::option_long(argc, argv, "--seed", seed) || !cli::option_long(argc, argv, "--pass-seed", pass_seed) ||
-      !cli::option_long(argc, argv, "--samples", samples) || !cli::option_long(argc, argv, "--start-s", start_s) || start_s < 0 ||
-      start_s > 4000000000L ||
-      !cli::option_double(argc, argv, "--range-m", range) || !(length > 1.0) || samples < 16 || samples > 16384) {
-    std::fprintf(stderr,
-                 "usage: qnav sonar simulate --out FILE.xtf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1] [--pass-seed N] "
-                 "[--samples 1024] [--range-m 40] [--truth PNG] [--candump FILE] [--dvl-log FILE] [--start-s 1700000000]\n");
+int simulate() {
+  const char* out = g_opt.out.c_str();
+  const double length = g_opt.length, offset = g_opt.offset, range = g_opt.range;
+  const long seed = g_opt.seed, samples = g_opt.samples, start_s = g_opt.start_s;
+  long pass_seed = g_opt.pass_seed;
+  if (!(length > 1.0)) {
+    std::fprintf(stderr, "qnav sonar simulate: --length-m: must be more than 1 m\n");
     return 2;
   }
-  (void)valued;
+  if (!make_out_parent("simulate", out)) return 1;
   SeabedConfig bc;
   bc.seed = static_cast<std::uint64_t>(seed);
   SeabedObject wreck;
@@ -334,7 +335,7 @@ int simulate(int argc, char** argv) {
   (void)trc.waypoints_ne.push_back(Vec2d(0.0, 0.0));
   (void)trc.waypoints_ne.push_back(Vec2d(length, 0.0));
   trc.lateral_offset_m = offset;
-  trc.reverse = cli::flag(argc, argv, "--reverse");
+  trc.reverse = g_opt.reverse;
   trc.seed = static_cast<std::uint64_t>(pass_seed);
   Trajectory traj;
   Status s = bed.init(bc);
@@ -345,10 +346,10 @@ int simulate(int argc, char** argv) {
     return 2;
   }
   SensorLogs logs;
-  if (!logs.open(cli::option(argc, argv, "--candump"), cli::option(argc, argv, "--dvl-log"))) return 1;
+  if (!logs.open(g_opt.candump.empty() ? nullptr : g_opt.candump.c_str(), g_opt.dvl_log.empty() ? nullptr : g_opt.dvl_log.c_str())) return 1;
   std::FILE* f = std::fopen(out, "wb");
   if (f == nullptr) {
-    std::fprintf(stderr, "qnav sonar simulate: cannot write %s\n", out);
+    std::fprintf(stderr, "qnav sonar simulate: cannot write %s: %s\n", out, std::strerror(errno));
     return 1;
   }
   const std::size_t out_len = std::strlen(out);
@@ -423,7 +424,7 @@ int simulate(int argc, char** argv) {
               n, length, trc.speed_mps, trc.ping_rate_hz, samples, range, offset, trc.reverse ? ", reverse" : "", out,
               wreck.north_m, wreck.east_m,
               jsf ? "EdgeTech JSF, message 80 per side, positions in mm" : "XTF, metric nav around a false origin N 5000000 E 500000");
-  if (const char* truth = cli::option(argc, argv, "--truth")) {
+  if (const char* truth = g_opt.truth.empty() ? nullptr : g_opt.truth.c_str()) {
     const double res = 0.1;
     const int W = static_cast<int>(2.0 * range / res), H = static_cast<int>(length / res);
     std::vector<float> img(static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
@@ -439,19 +440,49 @@ int simulate(int argc, char** argv) {
   return 0;
 }
 
-int run_sonar(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "waterfall") == 0) return waterfall(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "tiles") == 0) return tiles(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
-  std::fprintf(stderr,
-               "usage: qnav sonar waterfall FILE --out PNG [--corrected]\n"
-               "       qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024] [--nav fix|dr]\n"
-               "                        [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]\n"
-               "       qnav sonar simulate --out FILE.xtf|FILE.jsf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1] [--pass-seed N]\n"
-               "                        [--samples 1024] [--range-m 40] [--truth PNG]\n");
-  return 2;
+void setup_sonar(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_flag;
+  using qnav::cli::add_number;
+  using qnav::cli::add_text;
+  cmd.require_subcommand(1);
+  CLI::App* w = cmd.add_subcommand("waterfall", "port (far..near) | starboard (near..far), one row per ping, first ping at the top");
+  qnav::cli::add_positional(*w, "FILE", g_opt.file, "the side-scan file (XTF or JSF)");
+  add_text(*w, "--out", g_opt.out, "the PNG to write (folders created)")->required()->type_name("PNG");
+  add_flag(*w, "--corrected", g_opt.corrected,
+           "show the ScanlineCorrector's output (ground range from the first return, TVG + EGN) instead of raw samples");
+  run.on(w, waterfall);
+
+  CLI::App* t = cmd.add_subcommand("tiles", "north-up tiles (tile_NNN.png, tile_NNN_coverage.png) and tiles.csv with each tile's pose");
+  qnav::cli::add_positional(*t, "FILE", g_opt.file, "the side-scan file (XTF or JSF)");
+  add_text(*t, "--out", g_opt.out, "the folder to write (created as needed)")->required()->type_name("DIR");
+  add_number(*t, "--res", g_opt.res, "tile pixel size", "m", 0.005, 10);
+  add_number(*t, "--lines", g_opt.lines, "pings per tile", "pings", 1, 100000);
+  add_number(*t, "--stride", g_opt.stride, "a tile every N pings (-1: every --lines pings)", "pings", -1, 100000);
+  add_number(*t, "--size", g_opt.size, "tile width and height", "px", 16, 16384);
+  add_text(*t, "--nav", g_opt.nav, "navigation: the position fixes, or dead reckoning", {"fix", "dr"});
+  add_number(*t, "--heading-offset-deg", g_opt.heading_off_deg, "added to the recorded compass heading", "deg", -360, 360);
+  add_text(*t, "--altitude", g_opt.altitude,
+           "altitude from the first return detected in each ping, or the file's altimeter field", {"detect", "file"});
+  add_number(*t, "--nadir-gap-m", g_opt.nadir_gap, "ground range left blank under the vehicle", "m", 0, 1000);
+  run.on(t, tiles);
+
+  CLI::App* m = cmd.add_subcommand("simulate",
+                                   "fly the simulator along a straight route (metric nav) and write an XTF or JSF file (by --out's extension)");
+  add_text(*m, "--out", g_opt.out, "the file to write: FILE.xtf or FILE.jsf (folders created)")->required()->type_name("FILE");
+  add_number(*m, "--length-m", g_opt.length, "route length (more than 1 m)", "m", 1, 1e6);
+  add_number(*m, "--offset-m", g_opt.offset, "lateral offset of the pass from the route", "m", -1e4, 1e4);
+  add_flag(*m, "--reverse", g_opt.reverse, "fly the route backwards");
+  add_number(*m, "--seed", g_opt.seed, "seed of the seabed", "", 0, 2147483647);
+  add_number(*m, "--pass-seed", g_opt.pass_seed, "seed of the pass's speckle and navigation noise (-1: --seed)", "", -1, 2147483647);
+  add_number(*m, "--samples", g_opt.samples, "samples per side", "", 16, 16384);
+  add_number(*m, "--range-m", g_opt.range, "slant range", "m", 1, 10000);
+  add_text(*m, "--truth", g_opt.truth, "also write the ground-truth reflectivity under the swath at 0.1 m")->type_name("PNG");
+  add_text(*m, "--candump", g_opt.candump, "also log the AHRS heading as QNAV_ATTITUDE_IN at each ping (candump -l)")->type_name("FILE");
+  add_text(*m, "--dvl-log", g_opt.dvl_log, "also log the DVL's body velocities as Water Linked wrz sentences")->type_name("FILE");
+  add_number(*m, "--start-s", g_opt.start_s, "the first ping's time since the epoch", "s", 0, 4000000000.0);
+  run.on(m, simulate);
 }
 
 }  // namespace
 
-QNAV_COMMAND("sonar", "sonar waterfall|tiles|simulate: side-scan waterfall, north-up tiles, simulated XTF", run_sonar);
+QNAV_CLI_COMMAND("sonar", "sonar waterfall|tiles|simulate: side-scan waterfall, north-up tiles, simulated XTF", setup_sonar);

@@ -36,7 +36,7 @@
 
 #include "drivers/stereo_sim/mars_yard.hpp"
 #include "drivers/stereo_sim/noise_model.hpp"
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/pipeline/vo_defaults.hpp"
 #include "firmware/pipeline/vo_odometry.hpp"
@@ -257,18 +257,34 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
   return true;
 }
 
-int run_eval(int argc, char** argv) {
-  const bool json = cli::flag(argc, argv, "--json");
-  const bool quick = cli::flag(argc, argv, "--quick");
+// Every vo option (one invocation per process), declared in setup_vo below. NaN: "not given".
+struct VoOptions {
+  bool json = false, quick = false;
   EvalKnobs knobs;
-  knobs.verbose = cli::flag(argc, argv, "--verbose");
-  const char* noise_name = cli::option(argc, argv, "--noise", "small");
-  const char* configs = cli::option(argc, argv, "--configs", "main");
-  const char* traj_dir = cli::option(argc, argv, "--traj-dir");
+  std::string noise = "small", configs = "main", traj_dir, seeds;
   long seed = 3;
-  if (!cli::option_long(argc, argv, "--seed", seed) || seed < 0) {
-    std::fprintf(stderr, "vo eval: --seed wants a non-negative integer\n");
-    return 2;
+  double nt = std::nan(""), sigma_m_deg = std::nan(""), len27 = std::nan(""), len100 = std::nan(""), calib27 = 0.0;
+  bool no_refine = false, no_refine_disp = false, att_no_step_rot = false, att_iso = false;
+  std::string kitti, euroc, calib, out, peer;
+  long frames = 100000;
+  double max_depth = std::nan("");
+  bool weighted = false;
+};
+VoOptions g_opt;
+
+int run_eval() {
+  const bool json = g_opt.json;
+  const bool quick = g_opt.quick;
+  EvalKnobs knobs = g_opt.knobs;
+  const char* noise_name = g_opt.noise.c_str();
+  const char* configs = g_opt.configs.c_str();
+  const char* traj_dir = g_opt.traj_dir.empty() ? nullptr : g_opt.traj_dir.c_str();
+  long seed = g_opt.seed;
+  if (traj_dir != nullptr) {
+    if (const std::string e = qnav::cli::make_dirs(traj_dir); !e.empty()) {
+      std::fprintf(stderr, "vo eval: %s\n", e.c_str());
+      return 1;
+    }
   }
   sim::NoiseConfig noise = sim::NoiseConfig::small();
   if (std::strcmp(noise_name, "moderate") == 0) noise = sim::NoiseConfig::moderate();
@@ -278,19 +294,13 @@ int run_eval(int argc, char** argv) {
     return 2;
   }
   double nt = noise.translation_noise, sm_deg = rad_to_deg(noise.sigma_m_rad);
-  if (!cli::option_double(argc, argv, "--nt", nt) || !cli::option_double(argc, argv, "--sigma-m-deg", sm_deg)) return 2;
+  if (!std::isnan(g_opt.nt)) nt = g_opt.nt;
+  if (!std::isnan(g_opt.sigma_m_deg)) sm_deg = g_opt.sigma_m_deg;
   noise.translation_noise = nt;
-  if (!cli::option_double(argc, argv, "--dsig", knobs.dsig) || !cli::option_double(argc, argv, "--nsig", knobs.nsig) ||
-      !cli::option_double(argc, argv, "--app", knobs.app) || !cli::option_double(argc, argv, "--att-vo-scale", knobs.att_vo_scale) ||
-      !cli::option_double(argc, argv, "--att-rate-scale", knobs.att_rate_scale) ||
-      !cli::option_double(argc, argv, "--lat-px", knobs.lat_px) || !cli::option_double(argc, argv, "--ref-lat-px", knobs.ref_lat_px) ||
-      !cli::option_double(argc, argv, "--track-radius", knobs.track_radius))
-    return 2;
-  knobs.refine = !cli::flag(argc, argv, "--no-refine");
-  knobs.refine_disp = !cli::flag(argc, argv, "--no-refine-disparity");
-  knobs.att_step_rot = !cli::flag(argc, argv, "--att-no-step-rot");
-  knobs.att_aniso = !cli::flag(argc, argv, "--att-iso");
-  knobs.att_filtered = cli::flag(argc, argv, "--att-filtered");
+  knobs.refine = !g_opt.no_refine;
+  knobs.refine_disp = !g_opt.no_refine_disp;
+  knobs.att_step_rot = !g_opt.att_no_step_rot;
+  knobs.att_aniso = !g_opt.att_iso;
   noise.sigma_m_rad = deg_to_rad(sm_deg);
   std::vector<EvalConfig> cfgs;
   if (std::strcmp(configs, "main") == 0) {
@@ -301,17 +311,17 @@ int run_eval(int argc, char** argv) {
     for (const EvalConfig& e : kAll) cfgs.push_back(e);
   }
   double len27 = quick ? 6.0 : 27.0, len100 = quick ? 10.0 : 100.0;
-  if (!cli::option_double(argc, argv, "--length-27", len27) || !cli::option_double(argc, argv, "--length-100", len100) ||
-      !(len27 > 0.5) || !(len100 > 0.5)) {
+  if (!std::isnan(g_opt.len27)) len27 = g_opt.len27;
+  if (!std::isnan(g_opt.len100)) len100 = g_opt.len100;
+  if (!(len27 > 0.5) || !(len100 > 0.5)) {
     std::fprintf(stderr, "vo eval: --length-27 / --length-100 want metres > 0.5\n");
     return 2;
   }
-  double calib27 = 0.0;  // the 27 m run lets the attitude drift unless told otherwise
-  if (!cli::option_double(argc, argv, "--calib-27", calib27)) return 2;
+  const double calib27 = g_opt.calib27;  // the 27 m run lets the attitude drift unless told otherwise
   const Scenario scen[2] = {{"27m", len27, calib27}, {"100m", len100, 2.0}};
   // --seeds: comma list ("3,4,5") or inclusive range ("3-7"); the first is the primary seed.
   std::vector<long> seeds;
-  if (const char* ss = cli::option(argc, argv, "--seeds")) {
+  if (const char* ss = g_opt.seeds.empty() ? nullptr : g_opt.seeds.c_str()) {
     long a = 0, b = 0;
     char dash = 0;
     if (std::sscanf(ss, "%ld%c%ld", &a, &dash, &b) == 3 && dash == '-' && a >= 0 && b >= a && b - a < 100) {
@@ -532,16 +542,26 @@ bool write_poses(const char* out, const std::vector<Pose3>& poses) {
   return std::fclose(f) == 0;
 }
 
-int run_kitti(int argc, char** argv) {
-  const char* dir = cli::option(argc, argv, "--kitti");
-  const char* out = cli::option(argc, argv, "--out");
-  const std::string calib_path = cli::option(argc, argv, "--calib", (std::string(dir) + "/calib.txt").c_str());
-  const char* peer = cli::option(argc, argv, "--peer");
-  long max_frames = 100000;
-  if (out == nullptr || !cli::option_long(argc, argv, "--frames", max_frames) || max_frames < 2) {
-    std::fprintf(stderr, "usage: qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE]\n");
-    return 2;
+// --out is required with --kitti / --euroc; its folder is created.
+bool check_out(const char* what) {
+  if (g_opt.out.empty()) {
+    std::fprintf(stderr, "qnav vo: %s needs --out poses.txt (qnav help vo)\n", what);
+    return false;
   }
+  if (const std::string e = qnav::cli::make_parent_dirs(g_opt.out); !e.empty()) {
+    std::fprintf(stderr, "qnav vo: %s\n", e.c_str());
+    return false;
+  }
+  return true;
+}
+
+int run_kitti() {
+  const char* dir = g_opt.kitti.c_str();
+  if (!check_out("--kitti")) return 2;
+  const char* out = g_opt.out.c_str();
+  const std::string calib_path = g_opt.calib.empty() ? std::string(dir) + "/calib.txt" : g_opt.calib;
+  const char* peer = g_opt.peer.empty() ? nullptr : g_opt.peer.c_str();
+  const long max_frames = g_opt.frames;
   std::vector<tools::StereoFrame> frames;
   Status s = tools::read_kitti_sequence(dir, frames);
   Result<tools::KittiCalib> calib = tools::read_kitti_calib(calib_path);
@@ -551,8 +571,8 @@ int run_kitti(int argc, char** argv) {
   }
   const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
   vo::VoConfig c = pipeline::kitti_vo_config(calib->width, calib->height, calib->f_px, calib->cu_px, calib->cv_px, calib->baseline_m);
-  if (!cli::option_double(argc, argv, "--max-depth", c.max_depth_m)) return 2;
-  if (cli::flag(argc, argv, "--weighted")) c.weighted = true;  // the preset is unweighted (vo_defaults)
+  if (!std::isnan(g_opt.max_depth)) c.max_depth_m = g_opt.max_depth;
+  if (g_opt.weighted) c.weighted = true;  // the preset is unweighted (vo_defaults)
   SequenceRun run;
   auto load = [&](std::size_t i, ImageU8& l, ImageU8& r) {
     Result<ImageU8> a = tools::read_image_gray8(frames[i].left_path.c_str());
@@ -592,14 +612,11 @@ int run_kitti(int argc, char** argv) {
   return 0;
 }
 
-int run_euroc(int argc, char** argv) {
-  const std::string dir = cli::option(argc, argv, "--euroc");
-  const char* out = cli::option(argc, argv, "--out");
-  long max_frames = 100000;
-  if (out == nullptr || !cli::option_long(argc, argv, "--frames", max_frames) || max_frames < 2) {
-    std::fprintf(stderr, "usage: qnav vo --euroc DIR --out poses.txt [--frames N]\n");
-    return 2;
-  }
+int run_euroc() {
+  const std::string dir = g_opt.euroc;
+  if (!check_out("--euroc")) return 2;
+  const char* out = g_opt.out.c_str();
+  const long max_frames = g_opt.frames;
   std::vector<tools::StereoFrame> frames;
   const Status s = tools::read_euroc_sequence(dir, frames);
   Result<tools::EurocCamera> c0 = tools::read_euroc_camera(dir + "/cam0/sensor.yaml");
@@ -659,19 +676,73 @@ int run_euroc(int argc, char** argv) {
   return 0;
 }
 
-int run_vo(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "eval") == 0) return run_eval(argc, argv);
-  if (cli::option(argc, argv, "--kitti") != nullptr) return run_kitti(argc, argv);
-  if (cli::option(argc, argv, "--euroc") != nullptr) return run_euroc(argc, argv);
-  std::fprintf(stderr,
-               "usage: qnav vo eval [--json] [--quick] [--noise small|moderate|none] [--configs main|att|all] [--seed N] "
-               "[--seeds N,M,..|A-B] "
-               "[--traj-dir DIR] [--length-27 M] [--length-100 M] [--verbose]\n"
-               "       qnav vo --kitti DIR [--calib FILE] --out poses.txt [--frames N] [--peer FILE]\n"
-               "       qnav vo --euroc DIR --out poses.txt [--frames N]\n");
+int run_vo() {
+  if (!g_opt.kitti.empty() && !g_opt.euroc.empty()) {
+    std::fprintf(stderr, "qnav vo: give --kitti DIR or --euroc DIR, not both\n");
+    return 2;
+  }
+  if (!g_opt.kitti.empty()) return run_kitti();
+  if (!g_opt.euroc.empty()) return run_euroc();
+  std::fprintf(stderr, "qnav vo: give `eval`, --kitti DIR or --euroc DIR (qnav help vo; qnav help vo eval)\n");
   return 2;
+}
+
+void setup_vo(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_flag;
+  using qnav::cli::add_number;
+  using qnav::cli::add_text;
+  cmd.require_subcommand(0, 1);
+  cmd.footer("Runs: qnav vo eval [...] (synthetic Mars yard), or qnav vo --kitti DIR --out F, or qnav vo --euroc DIR --out F.");
+  add_text(cmd, "--kitti", g_opt.kitti, "run a rectified KITTI-layout sequence (6D-VME, constant-velocity prior, no attitude sensor)")
+      ->type_name("DIR");
+  add_text(cmd, "--euroc", g_opt.euroc, "run raw EuRoC pairs (rectified with RemapTable, 6D-VME, zero-motion prior)")->type_name("DIR");
+  add_text(cmd, "--calib", g_opt.calib, "KITTI calibration (default DIR/calib.txt)")->type_name("FILE");
+  add_text(cmd, "--out", g_opt.out, "poses in the KITTI format, 3x4 per frame (required with --kitti / --euroc; folders created)")
+      ->type_name("FILE");
+  add_number(cmd, "--frames", g_opt.frames, "frames to run at most", "", 2, 1e9);
+  add_text(cmd, "--peer", g_opt.peer, "KITTI: compare path and end point against this peer trajectory")->type_name("FILE");
+  add_flag(cmd, "--weighted", g_opt.weighted, "KITTI: weighted 6D motion estimate (the preset is unweighted)");
+  add_number(cmd, "--max-depth", g_opt.max_depth, "KITTI: farthest point used", "m", 0.1, 1e6)
+      ->description("KITTI: farthest point used (m; default: the KITTI preset's, pipeline/vo_defaults; 0.1..1e6)");
+  run.on(&cmd, run_vo);
+
+  CLI::App* e = cmd.add_subcommand("eval", "synthetic evaluation with exact ground truth: a 27 m run (attitude drifting) and a 100 m run\n"
+                                           "(attitude recalibrated every 2 m); one JSON object (--json) or a table");
+  add_flag(*e, "--json", g_opt.json, "one JSON object on stdout");
+  add_flag(*e, "--quick", g_opt.quick, "6 m and 10 m runs instead of 27 m and 100 m (the demo)");
+  add_flag(*e, "--verbose", g_opt.knobs.verbose, "per-frame diagnostics");
+  add_text(*e, "--noise", g_opt.noise, "the paper's noise model", {"small", "moderate", "none"});
+  add_text(*e, "--configs", g_opt.configs, "main: 3D-fc-fast-att, 3D-fc-fast, 6D-fc-fast; att: the first; all: + full fc / fb",
+           {"main", "att", "all"});
+  add_number(*e, "--seed", g_opt.seed, "seed of the yard and the noise", "", 0, 2147483647);
+  add_text(*e, "--seeds", g_opt.seeds, "run every seed, N,M,... or A-B (at most 100; the first is the primary)")->type_name("LIST");
+  add_text(*e, "--traj-dir", g_opt.traj_dir, "write per-configuration CSVs (path_m, err_m) for scripts/vo_plot.py (created)")
+      ->type_name("DIR");
+  add_number(*e, "--length-27", g_opt.len27, "length of the drifting run", "m", 0.5, 1e5)
+      ->description("length of the drifting run (m; default 27, 6 with --quick; > 0.5)");
+  add_number(*e, "--length-100", g_opt.len100, "length of the recalibrated run", "m", 0.5, 1e5)
+      ->description("length of the recalibrated run (m; default 100, 10 with --quick; > 0.5)");
+  add_number(*e, "--calib-27", g_opt.calib27, "attitude recalibration interval on the drifting run (0: never)", "m", 0, 1e5);
+  add_number(*e, "--nt", g_opt.nt, "translation noise n_t", "fraction", 0, 10)
+      ->description("translation noise n_t (fraction of the step; default from --noise; 0..10)");
+  add_number(*e, "--sigma-m-deg", g_opt.sigma_m_deg, "attitude noise sigma_m", "deg", 0, 90)
+      ->description("attitude noise sigma_m (deg; default from --noise; 0..90)");
+  add_number(*e, "--dsig", g_opt.knobs.dsig, "tuning: disparity sigma", "px", 0, 100);
+  add_number(*e, "--nsig", g_opt.knobs.nsig, "tuning: gate in sigmas", "sigma", 0, 100);
+  add_number(*e, "--app", g_opt.knobs.app, "tuning: appearance weight", "", -1e6, 1e6);
+  add_number(*e, "--lat-px", g_opt.knobs.lat_px, "tuning: lateral sigma of stereo matching (<= 0: the default)", "px", -1, 1e4);
+  add_number(*e, "--att-vo-scale", g_opt.knobs.att_vo_scale, "attitude filter: VO rotation sigma scale", "", 0, 1e6);
+  add_number(*e, "--att-rate-scale", g_opt.knobs.att_rate_scale, "attitude filter: drift-rate process noise scale", "", 0, 1e6);
+  add_flag(*e, "--att-no-step-rot", g_opt.att_no_step_rot, "attitude filter: do not use the visual step rotation");
+  add_flag(*e, "--att-iso", g_opt.att_iso, "attitude filter: isotropic instead of anisotropic noise");
+  add_flag(*e, "--att-filtered", g_opt.knobs.att_filtered, "attitude filter: feed the filtered attitude back");
+  add_flag(*e, "--no-refine", g_opt.no_refine, "track refinement off");
+  add_flag(*e, "--no-refine-disparity", g_opt.no_refine_disp, "disparity refinement off");
+  add_number(*e, "--ref-lat-px", g_opt.knobs.ref_lat_px, "track refinement: lateral sigma (<= 0: the default)", "px", -1, 1e4);
+  add_number(*e, "--track-radius", g_opt.knobs.track_radius, "track refinement: alignment search radius (0: the default)", "px", 0, 1e4);
+  run.on(e, run_eval);
 }
 
 }  // namespace
 
-QNAV_COMMAND("vo", "stereo visual odometry: synthetic Mars-yard evaluation, KITTI / EuRoC runs", run_vo);
+QNAV_CLI_COMMAND("vo", "stereo visual odometry: synthetic Mars-yard evaluation, KITTI / EuRoC runs", setup_vo);
