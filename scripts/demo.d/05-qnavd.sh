@@ -55,3 +55,38 @@ CFG
 else
   echo "(no $X: the recorded-dive replay is skipped)"
 fi
+# A recorded stereo sequence through the same daemon: the KITTI city drive (100 pairs, a car's camera
+# without an attitude sensor) replayed into the frame pool in Mode = Vo, with the KITTI preset that
+# `qnav vo --kitti` uses (firmware/pipeline/vo_defaults).
+K="$SHARED/data/stereo/kitti_raw_2011_09_26_0013_city100"
+if [ -d "$K/left" ]; then
+  rm -rf "$out/kitti_routes"
+  cat > "$out/kitti.toml" <<CFG
+[daemon]
+backend = "sim"
+route_dir = "$out/kitti_routes"
+log = "json"
+realtime = false
+[dvl]
+enabled = false
+[vo]
+preset = "kitti"
+width = 1242
+height = 375
+focal_px = 721.5377
+cu_px = 609.5593
+cv_px = 172.854
+baseline_m = 0.53715
+tilt_down_deg = 0.0
+mount_height_m = 0.0
+[[sim.pass]]
+mode = "vo"
+images = "$K"
+CFG
+  "$QNAVD" --config "$out/kitti.toml" > "$out/kitti.jsonl" 2> "$out/kitti.err"
+  grep '"event":"vo"' "$out/kitti.jsonl" |
+    awk -F'[:,]' '{ for (i = 1; i < NF; i++) { if ($i == "\"visual\"") v += ($(i + 1) == "true"); if ($i == "\"north_m\"") n = $(i + 1); if ($i == "\"east_m\"") e = $(i + 1) } k++ }
+         END { printf "qnavd on the recorded KITTI drive: %d stereo pairs, %d visual steps, end %.1f m north, %.1f m east of the start (libviso2, a peer: 115 m path)\n", k, v, n, e }'
+else
+  echo "(no $K: the recorded stereo replay is skipped)"
+fi
