@@ -472,6 +472,19 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   return StepResult::kProduced;
 }
 
+// A slot of the frame pool for the next pair: the one kept from a failed pair, else a free one; none
+// free is an overflow (counted).
+bool SimVehicle::take_frame_slot(std::uint32_t& slot, IoCounters& io) noexcept {
+  if (spare_frame_ >= 0) {
+    slot = static_cast<std::uint32_t>(spare_frame_);
+    spare_frame_ = -1;
+    return true;
+  }
+  if (frames_.free->try_pop(slot)) return true;
+  io.frame_overflow.fetch_add(1, std::memory_order_relaxed);
+  return false;
+}
+
 SimVehicle::StepResult SimVehicle::fly_rover(IoCounters& io) noexcept {
   if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
   if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
@@ -488,13 +501,7 @@ SimVehicle::StepResult SimVehicle::fly_rover(IoCounters& io) noexcept {
   if (stalled("camera", s.t_ns)) return StepResult::kProduced;
   io.frames_in.fetch_add(1, std::memory_order_relaxed);
   std::uint32_t slot = 0;
-  if (spare_frame_ >= 0) {
-    slot = static_cast<std::uint32_t>(spare_frame_);
-    spare_frame_ = -1;
-  } else if (!frames_.free->try_pop(slot)) {
-    io.frame_overflow.fetch_add(1, std::memory_order_relaxed);
-    return StepResult::kProduced;
-  }
+  if (!take_frame_slot(slot, io)) return StepResult::kProduced;
   const std::size_t n = static_cast<std::size_t>(frames_.width) * static_cast<std::size_t>(frames_.height);
   std::uint8_t* left = frames_.pool + static_cast<std::size_t>(slot) * 2 * n;
   const Status r = rover_->render(ImageViewU8::make(left, frames_.width, frames_.height).value(),
@@ -599,13 +606,7 @@ SimVehicle::StepResult SimVehicle::replay_pair(std::int64_t t, IoCounters& io) n
     return StepResult::kProduced;
   }
   std::uint32_t slot = 0;
-  if (spare_frame_ >= 0) {
-    slot = static_cast<std::uint32_t>(spare_frame_);
-    spare_frame_ = -1;
-  } else if (!frames_.free->try_pop(slot)) {
-    io.frame_overflow.fetch_add(1, std::memory_order_relaxed);
-    return StepResult::kProduced;
-  }
+  if (!take_frame_slot(slot, io)) return StepResult::kProduced;
   const std::size_t n = static_cast<std::size_t>(frames_.width) * static_cast<std::size_t>(frames_.height);
   std::uint8_t* left = frames_.pool + static_cast<std::size_t>(slot) * 2 * n;
   for (int y = 0; y < frames_.height; ++y) {

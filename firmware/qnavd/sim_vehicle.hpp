@@ -126,6 +126,7 @@ class SimVehicle {
   StepResult fly_replay(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
                         IoCounters& io) noexcept;
   StepResult replay_pair(std::int64_t t, IoCounters& io) noexcept;
+  bool take_frame_slot(std::uint32_t& slot, IoCounters& io) noexcept;
   bool peek_recorded(std::int64_t& stamp_ns) noexcept;
   Status load_sensors(const SimPass& p, std::size_t index);
   void align_sensors() noexcept;
