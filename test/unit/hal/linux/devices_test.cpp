@@ -153,16 +153,18 @@ TEST(V4l2Camera, VividGreyFramesWithMonotonicStamps) {
   }
   // vivid's webcam runs at 10-60 frames/s; the mean interval says the stamps are frame times, not
   // dequeue times of a backlog (under emulation frames may be dropped: gaps of a few periods).
-  const double mean_ms = static_cast<double>(got[kFrames - 1].stamp.sample_ns - got[0].stamp.sample_ns) / 1e6 / (kFrames - 1);
+  const double mean_ms =
+      static_cast<double>(got[kFrames - 1].stamp.sample_ns - got[0].stamp.sample_ns) / 1e6 / (kFrames - 1);
   EXPECT_GE(mean_ms, 5.0);
   EXPECT_LE(mean_ms, 1000.0);
   const auto mm = std::minmax_element(px.begin(), px.end());
-  EXPECT_GT(*mm.second - *mm.first, 64) << "the test pattern came out flat: min " << int(*mm.first) << " max " << int(*mm.second);
+  EXPECT_GT(*mm.second - *mm.first, 64) << "the test pattern came out flat: min " << int(*mm.first) << " max "
+                                        << int(*mm.second);
   const CameraStats st = cam.stats();
   EXPECT_EQ(st.frames, static_cast<std::uint32_t>(kFrames));
   EXPECT_EQ(st.corrupt, 0u);
-  std::printf("vivid %s: %d frames, mean interval %.1f ms, dropped %u, %d buffers, last stamp - dequeue %.1f ms\n", dev.c_str(),
-              kFrames, mean_ms, st.dropped, cam.buffer_count(),
+  std::printf("vivid %s: %d frames, mean interval %.1f ms, dropped %u, %d buffers, last stamp - dequeue %.1f ms\n",
+              dev.c_str(), kFrames, mean_ms, st.dropped, cam.buffer_count(),
               static_cast<double>(got[kFrames - 1].stamp.sample_ns - got[kFrames - 1].stamp.arrival_ns) / 1e6);
   cam.close();
   EXPECT_EQ(cam.fd(), -1);
