@@ -755,7 +755,7 @@ std::string suggest_key(const std::string& name, bool in_pass) {
   const std::string probe = in_pass ? leaf(name) : name;
   const std::string best = closest(probe, candidates);
   if (!best.empty()) return "did you mean " + best + "?";
-  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping";
+  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping, candump, dvl_log, images, max_frames";
   std::vector<std::string> same_leaf;
   for (const std::string& c : candidates)
     if (leaf(c) == leaf(name)) same_leaf.push_back(c);
@@ -869,6 +869,7 @@ class Reader {
           continue;
         }
         read_value(*spec, where + "." + key, pv, c);
+        lines_[where + "." + key] = line_of(k.source());
         has_mode = has_mode || key == "mode";
       }
       if (!has_mode) error(where, pass_line, "missing mode (one of \"teach\", \"repeat\", \"hold\")");
@@ -993,16 +994,22 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
     return r.error("sim.replay_stride", at("sim.replay_stride", "sim.replay_lines"),
                    "must be <= sim.replay_lines (" + std::to_string(c.sim_replay_lines) + "), got " + std::to_string(c.sim_replay_stride));
   }
-  for (const SimPass& p : c.sim_mission) {
+  for (std::size_t i = 0; i < c.sim_mission.size(); ++i) {
+    const SimPass& p = c.sim_mission[i];
+    const std::string pk = "sim.pass[" + std::to_string(i) + "].";  // the keys as the reader names them
+    const auto pass_at = [&](const char* key, const char* other) { return at((pk + key).c_str(), (pk + other).c_str()); };
     if (p.last_ping >= 0 && p.last_ping <= p.first_ping) {
-      return r.error("sim.pass.last_ping", at("sim.pass.last_ping", "sim.pass.first_ping"),
+      return r.error(pk + "last_ping", pass_at("last_ping", "first_ping"),
                      "must be -1 or > first_ping (" + std::to_string(p.first_ping) + "), got " + std::to_string(p.last_ping));
     }
     if (c.backend != Backend::kSim) continue;  // the mission is the sim backend's
     if (!p.images.empty() && p.mode != drivers::qnavcan::Mode::kVo)
-      return r.error("sim.pass.images", at("sim.pass.images", "sim.pass.mode"), "a stereo sequence is replayed in a pass with mode = \"vo\"");
+      return r.error(pk + "images", pass_at("images", "mode"), "a stereo sequence is replayed in a pass with mode = \"vo\"");
+    if (p.mode == drivers::qnavcan::Mode::kVo && p.images.empty() && (!p.candump.empty() || !p.dvl_log.empty()))
+      return r.error(pk + "images", pass_at("candump", "dvl_log"),
+                     "a vo pass replays recorded sensor logs with its recorded stereo sequence (sim.pass.images), not with the simulated rover");
     if (p.mode == drivers::qnavcan::Mode::kVo && !p.file.empty())
-      return r.error("sim.pass.file", at("sim.pass.file", "sim.pass.mode"), "a side-scan file is replayed in a teach, repeat or hold pass, not in mode = \"vo\"");
+      return r.error(pk + "file", pass_at("file", "mode"), "a side-scan file is replayed in a teach, repeat or hold pass, not in mode = \"vo\"");
   }
   if (!c.vo_enabled) {
     for (const SimPass& p : c.sim_mission)

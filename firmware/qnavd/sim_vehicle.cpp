@@ -165,7 +165,10 @@ Status SimVehicle::load_sensors(const SimPass& p, std::size_t index) {
 void SimVehicle::align_sensors() noexcept {
   const std::int64_t base = clock_.now_ns() + kPassLeadNs;
   std::int64_t abs0 = INT64_MAX, rel0 = INT64_MAX;
-  const auto take = [&](std::int64_t t) { (t >= kEpochFloorNs ? abs0 : rel0) = std::min(t >= kEpochFloorNs ? abs0 : rel0, t); };
+  const auto take = [&](std::int64_t t) {
+    std::int64_t& first = t >= kEpochFloorNs ? abs0 : rel0;
+    first = std::min(first, t);
+  };
   if (!rs_->can.empty()) take(rs_->can.front().t_ns);
   if (!rs_->dvl.empty()) take(rs_->dvl.front().t_ns);
   if (!rs_->pairs.empty()) take(rs_->pairs.front().stamp_ns);
