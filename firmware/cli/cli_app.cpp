@@ -1,6 +1,7 @@
 #include "firmware/cli/cli_app.hpp"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -160,6 +161,20 @@ std::string input_file_problem(const std::string& path, bool allow_empty) {
     return path + ": " + std::strerror(e) + (e == EACCES ? " (check the file's permissions)" : "");
   }
   std::fclose(f);
+  return std::string();
+}
+
+std::string input_dir_problem(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int e = errno;
+    return path + ": " + std::strerror(e) + (e == ENOENT ? " (check the path)" : "");
+  }
+  if (!S_ISDIR(st.st_mode)) return path + ": not a directory (give the folder)";
+  if (::access(path.c_str(), R_OK | X_OK) != 0) {
+    const int e = errno;
+    return path + ": " + std::strerror(e) + " (check the folder's permissions)";
+  }
   return std::string();
 }
 

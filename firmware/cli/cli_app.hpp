@@ -75,6 +75,8 @@ CLI::Option* add_flag(CLI::App& app, const std::string& name, bool& var, const s
 // "" when path names a readable, non-empty regular file (or a character device such as a pty);
 // otherwise the reason, with the fix where there is a common one ("is a directory: give a file").
 std::string input_file_problem(const std::string& path, bool allow_empty = false);
+// "" when path names a folder that can be listed; otherwise the reason (strerror, "not a directory").
+std::string input_dir_problem(const std::string& path);
 // Creates a folder and its parents as needed (mkdir -p). "" on success, else the reason with strerror.
 std::string make_dirs(const std::string& dir);
 // Creates the folder that will hold the file `path` (nothing when path has no folder part).

@@ -35,6 +35,96 @@ bool can_filter_matches(const CanFilter& f, const CanFrame& frame) noexcept {
   return f.invert ? !match : match;
 }
 
+namespace {
+// candump's screen format (its default output, what `candump can0 > file` writes):
+//   [(sec.usec)]  IFACE  [RX - -]  ID   [LEN]  B0 B1 ...  ['ascii' | ERRORFRAME ...]
+// ID 3 hex digits = 11-bit, 8 = 29-bit (bit 0x20000000: error frame); "remote request" = RTR;
+// [LEN] two digits for CAN FD. `i` is past leading blanks, `n` before trailing ones.
+Status parse_screen_line(const char* line, std::size_t i, std::size_t n, CanLogRecord& out) noexcept {
+  if (line[i] == '(') {
+    ++i;
+    std::int64_t sec = 0, usec = 0;
+    int digits = 0, frac = 0;
+    while (i < n && line[i] >= '0' && line[i] <= '9' && digits < 12) sec = sec * 10 + (line[i++] - '0'), ++digits;
+    if (digits == 0 || i >= n || line[i] != '.') return Status(StatusCode::kCorrupt, "bad timestamp");
+    ++i;
+    while (i < n && line[i] >= '0' && line[i] <= '9' && frac < 6) usec = usec * 10 + (line[i++] - '0'), ++frac;
+    if (frac != 6 || i >= n || line[i] != ')') return Status(StatusCode::kCorrupt, "bad timestamp");
+    ++i;
+    out.has_time = true;
+    out.time_us = sec * 1000000 + usec;
+    while (i < n && is_space(line[i])) ++i;
+  }
+  std::size_t k = 0;
+  while (i < n && !is_space(line[i])) {
+    if (k + 1 >= sizeof out.interface) return Status(StatusCode::kCorrupt, "interface name too long");
+    out.interface[k++] = line[i++];
+  }
+  out.interface[k] = '\0';
+  // The identifier is the last word before '[' (candump -x puts "RX - -" before it).
+  std::size_t open = i;
+  while (open < n && line[open] != '[') ++open;
+  if (open >= n) return Status(StatusCode::kTruncated, "no [length] in the candump line");
+  std::size_t id_end = open;
+  while (id_end > i && is_space(line[id_end - 1])) --id_end;
+  std::size_t id_begin = id_end;
+  while (id_begin > i && !is_space(line[id_begin - 1])) --id_begin;
+  const std::size_t id_digits = id_end - id_begin;
+  std::uint32_t id = 0;
+  for (std::size_t j = id_begin; j < id_end; ++j) {
+    const int h = hex_value(line[j]);
+    if (h < 0 || id_digits > 8) return Status(StatusCode::kCorrupt, "bad CAN id");
+    id = (id << 4) | static_cast<std::uint32_t>(h);
+  }
+  CanFrame& f = out.frame;
+  if (id_digits == 3) {
+    if (id > kCanSffMask) return Status(StatusCode::kOutOfRange, "11-bit id > 0x7FF");
+    f.id = id;
+  } else if (id_digits == 8) {
+    if (id & kCanErrFlag) {
+      f.error = true;
+      f.id = id & kCanEffMask & ~kCanErrFlag;
+    } else {
+      if (id > kCanEffMask) return Status(StatusCode::kOutOfRange, "29-bit id too large");
+      f.extended = true;
+      f.id = id;
+    }
+  } else {
+    return Status(StatusCode::kCorrupt, "CAN id must have 3 or 8 hex digits");
+  }
+  i = open + 1;
+  std::size_t len = 0;
+  int len_digits = 0;
+  while (i < n && line[i] >= '0' && line[i] <= '9' && len_digits < 2) len = len * 10 + static_cast<std::size_t>(line[i++] - '0'), ++len_digits;
+  if (len_digits == 0 || i >= n || line[i] != ']') return Status(StatusCode::kCorrupt, "bad [length]");
+  ++i;
+  f.fd = len_digits == 2;  // candump prints an FD frame's length with two digits ("[12]", "[08]")
+  if (len > (f.fd ? kCanMaxDataFd : kCanMaxDataClassic) || (f.fd && !can_fd_len_valid(len)))
+    return Status(StatusCode::kOutOfRange, "bad CAN length");
+  while (i < n && is_space(line[i])) ++i;
+  static constexpr char kRemote[] = "remote request";
+  if (n - i >= sizeof kRemote - 1 && std::memcmp(line + i, kRemote, sizeof kRemote - 1) == 0) {
+    if (f.fd) return Status(StatusCode::kCorrupt, "CAN FD has no remote frames");
+    f.rtr = true;
+    f.len = static_cast<std::uint8_t>(len);
+    return Status::ok();
+  }
+  for (std::size_t b = 0; b < len; ++b) {
+    if (i + 2 > n) return Status(StatusCode::kTruncated, "fewer data bytes than [length]");
+    const int hi = hex_value(line[i]);
+    const int lo = hex_value(line[i + 1]);
+    if (hi < 0 || lo < 0 || (i + 2 < n && !is_space(line[i + 2]))) return Status(StatusCode::kCorrupt, "bad hex data");
+    f.data[b] = static_cast<std::uint8_t>((hi << 4) | lo);
+    i += 2;
+    while (i < n && is_space(line[i])) ++i;
+  }
+  // What follows the data is candump's ASCII column ('...') or its error-frame text: not data.
+  if (i < n && line[i] != '\'' && !f.error) return Status(StatusCode::kCorrupt, "more data bytes than [length]");
+  f.len = static_cast<std::uint8_t>(len);
+  return Status::ok();
+}
+}  // namespace
+
 Status parse_can_log_line(const char* line, std::size_t n, CanLogRecord& out) noexcept {
   if (line == nullptr) return Status(StatusCode::kInvalidArgument, "null line");
   if (n > kMaxCanLogLine) return Status(StatusCode::kTruncated, "CAN log line too long");
@@ -42,6 +132,9 @@ Status parse_can_log_line(const char* line, std::size_t n, CanLogRecord& out) no
   std::size_t i = 0;
   while (i < n && is_space(line[i])) ++i;
   out = CanLogRecord{};
+  // No '#' but a '[': candump's screen format.
+  if (i < n && std::memchr(line + i, '#', n - i) == nullptr && std::memchr(line + i, '[', n - i) != nullptr)
+    return parse_screen_line(line, i, n, out);
   if (i < n && line[i] == '(') {
     ++i;
     std::int64_t sec = 0;

@@ -4,6 +4,9 @@
 //    an 8-digit id with bit 0x20000000 (CAN_ERR_FLAG) set is an error frame.
 //  - `123#R` / `123#R5` remote request (optional length); `123##<flags-nibble><data>` CAN FD
 //    (flags: 1 = BRS, 2 = ESI). Data is hex pairs, optionally separated by '.'.
+// parse_can_log_line() also reads candump's screen format (its default output, no -l): a line with no
+// '#' and a "[len]": `  can0  123   [2]  11 22`, with `(sec.usec)` before it under -t a, "RX - -"
+// under -x, the ASCII column under -a, "remote request" for RTR and a two-digit length for CAN FD.
 // parse_can_log_line(): pure, no heap, O(line length) with the line capped at kMaxCanLogLine bytes
 // (longer lines are rejected as kTruncated before any parsing). format_can_log_line() writes the same form.
 #pragma once

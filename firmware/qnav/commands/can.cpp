@@ -1,5 +1,6 @@
 // qnav can: qnav's CAN interface from the command line.
-//   qnav can decode LOG [--node N] [--all]  decode a candump log (candump -l): qnav messages (docs/qnav.dbc)
+//   qnav can decode LOG [--node N] [--all]  decode a candump log (candump -l, or candump's screen output):
+//                                    qnav messages (docs/qnav.dbc)
 //                                    and DroneCAN AHRS Solution/RawIMU; prints counters at the end
 //   qnav can listen IFACE [--seconds S] [--node N]
 //                                    the same, live from a SocketCAN interface (can0, vcan0)
@@ -7,6 +8,7 @@
 //   qnav can simulate OUT [--seconds S] [--faults]
 //                                    write a candump log of an AHRS (qnav ATTITUDE_IN + DroneCAN
 //                                    Solution at 20 Hz, node 42); --faults adds corrupted frames
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -18,7 +20,7 @@
 #include "drivers/qnavcan/dbc.hpp"
 #include "drivers/qnavcan/messages.hpp"
 #include "drivers/qnavcan/receiver.hpp"
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/text_file.hpp"
 #include "hal/core/candump.hpp"
@@ -89,14 +91,27 @@ struct Decoder {
   }
 };
 
-int decode(int argc, char** argv) {
-  static const char* const kValued[] = {"--node", nullptr};
-  const char* path = cli::positional(argc, argv, 2, 0, kValued);
+// Every can option (one invocation per process), declared in setup_can below.
+struct CanOptions {
+  std::string path;
   long node = 0;
-  if (path == nullptr || !cli::option_long(argc, argv, "--node", node) || node < 0 || node > 127) {
-    std::fprintf(stderr, "usage: qnav can decode LOG [--node N] [--all]\n");
-    return 2;
-  }
+  bool all = false, faults = false;
+  double listen_s = 5.0, simulate_s = 2.0;
+};
+CanOptions g_opt;
+
+// "" when the input can be read; otherwise printed with the reason, and the caller returns 1.
+bool input_ok(const char* path) {
+  const std::string e = qnav::cli::input_file_problem(path);
+  if (e.empty()) return true;
+  std::fprintf(stderr, "qnav can: %s\n", e.c_str());
+  return false;
+}
+
+int decode() {
+  const char* path = g_opt.path.c_str();
+  const long node = g_opt.node;
+  if (!input_ok(path)) return 1;
   std::string text;
   const Status rs = tools::read_text_file(path, kMaxLogBytes, text);
   if (!rs.is_ok()) {
@@ -105,7 +120,7 @@ int decode(int argc, char** argv) {
   }
   hal::CanLogReplay replay(text.data(), text.size(), 0);
   auto d = std::make_unique<Decoder>(static_cast<std::uint8_t>(node));
-  if (cli::flag(argc, argv, "--all")) d->max_print = ~0u;
+  if (g_opt.all) d->max_print = ~0u;
   hal::CanRxFrame f;
   // To the end of the log: a run of bad lines makes receive() pause (kTimeout), never stop the read.
   while (!replay.finished()) {
@@ -113,7 +128,10 @@ int decode(int argc, char** argv) {
   }
   d->summary(replay.bad_lines());
   if (d->frames == 0) {
-    std::fprintf(stderr, "qnav can: %s: no CAN frame in the log\n", path);
+    std::fprintf(stderr,
+                 "qnav can: %s: no CAN frame in the log: %u line(s), none a candump frame (candump -l `(time) can0 123#1122`, or "
+                 "candump's screen format `  can0  123   [2]  11 22`; the first bad line is %u)\n",
+                 path, replay.bad_lines(), replay.first_bad_line());
     return 1;
   }
   if (replay.bad_lines() > 0) {
@@ -125,22 +143,27 @@ int decode(int argc, char** argv) {
 }
 
 // Live: a SocketCAN interface (can0, vcan0) for --seconds, all frames, error frames subscribed.
-int listen_live(int argc, char** argv) {
-  static const char* const kValued[] = {"--node", "--seconds", nullptr};
-  const char* iface = cli::positional(argc, argv, 2, 0, kValued);
-  long node = 0;
-  double seconds = 5;
-  if (iface == nullptr || !cli::option_long(argc, argv, "--node", node) || node < 0 || node > 127 ||
-      !cli::option_double(argc, argv, "--seconds", seconds) || seconds <= 0) {
-    std::fprintf(stderr, "usage: qnav can listen IFACE [--seconds S] [--node N]\n");
-    return 2;
-  }
+int listen_live() {
+  const char* iface = g_opt.path.c_str();
+  const long node = g_opt.node;
+  const double seconds = g_opt.listen_s;
   hal::SocketCanBus bus;
   hal::SocketCanConfig cfg;
   cfg.interface = iface;
+  errno = 0;
   const Status st = bus.open(cfg);
   if (!st.is_ok()) {
-    std::fprintf(stderr, "qnav can: %s: %s\n", iface, st.message());
+    const int e = errno;
+    const char* hint = "";
+    if (std::strstr(st.message(), "socket(PF_CAN)") != nullptr)
+      hint = " (the kernel has no SocketCAN: load the can-raw / vcan modules: modprobe can-raw; modprobe vcan)";
+    else if (e == ENODEV || e == ENXIO)
+      hint = " (no such CAN interface: `ip link` lists them; a virtual one: ip link add dev vcan0 type vcan && ip link set up vcan0)";
+    else if (e == EPERM || e == EACCES)
+      hint = " (permission denied: run as root or with CAP_NET_RAW)";
+    else if (e == ENETDOWN)
+      hint = " (the interface is down: ip link set up IFACE)";
+    std::fprintf(stderr, "qnav can: %s: %s%s%s%s\n", iface, st.message(), e != 0 ? ": " : "", e != 0 ? std::strerror(e) : "", hint);
     return 1;
   }
   auto d = std::make_unique<Decoder>(static_cast<std::uint8_t>(node));
@@ -160,12 +183,9 @@ int listen_live(int argc, char** argv) {
   return 0;
 }
 
-int dbc(int argc, char** argv) {
-  const char* path = cli::positional(argc, argv, 2, 0, nullptr);
-  if (path == nullptr) {
-    std::fprintf(stderr, "usage: qnav can dbc FILE\n");
-    return 2;
-  }
+int dbc() {
+  const char* path = g_opt.path.c_str();
+  if (!input_ok(path)) return 1;
   std::string text;
   const Status rs = tools::read_text_file(path, kMaxDbcBytes, text);
   if (!rs.is_ok()) {
@@ -213,18 +233,17 @@ int dbc(int argc, char** argv) {
   return 0;
 }
 
-int simulate(int argc, char** argv) {
-  static const char* const kValued[] = {"--seconds", nullptr};
-  const char* out = cli::positional(argc, argv, 2, 0, kValued);
-  double seconds = 2.0;
-  if (out == nullptr || !cli::option_double(argc, argv, "--seconds", seconds) || seconds <= 0 || seconds > 3600) {
-    std::fprintf(stderr, "usage: qnav can simulate OUT [--seconds S] [--faults]\n");
-    return 2;
+int simulate() {
+  const char* out = g_opt.path.c_str();
+  const double seconds = g_opt.simulate_s;
+  const bool faults = g_opt.faults;
+  if (const std::string e = qnav::cli::make_parent_dirs(out); !e.empty()) {
+    std::fprintf(stderr, "qnav can: %s\n", e.c_str());
+    return 1;
   }
-  const bool faults = cli::flag(argc, argv, "--faults");
   FILE* f = std::fopen(out, "w");
   if (!f) {
-    std::fprintf(stderr, "qnav can: cannot write %s\n", out);
+    std::fprintf(stderr, "qnav can: cannot write %s: %s\n", out, std::strerror(errno));
     return 1;
   }
   const std::int64_t t0_us = 1700000000000000LL;
@@ -271,14 +290,34 @@ int simulate(int argc, char** argv) {
   return 0;
 }
 
-int run_can(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "decode") == 0) return decode(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "listen") == 0) return listen_live(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "dbc") == 0) return dbc(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
-  std::fprintf(stderr, "usage: qnav can decode LOG [--node N] | listen IFACE [--seconds S] | dbc FILE | simulate OUT [--seconds S] [--faults]\n");
-  return 2;
+void setup_can(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_flag;
+  using qnav::cli::add_number;
+  cmd.require_subcommand(1);
+  CLI::App* d = cmd.add_subcommand("decode", "decode a candump log (candump -l, or candump's screen output): qnav messages\n"
+                                             "(docs/qnav.dbc) and DroneCAN AHRS Solution/RawIMU; counters at the end;\n"
+                                             "exit 1 when no line is a CAN frame or some lines did not parse");
+  qnav::cli::add_positional(*d, "LOG", g_opt.path, "the candump log");
+  add_number(*d, "--node", g_opt.node, "DroneCAN node id of the AHRS (0: any)", "", 0, 127);
+  add_flag(*d, "--all", g_opt.all, "print every decoded frame (default: the first 20)");
+  run.on(d, decode);
+
+  CLI::App* l = cmd.add_subcommand("listen", "the same, live from a SocketCAN interface (can0, vcan0)");
+  qnav::cli::add_positional(*l, "IFACE", g_opt.path, "the SocketCAN interface");
+  add_number(*l, "--seconds", g_opt.listen_s, "how long to listen", "s", 0.001, 1e6);
+  add_number(*l, "--node", g_opt.node, "DroneCAN node id of the AHRS (0: any)", "", 0, 127);
+  run.on(l, listen_live);
+
+  CLI::App* b = cmd.add_subcommand("dbc", "read a DBC file and check every signal against qnav's codec (exit 1 on a mismatch or no message)");
+  qnav::cli::add_positional(*b, "FILE", g_opt.path, "the DBC file (docs/qnav.dbc)");
+  run.on(b, dbc);
+
+  CLI::App* m = cmd.add_subcommand("simulate", "write a candump -l log of an AHRS (qnav ATTITUDE_IN + DroneCAN Solution at 20 Hz, node 42)");
+  qnav::cli::add_positional(*m, "OUT", g_opt.path, "the log to write (folders created)");
+  add_number(*m, "--seconds", g_opt.simulate_s, "length of the log", "s", 0.05, 3600);
+  add_flag(*m, "--faults", g_opt.faults, "add corrupted, lost and repeated frames");
+  run.on(m, simulate);
 }
 }  // namespace
 
-QNAV_COMMAND("can", "CAN interface: decode candump logs, check a DBC, simulate an AHRS", run_can);
+QNAV_CLI_COMMAND("can", "CAN interface: decode candump logs, check a DBC, simulate an AHRS", setup_can);

@@ -7,6 +7,7 @@
 //   qnav dvl simulate OUT [--seconds S] [--faults]
 //                                    write Water Linked sentences (wrz + wru at 8 Hz) with valid
 //                                    checksums; --faults adds bad checksums, lock losses and stale lines
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -16,7 +17,7 @@
 #include "drivers/dvl/line_assembler.hpp"
 #include "drivers/dvl/pd6_parser.hpp"
 #include "drivers/dvl/wl_parser.hpp"
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/termios_serial.hpp"
@@ -32,18 +33,28 @@ void print_counters(const C& c) {
   std::printf("\n");
 }
 
-int parse(int argc, char** argv) {
-  const char* path = cli::positional(argc, argv, 2, 0, nullptr);
-  if (path == nullptr) {
-    std::fprintf(stderr, "usage: qnav dvl parse FILE [--pd6]\n");
-    return 2;
+// Every dvl option (one invocation per process), declared in setup_dvl below.
+struct DvlOptions {
+  std::string path;
+  bool pd6 = false, faults = false;
+  long baud = 115200;
+  double listen_s = 5.0, simulate_s = 5.0;
+};
+DvlOptions g_opt;
+
+int parse() {
+  const char* path = g_opt.path.c_str();
+  // A capture may be a device (a pty, /dev/ttyUSB0): only folders, missing and empty files are refused here.
+  if (const std::string e = qnav::cli::input_file_problem(path); !e.empty()) {
+    std::fprintf(stderr, "qnav dvl: %s\n", e.c_str());
+    return 1;
   }
   FILE* f = std::fopen(path, "rb");
   if (!f) {
-    std::fprintf(stderr, "qnav dvl: cannot read %s\n", path);
+    std::fprintf(stderr, "qnav dvl: cannot read %s: %s\n", path, std::strerror(errno));
     return 1;
   }
-  bool pd6 = cli::flag(argc, argv, "--pd6");
+  bool pd6 = g_opt.pd6;
   const int first = std::fgetc(f);
   if (first == ':') pd6 = true;
   if (first != EOF) std::ungetc(first, f);
@@ -57,7 +68,7 @@ int parse(int argc, char** argv) {
   std::int64_t t_ns = 0;  // line index as time (a file has no arrival times): 1 ms per line
   // A capture is read to its end but never without bound (a device such as /dev/zero has no end).
   constexpr std::uint64_t kMaxCaptureBytes = std::uint64_t{64} << 20;
-  std::uint64_t bytes = 0;
+  std::uint64_t bytes = 0, binary = 0;  // binary: control bytes, never in a text capture
   int c;
   while ((c = std::fgetc(f)) != EOF) {
     if (++bytes > kMaxCaptureBytes) {
@@ -66,6 +77,7 @@ int parse(int argc, char** argv) {
                    static_cast<unsigned long long>(kMaxCaptureBytes >> 20));
       return 1;
     }
+    binary += (c < 0x20 && c != '\n' && c != '\r' && c != '\t') ? 1u : 0u;
     if (!lines.push(static_cast<std::uint8_t>(c))) continue;
     ++n_lines;
     t_ns += 1000000;
@@ -93,33 +105,37 @@ int parse(int argc, char** argv) {
   if (pd6) print_counters(pd.counters());
   else print_counters(wl.counters());
   if (n_vel == 0) {
-    std::fprintf(stderr, "qnav dvl: %s: no %s velocity sentence in %u lines (rejections counted above)\n", path,
-                 pd6 ? "PD6" : "Water Linked", n_lines);
+    std::fprintf(stderr, "qnav dvl: %s: no %s velocity sentence in %u lines (rejections counted above)%s\n", path,
+                 pd6 ? "PD6" : "Water Linked", n_lines,
+                 binary > bytes / 100 ? ": the file is binary (a DVL capture is text, one sentence a line)"
+                 : n_lines == 0 ? ": no complete line"
+                 : pd6          ? ""
+                                : " (an RDI PD6 capture? give --pd6)");
     return 1;
   }
   return 0;
 }
 
 // Live: a DVL on a serial device (or a pty) through TermiosSerialPort + DvlSerialDriver.
-int listen_live(int argc, char** argv) {
-  static const char* const kValued[] = {"--baud", "--seconds", nullptr};
-  const char* dev = cli::positional(argc, argv, 2, 0, kValued);
-  long baud = 115200;
-  double seconds = 5;
-  if (dev == nullptr || !cli::option_long(argc, argv, "--baud", baud) || !cli::option_double(argc, argv, "--seconds", seconds) ||
-      seconds <= 0 || baud <= 0) {
-    std::fprintf(stderr, "usage: qnav dvl listen DEVICE [--baud B] [--pd6] [--seconds S]\n");
-    return 2;
-  }
+int listen_live() {
+  const char* dev = g_opt.path.c_str();
+  const long baud = g_opt.baud;
+  const double seconds = g_opt.listen_s;
   hal::TermiosSerialPort port;
   hal::SerialConfig cfg;
   cfg.baud = static_cast<std::uint32_t>(baud);
+  errno = 0;
   const Status st = port.open(dev, cfg);
   if (!st.is_ok()) {
-    std::fprintf(stderr, "qnav dvl: %s: %s\n", dev, st.message());
+    const int e = errno;
+    const char* hint = e == EACCES  ? " (permission denied: add the user to the dialout group, or run as root)"
+                       : e == ENOENT ? " (no such device: `ls /dev/tty*` lists serial ports)"
+                       : e == EBUSY  ? " (the device is in use by another program)"
+                                     : "";
+    std::fprintf(stderr, "qnav dvl: %s: %s%s%s%s\n", dev, st.message(), e != 0 ? ": " : "", e != 0 ? std::strerror(e) : "", hint);
     return 1;
   }
-  const bool pd6 = cli::flag(argc, argv, "--pd6");
+  const bool pd6 = g_opt.pd6;
   DvlSerialDriver drv(port, pd6 ? DvlProtocol::kPd6 : DvlProtocol::kWaterLinked);
   const std::int64_t end = hal::monotonic_now_ns() + static_cast<std::int64_t>(seconds * 1e9);
   unsigned n = 0;
@@ -145,18 +161,17 @@ int listen_live(int argc, char** argv) {
   return 0;
 }
 
-int simulate(int argc, char** argv) {
-  static const char* const kValued[] = {"--seconds", nullptr};
-  const char* out = cli::positional(argc, argv, 2, 0, kValued);
-  double seconds = 5.0;
-  if (out == nullptr || !cli::option_double(argc, argv, "--seconds", seconds) || seconds <= 0 || seconds > 3600) {
-    std::fprintf(stderr, "usage: qnav dvl simulate OUT [--seconds S] [--faults]\n");
-    return 2;
+int simulate() {
+  const char* out = g_opt.path.c_str();
+  const double seconds = g_opt.simulate_s;
+  const bool faults = g_opt.faults;
+  if (const std::string e = qnav::cli::make_parent_dirs(out); !e.empty()) {
+    std::fprintf(stderr, "qnav dvl: %s\n", e.c_str());
+    return 1;
   }
-  const bool faults = cli::flag(argc, argv, "--faults");
   FILE* f = std::fopen(out, "w");
   if (!f) {
-    std::fprintf(stderr, "qnav dvl: cannot write %s\n", out);
+    std::fprintf(stderr, "qnav dvl: cannot write %s: %s\n", out, std::strerror(errno));
     return 1;
   }
   const int steps = static_cast<int>(seconds * 8);
@@ -189,13 +204,29 @@ int simulate(int argc, char** argv) {
   return 0;
 }
 
-int run_dvl(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "parse") == 0) return parse(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "listen") == 0) return listen_live(argc, argv);
-  if (argc >= 2 && std::strcmp(argv[1], "simulate") == 0) return simulate(argc, argv);
-  std::fprintf(stderr, "usage: qnav dvl parse FILE [--pd6] | listen DEVICE [--baud B] [--pd6] [--seconds S] | simulate OUT [--seconds S] [--faults]\n");
-  return 2;
+void setup_dvl(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_flag;
+  using qnav::cli::add_number;
+  cmd.require_subcommand(1);
+  CLI::App* p = cmd.add_subcommand("parse", "parse a capture of DVL output (Water Linked serial protocol, or RDI PD6); prints the\n"
+                                            "velocities and the rejection counters; exit 1 when no velocity sentence is found");
+  qnav::cli::add_positional(*p, "FILE", g_opt.path, "the capture (text, one sentence a line)");
+  add_flag(*p, "--pd6", g_opt.pd6, "RDI PD6 (also chosen when the first line starts with ':')");
+  run.on(p, parse);
+
+  CLI::App* l = cmd.add_subcommand("listen", "live from a serial device through the termios backend");
+  qnav::cli::add_positional(*l, "DEVICE", g_opt.path, "the serial device (/dev/ttyUSB0, a pty)");
+  add_number(*l, "--baud", g_opt.baud, "line speed", "bit/s", 50, 4000000);
+  add_flag(*l, "--pd6", g_opt.pd6, "RDI PD6 instead of the Water Linked protocol");
+  add_number(*l, "--seconds", g_opt.listen_s, "how long to listen", "s", 0.001, 1e6);
+  run.on(l, listen_live);
+
+  CLI::App* m = cmd.add_subcommand("simulate", "write Water Linked sentences (wrz + wru at 8 Hz) with valid checksums");
+  qnav::cli::add_positional(*m, "OUT", g_opt.path, "the capture to write (folders created)");
+  add_number(*m, "--seconds", g_opt.simulate_s, "length of the capture", "s", 0.125, 3600);
+  add_flag(*m, "--faults", g_opt.faults, "add bad checksums, lock losses and stale lines");
+  run.on(m, simulate);
 }
 }  // namespace
 
-QNAV_COMMAND("dvl", "DVL serial protocols: parse a capture (Water Linked / PD6), simulate one", run_dvl);
+QNAV_CLI_COMMAND("dvl", "DVL serial protocols: parse a capture (Water Linked / PD6), simulate one", setup_dvl);

@@ -258,6 +258,10 @@ int cmd_train() {
 
 int cmd_info() {
   const char* path = g_opt.info_file.c_str();
+  if (const std::string e = qnav::cli::input_file_problem(path); !e.empty()) {
+    std::fprintf(stderr, "qnav route info: %s\n", e.c_str());
+    return 1;
+  }
   tools::RouteFileReader r;
   const Status s = r.open(path);
   if (!s) {
@@ -1015,6 +1019,10 @@ int open_file_pass(const char* path, FilePass& out) {
   if (stride > lines) {
     std::fprintf(stderr, "qnav route: --stride %ld is more than --lines %ld (a tile every --stride pings of --lines pings)\n", stride, lines);
     return 2;
+  }
+  if (const std::string e = qnav::cli::input_file_problem(path); !e.empty()) {
+    std::fprintf(stderr, "qnav route: %s\n", e.c_str());
+    return 1;
   }
   if (tools::load_sonar_file(path, out.fd) != 0) return 1;
   out.track = tools::build_track(out.fd, std::strcmp(nav, "dr") == 0, deg_to_rad(hoff_deg));

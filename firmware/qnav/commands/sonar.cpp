@@ -83,6 +83,10 @@ int waterfall() {
   const char* out = g_opt.out.c_str();
   if (!make_out_parent("waterfall", out)) return 1;
   FileData fd;
+  if (const std::string e = qnav::cli::input_file_problem(file); !e.empty()) {
+    std::fprintf(stderr, "qnav sonar: %s\n", e.c_str());
+    return 1;
+  }
   if (load_sonar_file(file, fd) != 0) return 1;
   const bool corrected = g_opt.corrected;
   const int rows = static_cast<int>(fd.pings.size());
@@ -154,6 +158,10 @@ int tiles() {
     return 1;
   }
   FileData fd;
+  if (const std::string e = qnav::cli::input_file_problem(file); !e.empty()) {
+    std::fprintf(stderr, "qnav sonar: %s\n", e.c_str());
+    return 1;
+  }
   if (load_sonar_file(file, fd) != 0) return 1;
   const NavTrack track = build_track(fd, nav == "dr", deg_to_rad(heading_off_deg));
   report_track("qnav sonar", file, track);

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/png_writer.hpp"
@@ -35,7 +35,19 @@ namespace {
 using namespace qnav;
 using namespace qnav::vision;
 
-const char* const kValued[] = {"--max-disparity", "--corners", "--out", "--dir", "--filter", nullptr};
+// Every stereo option (one invocation per process), declared in setup_stereo below.
+struct StereoOptions {
+  std::string left, right, left_opt, right_opt, out, dir, image;
+  long max_d = 64, corners = 500, filter = 4;
+};
+StereoOptions g_opt;
+const char* out_or_null() { return g_opt.out.empty() ? nullptr : g_opt.out.c_str(); }
+// --out's folder is created; false (reported) when it cannot be.
+bool out_dir_ok() {
+  const std::string e = g_opt.out.empty() ? std::string() : qnav::cli::make_parent_dirs(g_opt.out);
+  if (!e.empty()) std::fprintf(stderr, "qnav stereo: %s\n", e.c_str());
+  return e.empty();
+}
 
 struct Detector {
   Detector(int w, int h, int cap) : storage(static_cast<std::size_t>(cap)) {
@@ -66,6 +78,10 @@ void print_counters(const VisionCounters& c) {
 }
 
 bool load(const char* path, ImageU8& img) {
+  if (const std::string e = qnav::cli::input_file_problem(path); !e.empty()) {
+    std::fprintf(stderr, "qnav stereo: %s\n", e.c_str());
+    return false;
+  }
   Result<ImageU8> r = tools::read_image_gray8(path);
   if (!r.is_ok()) {
     std::fprintf(stderr, "qnav stereo: %s: %s\n", path, r.status().message());
@@ -105,15 +121,18 @@ bool run_stereo(const ImageU8& l, const ImageU8& r, int corners, int max_d, Dete
   return true;
 }
 
-int cmd_disparity(int argc, char** argv) {
-  const char* lp = cli::positional(argc, argv, 2, 0, kValued);
-  const char* rp = cli::positional(argc, argv, 2, 1, kValued);
-  long max_d = 64, corners = 500;
-  if (lp == nullptr || rp == nullptr || !cli::option_long(argc, argv, "--max-disparity", max_d) ||
-      !cli::option_long(argc, argv, "--corners", corners) || max_d < 3 || max_d > 500 || corners < 1 || corners > 100000) {
-    std::fprintf(stderr, "usage: qnav stereo disparity LEFT RIGHT [--max-disparity 3..500] [--corners N] [--out PNG]\n");
+int cmd_disparity() {
+  const std::string& left = g_opt.left_opt.empty() ? g_opt.left : g_opt.left_opt;
+  const std::string& right = g_opt.right_opt.empty() ? g_opt.right : g_opt.right_opt;
+  if (left.empty() || right.empty() || (!g_opt.left_opt.empty() && !g_opt.left.empty()) ||
+      (!g_opt.right_opt.empty() && !g_opt.right.empty())) {
+    std::fprintf(stderr, "qnav stereo disparity: give the pair once: LEFT RIGHT, or --left LEFT --right RIGHT (qnav help stereo disparity)\n");
     return 2;
   }
+  const char* lp = left.c_str();
+  const char* rp = right.c_str();
+  const long max_d = g_opt.max_d, corners = g_opt.corners;
+  if (!out_dir_ok()) return 1;
   ImageU8 l, r;
   if (!load(lp, l) || !load(rp, r)) return 1;
   if (l.width() != r.width() || l.height() != r.height()) {
@@ -130,7 +149,7 @@ int cmd_disparity(int argc, char** argv) {
               l.height(), d.out.size(), pts.size(), d.out.size() ? 100.0 * pts.size() / d.out.size() : 0.0, median(ds),
               ds.empty() ? 0.0 : *std::min_element(ds.begin(), ds.end()), ds.empty() ? 0.0 : *std::max_element(ds.begin(), ds.end()));
   print_counters(m.counters());
-  if (const char* outp = cli::option(argc, argv, "--out")) {
+  if (const char* outp = out_or_null()) {
     std::vector<std::uint8_t> rgb(static_cast<std::size_t>(l.width() * l.height() * 3));
     for (int y = 0; y < l.height(); ++y)
       for (int x = 0; x < l.width(); ++x)
@@ -165,9 +184,9 @@ int missing_sample_data(bool used_default) {
   return 1;
 }
 
-int cmd_aloe(int argc, char** argv) {
+int cmd_aloe() {
   const std::string fallback = tools::shared_dir() + "/data/stereo/middlebury_aloe_opencv";
-  const std::string dir = cli::option(argc, argv, "--dir", fallback.c_str());
+  const std::string dir = g_opt.dir.empty() ? fallback : g_opt.dir;
   ImageU8 l, r, gt;
   if (!load((dir + "/aloeL.jpg").c_str(), l) || !load((dir + "/aloeR.jpg").c_str(), r) || !load((dir + "/aloeGT.png").c_str(), gt))
     return missing_sample_data(dir == fallback);
@@ -197,8 +216,9 @@ std::vector<double> row_offsets(const ImageU8& L, const ImageU8& R) {
   return tools::epipolar_row_offsets(L.view(), R.view(), Span<const Corner>(d.out.data(), d.out.size()));
 }
 
-int cmd_euroc_rectify(int argc, char** argv) {
-  const char* dp = cli::positional(argc, argv, 2, 0, kValued);
+int cmd_euroc_rectify() {
+  if (!out_dir_ok()) return 1;
+  const char* dp = g_opt.dir.empty() ? nullptr : g_opt.dir.c_str();
   const std::string dir = dp ? dp : tools::shared_dir() + "/data/stereo/euroc_v1_01_hover40";
   Result<tools::EurocCamera> c0 = tools::read_euroc_camera(dir + "/cam0/sensor.yaml");
   Result<tools::EurocCamera> c1 = tools::read_euroc_camera(dir + "/cam1/sensor.yaml");
@@ -240,7 +260,7 @@ int cmd_euroc_rectify(int argc, char** argv) {
               100.0 * tr.valid_pixels() / (W * H));
   std::printf("row offset of matched corners: raw %zu matches median %.3f px; rectified %zu matches median %.3f px\n", before.size(),
               median(before), after.size(), median(after));
-  if (const char* outp = cli::option(argc, argv, "--out")) {
+  if (const char* outp = out_or_null()) {
     ImageU8 both = ImageU8::allocate(2 * W, H).value();
     for (int y = 0; y < H; ++y)
       for (int x = 0; x < W; ++x) {
@@ -258,13 +278,10 @@ int cmd_euroc_rectify(int argc, char** argv) {
   return 0;
 }
 
-int cmd_degrade(int argc, char** argv) {
-  const char* ip = cli::positional(argc, argv, 2, 0, kValued);
-  long filter = 4;
-  if (ip == nullptr || !cli::option_long(argc, argv, "--filter", filter) || filter < 1 || filter > 5) {
-    std::fprintf(stderr, "usage: qnav stereo degrade IMAGE [--filter 1..5] [--out PNG]\n");
-    return 2;
-  }
+int cmd_degrade() {
+  const char* ip = g_opt.image.c_str();
+  const long filter = g_opt.filter;
+  if (!out_dir_ok()) return 1;
   ImageU8 img;
   if (!load(ip, img)) return 1;
   ImageU8 deg = ImageU8::allocate(img.width(), img.height()).value();
@@ -286,7 +303,7 @@ int cmd_degrade(int argc, char** argv) {
   std::printf("degrade filter %ld (light %.2f m, attenuation %.2f, noise %.0f, min grey %d, %d flakes): Harris repeatability %.3f (%d of %zu corners within 1.5 px)\n",
               filter, p.light_distance_m, p.attenuation, p.noise_sigma, p.min_grey, p.snow_flakes,
               a.out.size() ? static_cast<double>(hit) / a.out.size() : 0.0, hit, a.out.size());
-  if (const char* outp = cli::option(argc, argv, "--out")) {
+  if (const char* outp = out_or_null()) {
     const Status w = tools::write_png_gray8(outp, deg.view());
     if (!w.is_ok()) {
       std::fprintf(stderr, "qnav stereo: %s: %s\n", outp, w.message());
@@ -297,20 +314,38 @@ int cmd_degrade(int argc, char** argv) {
   return 0;
 }
 
-int run_stereo_cmd(int argc, char** argv) {
-  const char* sub = argc > 1 ? argv[1] : "";
-  if (std::strcmp(sub, "disparity") == 0) return cmd_disparity(argc, argv);
-  if (std::strcmp(sub, "aloe") == 0) return cmd_aloe(argc, argv);
-  if (std::strcmp(sub, "euroc-rectify") == 0) return cmd_euroc_rectify(argc, argv);
-  if (std::strcmp(sub, "degrade") == 0) return cmd_degrade(argc, argv);
-  std::fprintf(stderr,
-               "usage: qnav stereo disparity LEFT RIGHT [--max-disparity N] [--corners N] [--out PNG]\n"
-               "       qnav stereo aloe [--dir DIR]\n"
-               "       qnav stereo euroc-rectify [DIR] [--out PNG]\n"
-               "       qnav stereo degrade IMAGE [--filter 1..5] [--out PNG]\n");
-  return 2;
+void setup_stereo(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_number;
+  using qnav::cli::add_text;
+  cmd.require_subcommand(1);
+  CLI::App* d = cmd.add_subcommand("disparity", "Harris corners on LEFT, ZNCC stereo at the corners; prints counts and counters; --out\n"
+                                                "writes the left image with each matched corner coloured by disparity (red near, blue far)");
+  d->add_option("LEFT", g_opt.left, "the left image (PNG, JPEG, PGM)")->type_name("");
+  d->add_option("RIGHT", g_opt.right, "the right image")->type_name("");
+  add_text(*d, "--left", g_opt.left_opt, "the left image (instead of LEFT)")->type_name("FILE");
+  add_text(*d, "--right", g_opt.right_opt, "the right image (instead of RIGHT)")->type_name("FILE");
+  add_number(*d, "--max-disparity", g_opt.max_d, "largest disparity searched", "px", 3, 500);
+  add_number(*d, "--corners", g_opt.corners, "Harris corners at most", "", 1, 100000);
+  add_text(*d, "--out", g_opt.out, "write the coloured corners here (folders created)")->type_name("PNG");
+  run.on(d, cmd_disparity);
+
+  CLI::App* a = cmd.add_subcommand("aloe", "disparity at Harris corners of the Middlebury Aloe pair against its ground truth");
+  add_text(*a, "--dir", g_opt.dir, "the folder with aloeL.jpg, aloeR.jpg, aloeGT.png (default: the sample data)")->type_name("DIR");
+  run.on(a, cmd_aloe);
+
+  CLI::App* e = cmd.add_subcommand("euroc-rectify", "rectify the first EuRoC pair from the two sensor.yaml; row offset of matched corners\n"
+                                                    "before and after; --out writes the rectified pair side by side with guide rows");
+  e->add_option("DIR", g_opt.dir, "the EuRoC sequence folder (default: the sample data)")->type_name("");
+  add_text(*e, "--out", g_opt.out, "write the rectified pair here (folders created)")->type_name("PNG");
+  run.on(e, cmd_euroc_rectify);
+
+  CLI::App* g = cmd.add_subcommand("degrade", "apply an underwater degradation of Table 1; Harris repeatability against the clean image");
+  qnav::cli::add_positional(*g, "IMAGE", g_opt.image, "the clean image");
+  add_number(*g, "--filter", g_opt.filter, "the Table 1 filter", "", 1, 5);
+  add_text(*g, "--out", g_opt.out, "write the degraded image here (folders created)")->type_name("PNG");
+  run.on(g, cmd_degrade);
 }
 
 }  // namespace
 
-QNAV_COMMAND("stereo", "vision front end on files: disparity, aloe, euroc-rectify, degrade", run_stereo_cmd);
+QNAV_CLI_COMMAND("stereo", "vision front end on files: disparity, aloe, euroc-rectify, degrade", setup_stereo);

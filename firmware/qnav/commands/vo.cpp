@@ -562,11 +562,15 @@ int run_kitti() {
   const std::string calib_path = g_opt.calib.empty() ? std::string(dir) + "/calib.txt" : g_opt.calib;
   const char* peer = g_opt.peer.empty() ? nullptr : g_opt.peer.c_str();
   const long max_frames = g_opt.frames;
+  if (const std::string e = qnav::cli::input_dir_problem(dir); !e.empty()) {
+    std::fprintf(stderr, "qnav vo: --kitti %s\n", e.c_str());
+    return 1;
+  }
   std::vector<tools::StereoFrame> frames;
   Status s = tools::read_kitti_sequence(dir, frames);
   Result<tools::KittiCalib> calib = tools::read_kitti_calib(calib_path);
   if (!s || !calib) {
-    std::fprintf(stderr, "vo: cannot read KITTI sequence/calibration: %s\n", !s ? s.message() : calib.status().message());
+    std::fprintf(stderr, "qnav vo: %s: cannot read the KITTI sequence/calibration: %s\n", dir, !s ? s.message() : calib.status().message());
     return 1;
   }
   const std::size_t n = std::min<std::size_t>(frames.size(), static_cast<std::size_t>(max_frames));
@@ -617,12 +621,17 @@ int run_euroc() {
   if (!check_out("--euroc")) return 2;
   const char* out = g_opt.out.c_str();
   const long max_frames = g_opt.frames;
+  if (const std::string e = qnav::cli::input_dir_problem(dir); !e.empty()) {
+    std::fprintf(stderr, "qnav vo: --euroc %s\n", e.c_str());
+    return 1;
+  }
   std::vector<tools::StereoFrame> frames;
   const Status s = tools::read_euroc_sequence(dir, frames);
   Result<tools::EurocCamera> c0 = tools::read_euroc_camera(dir + "/cam0/sensor.yaml");
   Result<tools::EurocCamera> c1 = tools::read_euroc_camera(dir + "/cam1/sensor.yaml");
   if (!s || !c0 || !c1) {
-    std::fprintf(stderr, "vo: cannot read EuRoC sequence\n");
+    std::fprintf(stderr, "qnav vo: %s: cannot read the EuRoC sequence: %s\n", dir.c_str(),
+                 !s ? s.message() : !c0 ? c0.status().message() : c1.status().message());
     return 1;
   }
   const int w = c0->model.width, h = c0->model.height;

@@ -2,11 +2,13 @@
 // packet types skipped, reader counters). Reads the whole file once with the fixed-buffer reader.
 #include <cinttypes>
 #include <cstdio>
+#include <cerrno>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "drivers/sidescan/xtf_reader.hpp"
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 
 namespace {
@@ -25,9 +27,13 @@ const char* channel_type(std::uint8_t t) {
 }
 
 int xtf_info(const char* path) {
+  if (const std::string e = qnav::cli::input_file_problem(path); !e.empty()) {
+    std::fprintf(stderr, "qnav xtf info: %s\n", e.c_str());
+    return 1;
+  }
   FileSource src;
   if (!src.open(path)) {
-    std::fprintf(stderr, "qnav xtf info: cannot open %s\n", path);
+    std::fprintf(stderr, "qnav xtf info: cannot open %s: %s\n", path, std::strerror(errno));
     return 1;
   }
   XtfReader reader;
@@ -97,17 +103,23 @@ int xtf_info(const char* path) {
   for (std::size_t i = 0; i < reader.counters().size(); ++i)
     std::printf(" %s=%u", reader.counters().name_at(i), reader.counters().count_at(i));
   std::printf("\n");
+  if (rc == 0 && reader.packets_read() == 0) {
+    std::fprintf(stderr, "qnav xtf info: %s: a file header but no packet: nothing to read\n", path);
+    return 1;
+  }
   return rc;
 }
 
-int run_xtf(int argc, char** argv) {
-  if (argc < 3 || std::strcmp(argv[1], "info") != 0) {
-    std::fprintf(stderr, "usage: qnav xtf info FILE\n");
-    return 2;
-  }
-  return xtf_info(argv[2]);
+std::string g_path;
+
+void setup_xtf(CLI::App& cmd, qnav::cli::Runner& run) {
+  cmd.require_subcommand(1);
+  CLI::App* i = cmd.add_subcommand("info", "what an XTF file holds: header, channels, pings, time span, navigation, packet types\n"
+                                           "skipped, reader counters; exit 1 on a read error or when the file holds no packet");
+  qnav::cli::add_positional(*i, "FILE", g_path, "the XTF file");
+  run.on(i, [] { return xtf_info(g_path.c_str()); });
 }
 
 }  // namespace
 
-QNAV_COMMAND("xtf", "xtf info FILE: channels, pings, time span, navigation of an XTF file", run_xtf);
+QNAV_CLI_COMMAND("xtf", "xtf info FILE: channels, pings, time span, navigation of an XTF file", setup_xtf);

@@ -123,3 +123,53 @@ TEST(SerialConfig, ValidatesFraming) {
   c.stop_bits = 3;
   EXPECT_EQ(validate_serial_config(c), StatusCode::kInvalidArgument);
 }
+
+// candump's default screen format (`candump can0 > file`): read like the -l log.
+TEST(CandumpScreen, ReadsTheDefaultScreenFormat) {
+  CanLogRecord r;
+  ASSERT_TRUE(parse("  can0  123   [2]  11 22", r).is_ok());
+  EXPECT_FALSE(r.has_time);
+  EXPECT_STREQ(r.interface, "can0");
+  EXPECT_EQ(r.frame.id, 0x123u);
+  EXPECT_FALSE(r.frame.extended);
+  ASSERT_EQ(r.frame.len, 2);
+  EXPECT_EQ(r.frame.data[0], 0x11);
+  EXPECT_EQ(r.frame.data[1], 0x22);
+
+  ASSERT_TRUE(parse("  vcan0  1F334455   [8]  01 02 03 04 05 06 07 08\n", r).is_ok());
+  EXPECT_TRUE(r.frame.extended);
+  EXPECT_EQ(r.frame.id, 0x1F334455u);
+  ASSERT_EQ(r.frame.len, 8);
+  EXPECT_EQ(r.frame.data[7], 0x08);
+
+  ASSERT_TRUE(parse("  can0  321   [0]  ", r).is_ok());
+  EXPECT_EQ(r.frame.len, 0);
+}
+
+TEST(CandumpScreen, ReadsTimestampsExtraColumnsRemoteFdAndAscii) {
+  CanLogRecord r;
+  ASSERT_TRUE(parse(" (1436509052.249713)  can0  123   [2]  11 22", r).is_ok());  // -t a
+  EXPECT_TRUE(r.has_time);
+  EXPECT_EQ(r.time_us, 1436509052249713LL);
+  ASSERT_TRUE(parse("  can0  RX - -  123   [2]  11 22", r).is_ok());  // -x
+  EXPECT_EQ(r.frame.id, 0x123u);
+  ASSERT_TRUE(parse("  can0  123   [3]  41 42 43   'ABC'", r).is_ok());  // -a
+  EXPECT_EQ(r.frame.len, 3);
+  ASSERT_TRUE(parse("  can0  123   [4]  remote request", r).is_ok());
+  EXPECT_TRUE(r.frame.rtr);
+  EXPECT_EQ(r.frame.len, 4);
+  ASSERT_TRUE(parse("  can0  123  [12]  00 11 22 33 44 55 66 77 88 99 AA BB", r).is_ok());
+  EXPECT_TRUE(r.frame.fd);
+  EXPECT_EQ(r.frame.len, 12);
+}
+
+TEST(CandumpScreen, RejectsDamagedScreenLines) {
+  CanLogRecord r;
+  EXPECT_FALSE(parse("  can0  123   [2]  11", r).is_ok());           // fewer bytes than [len]
+  EXPECT_FALSE(parse("  can0  123   [2]  11 22 33", r).is_ok());     // more
+  EXPECT_FALSE(parse("  can0  12345   [2]  11 22", r).is_ok());      // 5-digit id
+  EXPECT_FALSE(parse("  can0  123   [9]  11 22", r).is_ok());        // classic length > 8
+  EXPECT_FALSE(parse("  can0  123   [2]  1G 22", r).is_ok());        // bad hex
+  EXPECT_FALSE(parse("  can0  800   [1]  11", r).is_ok());           // 11-bit id > 0x7FF
+  EXPECT_FALSE(parse("Usage: see [the README]", r).is_ok());         // prose with a bracket
+}
