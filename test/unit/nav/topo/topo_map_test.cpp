@@ -416,7 +416,11 @@ TEST(TopoMap, DijkstraEqualsAStarOnARandomGrid) {
     return 0.2 * (static_cast<double>(h >> 8) / 16777216.0 - 0.5);
   };
   std::vector<Vec2d> where(100);
-  for (int i = 0; i < 100; ++i) where[static_cast<std::size_t>(i)] = Vec2d(1.5 * (i % 10) + jitter(), 1.5 * (i / 10) + jitter());
+  for (int i = 0; i < 100; ++i) {
+    const double jx = jitter();  // two statements: the order of evaluation of arguments differs between targets
+    const double jy = jitter();
+    where[static_cast<std::size_t>(i)] = Vec2d(1.5 * (i % 10) + jx, 1.5 * (i / 10) + jy);
+  }
   for (int row = 0; row < 10; ++row)
     for (int j = 0; j < 10; ++j) {
       const int col = row % 2 ? 9 - j : j;
