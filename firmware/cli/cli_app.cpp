@@ -61,6 +61,13 @@ std::vector<std::string> names_at(CLI::App& a) {
   for (const CLI::App* s : a.get_subcommands({})) out.push_back(s->get_name());
   return out;
 }
+// The help of `a` and of every subcommand below it, each under its full name (the man page's text).
+void print_help_tree(const CLI::App& a, const std::string& prev) {
+  const std::string name = prev.empty() ? a.get_name() : prev + " " + a.get_name();
+  if (!prev.empty()) std::printf("\n==== %s ====\n", name.c_str());
+  std::fputs(a.help(prev).c_str(), stdout);
+  for (const CLI::App* s : a.get_subcommands([](const CLI::App*) { return true; })) print_help_tree(*s, name);
+}
 }  // namespace
 
 std::string closest(const std::string& word, const std::vector<std::string>& candidates) {
@@ -85,7 +92,7 @@ int parse(CLI::App& app, int argc, char** argv) {
     std::fputs(app.help().c_str(), stdout);
     return 0;
   } catch (const CLI::CallForAllHelp&) {
-    std::fputs(app.help("", CLI::AppFormatMode::All).c_str(), stdout);
+    print_help_tree(app, "");
     return 0;
   } catch (const CLI::ParseError& e) {
     CLI::App& at = selected(app);

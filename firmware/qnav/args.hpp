@@ -1,5 +1,7 @@
-// Minimal command-line helpers for qnav commands: `--name value` options, `--flag` switches and
-// positional arguments. Options may appear anywhere after the sub-command words.
+// The older, lenient command-line helpers (`--name value` options, `--flag` switches, positional
+// arguments; unknown options are NOT detected). Only `qnav map` still uses them: every other command
+// declares its options on the strict parser (firmware/cli/cli_app.hpp, docs/cli.md). Delete this
+// file when map moves too.
 #pragma once
 
 #include <cerrno>

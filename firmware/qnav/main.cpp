@@ -23,6 +23,7 @@ int run(int argc, char** argv) {
                "or processed nothing valid. `qnav help COMMAND` prints a command's options.",
                "qnav");
   qnav::cli::configure(app);
+  app.set_help_all_flag("--help-all", "print the help of every command and subcommand");
   app.require_subcommand(1);
   qnav::cli::Runner runner;
   for (int i = 0; i < qnav::cli::command_count(); ++i) {

@@ -59,6 +59,7 @@ ok 'Usage: qnav route' "$Q" help route
 ok 'train' "$Q" help route
 ok 'length-m NUM +length of the simulated route \(m; default 2000; 200\.\.50000\)' "$Q" help route train
 help "$Q" route --help
+ok '==== qnav route train ====' "$Q" --help-all   # every (sub)command's help: the man page's text
 help "$Q" route train --help
 err 2 "unknown command 'rout'.*'route'" "$Q" rout
 err 2 "unknown command 'nosuch'" "$Q" help nosuch
