@@ -455,6 +455,10 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "vo.rate_hz", [](auto& c) -> auto& { return c.vo_rate_hz; }, 0.5, 60.0, "Hz",
       "Pairs per second the trigger line asks for (free-running cameras keep their own rate)"));
+  t.push_back(float_key(
+      "vo.pair_tolerance_ms", [](auto& c) -> auto& { return c.vo_pair_tolerance_ms; }, 0.01, 1000.0, "ms",
+      "Left and right frames whose kernel stamps are this close make a pair (v4l2). Triggered cameras: ~0.1 ms apart; "
+      "free-running, unsynchronised cameras need up to half a frame period, and the rig's motion in that time is a stereo error"));
   t.push_back(enum_key(
       "vo.preset", [](auto& c) -> auto& { return c.vo_preset; },
       std::vector<std::pair<std::string, VoPreset>>{{"bench", VoPreset::kBench}, {"kitti", VoPreset::kKitti}, {"euroc", VoPreset::kEuroc}},

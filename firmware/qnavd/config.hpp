@@ -111,6 +111,7 @@ struct DaemonConfig {
   std::string vo_trigger_chip;                // vo.trigger_chip: gpiochip of the trigger line; "" = free-running cameras
   int vo_trigger_line = 0;                    // vo.trigger_line [0, 511]
   double vo_rate_hz = 10.0;                   // vo.rate_hz [0.5, 60]: trigger rate (with vo.trigger_chip)
+  double vo_pair_tolerance_ms = 2.0;          // vo.pair_tolerance_ms [0.01, 1000]: left/right stamps this close are a pair
   double vo_tilt_down_deg = 70.0;             // vo.tilt_down_deg [0, 90]: camera mount, forward-looking, tilted down
   double vo_mount_height_m = 0.8;             // vo.mount_height_m [0, 10]: left camera above the body origin
   VoPreset vo_preset = VoPreset::kBench;      // vo.preset = "bench" | "kitti" | "euroc"

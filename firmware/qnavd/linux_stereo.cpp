@@ -1,5 +1,6 @@
 #include "firmware/qnavd/linux_stereo.hpp"
 
+#include <cstdio>
 #include <cstring>
 
 namespace qnav::daemon {
@@ -71,15 +72,19 @@ bool LinuxStereoSource::open_devices(IoCounters& io) noexcept {
   }
   drivers::camera::StereoConfig sc;
   sc.capture_timeout_ms = has_trigger_ ? kCaptureTimeoutMs : 0;
+  sc.pair_tolerance_ns = static_cast<std::int64_t>(cfg_.vo_pair_tolerance_ms * 1e6);
   s = stereo_.open(left_, right_, sc, trigger);
   if (!s) {
-    report(cfg_.vo_left_device.c_str(), s.message());
+    char both[160];
+    std::snprintf(both, sizeof both, "%s + %s", cfg_.vo_left_device.c_str(), cfg_.vo_right_device.c_str());
+    report(both, s.message());
     io.device_errors.fetch_add(1, std::memory_order_relaxed);
     close_devices();
     return false;
   }
   open_ = true;
   warned_ = false;
+  rejects_ = 0;  // the reopened pair counts from zero (the totals already passed on stay in IoCounters)
   return true;
 }
 

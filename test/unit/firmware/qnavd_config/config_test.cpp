@@ -115,6 +115,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(vo_trigger_line),
       QNAV_FIELD(vo_rate_hz),
       QNAV_FIELD(vo_preset),
+      QNAV_FIELD(vo_pair_tolerance_ms),
       QNAV_FIELD(vo.max_width),
       QNAV_FIELD(vo.max_height),
       QNAV_FIELD(vo.camera.focal_px),
@@ -403,6 +404,7 @@ active_low = true
 [vo]
 enabled = false
 preset = "euroc"
+pair_tolerance_ms = 40.0
 camera = "v4l2"
 left_device = "/dev/video4"
 right_device = "/dev/video5"
