@@ -5,9 +5,6 @@
 // options and sub-subcommands with firmware/cli/cli_app.hpp and binds each leaf to the function that
 // runs it with Runner::on). main.cpp parses strictly (docs/cli.md) and runs the selected leaf.
 // Exit codes: 0 success, 1 failure of the work (nothing valid processed included), 2 usage error.
-//
-// QNAV_COMMAND is the older form, kept for commands not yet moved: the function receives argv from
-// its own name (argv[0] == "map") and parses it itself.
 #pragma once
 
 #include <functional>
@@ -35,14 +32,12 @@ class Runner {
   std::vector<std::pair<const CLI::App*, std::function<int()>>> actions_;
 };
 
-using CommandFn = int (*)(int argc, char** argv);
 using SetupFn = void (*)(CLI::App& cmd, Runner& run);
 
 struct Command {
   const char* name;     // first word after `qnav`
   const char* summary;  // one line for `qnav --help`
-  CommandFn run;        // older commands: parse argv themselves (nullptr when setup is set)
-  SetupFn setup;        // strict commands: declare options on the subcommand
+  SetupFn setup;        // declares the command's options and subcommands
 };
 
 // Returns false (and the command is not added) when the table is full or the name is taken.
@@ -55,9 +50,6 @@ const Command* command_at(int i) noexcept;
 
 #define QNAV_COMMAND_CAT2(a, b) a##b
 #define QNAV_COMMAND_CAT(a, b) QNAV_COMMAND_CAT2(a, b)
-#define QNAV_COMMAND(name, summary, fn)                                    \
-  static const bool QNAV_COMMAND_CAT(qnav_command_registered_, __LINE__) = \
-      ::qnav::cli::register_command({name, summary, fn, nullptr})
 #define QNAV_CLI_COMMAND(name, summary, setup)                             \
   static const bool QNAV_COMMAND_CAT(qnav_command_registered_, __LINE__) = \
-      ::qnav::cli::register_command({name, summary, nullptr, setup})
+      ::qnav::cli::register_command({name, summary, setup})

@@ -13,11 +13,6 @@ namespace {
 using qnav::cli::Command;
 
 int run(int argc, char** argv) {
-  // Older commands parse their own argv (none of them may be reached through `help`).
-  if (argc >= 2) {
-    const Command* c = qnav::cli::find_command(argv[1]);
-    if (c != nullptr && c->setup == nullptr) return c->run(argc - 1, argv + 1);
-  }
   CLI::App app("qnav: the engineers' tool for the qnav navigation daemon (train, replay, evaluate, plot, simulate).\n"
                "Options are strict: an unknown option or a bad value is an error (exit 2). Exit 1: the work failed\n"
                "or processed nothing valid. `qnav help COMMAND` prints a command's options.",
@@ -28,9 +23,7 @@ int run(int argc, char** argv) {
   qnav::cli::Runner runner;
   for (int i = 0; i < qnav::cli::command_count(); ++i) {
     const Command* c = qnav::cli::command_at(i);
-    CLI::App* sub = app.add_subcommand(c->name, c->summary);
-    if (c->setup != nullptr) c->setup(*sub, runner);
-    else sub->allow_extras()->prefix_command();  // listed only; run above
+    c->setup(*app.add_subcommand(c->name, c->summary), runner);
   }
   const int rc = qnav::cli::parse(app, argc, argv);
   if (rc >= 0) return rc;

@@ -38,7 +38,7 @@
 #include <string>
 #include <vector>
 
-#include "firmware/qnav/args.hpp"
+#include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/map_file.hpp"
@@ -329,28 +329,28 @@ std::string source_root() {
   return f.empty() ? "." : f;
 }
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]\n"
-               "                [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]\n"
-               "                [--map-out FILE] [--node-spacing D] [--max-nodes N]\n"
-               "       qnav map route --map FILE --from A --to B [--astar] [--json]\n"
-               "       qnav map eval [--json] [--laps L] [--frames-per-lap N] [--filters 0..5] [--map-out FILE] [--out DIR]\n");
-  return 2;
-}
+// Every map option (one invocation per process), declared in setup_map at the end of this file.
+// NaN / -1: not given (the default depends on other options).
+struct MapOptions {
+  std::string images, poses, camera, out, map_out, map;
+  bool json = false, no_undistort = false, fundamental = false, no_plot = false, astar = false;
+  double altitude = -1.0, node_spacing = std::nan(""), laps = 1.35;
+  long frames = 100000, keyframe_gap = -1, max_nodes = 1024, from = -1, to = -1, per_lap = 90, filters = 5;
+};
+MapOptions g_opt;
+const char* opt_or_null(const std::string& s) { return s.empty() ? nullptr : s.c_str(); }
 
 // qnav map route --map FILE --from A --to B [--astar] [--json]: the shortest path over the map's
 // edges (Dijkstra, or A* with the Euclidean heuristic), node ids and cost.
-int run_route(int argc, char** argv) {
-  const char* path = cli::option(argc, argv, "--map");
-  long from = -1, to = -1;
-  if (path == nullptr || !cli::option_long(argc, argv, "--from", from) || !cli::option_long(argc, argv, "--to", to) ||
-      cli::option(argc, argv, "--from") == nullptr || cli::option(argc, argv, "--to") == nullptr) {
-    std::fprintf(stderr, "usage: qnav map route --map FILE --from A --to B [--astar] [--json]\n");
-    return 2;
+int run_route() {
+  const char* path = g_opt.map.c_str();
+  const long from = g_opt.from, to = g_opt.to;
+  const bool astar = g_opt.astar;
+  const bool json = g_opt.json;
+  if (const std::string e = qnav::cli::input_file_problem(path); !e.empty()) {
+    std::fprintf(stderr, "map route: %s\n", e.c_str());
+    return 1;
   }
-  const bool astar = cli::flag(argc, argv, "--astar");
-  const bool json = cli::flag(argc, argv, "--json");
   topo::MapHeader h;
   Status s = tools::read_map_header(path, h);
   if (!s) {
@@ -411,19 +411,18 @@ int run_route(int argc, char** argv) {
 // % of path), pairs registered, keypoints / inliers, map nodes, revisits recognised (second-pass
 // frames matched to a first-lap node within the gate of the true position), frame time (chain +
 // signature + map; rendering and degradation not counted).
-int run_eval(int argc, char** argv) {
-  const bool json = cli::flag(argc, argv, "--json");
-  double laps = 1.35;
-  long per_lap = 90, filters = 5;
-  if (!cli::option_double(argc, argv, "--laps", laps) || !(laps >= 1.05 && laps <= 5.0) ||
-      !cli::option_long(argc, argv, "--frames-per-lap", per_lap) || per_lap < 40 || per_lap > 1000 ||
-      !cli::option_long(argc, argv, "--filters", filters) || filters < 0 || filters > 5) {
-    std::fprintf(stderr, "usage: qnav map eval [--json] [--laps 1.05..5] [--frames-per-lap 40..1000] [--filters 0..5] [--map-out FILE] "
-                         "[--out DIR]\n");
-    return 2;
+int run_eval() {
+  const bool json = g_opt.json;
+  const double laps = g_opt.laps;
+  const long per_lap = g_opt.per_lap, filters = g_opt.filters;
+  const char* map_out = opt_or_null(g_opt.map_out);
+  const char* out_dir = opt_or_null(g_opt.out);
+  if (out_dir != nullptr) {
+    if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+      std::fprintf(stderr, "map eval: %s\n", e.c_str());
+      return 1;
+    }
   }
-  const char* map_out = cli::option(argc, argv, "--map-out");
-  const char* out_dir = cli::option(argc, argv, "--out");
   const int frames = static_cast<int>(std::lround(laps * static_cast<double>(per_lap)));
   const int lap = static_cast<int>(per_lap);
   const double radius = 0.8, altitude = 2.0, spacing = 0.2;
@@ -551,29 +550,22 @@ int run_eval(int argc, char** argv) {
   return worst_rc;
 }
 
-int run_map(int argc, char** argv) {
-  if (argc > 1 && std::strcmp(argv[1], "route") == 0) return run_route(argc - 1, argv + 1);
-  if (argc > 1 && std::strcmp(argv[1], "eval") == 0) return run_eval(argc - 1, argv + 1);
-  if (cli::flag(argc, argv, "--help") || cli::flag(argc, argv, "-h")) {
-    usage();
-    return 0;
-  }
-  const char* images = cli::option(argc, argv, "--images");
-  const char* poses_path = cli::option(argc, argv, "--poses");
-  const char* camera_path = cli::option(argc, argv, "--camera");
-  const char* out_dir = cli::option(argc, argv, "--out");
-  const bool json = cli::flag(argc, argv, "--json");
-  const bool undistort = !cli::flag(argc, argv, "--no-undistort");
-  double altitude = -1.0;
-  long max_frames = 100000;
-  if (images == nullptr) return usage();
-  if (!cli::option_double(argc, argv, "--altitude", altitude) || (cli::option(argc, argv, "--altitude") && !(altitude > 0.0))) {
-    std::fprintf(stderr, "map: --altitude wants a positive number of metres\n");
+int run_map() {
+  if (g_opt.images.empty()) {
+    std::fprintf(stderr, "qnav map: give --images DIR, or `route` / `eval` (qnav help map)\n");
     return 2;
   }
-  if (!cli::option_long(argc, argv, "--frames", max_frames) || max_frames < 2) {
-    std::fprintf(stderr, "map: --frames wants an integer >= 2\n");
-    return 2;
+  const char* images = g_opt.images.c_str();
+  const char* poses_path = opt_or_null(g_opt.poses);
+  const char* camera_path = opt_or_null(g_opt.camera);
+  const char* out_dir = opt_or_null(g_opt.out);
+  const bool json = g_opt.json;
+  const bool undistort = !g_opt.no_undistort;
+  const double altitude = g_opt.altitude;
+  const long max_frames = g_opt.frames;
+  if (const std::string e = qnav::cli::input_dir_problem(images); !e.empty()) {
+    std::fprintf(stderr, "map: --images %s\n", e.c_str());
+    return 1;
   }
 
   std::vector<std::string> files;
@@ -618,12 +610,8 @@ int run_map(int argc, char** argv) {
   topo::HomographyChainConfig config;
   config.max_width = W;
   config.max_height = H;
-  config.fundamental_filter = cli::flag(argc, argv, "--fundamental");
-  long gap = static_cast<long>(config.max_keyframe_gap);
-  if (!cli::option_long(argc, argv, "--keyframe-gap", gap) || gap < 1 || gap > 100000) {
-    std::fprintf(stderr, "map: --keyframe-gap wants an integer >= 1 (1 = every frame a keyframe: the frame-to-frame chain)\n");
-    return 2;
-  }
+  config.fundamental_filter = g_opt.fundamental;
+  const long gap = g_opt.keyframe_gap > 0 ? g_opt.keyframe_gap : static_cast<long>(config.max_keyframe_gap);
   config.max_keyframe_gap = static_cast<std::uint32_t>(gap);
   if (have_camera) {
     config.camera.fx = cam.fx;
@@ -640,18 +628,17 @@ int run_map(int argc, char** argv) {
     return 1;
   }
   // The topological map (when --map-out or --node-spacing is given).
-  const char* map_out = cli::option(argc, argv, "--map-out");
+  const char* map_out = opt_or_null(g_opt.map_out);
   const bool metric = altitude > 0.0 && have_camera;
-  double spacing = metric ? 0.2 : 30.0;
-  long max_nodes = 1024;
-  if (!cli::option_double(argc, argv, "--node-spacing", spacing) || !(spacing > 0.0) || !std::isfinite(spacing) ||
-      !cli::option_long(argc, argv, "--max-nodes", max_nodes) || max_nodes < 2 || max_nodes > 65534) {
-    std::fprintf(stderr, "map: --node-spacing wants a positive number (%s), --max-nodes an integer 2..65534\n",
-                 metric ? "metres" : "mosaic pixels: no --altitude");
-    return 2;
+  const double spacing = !std::isnan(g_opt.node_spacing) ? g_opt.node_spacing : metric ? 0.2 : 30.0;
+  const long max_nodes = g_opt.max_nodes;
+  const bool mapping = map_out != nullptr || !std::isnan(g_opt.node_spacing);
+  if (out_dir != nullptr) {  // the map file may live there and is written from the first node
+    if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+      std::fprintf(stderr, "map: %s\n", e.c_str());
+      return 1;
+    }
   }
-  const bool mapping = map_out != nullptr || cli::option(argc, argv, "--node-spacing") != nullptr;
-  if (out_dir != nullptr) mkdir(out_dir, 0755);  // the map file may live there and is written from the first node
   MapBuilder builder;
   if (mapping) {
     s = builder.init(spacing, metric, static_cast<std::size_t>(max_nodes));
@@ -826,7 +813,7 @@ int run_map(int argc, char** argv) {
     }
     const std::string script = source_root() + "/scripts/map_plot.py";
     struct stat st {};
-    if (cli::flag(argc, argv, "--no-plot")) {
+    if (g_opt.no_plot) {
       png_path.clear();
     } else if (stat("/usr/bin/python3", &st) != 0 || stat(script.c_str(), &st) != 0) {
       std::fprintf(stderr, "map: no plot (%s or /usr/bin/python3 missing)\n", script.c_str());
@@ -929,4 +916,49 @@ int run_map(int argc, char** argv) {
 
 }  // namespace
 
-QNAV_COMMAND("map", "downward-camera mapping: homography chain over a frame directory, vs navigation poses", run_map);
+namespace {
+void setup_map(CLI::App& cmd, qnav::cli::Runner& run) {
+  using qnav::cli::add_flag;
+  using qnav::cli::add_number;
+  using qnav::cli::add_text;
+  cmd.require_subcommand(0, 1);
+  cmd.footer("Runs: qnav map --images DIR [...], qnav map route --map FILE --from A --to B, qnav map eval [...].");
+  add_text(cmd, "--images", g_opt.images, "the frames: every .png/.jpg/.jpeg/.pgm in DIR, in name order")->type_name("DIR");
+  add_text(cmd, "--poses", g_opt.poses, "navigation poses: CSV with file, x, y, yaw_deg (matched by file name)")->type_name("CSV");
+  add_text(cmd, "--camera", g_opt.camera, "OpenCV-style camera YAML (frames undistorted unless --no-undistort)")->type_name("YAML");
+  add_number(cmd, "--altitude", g_opt.altitude, "altitude above the seabed, constant", "m", 1e-6, 1e6)
+      ->description("altitude above the seabed, constant: metric scale with --camera (m; default: none, mosaic pixels; > 0)");
+  add_text(cmd, "--out", g_opt.out, "folder for map_trajectory.csv/.png and the map CSVs (created)")->type_name("DIR");
+  add_flag(cmd, "--json", g_opt.json, "one JSON object on stdout");
+  add_flag(cmd, "--no-undistort", g_opt.no_undistort, "do not undistort the frames");
+  add_flag(cmd, "--fundamental", g_opt.fundamental, "the paper's F both-accept outlier rule before H");
+  add_number(cmd, "--keyframe-gap", g_opt.keyframe_gap, "a new keyframe at least every N frames", "frames", 1, 100000)
+      ->description("a new keyframe at least every N frames; 1 = the frame-to-frame chain (frames; default 30; 1..100000)");
+  add_number(cmd, "--frames", g_opt.frames, "frames to use at most", "", 2, 1e9);
+  add_flag(cmd, "--no-plot", g_opt.no_plot, "do not draw map_trajectory.png");
+  add_text(cmd, "--map-out", g_opt.map_out, "build the topological map beside the chain, written durably here")->type_name("FILE");
+  add_number(cmd, "--node-spacing", g_opt.node_spacing, "topological map node spacing", "", 1e-9, 1e9)
+      ->description("topological map node spacing (m with --altitude, else mosaic px; default 0.2 m / 30 px; > 0)");
+  add_number(cmd, "--max-nodes", g_opt.max_nodes, "topological map nodes at most", "", 2, 65534);
+  run.on(&cmd, run_map);
+
+  CLI::App* r = cmd.add_subcommand("route", "shortest path over a map's edges (Dijkstra, or A* with the Euclidean heuristic)");
+  add_text(*r, "--map", g_opt.map, "the topological map file")->required()->type_name("FILE");
+  add_number(*r, "--from", g_opt.from, "start node id", "", 0, 65535)->required();
+  add_number(*r, "--to", g_opt.to, "goal node id", "", 0, 65535)->required();
+  add_flag(*r, "--astar", g_opt.astar, "A* instead of Dijkstra");
+  add_flag(*r, "--json", g_opt.json, "one JSON object on stdout");
+  run.on(r, run_route);
+
+  CLI::App* e = cmd.add_subcommand("eval", "the nav/topo synthetic loop under the Table-1 filters");
+  add_flag(*e, "--json", g_opt.json, "one JSON object on stdout");
+  add_number(*e, "--laps", g_opt.laps, "laps of the loop", "laps", 1.05, 5);
+  add_number(*e, "--frames-per-lap", g_opt.per_lap, "frames per lap", "frames", 40, 1000);
+  add_number(*e, "--filters", g_opt.filters, "Table-1 filters applied (0: clean)", "", 0, 5);
+  add_text(*e, "--map-out", g_opt.map_out, "write the map here")->type_name("FILE");
+  add_text(*e, "--out", g_opt.out, "folder for the CSVs (created)")->type_name("DIR");
+  run.on(e, run_eval);
+}
+}  // namespace
+
+QNAV_CLI_COMMAND("map", "downward-camera mapping: homography chain over a frame directory, vs navigation poses", setup_map);

@@ -67,7 +67,7 @@ err 2 "give a command" "$Q"
 err 2 "give a subcommand: train info repeat eval xtf camera" "$Q" route
 err 2 "unexpected argument 'trian'.*'train'" "$Q" route trian
 for c in can dvl map route sonar stereo version vo xtf; do ok "$c" "$Q" --help; done
-for c in can dvl route sonar stereo version vo xtf; do help "$Q" help "$c"; help "$Q" "$c" --help; done
+for c in can dvl map route sonar stereo version vo xtf; do help "$Q" help "$c"; help "$Q" "$c" --help; done
 
 # ---- route ----
 err 2 "unknown option '--lenght-m'.*did you mean '--length-m'" "$Q" route train --sim --out r.qroute --lenght-m 300
@@ -145,6 +145,17 @@ err 1 "nosuch.png: No such file or directory" "$Q" stereo degrade nosuch.png
 err 1 "dir: is a directory" "$Q" stereo degrade dir
 err 1 "empty.txt: empty file" "$Q" stereo degrade empty.txt
 err 1 "unknown format" "$Q" stereo degrade "$WRONG"
+
+# ---- map ----
+err 2 "unknown option '--imagse'.*'--images'" "$Q" map --imagse dir
+err 2 "--laps: 9 is outside the allowed range 1\.05\.\.5" "$Q" map eval --laps 9
+err 2 "--from is required" "$Q" map route --map m.qmap
+err 1 "nosuch: No such file or directory" "$Q" map --images nosuch --no-plot
+err 1 "README.md: not a directory" "$Q" map --images "$WRONG" --no-plot
+err 1 "nosuch.qmap: No such file or directory" "$Q" map route --map nosuch.qmap --from 0 --to 1
+err 1 "dir: is a directory" "$Q" map route --map dir --from 0 --to 1
+err 1 "empty.txt: empty file" "$Q" map route --map empty.txt --from 0 --to 1
+err 1 "README.md" "$Q" map route --map "$WRONG" --from 0 --to 1
 
 # ---- version ----
 err 2 "unknown option '--verbose'" "$Q" version --verbose
