@@ -13,6 +13,26 @@ int hex_value(char c) noexcept {
   return -1;
 }
 bool is_space(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+// The frame's id from its hex digits, as both candump formats write it: 3 digits = 11-bit, 8 digits =
+// 29-bit, or an error frame when CAN_ERR_FLAG is set (its class bits kept).
+Status set_frame_id(std::uint32_t id, std::size_t digits, CanFrame& f) noexcept {
+  if (digits == 3) {
+    if (id > kCanSffMask) return Status(StatusCode::kOutOfRange, "11-bit id > 0x7FF");
+    f.id = id;
+    return Status::ok();
+  }
+  if (digits != 8) return Status(StatusCode::kCorrupt, "CAN id must have 3 or 8 hex digits");
+  if (id & kCanErrFlag) {
+    f.error = true;
+    f.extended = false;
+    f.id = id & kCanEffMask & ~kCanErrFlag;
+    return Status::ok();
+  }
+  if (id > kCanEffMask) return Status(StatusCode::kOutOfRange, "29-bit id too large");
+  f.extended = true;
+  f.id = id;
+  return Status::ok();
+}
 }  // namespace
 
 Status validate_can_frame(const CanFrame& f) noexcept {
@@ -77,21 +97,7 @@ Status parse_screen_line(const char* line, std::size_t i, std::size_t n, CanLogR
     id = (id << 4) | static_cast<std::uint32_t>(h);
   }
   CanFrame& f = out.frame;
-  if (id_digits == 3) {
-    if (id > kCanSffMask) return Status(StatusCode::kOutOfRange, "11-bit id > 0x7FF");
-    f.id = id;
-  } else if (id_digits == 8) {
-    if (id & kCanErrFlag) {
-      f.error = true;
-      f.id = id & kCanEffMask & ~kCanErrFlag;
-    } else {
-      if (id > kCanEffMask) return Status(StatusCode::kOutOfRange, "29-bit id too large");
-      f.extended = true;
-      f.id = id;
-    }
-  } else {
-    return Status(StatusCode::kCorrupt, "CAN id must have 3 or 8 hex digits");
-  }
+  QNAV_RETURN_IF_ERROR(set_frame_id(id, id_digits, f));
   i = open + 1;
   std::size_t len = 0;
   int len_digits = 0;
@@ -171,22 +177,7 @@ Status parse_can_log_line(const char* line, std::size_t n, CanLogRecord& out) no
   if (i >= n) return Status(StatusCode::kTruncated, "no '#' in CAN frame");
   ++i;  // '#'
   CanFrame& f = out.frame;
-  if (id_digits == 3) {
-    if (id > kCanSffMask) return Status(StatusCode::kOutOfRange, "11-bit id > 0x7FF");
-    f.id = id;
-  } else if (id_digits == 8) {
-    if (id & kCanErrFlag) {
-      f.error = true;
-      f.extended = false;
-      f.id = id & kCanEffMask & ~kCanErrFlag;
-    } else {
-      if (id > kCanEffMask) return Status(StatusCode::kOutOfRange, "29-bit id too large");
-      f.extended = true;
-      f.id = id;
-    }
-  } else {
-    return Status(StatusCode::kCorrupt, "CAN id must have 3 or 8 hex digits");
-  }
+  QNAV_RETURN_IF_ERROR(set_frame_id(id, id_digits, f));
   std::size_t cap = kCanMaxDataClassic;
   if (i < n && line[i] == '#') {
     ++i;
