@@ -50,7 +50,7 @@
 #include "nav/vision/rectify.hpp"
 // The synthetic seabed and its downward camera (header-only, deterministic on every target): the same
 // sequence the nav/topo tests use, for `qnav map eval`.
-#include "test/unit/nav/topo/seabed_scene.hpp"
+#include "drivers/downward_sim/seabed_scene.hpp"
 
 namespace {
 
@@ -426,11 +426,11 @@ int run_eval() {
   const int frames = static_cast<int>(std::lround(laps * static_cast<double>(per_lap)));
   const int lap = static_cast<int>(per_lap);
   const double radius = 0.8, altitude = 2.0, spacing = 0.2;
-  const topo::test::Seabed seabed;
-  const topo::test::Camera cam;
-  const topo::test::CameraPose p0 = topo::test::loop_pose(0, lap, radius, altitude);
+  const sim::downward::Seabed seabed;
+  const sim::downward::Camera cam;
+  const sim::downward::CameraPose p0 = sim::downward::loop_pose(0, lap, radius, altitude);
   auto truth = [&](int k) {
-    const topo::test::CameraPose pk = topo::test::loop_pose(k, lap, radius, altitude);
+    const sim::downward::CameraPose pk = sim::downward::loop_pose(k, lap, radius, altitude);
     const double c = std::cos(p0.yaw_rad), sn = std::sin(p0.yaw_rad);
     const Vec2d d(pk.x_m - p0.x_m, pk.y_m - p0.y_m);
     return Vec2d(c * d.x() + sn * d.y(), -sn * d.x() + c * d.y());
@@ -468,7 +468,7 @@ int run_eval() {
     double max_err = 0.0, final_err = std::nan("");
     int ok = 0, second = 0, recognised = 0;
     for (int k = 0; k < frames; ++k) {
-      topo::test::render(seabed, cam, topo::test::loop_pose(k, lap, radius, altitude), clean->view());
+      sim::downward::render(seabed, cam, sim::downward::loop_pose(k, lap, radius, altitude), clean->view());
       if (filter > 0) {
         vision::UnderwaterDegradation d = vision::table1_filter(filter);
         d.seed = static_cast<std::uint64_t>(filter) * 100003u + static_cast<std::uint64_t>(k);

@@ -7,9 +7,10 @@
 #include <vector>
 
 #include "test/support/alloc_guard.hpp"
-#include "test/unit/nav/topo/seabed_scene.hpp"
+#include "drivers/downward_sim/seabed_scene.hpp"
 
 namespace qnav::topo {
+namespace test = qnav::sim::downward;  // the downward-camera scene
 namespace {
 
 using test::Camera;
@@ -279,6 +280,7 @@ TEST(HomographyChain, MisuseAndBadConfiguration) {
 }  // namespace qnav::topo
 
 namespace qnav::topo {
+namespace test = qnav::sim::downward;  // the downward-camera scene
 namespace {
 
 struct ChainRun {

@@ -10,9 +10,10 @@
 
 #include "nav/topo/homography_chain.hpp"
 #include "test/support/alloc_guard.hpp"
-#include "test/unit/nav/topo/seabed_scene.hpp"
+#include "drivers/downward_sim/seabed_scene.hpp"
 
 namespace qnav::topo {
+namespace test = qnav::sim::downward;  // the downward-camera scene
 namespace {
 
 using test::Camera;

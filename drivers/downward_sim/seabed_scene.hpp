@@ -1,4 +1,5 @@
-// A deterministic textured seabed seen by a downward pinhole camera, for the homography chain tests.
+// A deterministic textured seabed seen by a downward pinhole camera (drivers/downward_sim, header-only):
+// the scene of the nav/topo tests and of `qnav map eval`, so the tool and the tests render one scene.
 // The seabed is a flat ground raster (1 texel = texel_m metres, ground axes X right / Y down like the
 // image) of smooth value noise plus hashed rectangles (sharp corners for Harris), built once from an
 // integer hash (same texels on every target). A camera at ground position C (metres), yaw psi (the
@@ -14,7 +15,7 @@
 
 #include "nav/core/image.hpp"
 
-namespace qnav::topo::test {
+namespace qnav::sim::downward {
 
 inline std::uint32_t hash32(std::int32_t i, std::int32_t j, std::uint32_t salt) {
   std::uint32_t h = static_cast<std::uint32_t>(i) * 0x8DA6B343u ^ static_cast<std::uint32_t>(j) * 0xD8163841u ^ salt * 0xCB1AB31Fu;
@@ -133,4 +134,4 @@ inline CameraPose loop_pose(int k, int frames_per_lap, double radius_m = 0.8, do
   return p;
 }
 
-}  // namespace qnav::topo::test
+}  // namespace qnav::sim::downward
