@@ -53,7 +53,7 @@ bool wrz_time(const char* p, std::size_t n, std::int64_t& t_ns) {
   if (field < 9) return false;
   std::int64_t us = 0;
   std::size_t digits = 0;
-  for (; i < n && p[i] >= '0' && p[i] <= '9' && digits < 18; ++i, ++digits) us = us * 10 + (p[i] - '0');
+  for (; i < n && p[i] >= '0' && p[i] <= '9' && digits < 16; ++i, ++digits) us = us * 10 + (p[i] - '0');  // < 1e16 us: no overflow in ns
   if (digits == 0 || (i < n && p[i] != ',')) return false;
   t_ns = us * 1000;
   return true;
@@ -99,7 +99,8 @@ Status RecordedSensors::load_candump(const std::string& path) {
     if (n > 0 && text[pos + n - 1] == '\r') --n;
     hal::CanLogRecord rec;
     if (n > 0) {
-      if (!hal::parse_can_log_line(text.data() + pos, n, rec) || !rec.has_time) {
+      // (a time beyond 2^63 ns, year 2262, is not a time: counted with the bad lines)
+      if (!hal::parse_can_log_line(text.data() + pos, n, rec) || !rec.has_time || rec.time_us < 0 || rec.time_us > INT64_MAX / 1000) {
         ++can_bad_lines;
       } else {
         const std::uint32_t id = rec.frame.id;
@@ -202,18 +203,6 @@ Status RecordedSensors::load_images(const std::string& dir, std::size_t max_fram
                 static_cast<double>(pairs.back().stamp_ns - pairs.front().stamp_ns) * 1e-9);
   what += line;
   return Status::ok();
-}
-
-bool RecordedSensors::first_time(std::int64_t& t_ns) const noexcept {
-  bool any = false;
-  const auto take = [&](std::int64_t t) {
-    if (!any || t < t_ns) t_ns = t;
-    any = true;
-  };
-  if (!can.empty()) take(can.front().t_ns);
-  if (!dvl.empty()) take(dvl.front().t_ns);
-  if (!pairs.empty()) take(pairs.front().stamp_ns);
-  return any;
 }
 
 }  // namespace qnav::daemon

@@ -42,8 +42,6 @@ class RecordedSensors {
   Status load_dvl(const std::string& path, bool pd6);
   // max_frames: 0 = all.
   Status load_images(const std::string& dir, std::size_t max_frames);
-  // The earliest sample time of the loaded sources; false when none is loaded.
-  bool first_time(std::int64_t& t_ns) const noexcept;
 
   std::vector<ReplayCanFrame> can;
   std::uint32_t can_skipped = 0;     // mode commands and qnavd's own frames in the log
