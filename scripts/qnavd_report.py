@@ -99,12 +99,21 @@ def main():
         axes[0].plot(seq, [t["estimate"] for t in p["tiles"]], "o", ms=4, label=label)
         true_ct = -p["lateral"] if p["reverse"] else p["lateral"]
         axes[1].plot(seq, [true_ct] * len(seq), "k-", lw=3, alpha=0.25)
-        axes[1].errorbar(seq, [t["cross_track_m"] for t in p["tiles"]], yerr=[min(t["sigma_m"], 50) for t in p["tiles"]], fmt="o", ms=4, label=label)
+        # Tracking tiles filled with their sigma; the others (hold course, dead-reckoned, route end)
+        # hollow: their cross-track is not a fix the autopilot should steer by.
+        trk = [t for t in p["tiles"] if t["status"] == "tracking"]
+        other = [t for t in p["tiles"] if t["status"] != "tracking"]
+        eb = axes[1].errorbar([t["seq"] for t in trk], [t["cross_track_m"] for t in trk], yerr=[min(t["sigma_m"], 50) for t in trk],
+                              fmt="o", ms=4, label=label)
+        if other:
+            axes[1].plot([t["seq"] for t in other], [t["cross_track_m"] for t in other], "o", ms=6, mfc="none",
+                         color=eb[0].get_color(), label=f"pass {k}: not tracking ({len(other)})")
     axes[0].set_ylabel("node (grey: truth)")
     axes[0].set_title("qnavd on the simulated vehicle: route estimate and cross-track per tile, from its log")
     axes[0].legend(fontsize=8)
     axes[1].set_ylabel("cross-track m (+ starboard; grey: truth)")
     axes[1].set_xlabel("tile sequence number")
+    axes[1].legend(fontsize=7, loc="upper left", ncol=2)
     fig.tight_layout()
     out = sys.argv[2] + "/qnavd_mission.png"
     fig.savefig(out, dpi=90)
