@@ -13,6 +13,33 @@ int hex_value(char c) noexcept {
   return -1;
 }
 bool is_space(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+// "(sec.usec)" at line[i] (both formats write it so, usec always 6 digits) into out.time_us; `i`
+// moves past it and the blanks after it.
+Status read_timestamp(const char* line, std::size_t& i, std::size_t n, CanLogRecord& out) noexcept {
+  ++i;  // '('
+  std::int64_t sec = 0, usec = 0;
+  int digits = 0, frac = 0;
+  while (i < n && line[i] >= '0' && line[i] <= '9' && digits < 12) sec = sec * 10 + (line[i++] - '0'), ++digits;
+  if (digits == 0 || i >= n || line[i] != '.') return Status(StatusCode::kCorrupt, "bad timestamp");
+  ++i;
+  while (i < n && line[i] >= '0' && line[i] <= '9' && frac < 6) usec = usec * 10 + (line[i++] - '0'), ++frac;
+  if (frac != 6 || i >= n || line[i] != ')') return Status(StatusCode::kCorrupt, "bad timestamp");
+  ++i;
+  out.has_time = true;
+  out.time_us = sec * 1000000 + usec;
+  while (i < n && is_space(line[i])) ++i;
+  return Status::ok();
+}
+// The interface name (one word) at line[i]; `i` moves past it.
+Status read_interface(const char* line, std::size_t& i, std::size_t n, CanLogRecord& out) noexcept {
+  std::size_t k = 0;
+  while (i < n && !is_space(line[i])) {
+    if (k + 1 >= sizeof out.interface) return Status(StatusCode::kCorrupt, "interface name too long");
+    out.interface[k++] = line[i++];
+  }
+  out.interface[k] = '\0';
+  return Status::ok();
+}
 // The frame's id from its hex digits, as both candump formats write it: 3 digits = 11-bit, 8 digits =
 // 29-bit, or an error frame when CAN_ERR_FLAG is set (its class bits kept).
 Status set_frame_id(std::uint32_t id, std::size_t digits, CanFrame& f) noexcept {
@@ -61,26 +88,8 @@ namespace {
 // ID 3 hex digits = 11-bit, 8 = 29-bit (bit 0x20000000: error frame); "remote request" = RTR;
 // [LEN] two digits for CAN FD. `i` is past leading blanks, `n` before trailing ones.
 Status parse_screen_line(const char* line, std::size_t i, std::size_t n, CanLogRecord& out) noexcept {
-  if (line[i] == '(') {
-    ++i;
-    std::int64_t sec = 0, usec = 0;
-    int digits = 0, frac = 0;
-    while (i < n && line[i] >= '0' && line[i] <= '9' && digits < 12) sec = sec * 10 + (line[i++] - '0'), ++digits;
-    if (digits == 0 || i >= n || line[i] != '.') return Status(StatusCode::kCorrupt, "bad timestamp");
-    ++i;
-    while (i < n && line[i] >= '0' && line[i] <= '9' && frac < 6) usec = usec * 10 + (line[i++] - '0'), ++frac;
-    if (frac != 6 || i >= n || line[i] != ')') return Status(StatusCode::kCorrupt, "bad timestamp");
-    ++i;
-    out.has_time = true;
-    out.time_us = sec * 1000000 + usec;
-    while (i < n && is_space(line[i])) ++i;
-  }
-  std::size_t k = 0;
-  while (i < n && !is_space(line[i])) {
-    if (k + 1 >= sizeof out.interface) return Status(StatusCode::kCorrupt, "interface name too long");
-    out.interface[k++] = line[i++];
-  }
-  out.interface[k] = '\0';
+  if (line[i] == '(') QNAV_RETURN_IF_ERROR(read_timestamp(line, i, n, out));
+  QNAV_RETURN_IF_ERROR(read_interface(line, i, n, out));
   // The identifier is the last word before '[' (candump -x puts "RX - -" before it).
   std::size_t open = i;
   while (open < n && line[open] != '[') ++open;
@@ -142,26 +151,8 @@ Status parse_can_log_line(const char* line, std::size_t n, CanLogRecord& out) no
   if (i < n && std::memchr(line + i, '#', n - i) == nullptr && std::memchr(line + i, '[', n - i) != nullptr)
     return parse_screen_line(line, i, n, out);
   if (i < n && line[i] == '(') {
-    ++i;
-    std::int64_t sec = 0;
-    std::int64_t usec = 0;
-    int digits = 0;
-    while (i < n && line[i] >= '0' && line[i] <= '9' && digits < 12) sec = sec * 10 + (line[i++] - '0'), ++digits;
-    if (digits == 0 || i >= n || line[i] != '.') return Status(StatusCode::kCorrupt, "bad timestamp");
-    ++i;
-    int frac = 0;
-    while (i < n && line[i] >= '0' && line[i] <= '9' && frac < 6) usec = usec * 10 + (line[i++] - '0'), ++frac;
-    if (frac != 6 || i >= n || line[i] != ')') return Status(StatusCode::kCorrupt, "bad timestamp");
-    ++i;
-    out.has_time = true;
-    out.time_us = sec * 1000000 + usec;
-    while (i < n && is_space(line[i])) ++i;
-    std::size_t k = 0;
-    while (i < n && !is_space(line[i])) {
-      if (k + 1 >= sizeof out.interface) return Status(StatusCode::kCorrupt, "interface name too long");
-      out.interface[k++] = line[i++];
-    }
-    out.interface[k] = '\0';
+    QNAV_RETURN_IF_ERROR(read_timestamp(line, i, n, out));
+    QNAV_RETURN_IF_ERROR(read_interface(line, i, n, out));
     while (i < n && is_space(line[i])) ++i;
   }
   // Identifier.
