@@ -1,6 +1,7 @@
 #include "drivers/dvl/wl_parser.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "drivers/dvl/text_fields.hpp"
@@ -24,6 +25,15 @@ int hexval(char c) noexcept {
   return -1;
 }
 }  // namespace
+
+std::size_t wl_velocity_report(double vx_mps, double vy_mps, double vz_mps, double altitude_m, long long tov_us, long long tot_us, char* out,
+                               std::size_t cap) noexcept {
+  char body[224];
+  const int n = std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,%.3f,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", vx_mps, vy_mps,
+                              vz_mps, altitude_m, tov_us, tot_us);
+  if (n < 0 || static_cast<std::size_t>(n) >= sizeof body) return 0;
+  return wl_with_checksum(body, out, cap);
+}
 
 std::size_t wl_with_checksum(const char* body, char* out, std::size_t cap) noexcept {
   static constexpr char kHex[] = "0123456789abcdef";

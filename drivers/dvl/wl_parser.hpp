@@ -72,5 +72,10 @@ class WlParser {
 // Builds a command or sentence with its checksum: "<body>*xx\n" into out (NUL-terminated); returns
 // the length without the NUL, 0 when it does not fit.
 std::size_t wl_with_checksum(const char* body, char* out, std::size_t cap) noexcept;
+// A velocity report as a simulated DVL sends it: "wrz,vx,vy,vz,y,altitude,0.002,<covariance 1e-5 I>,
+// tov,tot,125.00,0*xx\n" (bottom lock, times in us since the epoch; a NaN velocity reads "nan"), with its
+// checksum. Returns the length, 0 when it does not fit.
+std::size_t wl_velocity_report(double vx_mps, double vy_mps, double vz_mps, double altitude_m, long long tov_us, long long tot_us, char* out,
+                               std::size_t cap) noexcept;
 
 }  // namespace qnav::drivers::dvl

@@ -14,6 +14,16 @@
 
 namespace qnav::pipeline {
 
+// What a DVL reports for a vehicle that went from `a` to `b` (north/east metres) in dt_s seconds,
+// heading b.heading_rad: the body velocities (forward, starboard; m/s) that DeadReckoner turns back
+// into that displacement. The simulators' DVL.
+inline void body_velocity_between(const Pose2& a, const Pose2& b, double dt_s, double& forward_mps, double& starboard_mps) noexcept {
+  const double dn = (b.x_m - a.x_m) / dt_s, de = (b.y_m - a.y_m) / dt_s;
+  const double c = std::cos(b.heading_rad), s = std::sin(b.heading_rad);
+  forward_mps = c * dn + s * de;
+  starboard_mps = -s * dn + c * de;
+}
+
 class DeadReckoner {
  public:
   explicit DeadReckoner(double max_extrapolation_s = 1.0) noexcept : max_extrap_s_(max_extrapolation_s) {}

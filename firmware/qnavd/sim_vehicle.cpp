@@ -9,6 +9,7 @@
 #include "drivers/dronecan/ahrs.hpp"
 #include "drivers/dronecan/transfer.hpp"
 #include "drivers/dvl/wl_parser.hpp"
+#include "firmware/pipeline/dead_reckoner.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/candump.hpp"
@@ -262,14 +263,8 @@ void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
   last_tov_us_ = tov;
   const bool nan = faulty("dvl_nan", t_ns), back = faulty("dvl_time_back", t_ns);
   const long long stamp = back ? tov - 5000000 : tov;  // 5 s in the past
-  char body[200], line[240];
-  if (nan)
-    std::snprintf(body, sizeof body, "wrz,nan,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", stbd,
-                  pass_cfg_.altitude_m, stamp, stamp);
-  else
-    std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", fwd, stbd,
-                  pass_cfg_.altitude_m, stamp, stamp);
-  const std::size_t n = drivers::dvl::wl_with_checksum(body, line, sizeof line);
+  char line[240];
+  const std::size_t n = drivers::dvl::wl_velocity_report(nan ? std::nan("") : fwd, stbd, 0.0, pass_cfg_.altitude_m, stamp, stamp, line, sizeof line);
   if (faulty("dvl_line_noise", t_ns)) {
     // A burst of line noise ending in a line break: a line of its own, before the real sentence.
     std::uint8_t noise[24];
@@ -400,10 +395,9 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
   if (replay_dvl_) {
   } else if (have_prev_ && t > last_sample_ns_) {
-    const double dt = static_cast<double>(t - last_sample_ns_) * 1e-9;
-    const double dn = (smp.nav.x_m - prev_nav_.x_m) / dt, de = (smp.nav.y_m - prev_nav_.y_m) / dt;
-    const double c = std::cos(smp.nav.heading_rad), sn = std::sin(smp.nav.heading_rad);
-    send_dvl(c * dn + sn * de, -sn * dn + c * de, t);
+    double fwd = 0.0, stbd = 0.0;
+    pipeline::body_velocity_between(prev_nav_, smp.nav, static_cast<double>(t - last_sample_ns_) * 1e-9, fwd, stbd);
+    send_dvl(fwd, stbd, t);
   } else {
     // The pass starts here: nothing travelled since the last sample between passes (whose time
     // depends on how fast the daemon answered the mode command), so every pass is flown the same.

@@ -34,6 +34,7 @@
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "drivers/sidescan/xtf_writer.hpp"
 #include "firmware/cli/cli_app.hpp"
+#include "firmware/pipeline/dead_reckoner.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/sonar_file.hpp"
@@ -283,16 +284,11 @@ class SensorLogs {
     if (dvl_ != nullptr) {
       double fwd = 0.0, stbd = 0.0;
       if (have_prev_ && t_ns > prev_t_ns_) {
-        const double dt = static_cast<double>(t_ns - prev_t_ns_) * 1e-9;
-        const double dn = (nav.x_m - prev_.x_m) / dt, de = (nav.y_m - prev_.y_m) / dt;
-        fwd = std::cos(nav.heading_rad) * dn + std::sin(nav.heading_rad) * de;
-        stbd = -std::sin(nav.heading_rad) * dn + std::cos(nav.heading_rad) * de;
+        pipeline::body_velocity_between(prev_, nav, static_cast<double>(t_ns - prev_t_ns_) * 1e-9, fwd, stbd);
       }
       const long long t_us = static_cast<long long>(t_ns / 1000);
-      char body[200], line[240];
-      std::snprintf(body, sizeof body, "wrz,%.4f,%.4f,0.000,y,%.2f,0.002,1e-05;0;0;0;1e-05;0;0;0;1e-05,%lld,%lld,125.00,0", fwd, stbd, 10.0,
-                    t_us, t_us);
-      if (drivers::dvl::wl_with_checksum(body, line, sizeof line) > 0) std::fputs(line, dvl_);
+      char line[240];
+      if (drivers::dvl::wl_velocity_report(fwd, stbd, 0.0, 10.0, t_us, t_us, line, sizeof line) > 0) std::fputs(line, dvl_);
     }
     prev_ = nav, prev_t_ns_ = t_ns, have_prev_ = true;
   }
