@@ -393,16 +393,13 @@ SimVehicle::StepResult SimVehicle::emit(const Sample& smp, SpscRing<std::uint32_
   // the pass replays the recorded one (sim.pass.candump), or the DVL (sim.pass.dvl_log).
   if (!replay_attitude_) send_attitude(smp.nav.heading_rad);
   // DVL: the dead-reckoned displacement since the previous ping, in the body frame of that heading.
-  if (replay_dvl_) {
-  } else if (have_prev_ && t > last_sample_ns_) {
-    double fwd = 0.0, stbd = 0.0;
-    pipeline::body_velocity_between(prev_nav_, smp.nav, static_cast<double>(t - last_sample_ns_) * 1e-9, fwd, stbd);
-    send_dvl(fwd, stbd, t);
-  } else {
-    // The pass starts here: nothing travelled since the last sample between passes (whose time
-    // depends on how fast the daemon answered the mode command), so every pass is flown the same.
-    send_dvl(0.0, 0.0, t);
-  }
+  // The pass's first sample sends zero: nothing travelled since the last sample between passes
+  // (whose time depends on how fast the daemon answered the mode command), so every pass is flown
+  // the same.
+  double fwd_mps = 0.0, stbd_mps = 0.0;
+  if (have_prev_ && t > last_sample_ns_)
+    pipeline::body_velocity_between(prev_nav_, smp.nav, static_cast<double>(t - last_sample_ns_) * 1e-9, fwd_mps, stbd_mps);
+  if (!replay_dvl_) send_dvl(fwd_mps, stbd_mps, t);
   prev_nav_ = smp.nav;
   have_prev_ = true;
   last_sample_ns_ = t;
