@@ -135,7 +135,10 @@ bool NavWorker::run_once() noexcept {
       ++can_frames_;
       handle_frame(rx);
       nav_now_ns_ = std::max(nav_now_ns_, rx.stamp.sample_ns);
-      publisher_->poll(nav_now_ns_);  // outputs keep their DBC periods in sample time, also in a fast replay
+      // Outputs keep their DBC periods in sample time, also in a fast replay, and a frame sent from
+      // inside a batch carries the faults of its own time (a sensor that went stale in the batch says so).
+      update_faults();
+      publish();
     } else {
       if (!q_.dvl->try_pop(v)) break;
       ++dvl_samples_;
