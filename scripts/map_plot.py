@@ -4,7 +4,8 @@
   map_plot.py DIR/map_trajectory.csv OUT.png
 
 Left: the chained trajectory (aligned to the navigation frame by the fit `qnav map` prints) and the
-navigation positions, metres, equal axes, keyframes marked. Middle: the image rotation of the chain and
+navigation positions, metres, equal axes, keyframes marked. Legends under the panels, never over the
+data (scripts/qnav_plot.py). Middle: the image rotation of the chain and
 the navigation's yaw change since frame 0, per frame. Right (when `qnav map --map-out` wrote
 map_nodes.csv / map_edges.csv beside the trajectory): the topological map in the chain's frame (metres
 with an altitude, else mosaic pixels): nodes (revisited ones red) with their ids, edges, the chain.
@@ -13,10 +14,8 @@ import csv
 import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from qnav_plot import axes_labels, legend_outside, plt  # noqa: E402
 
 
 def fnum(s):
@@ -32,10 +31,10 @@ def main(path, out):
     edges_path = os.path.join(os.path.dirname(path), "map_edges.csv")
     have_map = os.path.isfile(nodes_path) and os.path.isfile(edges_path)
     if have_map:
-        fig, (ax, ay, am) = plt.subplots(1, 3, figsize=(18, 5.2))
+        fig, (ax, ay, am) = plt.subplots(1, 3, figsize=(18, 6.2))
         plot_map(am, rows, list(csv.DictReader(open(nodes_path))), list(csv.DictReader(open(edges_path))))
     else:
-        fig, (ax, ay) = plt.subplots(1, 2, figsize=(12, 5.2))
+        fig, (ax, ay) = plt.subplots(1, 2, figsize=(12, 6.2))
     cx = [fnum(r["aligned_x_m"]) for r in rows if r["status"] == "ok" and fnum(r["aligned_x_m"]) is not None]
     cy = [fnum(r["aligned_y_m"]) for r in rows if r["status"] == "ok" and fnum(r["aligned_y_m"]) is not None]
     nx = [fnum(r["nav_x_m"]) for r in rows if fnum(r["nav_x_m"]) is not None]
@@ -49,11 +48,9 @@ def main(path, out):
         ky = [fnum(r["aligned_y_m"]) for r in rows if r["status"] == "ok" and r["new_keyframe"] == "1" and fnum(r["aligned_y_m"]) is not None]
         ax.plot(kx, ky, "o", color="tab:orange", ms=6, label="keyframes")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    axes_labels(ax, "x m (navigation frame)", "y m (navigation frame)")
     ax.set_title("trajectory (chain scaled and rotated onto the navigation)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="best", framealpha=0.8)
+    legend_outside(ax, where="below", ncol=2)
 
     fr = [int(r["frame"]) for r in rows if r["status"] == "ok"]
     rot = [fnum(r["image_rot_deg"]) for r in rows if r["status"] == "ok"]
@@ -65,11 +62,9 @@ def main(path, out):
         held = [(f, y - y0) for f, y, i in nav if i != "1"]
         if held:
             ay.plot([f for f, _ in held], [y for _, y in held], "rx", ms=8, label="navigation held (outside its span)")
-    ay.set_xlabel("frame")
-    ay.set_ylabel("rotation since frame 0 [deg]")
+    axes_labels(ay, "frame", "rotation since frame 0 deg", integer_x=True)
     ay.set_title("chained rotation vs navigation yaw")
-    ay.grid(True, alpha=0.3)
-    ay.legend(fontsize=8, loc="upper left")
+    legend_outside(ay, where="below", ncol=2)
     fig.tight_layout()
     fig.savefig(out, dpi=100)
 
@@ -96,11 +91,9 @@ def plot_map(am, rows, nodes, edges):
     if not metric:
         am.invert_yaxis()
     unit = "m" if metric else "mosaic px"
-    am.set_xlabel("x [%s]" % unit)
-    am.set_ylabel("y [%s]" % unit)
+    axes_labels(am, "x %s" % unit, "y %s" % unit)
     am.set_title("topological map: %d nodes, %d edges" % (len(nodes), len(edges)))
-    am.grid(True, alpha=0.3)
-    am.legend(fontsize=8, loc="best", framealpha=0.8)
+    legend_outside(am, where="below", ncol=3)
 
 
 if __name__ == "__main__":

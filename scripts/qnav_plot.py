@@ -4,7 +4,7 @@ PNG rasters (waterfalls, tiles) are drawn by firmware/tools/raster_plot.hpp to t
 
 - axes say their quantity and unit ("east m"), ticks carry values;
 - a legend sits outside the axes (right of them, or below), so it never hides data;
-- a plan view (north up) carries a north arrow beside the axes, and a scale bar when its aspect is equal;
+- a plan view (north up) carries a north arrow beside the axes (its ticks in metres are its scale);
 - where colour means a value (belief, intensity), a colour bar with its label.
 """
 import matplotlib
@@ -36,20 +36,6 @@ def north_arrow(ax, x=1.05, y=0.02):
     ax.annotate("", xy=(x, y + 0.13), xytext=(x, y), xycoords="axes fraction", textcoords="axes fraction",
                 annotation_clip=False, arrowprops=dict(arrowstyle="-|>", color="k", lw=1.5))
     ax.text(x, y + 0.14, "N", transform=ax.transAxes, ha="center", va="bottom", fontsize=10, fontweight="bold", clip_on=False)
-
-
-def scale_bar(ax, unit="m"):
-    """A scale bar under the axes' lower-left corner, about a fifth of the x range (equal-aspect plots)."""
-    lo, hi = ax.get_xlim()
-    want = abs(hi - lo) / 5.0
-    if want <= 0:
-        return
-    mag = 10 ** __import__("math").floor(__import__("math").log10(want))
-    length = max(m * mag for m in (1, 2, 5) if m * mag <= want)
-    x0 = min(lo, hi)
-    trans = ax.get_xaxis_transform()  # x in data, y in axes fraction
-    ax.plot([x0, x0 + length], [-0.2, -0.2], "k-", lw=3, transform=trans, clip_on=False, solid_capstyle="butt")
-    ax.text(x0 + length * 1.05, -0.2, "%g %s" % (length, unit), transform=trans, va="center", fontsize=8, clip_on=False)
 
 
 def colour_bar(fig, mappable, ax, label, cax=None):

@@ -5,12 +5,13 @@
 #   route_fig5.png     measurement model p(z|w) per sensed tile (paper Fig. 5)
 #   route_fig7.png     belief per sensed tile (paper Fig. 7)
 #   route_fig9.png     true positions, estimated nodes and cross-track side arrows (paper Fig. 9/10)
+#   (scripts/qnav_plot.py's style: legends outside the axes, colour bars labelled, north arrow on Fig. 9)
 import csv
+import os
 import sys
 
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from qnav_plot import axes_labels, colour_bar, legend_outside, north_arrow, plt  # noqa: E402
 
 
 def rows(path):
@@ -26,7 +27,7 @@ def matrix(path):
 def main():
     src, out = sys.argv[1], sys.argv[2]
     offs = rows(src + "/route_eval_offsets.csv")
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    fig, ax = plt.subplots(1, 2, figsize=(11, 5.4))
     for d, m in (("forward", "o-"), ("reverse", "s--")):
         r = [x for x in offs if x["direction"] == d]
         pct = [int(x["offset_pct"]) for x in r]
@@ -38,38 +39,35 @@ def main():
         ax[1].plot(pct, side, m, label=d + " (side correct, of decided)")
         decided = [100.0 * int(x["side_n"]) / int(x["scored"]) if int(x["scored"]) and int(x["offset_pct"]) > 0 else float("nan") for x in r]
         ax[1].plot(pct, decided, m, alpha=0.4, label=d + " (side decided, of tiles)")
-    ax[0].set_xlabel("lateral offset, % of swath")
-    ax[0].set_ylabel("% of tiles")
+    axes_labels(ax[0], "lateral offset, % of swath", "% of tiles", grid=False)
     ax[0].set_ylim(0, 105)
     ax[0].axhline(95, color="gray", lw=0.5)
-    ax[0].legend(fontsize=7)
+    legend_outside(ax[0], where="below", ncol=1, fontsize=7)
     ax[0].set_title("localisation vs offset")
-    ax[1].set_xlabel("lateral offset, % of swath")
-    ax[1].set_ylabel("%")
+    axes_labels(ax[1], "lateral offset, % of swath", "%", grid=False)
     ax[1].set_ylim(0, 105)
     ax[1].axhline(95, color="gray", lw=0.5)
-    ax[1].legend(fontsize=7)
+    legend_outside(ax[1], where="below", ncol=1, fontsize=7)
     ax[1].set_title("route side (decided: a side reported, not unknown)")
     fig.tight_layout()
     fig.savefig(out + "/route_offsets.png", dpi=90)
 
-    for name, title in (("fig5", "measurement model p(z|w) (paper Fig. 5)"), ("fig7", "belief bel(w) (paper Fig. 7)")):
+    for name, title, value in (("fig5", "measurement model p(z|w) (paper Fig. 5)", "p(z|w)"), ("fig7", "belief bel(w) (paper Fig. 7)", "bel(w)")):
         m = matrix(src + "/route_%s.csv" % name)
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig, ax = plt.subplots(figsize=(8.2, 4))
         im = ax.imshow(m, aspect="auto", cmap="viridis", origin="upper",
                        extent=(0.5, len(m[0]) + 0.5, len(m) + 0.5, 0.5))
         t1 = rows(src + "/route_table1.csv")
         ax.plot([int(x["truth"]) for x in t1], [int(x["sensed"]) for x in t1], "r+", ms=10, label="true node")
-        ax.set_xlabel("training node")
-        ax.set_ylabel("sensed tile")
+        axes_labels(ax, "training node", "sensed tile", grid=False)
         ax.set_title(title)
-        ax.legend(loc="lower right", fontsize=7)
-        fig.colorbar(im)
+        colour_bar(fig, im, ax, value)
+        legend_outside(ax, where="below", ncol=1, fontsize=7)
         fig.tight_layout()
         fig.savefig(out + "/route_%s.png" % name, dpi=90)
 
     f9 = rows(src + "/route_fig9.csv")
-    fig, ax = plt.subplots(figsize=(6, 7))
+    fig, ax = plt.subplots(figsize=(6.4, 8.4))
     for x in f9:
         tn, te = float(x["true_north"]), float(x["true_east"])
         nn, ne = float(x["node_north"]), float(x["node_east"])
@@ -91,9 +89,9 @@ def main():
     ax.plot([], [], "bo", label="true vehicle position at the sensed tile")
     ax.plot([], [], "g-", label="side reported and correct, steering (tracking)")
     ax.plot([], [], "g--", label="side reported and correct, holding course")
-    ax.set_xlabel("east, m")
-    ax.set_ylabel("north, m")
-    ax.legend(fontsize=7, loc="lower right")
+    axes_labels(ax, "east m", "north m", grid=False)
+    legend_outside(ax, where="below", ncol=1, fontsize=7)
+    north_arrow(ax)
     ax.set_title("paper Fig. 9/10: estimate, route side (15 nodes, 8 tiles)")
     fig.tight_layout()
     fig.savefig(out + "/route_fig9.png", dpi=90)

@@ -3,20 +3,19 @@
 
   vo_plot.py eval TRAJ_DIR OUT.png     error vs distance per configuration (from `qnav vo eval --traj-dir`)
   vo_plot.py kitti OURS PEER OUT.png   top view (x, z) of two KITTI pose files
+Legends under the axes, never over the data (scripts/qnav_plot.py).
 """
 import csv
 import glob
 import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from qnav_plot import axes_labels, legend_outside, plt  # noqa: E402
 
 
 def plot_eval(traj_dir, out):
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.5))
     for ax, scen, title in ((axes[0], "27m", "%.0f m, attitude drifting (no recalibration)"),
                             (axes[1], "100m", "%.0f m, attitude recalibrated every 2 m")):
         files = sorted(glob.glob(os.path.join(traj_dir, "vo_%s_*.csv" % scen)))
@@ -32,10 +31,8 @@ def plot_eval(traj_dir, out):
             ax.plot(path, err, style, label=name)
             longest = max([longest] + path)
         ax.set_title(title % longest)
-        ax.set_xlabel("distance travelled [m]")
-        ax.set_ylabel("position error / distance [%]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
+        axes_labels(ax, "distance travelled m", "position error / distance %")
+        legend_outside(ax, where="below", ncol=3)
     fig.suptitle("Stereo VO on the synthetic Mars yard (paper's noise model, small), qnav vo eval")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
@@ -53,17 +50,15 @@ def read_poses(p):
 
 
 def plot_kitti(ours, peer, out):
-    fig, ax = plt.subplots(figsize=(6, 7))
+    fig, ax = plt.subplots(figsize=(6, 7.6))
     x, z = read_poses(ours)
     px, pz = read_poses(peer)
     n = len(x)
     ax.plot(px[:n], pz[:n], "k--", label="libviso2 (peer, not ground truth)")
     ax.plot(x, z, "r-", label="qnav vo (6D-VME, fc fast)")
-    ax.set_xlabel("x [m] (right; axis scale stretched 4x)")
-    ax.set_ylabel("z [m] (forward)")
+    axes_labels(ax, "x m (right of the first camera pose; stretched 4x)", "z m (forward of the first camera pose)")
     ax.set_xlim(-12, 12)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax, where="below", ncol=1)
     ax.set_title("KITTI 2011_09_26 city, %d frames" % n)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
