@@ -2,6 +2,9 @@
 
 #include <gpiod.h>
 
+#include <cerrno>
+
+#include "hal/linux/device_error.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 
 namespace qnav::hal {
@@ -10,6 +13,16 @@ namespace {
 gpiod_chip* open_chip(const char* name) noexcept {
   if (name == nullptr) return nullptr;
   return name[0] == '/' ? gpiod_chip_open(name) : gpiod_chip_open_by_name(name);
+}
+Status chip_error(const char* chip) noexcept {
+  const int e = errno;
+  return device_error(e == 0 || e == ENOENT || e == ENODEV || e == ENXIO ? StatusCode::kNotFound : StatusCode::kIoError,
+                      "cannot open GPIO chip", chip, e, gpiochip_open_hint(e));
+}
+Status request_error(const char* what, const char* chip) noexcept {
+  const int e = errno;
+  return device_error(StatusCode::kIoError, what, chip, e,
+                      e == EBUSY ? "the line is held by another consumer: `gpioinfo CHIP` names it" : gpiochip_open_hint(e));
 }
 int flags_of(const GpioLineConfig& c) noexcept { return c.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0; }
 }  // namespace
@@ -23,17 +36,19 @@ void GpiodOutputLine::close() noexcept {
 }
 Status GpiodOutputLine::open(const GpioLineConfig& c, bool initial) noexcept {
   close();
+  errno = 0;
   chip_ = open_chip(c.chip);
-  if (chip_ == nullptr) return Status(StatusCode::kNotFound, "GPIO chip not found");
+  if (chip_ == nullptr) return chip_error(c.chip);
   line_ = gpiod_chip_get_line(chip_, c.offset);
   if (line_ == nullptr) {
     close();
     return Status(StatusCode::kNotFound, "GPIO line offset not on this chip");
   }
   if (gpiod_line_request_output_flags(line_, c.consumer, flags_of(c), initial ? 1 : 0) < 0) {
+    const Status st = request_error("GPIO output request failed on", c.chip);
     line_ = nullptr;
     close();
-    return Status(StatusCode::kIoError, "GPIO output request failed (line busy?)");
+    return st;
   }
   return Status::ok();
 }
@@ -53,8 +68,9 @@ void GpiodInputLine::close() noexcept {
 int GpiodInputLine::fd() const noexcept { return line_ != nullptr ? gpiod_line_event_get_fd(line_) : -1; }
 Status GpiodInputLine::open(const GpioLineConfig& c, GpioEdge edges) noexcept {
   close();
+  errno = 0;
   chip_ = open_chip(c.chip);
-  if (chip_ == nullptr) return Status(StatusCode::kNotFound, "GPIO chip not found");
+  if (chip_ == nullptr) return chip_error(c.chip);
   line_ = gpiod_chip_get_line(chip_, c.offset);
   if (line_ == nullptr) {
     close();
@@ -67,9 +83,10 @@ Status GpiodInputLine::open(const GpioLineConfig& c, GpioEdge edges) noexcept {
     default: r = gpiod_line_request_both_edges_events_flags(line_, c.consumer, flags_of(c)); break;
   }
   if (r < 0) {
+    const Status st = request_error("GPIO event request failed on", c.chip);
     line_ = nullptr;
     close();
-    return Status(StatusCode::kIoError, "GPIO event request failed (line busy?)");
+    return st;
   }
   return Status::ok();
 }

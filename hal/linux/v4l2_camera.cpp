@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "hal/core/pixel.hpp"
+#include "hal/linux/device_error.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 
 namespace qnav::hal {
@@ -51,11 +52,17 @@ Status V4l2Camera::open(const CameraConfig& c) noexcept {
   if (c.width <= 0 || c.height <= 0 || c.width > kMaxImageSide || c.height > kMaxImageSide)
     return Status(StatusCode::kInvalidArgument, "camera size out of range");
   fd_ = ::open(c.device, O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (fd_ < 0) return Status(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError, "cannot open video device");
+  if (fd_ < 0) {
+    const int e = errno;
+    return device_error(e == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError, "cannot open video device", c.device, e,
+                        v4l2_open_hint(e));
+  }
   v4l2_capability cap{};
   if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {
+    const int e = errno;
     close();
-    return Status(StatusCode::kUnsupported, "not a V4L2 device (QUERYCAP failed)");
+    return device_error(StatusCode::kUnsupported, "not a V4L2 device (VIDIOC_QUERYCAP failed):", c.device, e,
+                        "give a capture node: `v4l2-ctl --list-devices` lists them");
   }
   const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
   if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) {

@@ -7,6 +7,7 @@
 //  - gpio-sim: the first /sys/bus/platform/devices/gpio-sim.*/gpiochipN with sim_gpio0..1 (line 0
 //    is driven and read back through sim_gpio0/value, line 1's edges come from sim_gpio1/pull).
 #include <dirent.h>
+#include <errno.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "hal/linux/device_error.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/v4l2_camera.hpp"
 #ifdef QNAV_HAVE_GPIOD
@@ -95,6 +97,31 @@ TEST(V4l2Camera, OpenErrorsAreValues) {
   std::uint8_t px[4];
   auto v = ImageView<std::uint8_t>::make(px, 2, 2).value();
   EXPECT_EQ(cam.capture(v, 0).status(), StatusCode::kNotReady);
+}
+
+// The open errors name the device, carry the OS reason and, where there is one, the fix: a missing
+// node points at `ls /dev/video*` and the modules, a file that is not a capture node says so. The
+// permission case (EACCES: the video group or a udev rule) is the same path with another errno; it is
+// pinned through the hint function, since a test running as root cannot provoke it.
+TEST(V4l2Camera, OpenErrorsNameTheDeviceTheReasonAndTheFix) {
+  V4l2Camera cam;
+  CameraConfig c;
+  c.device = "/dev/qnav-no-video";
+  const Status missing = cam.open(c);
+  EXPECT_EQ(missing, StatusCode::kNotFound);
+  const std::string m = missing.message();
+  EXPECT_NE(m.find("cannot open video device /dev/qnav-no-video: No such file or directory"), std::string::npos) << m;
+  EXPECT_NE(m.find("ls /dev/video*"), std::string::npos) << m;
+  EXPECT_NE(m.find("uvcvideo"), std::string::npos) << m;
+  EXPECT_NE(m.find("modprobe vivid"), std::string::npos) << m;
+  c.device = "/dev/null";
+  const std::string n = cam.open(c).message();
+  EXPECT_NE(n.find("not a V4L2 device (VIDIOC_QUERYCAP failed): /dev/null: Inappropriate ioctl for device"), std::string::npos) << n;
+  const std::string perm = v4l2_open_hint(EACCES);
+  EXPECT_NE(perm.find("video group"), std::string::npos) << perm;
+  EXPECT_NE(perm.find("udev rule"), std::string::npos) << perm;
+  EXPECT_EQ(std::string(v4l2_open_hint(EPERM)), perm);
+  EXPECT_EQ(v4l2_open_hint(EIO), nullptr);
 }
 
 // Streams GREY frames from vivid: the negotiated format is the one asked for, 12 frames arrive with
@@ -212,6 +239,34 @@ TEST(GpiodLine, MissingChipIsAnError) {
   GpiodInputLine in;
   EXPECT_EQ(in.open(c, GpioEdge::kBoth), StatusCode::kNotFound);
   EXPECT_EQ(in.wait_event(0).status(), StatusCode::kNotReady);
+}
+
+// A chip that is not there is named with the OS reason and how to list the chips; a file that is not
+// a GPIO chip says so; the permission hint (the gpio group, a udev rule for /dev/gpiochipN) is pinned
+// through the hint function (a root test cannot provoke EACCES).
+TEST(GpiodLine, OpenErrorsNameTheChipTheReasonAndTheFix) {
+  GpiodOutputLine out;
+  GpioLineConfig c;
+  c.chip = "/dev/qnav-no-gpiochip";
+  const Status missing = out.open(c, false);
+  EXPECT_EQ(missing, StatusCode::kNotFound);
+  std::string m = missing.message();
+  EXPECT_NE(m.find("cannot open GPIO chip /dev/qnav-no-gpiochip: No such file or directory"), std::string::npos) << m;
+  EXPECT_NE(m.find("ls /dev/gpiochip*"), std::string::npos) << m;
+  c.chip = "gpiochip987";  // by name: /dev/gpiochip987
+  GpiodInputLine in;
+  m = in.open(c, GpioEdge::kBoth).message();
+  EXPECT_NE(m.find("cannot open GPIO chip gpiochip987: No such file or directory"), std::string::npos) << m;
+  c.chip = "/dev/null";
+  const Status notchip = out.open(c, false);
+  EXPECT_FALSE(notchip.is_ok());
+  m = notchip.message();
+  EXPECT_NE(m.find("cannot open GPIO chip /dev/null: "), std::string::npos) << m;
+  EXPECT_NE(m.find("not a GPIO character device"), std::string::npos) << m;
+  const std::string perm = gpiochip_open_hint(EACCES);
+  EXPECT_NE(perm.find("gpio group"), std::string::npos) << perm;
+  EXPECT_NE(perm.find("KERNEL==\"gpiochip*\""), std::string::npos) << perm;
+  EXPECT_EQ(std::string(gpiochip_open_hint(EPERM)), perm);
 }
 
 // An output line on a gpio-sim chip: the level gpio-sim sees (sim_gpio0/value) follows set(), with
