@@ -1,5 +1,7 @@
 // qnav map: downward-camera mapping (underwater SLAM paper): the homography chain of nav/topo over a
-// directory of frames, with the navigation poses when given.
+// directory of frames, with the navigation poses when given. The per-frame wiring (undistortion,
+// chain, topological map) and its tuned defaults are firmware/pipeline/topo_mapper, shared with qnavd;
+// this file reads the frames, times the parts, saves the map file and writes the outputs.
 //
 //   qnav map --images DIR [--poses CSV] [--camera YAML] [--altitude M] [--out DIR] [--json]
 //            [--no-undistort] [--fundamental] [--keyframe-gap N] [--frames N] [--no-plot]
@@ -39,15 +41,13 @@
 #include <vector>
 
 #include "firmware/cli/cli_app.hpp"
+#include "firmware/pipeline/topo_mapper.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/map_file.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "firmware/tools/text_file.hpp"
-#include "nav/topo/homography_chain.hpp"
-#include "nav/topo/topo_map.hpp"
 #include "nav/vision/degrade.hpp"
-#include "nav/vision/rectify.hpp"
 // The synthetic seabed and its downward camera (header-only, deterministic on every target): the same
 // sequence the nav/topo tests use, for `qnav map eval`.
 #include "drivers/downward_sim/seabed_scene.hpp"
@@ -202,44 +202,28 @@ struct FrameRecord {
   topo::ObserveResult place;      // the topological map's answer (kBadInput when not observed)
   bool observed = false;
   double map_ms = 0.0;            // signature + map update (in ms)
+  void take(const pipeline::MapperStep& m) {
+    step = m.chain;
+    place = m.place;
+    observed = m.observed;
+  }
 };
 
-// The topological map beside the chain: the frame's place signature from the chain's keypoints, the
-// map updated with the chain's pose (metres when metric, else mosaic pixels), the map file rewritten
-// (durably) after each new node.
+// The tool's side of the topological map that the shared mapper (pipeline::TopoMapper) builds beside
+// the chain: the map file (rewritten durably after each new node), its save count and times, the
+// nodes and edges CSVs.
 struct MapBuilder {
-  topo::TopoMapConfig config;
-  topo::PlaceEncoder encoder;
-  topo::TopoMap map;
-  std::unique_ptr<ArenaStorage> arena;
+  const pipeline::TopoMapper* mapper = nullptr;
   const char* path = nullptr;  // --map-out
-  bool metric = false;
   int saves = 0;
   std::vector<double> save_ms;
   Status status;  // the first save failure
 
-  Status init(double spacing, bool metric_units, std::size_t max_nodes) {
-    metric = metric_units;
-    config.max_nodes = max_nodes;
-    config.node_spacing = spacing;
-    config.gate = 1.5 * spacing;
-    config.max_edge_length = 3.0 * spacing;
-    arena = std::make_unique<ArenaStorage>(topo::TopoMap::arena_bytes(config));
-    encoder.init();
-    return map.init(config, *arena);
-  }
-  void observe(const topo::HomographyChain& chain, const topo::ChainStep& step, FrameRecord& r) {
-    if (step.status != topo::StepStatus::kOk) return;
-    const auto t0 = Clock::now();
-    topo::PlaceSignature sig;
-    encoder.encode(chain.current_keypoints(), sig);
-    const Vec2d p = metric ? step.pose.position_m : step.pose.position_px;
-    if (map.observe(sig, p, step.pose.heading_rad, r.place)) r.observed = true;
-    r.map_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  }
+  const topo::TopoMap& map() const { return mapper->map(); }
+  bool metric() const { return mapper->metric(); }
   void save() {
     const auto t0 = Clock::now();
-    const Status s = tools::save_map(path, map, metric);
+    const Status s = tools::save_map(path, map(), metric());
     save_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     ++saves;
     if (!s && status) status = s;
@@ -254,11 +238,11 @@ struct MapBuilder {
     FILE* f = std::fopen(np.c_str(), "w");
     if (f == nullptr) return false;
     std::fprintf(f, "id,x,y,units,x_px,y_px,heading_deg,created,last_seen,visits,revisits,edges\n");
-    for (std::uint16_t i = 0; i < map.capacity(); ++i) {
-      if (!map.active(i)) continue;
-      const topo::TopoNode& n = map.node(i);
-      const double to_px = metric && mpp > 0.0 ? 1.0 / mpp : 1.0;
-      std::fprintf(f, "%u,%.4f,%.4f,%s,%.3f,%.3f,%.3f,%u,%u,%u,%u,%u\n", i, n.position.x(), n.position.y(), metric ? "m" : "px",
+    for (std::uint16_t i = 0; i < map().capacity(); ++i) {
+      if (!map().active(i)) continue;
+      const topo::TopoNode& n = map().node(i);
+      const double to_px = metric() && mpp > 0.0 ? 1.0 / mpp : 1.0;
+      std::fprintf(f, "%u,%.4f,%.4f,%s,%.3f,%.3f,%.3f,%u,%u,%u,%u,%u\n", i, n.position.x(), n.position.y(), metric() ? "m" : "px",
                    n.position.x() * to_px, n.position.y() * to_px, rad_to_deg(n.heading_rad), n.created, n.last_seen, n.visits,
                    n.revisits, n.edge_count);
     }
@@ -267,10 +251,10 @@ struct MapBuilder {
     f = std::fopen(ep.c_str(), "w");
     if (f == nullptr) return false;
     std::fprintf(f, "a,b,age,length\n");
-    for (std::uint16_t i = 0; i < map.capacity(); ++i) {
-      if (!map.active(i)) continue;
-      for (const topo::TopoEdge& e : map.edges(i))
-        if (e.to > i) std::fprintf(f, "%u,%u,%u,%.4f\n", i, e.to, e.age, (map.node(e.to).position - map.node(i).position).norm());
+    for (std::uint16_t i = 0; i < map().capacity(); ++i) {
+      if (!map().active(i)) continue;
+      for (const topo::TopoEdge& e : map().edges(i))
+        if (e.to > i) std::fprintf(f, "%u,%u,%u,%.4f\n", i, e.to, e.age, (map().node(e.to).position - map().node(i).position).norm());
     }
     ok = std::fflush(f) == 0 && ok;
     std::fclose(f);
@@ -357,12 +341,8 @@ int run_route() {
     std::fprintf(stderr, "map route: %s: refused: %s (%s)\n", path, s.message(), to_string(s.code()));
     return 1;
   }
-  topo::TopoMapConfig c;
-  c.max_nodes = std::max<std::size_t>(h.capacity, 2);
+  topo::TopoMapConfig c = pipeline::topo_map_config(h.node_spacing, std::max<std::size_t>(h.capacity, 2));
   c.max_edges_per_node = h.max_edges_per_node;
-  c.node_spacing = h.node_spacing;
-  c.gate = 1.5 * h.node_spacing;
-  c.max_edge_length = 3.0 * h.node_spacing;
   ArenaStorage arena(topo::TopoMap::arena_bytes(c));
   topo::TopoMap map;
   s = map.init(c, arena);
@@ -445,17 +425,19 @@ int run_eval() {
   double recognised_none = std::nan("");
   int worst_rc = 0;
   for (int filter = 0; filter <= static_cast<int>(filters); ++filter) {
-    topo::HomographyChainConfig config;
-    config.max_width = cam.width;
-    config.max_height = cam.height;
-    config.camera.fx = config.camera.fy = cam.f;
-    config.camera.cx = cam.cx;
-    config.camera.cy = cam.cy;
-    ArenaStorage arena(topo::HomographyChain::arena_bytes(config));
-    topo::HomographyChain chain;
+    vision::PinholeRadTan pinhole;
+    pinhole.fx = pinhole.fy = cam.f;
+    pinhole.cx = cam.cx;
+    pinhole.cy = cam.cy;
+    pinhole.width = cam.width;
+    pinhole.height = cam.height;
+    const pipeline::TopoMapperConfig config =
+        pipeline::topo_mapper_config(cam.width, cam.height, true, pinhole, false, true, true, spacing, 1024);
+    ArenaStorage arena(pipeline::TopoMapper::arena_bytes(config));
+    pipeline::TopoMapper mapper;
     MapBuilder builder;
-    Status s = chain.init(config, arena);
-    if (s) s = builder.init(spacing, true, 1024);
+    builder.mapper = &mapper;
+    Status s = mapper.init(config, arena);
     if (!s) {
       std::fprintf(stderr, "map eval: init: %s\n", s.message());
       return 1;
@@ -482,8 +464,9 @@ int run_eval() {
       FrameRecord r;
       const auto t0 = Clock::now();
       const double c0 = cpu_ms();
-      s = chain.process(input, altitude, r.step);
-      if (s) builder.observe(chain, r.step, r);
+      pipeline::MapperStep m;
+      s = mapper.step(input, altitude, m);
+      r.take(m);
       r.chain_cpu_ms = cpu_ms() - c0;
       r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       if (!s) return 1;
@@ -504,10 +487,10 @@ int run_eval() {
         created_frame[r.place.node] = k;
       if (k >= lap + 3) {
         ++second;
-        const topo::TopoMap& m = builder.map;
-        if (r.observed && r.place.kind == topo::ObserveKind::kMatched && m.active(r.place.node) &&
+        const topo::TopoMap& map = builder.map();
+        if (r.observed && r.place.kind == topo::ObserveKind::kMatched && map.active(r.place.node) &&
             created_frame[r.place.node] >= 0 && created_frame[r.place.node] < lap &&
-            (m.node(r.place.node).position - truth(k)).norm() <= m.config().gate)
+            (map.node(r.place.node).position - truth(k)).norm() <= map.config().gate)
           ++recognised;
       }
       rec.push_back(r);
@@ -526,21 +509,21 @@ int run_eval() {
     const double rec_pct = second > 0 ? 100.0 * recognised / second : std::nan("");
     if (filter == 0) recognised_none = rec_pct;
     if (ok < frames) worst_rc = 1;
-    const topo::TopoCounters& c = builder.map.counters();
+    const topo::TopoCounters& c = builder.map().counters();
     char buf[768];
     std::snprintf(buf, sizeof buf,
                   "%s\"%s\": {\"traj_error_pct\": %.4f, \"final_error_pct\": %.4f, \"frames_ok\": %d, \"frames\": %d, "
                   "\"keypoints_median\": %.0f, \"inliers_median\": %.0f, \"nodes\": %zu, \"edges\": %zu, \"mismatch\": %u, "
                   "\"revisits_recognised_pct\": %.1f, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
-                  filter ? ", " : "", name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map.node_count(),
-                  builder.map.edge_count(), c.get(topo::TopoCounter::kMismatch), rec_pct, median(ms), median(cpu));
+                  filter ? ", " : "", name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map().node_count(),
+                  builder.map().edge_count(), c.get(topo::TopoCounter::kMismatch), rec_pct, median(ms), median(cpu));
     out += buf;
     std::snprintf(buf, sizeof buf, "%s\"%s\": %.4f", filter ? ", " : "", name[filter], err_pct);
     errs += buf;
     if (!json)
       std::printf("%-8s traj error max %.3f %% (final %.3f %%) of path; %d/%d frames ok; keypoints %.0f, inliers %.0f; map %zu nodes, "
                   "%zu edges, %u mismatches; revisits recognised %.1f %% (%d/%d); frame %.2f ms median (CPU %.2f ms)\n",
-                  name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map.node_count(), builder.map.edge_count(),
+                  name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map().node_count(), builder.map().edge_count(),
                   c.get(topo::TopoCounter::kMismatch), rec_pct, recognised, second, median(ms), median(cpu));
   }
   char tail[256];
@@ -607,60 +590,33 @@ int run_map() {
     std::fprintf(stderr, "map: camera is %dx%d, frames are %dx%d\n", cam.width, cam.height, W, H);
     return 1;
   }
-  topo::HomographyChainConfig config;
-  config.max_width = W;
-  config.max_height = H;
-  config.fundamental_filter = g_opt.fundamental;
-  const long gap = g_opt.keyframe_gap > 0 ? g_opt.keyframe_gap : static_cast<long>(config.max_keyframe_gap);
-  config.max_keyframe_gap = static_cast<std::uint32_t>(gap);
-  if (have_camera) {
-    config.camera.fx = cam.fx;
-    config.camera.fy = cam.fy;
-    config.camera.cx = cam.cx;
-    config.camera.cy = cam.cy;
-  }
-  ArenaStorage arena(topo::HomographyChain::arena_bytes(config) +
-                     (have_camera && undistort ? vision::RemapTable::arena_bytes(vision::RemapConfig{W, H, 0}) : 0));
-  topo::HomographyChain chain;
-  Status s = chain.init(config, arena);
-  if (!s) {
-    std::fprintf(stderr, "map: chain init: %s\n", s.message());
-    return 1;
-  }
   // The topological map (when --map-out or --node-spacing is given).
   const char* map_out = opt_or_null(g_opt.map_out);
   const bool metric = altitude > 0.0 && have_camera;
-  const double spacing = !std::isnan(g_opt.node_spacing) ? g_opt.node_spacing : metric ? 0.2 : 30.0;
-  const long max_nodes = g_opt.max_nodes;
   const bool mapping = map_out != nullptr || !std::isnan(g_opt.node_spacing);
+  pipeline::TopoMapperConfig config = pipeline::topo_mapper_config(W, H, have_camera, cam, undistort, mapping, metric, g_opt.node_spacing,
+                                                                   static_cast<std::size_t>(g_opt.max_nodes));
+  config.chain.fundamental_filter = g_opt.fundamental;
+  const long gap = g_opt.keyframe_gap > 0 ? g_opt.keyframe_gap : static_cast<long>(config.chain.max_keyframe_gap);
+  config.chain.max_keyframe_gap = static_cast<std::uint32_t>(gap);
+  const double spacing = config.map.node_spacing;
   if (out_dir != nullptr) {  // the map file may live there and is written from the first node
     if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
       std::fprintf(stderr, "map: %s\n", e.c_str());
       return 1;
     }
   }
+  ArenaStorage arena(pipeline::TopoMapper::arena_bytes(config));
+  pipeline::TopoMapper mapper;
+  Status s = mapper.init(config, arena);
+  if (!s) {
+    std::fprintf(stderr, "map: mapper init (chain, undistortion table, topological map): %s\n", s.message());
+    return 1;
+  }
+  const topo::HomographyChain& chain = mapper.chain();
   MapBuilder builder;
-  if (mapping) {
-    s = builder.init(spacing, metric, static_cast<std::size_t>(max_nodes));
-    if (!s) {
-      std::fprintf(stderr, "map: topological map init: %s\n", s.message());
-      return 1;
-    }
-    builder.path = map_out;
-  }
-  vision::RemapTable remap;
-  Result<ImageU8> rectified = ImageU8::allocate(W, H);
-  if (have_camera && undistort) {
-    vision::RemapConfig rc;
-    rc.max_width = W;
-    rc.max_height = H;
-    s = remap.init(rc, arena);
-    if (s) s = remap.build_undistort(cam, vision::FlatPortRefraction{});
-    if (!s || !rectified) {
-      std::fprintf(stderr, "map: undistortion table: %s\n", s ? "no memory" : s.message());
-      return 1;
-    }
-  }
+  builder.mapper = &mapper;
+  builder.path = map_out;
 
   std::vector<FrameRecord> rec;
   for (std::size_t i = 0; i < files.size(); ++i) {
@@ -670,24 +626,25 @@ int run_map() {
       if (p.first == r.file) r.nav = p.second;
     Result<ImageU8> img = i == 0 ? std::move(first) : tools::read_image_gray8(files[i].c_str());
     const auto t0 = Clock::now();
+    pipeline::MapperStep m;
     if (!img) {
       std::fprintf(stderr, "map: %s: %s (frame counted as bad input)\n", files[i].c_str(), img.status().message());
-      s = chain.process(ConstImageViewU8(), r.step);
-    } else if (img->width() != W || img->height() != H) {
-      s = chain.process(img->view(), r.step);  // refused as kBadInput (size)
-    } else if (have_camera && undistort) {
-      s = remap.apply(img->view(), rectified->view());
+      s = mapper.unreadable_frame(m);
+    } else {
+      ConstImageViewU8 input;
+      s = mapper.undistort(img->view(), input);  // a frame of another size passes through, refused as kBadInput (size)
       const auto t1 = Clock::now();
       const double c1 = cpu_ms();
-      if (s) s = chain.process(ConstImageViewU8(rectified->view()), altitude, r.step);
+      if (s) s = mapper.register_frame(input, altitude, m);
       r.chain_cpu_ms = cpu_ms() - c1;
-      r.chain_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
-    } else {
-      const double c1 = cpu_ms();
-      s = chain.process(img->view(), altitude, r.step);
-      r.chain_cpu_ms = cpu_ms() - c1;
+      if (mapper.undistorts()) r.chain_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
     }
-    if (s && mapping) builder.observe(chain, r.step, r);
+    if (s && m.chain.status == topo::StepStatus::kOk) {
+      const auto t2 = Clock::now();
+      mapper.observe(m);
+      r.map_ms = std::chrono::duration<double, std::milli>(Clock::now() - t2).count();
+    }
+    r.take(m);
     r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (r.chain_ms == 0.0) r.chain_ms = r.ms - r.map_ms;
     if (!s) {
@@ -840,13 +797,13 @@ int run_map() {
     if (r.observed) map_ms.push_back(r.map_ms);
   std::string map_json = "\"map\": null, ";
   if (mapping) {
-    const topo::TopoCounters& c = builder.map.counters();
+    const topo::TopoCounters& c = builder.map().counters();
     char buf[1024];
     std::snprintf(buf, sizeof buf,
                   "\"map\": {\"nodes\": %zu, \"edges\": %zu, \"units\": \"%s\", \"node_spacing\": %g, \"revisits\": %u, "
                   "\"revisit_frames\": %d, \"mismatch\": %u, \"full\": %u, \"pruned\": %u, \"edges_aged\": %u, \"edge_too_long\": %u, "
                   "\"map_ms_median\": %s, \"file\": \"%s\", \"saves\": %d, \"save_ms_median\": %s}, ",
-                  builder.map.node_count(), builder.map.edge_count(), metric ? "m" : "px", spacing, builder.map.revisits(),
+                  builder.map().node_count(), builder.map().edge_count(), metric ? "m" : "px", spacing, builder.map().revisits(),
                   builder.revisit_frames(rec), c.get(topo::TopoCounter::kMismatch), c.get(topo::TopoCounter::kNodeCapacity),
                   c.get(topo::TopoCounter::kNodesPruned), c.get(topo::TopoCounter::kEdgesAged), c.get(topo::TopoCounter::kEdgeTooLong),
                   num(median(map_ms)).c_str(), map_out ? map_out : "", builder.saves, num(median(builder.save_ms)).c_str());
@@ -873,10 +830,10 @@ int run_map() {
                 num(al.valid ? rad_to_deg(al.rotation_rad) : std::nan("")).c_str(), al.valid ? (al.mirrored ? "true" : "false") : "null",
                 num(al.valid ? al.rms_m : std::nan("")).c_str(), num(implied_alt).c_str(), num(median(ms)).c_str(),
                 num(*std::max_element(ms.begin(), ms.end())).c_str(), num(median(chain_ms)).c_str(), num(median(chain_cpu)).c_str(), (have_camera && undistort) ? "true" : "false",
-                config.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str());
+                config.chain.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str());
   } else {
     std::printf("frames %zu (%dx%d)%s%s\n", n, W, H, (have_camera && undistort) ? ", undistorted" : "",
-                config.fundamental_filter ? ", F both-accept filter" : "");
+                config.chain.fundamental_filter ? ", F both-accept filter" : "");
     std::printf("pairs registered      %d / %d (keyframes %u)\n", registered, pairs, chain.keyframes());
     std::printf("keypoints per frame   median %.0f\n", median(keypoints));
     if (!inliers.empty())
@@ -901,10 +858,10 @@ int run_map() {
     std::printf("frame time            median %.2f ms, max %.2f ms (undistortion + chain); chain alone median %.2f ms (CPU %.2f ms)\n",
                 median(ms), *std::max_element(ms.begin(), ms.end()), median(chain_ms), median(chain_cpu));
     if (mapping) {
-      const topo::TopoCounters& c = builder.map.counters();
+      const topo::TopoCounters& c = builder.map().counters();
       std::printf("topological map       %zu nodes, %zu edges (node spacing %g %s); revisits %u; refused: appearance mismatch %u, "
                   "map full %u; pruned %u\n",
-                  builder.map.node_count(), builder.map.edge_count(), spacing, metric ? "m" : "px", builder.map.revisits(),
+                  builder.map().node_count(), builder.map().edge_count(), spacing, metric ? "m" : "px", builder.map().revisits(),
                   c.get(topo::TopoCounter::kMismatch), c.get(topo::TopoCounter::kNodeCapacity), c.get(topo::TopoCounter::kNodesPruned));
       std::printf("map update            median %.3f ms per frame (signature + map); file %s rewritten %d times, median %.2f ms\n",
                   median(map_ms), map_out ? map_out : "(none)", builder.saves, median(builder.save_ms));
