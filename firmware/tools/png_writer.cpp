@@ -78,12 +78,11 @@ Status write_png_rgb8(const char* path, const std::uint8_t* rgb, int width, int 
   return write_rows(path, rows.data(), width, height, PNG_COLOR_TYPE_RGB);
 }
 
-Status write_png_float(const char* path, ConstImageViewF32 image, float lo, float hi) noexcept {
-  if (image.empty()) return Status(StatusCode::kInvalidArgument, "png: empty image");
-  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
-    return Status(StatusCode::kInvalidArgument, "png: bad range");
+std::vector<std::uint8_t> gray8_from_float(ConstImageViewF32 image, float lo, float hi) {
+  std::vector<std::uint8_t> px;
+  if (image.empty() || !(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return px;
   const std::size_t w = static_cast<std::size_t>(image.width());
-  std::vector<std::uint8_t> px(w * static_cast<std::size_t>(image.height()));
+  px.resize(w * static_cast<std::size_t>(image.height()));
   const float scale = 255.0f / (hi - lo);
   for (int y = 0; y < image.height(); ++y) {
     const float* s = image.row(y);
@@ -94,6 +93,14 @@ Status write_png_float(const char* path, ConstImageViewF32 image, float lo, floa
       d[x] = static_cast<std::uint8_t>(v + 0.5f);
     }
   }
+  return px;
+}
+
+Status write_png_float(const char* path, ConstImageViewF32 image, float lo, float hi) noexcept {
+  if (image.empty()) return Status(StatusCode::kInvalidArgument, "png: empty image");
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
+    return Status(StatusCode::kInvalidArgument, "png: bad range");
+  const std::vector<std::uint8_t> px = gray8_from_float(image, lo, hi);
   auto view = ConstImageViewU8::make(px.data(), image.width(), image.height());
   if (!view) return view.status();
   return write_png_gray8(path, *view);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "nav/core/image.hpp"
 #include "nav/core/status.hpp"
@@ -16,5 +17,8 @@ Status write_png_gray8(const char* path, ConstImageViewU8 image) noexcept;
 Status write_png_rgb8(const char* path, const std::uint8_t* rgb, int width, int height, int stride_bytes) noexcept;
 // Float image mapped linearly from [lo, hi] to [0, 255] (values outside clamp; NaN -> 0).
 Status write_png_float(const char* path, ConstImageViewF32 image, float lo, float hi) noexcept;
+// The grey levels write_png_float writes (row-major, width x height; empty on a bad range), for a
+// raster_plot.hpp plot of the same image.
+std::vector<std::uint8_t> gray8_from_float(ConstImageViewF32 image, float lo, float hi);
 
 }  // namespace qnav::tools

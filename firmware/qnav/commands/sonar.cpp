@@ -1,20 +1,23 @@
 // qnav sonar: side-scan tools over XTF and EdgeTech JSF files (told apart by their first bytes).
-//   qnav sonar waterfall FILE --out PNG [--corrected]
-//       port (far..near) | starboard (near..far), one row per ping, first ping at the top.
-//       --corrected shows ScanlineCorrector output (ground range from the detected first return,
-//       TVG + EGN) instead of raw samples.
+//   qnav sonar waterfall FILE --out PNG [--corrected] [--raster PNG]
+//       port (far..near) | starboard (near..far), one row per ping, first ping at the top, drawn with
+//       its axes (across-track m, ping) and a colour bar (firmware/tools/raster_plot.hpp); --raster
+//       also writes the bare image, one pixel per sample. --corrected shows ScanlineCorrector output
+//       (ground range from the detected first return, TVG + EGN) instead of raw samples.
 //   qnav sonar tiles FILE --out DIR [--res 0.1] [--lines 500] [--stride N] [--size 1024]
 //       [--nav fix|dr] [--heading-offset-deg 0] [--altitude detect|file] [--nadir-gap-m 1]
-//       north-up tiles (tile_NNN.png, tile_NNN_coverage.png) and tiles.csv with each tile's pose.
+//       north-up tiles (tile_NNN.png, tile_NNN_coverage.png: the bare rasters) and tiles.csv with each
+//       tile's pose; tile_NNN_plot.png: the tile with east/north axes in metres, a scale bar, a north
+//       arrow and an intensity colour bar.
 //       Altitude: the first return detected in the ping by default; `file` uses the altimeter field
 //       (on the Iver2 file it reads 15-20 % short of the first return, leaving water column in the tile).
 //   qnav sonar simulate --out FILE.xtf|FILE.jsf [--length-m 200] [--offset-m 0] [--reverse] [--seed 1] [--pass-seed N]
 //       [--samples 1024] [--range-m 40] [--truth PNG] [--candump FILE] [--dvl-log FILE] [--start-s 1700000000]
 //       flies the simulator along a straight route (metric nav) and writes an XTF or JSF file; --truth
-//       writes the ground-truth reflectivity under the swath at 0.1 m. --candump / --dvl-log also
-//       record the dive's navigation sensors at each ping, as a vehicle logs them: the AHRS heading as
-//       QNAV_ATTITUDE_IN in a `candump -l` log, the DVL's body velocities as Water Linked wrz sentences
-//       (qnavd replays them: sim.pass.candump, sim.pass.dvl_log). --start-s: the first ping's time
+//       draws the ground-truth reflectivity under the swath at 0.1 m (metric axes, scale bar, north
+//       arrow, colour bar). --candump / --dvl-log also record the dive's navigation sensors at each
+//       ping, as a vehicle logs them: the AHRS heading as QNAV_ATTITUDE_IN in a `candump -l` log, the
+//       DVL's body velocities as Water Linked wrz sentences (qnavd replays them: sim.pass.candump, sim.pass.dvl_log). --start-s: the first ping's time
 //       (s since the epoch), so that passes recorded one after the other have their own times.
 #include <algorithm>
 #include <cerrno>
@@ -37,6 +40,7 @@
 #include "firmware/pipeline/dead_reckoner.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
+#include "firmware/tools/raster_plot.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/candump.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
@@ -54,7 +58,7 @@ constexpr double kFalseEast_m = 500000.0;
 
 // Every sonar subcommand's options (one invocation per process), declared in setup_sonar below.
 struct SonarOptions {
-  std::string file, out, nav = "fix", altitude = "detect", truth, candump, dvl_log;
+  std::string file, out, raster, nav = "fix", altitude = "detect", truth, candump, dvl_log;
   bool corrected = false, reverse = false;
   double res = 0.1, heading_off_deg = 0.0, nadir_gap = 1.0;
   long lines = 500, stride = -1, size = 1024;
@@ -135,7 +139,29 @@ int waterfall() {
   const float hi = corrected ? 2.5f : percentile(img, 0.95);
   const Result<ConstImageViewF32> v = ConstImageViewF32::make(img.data(), 2 * side, rows);
   if (!v) return 1;
-  const Status w = tools::write_png_float(out, v.value(), 0.0f, hi);
+  if (!g_opt.raster.empty()) {
+    if (!make_out_parent("waterfall", g_opt.raster)) return 1;
+    const Status w = tools::write_png_float(g_opt.raster.c_str(), v.value(), 0.0f, hi);
+    if (!w) {
+      std::fprintf(stderr, "qnav sonar: %s: %s\n", g_opt.raster.c_str(), w.message());
+      return 1;
+    }
+  }
+  // Column c's centre: (c - side + 0.5) bins across track, port negative; the bin is the slant
+  // range per sample (raw) or the corrector's ground bin (the same range over as many bins).
+  const double bin_m = static_cast<double>(fd.pings[0].ping.slant_range_m) / side;
+  tools::RasterPlot plot;
+  plot.title = std::string("qnav sonar waterfall ") + file + (corrected ? " (corrected)" : " (raw)");
+  plot.x = {(0.5 - side) * bin_m, bin_m,
+            corrected ? "across-track ground range m (port -, starboard +)" : "across-track slant range m (port -, starboard +)"};
+  plot.y = {0.0, 1.0, "ping (first at the top)"};
+  plot.colour_bar = true;
+  plot.colour_lo = 0.0;
+  plot.colour_hi = hi;
+  plot.colour_label = corrected ? "intensity (TVG + EGN)" : "raw sample value";
+  const std::vector<std::uint8_t> grey = tools::gray8_from_float(v.value(), 0.0f, hi);
+  const Status w = grey.empty() ? Status(StatusCode::kInvalidArgument, "bad intensity range")
+                                : tools::write_raster_plot_png(out, ConstImageViewU8::unchecked(grey.data(), 2 * side, rows, 2 * side), plot);
   if (!w) {
     std::fprintf(stderr, "qnav sonar: %s: %s\n", out, w.message());
     return 1;
@@ -213,7 +239,18 @@ int tiles() {
     std::snprintf(name, sizeof name, "/tile_%03u_coverage.png", t.index);
     const Status w2 = tools::write_png_gray8((dir + name).c_str(),
                                              ConstImageViewU8::unchecked(cov.data(), t.coverage.width(), t.coverage.height(), t.coverage.width()));
-    if (!w1 || !w2) std::fprintf(stderr, "qnav sonar tiles: cannot write tile %u\n", t.index);
+    tools::RasterPlot plot;
+    char title[96];
+    std::snprintf(title, sizeof title, "tile %u: pings %u..%u, %.2f m per px, north up", t.index, t.first_ping, t.last_ping, t.resolution_m);
+    plot.title = title;
+    plot.x = {t.origin_east_m + 0.5 * t.resolution_m, t.resolution_m, "east m (from the track's origin)"};
+    plot.y = {t.origin_north_m - 0.5 * t.resolution_m, -t.resolution_m, "north m (from the track's origin)"};
+    plot.scale_bar = plot.north_arrow = plot.colour_bar = true;
+    plot.colour_hi = static_cast<double>(tc.display_max);
+    plot.colour_label = "intensity (TVG + EGN)";
+    std::snprintf(name, sizeof name, "/tile_%03u_plot.png", t.index);
+    const Status w3 = tools::write_raster_plot_png((dir + name).c_str(), t.intensity_u8, plot);
+    if (!w1 || !w2 || !w3) std::fprintf(stderr, "qnav sonar tiles: cannot write tile %u\n", t.index);
     const bool latlon = fd.header.nav_units == 3;
     std::fprintf(csv, "%u,%u,%u,%u,%.3f,%.3f,%.2f,%.3f,%.3f,%.3f,%d,%d,%.4f,%.8f,%.8f\n", t.index, t.first_ping, t.last_ping,
                  t.scanlines, t.pose.x_m, t.pose.y_m, rad_to_deg(t.pose.heading_rad), t.origin_north_m, t.origin_east_m,
@@ -437,7 +474,14 @@ int simulate() {
         img[static_cast<std::size_t>(r) * static_cast<std::size_t>(W) + static_cast<std::size_t>(c)] =
             bed.reflectivity(length - (r + 0.5) * res, -range + (c + 0.5) * res);
     const Result<ConstImageViewF32> v = ConstImageViewF32::make(img.data(), W, H);
-    if (v && tools::write_png_float(truth, v.value(), 0.0f, 1.0f))
+    tools::RasterPlot plot;
+    plot.title = "simulated seabed: ground-truth reflectivity under the swath";
+    plot.x = {-range + 0.5 * res, res, "east m (route along north, at east 0)"};
+    plot.y = {length - 0.5 * res, -res, "north m"};
+    plot.scale_bar = plot.north_arrow = plot.colour_bar = true;
+    plot.colour_label = "reflectivity";
+    const std::vector<std::uint8_t> grey = v ? tools::gray8_from_float(v.value(), 0.0f, 1.0f) : std::vector<std::uint8_t>();
+    if (!grey.empty() && tools::write_raster_plot_png(truth, ConstImageViewU8::unchecked(grey.data(), W, H, W), plot))
       std::printf("ground truth reflectivity %s: %dx%d px at %.1f m, north up, east %.0f..%.0f m, north 0..%.0f m\n", truth, W, H,
                   res, -range, range, length);
   }
@@ -454,9 +498,10 @@ void setup_sonar(CLI::App& cmd, qnav::cli::Runner& run) {
   add_text(*w, "--out", g_opt.out, "the PNG to write (folders created)")->required()->type_name("PNG");
   add_flag(*w, "--corrected", g_opt.corrected,
            "show the ScanlineCorrector's output (ground range from the first return, TVG + EGN) instead of raw samples");
+  add_text(*w, "--raster", g_opt.raster, "also write the bare waterfall, one pixel per sample, no axes (folders created)")->type_name("PNG");
   run.on(w, waterfall);
 
-  CLI::App* t = cmd.add_subcommand("tiles", "north-up tiles (tile_NNN.png, tile_NNN_coverage.png) and tiles.csv with each tile's pose");
+  CLI::App* t = cmd.add_subcommand("tiles", "north-up tiles (tile_NNN.png, tile_NNN_coverage.png), tile_NNN_plot.png (metric axes, scale bar, north arrow) and tiles.csv with each tile's pose");
   qnav::cli::add_positional(*t, "FILE", g_opt.file, "the side-scan file (XTF or JSF)");
   add_text(*t, "--out", g_opt.out, "the folder to write (created as needed)")->required()->type_name("DIR");
   add_number(*t, "--res", g_opt.res, "tile pixel size", "m", 0.005, 10);

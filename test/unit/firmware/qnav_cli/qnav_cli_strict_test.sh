@@ -92,6 +92,21 @@ err 1 "dir: is a directory" "$Q" sonar tiles dir --out t
 err 1 "empty.txt: empty file" "$Q" sonar waterfall empty.txt --out w.png
 err 1 "not an XTF file" "$Q" sonar waterfall "$WRONG" --out w.png
 ok "waterfall new/sub/w.png" "$Q" sonar waterfall s.xtf --out new/sub/w.png   # --out's folders are created
+# The pictures a person reads: the waterfall drawn with axes around it (wider than its 2 x 64 samples),
+# --raster the bare image one pixel per sample; each tile's bare rasters and its plot.
+png_w() { od -An -tu1 -j16 -N4 "$1" | awk '{ print $1 * 16777216 + $2 * 65536 + $3 * 256 + $4 }'; }
+ok "waterfall w.png" "$Q" sonar waterfall s.xtf --out w.png --raster raw/w.png
+checks=$((checks + 1))
+if [ "$(png_w raw/w.png)" != 128 ] || [ "$(png_w w.png)" -le 128 ]; then
+  echo "FAIL: waterfall --raster $(png_w raw/w.png) px wide (want 128), the plot $(png_w w.png) (want more)"
+  fails=$((fails + 1))
+fi
+ok "tile 0" "$Q" sonar tiles s.xtf --out t --size 256
+checks=$((checks + 1))
+for f in tile_000.png tile_000_coverage.png tile_000_plot.png tiles.csv; do
+  [ -s "t/$f" ] || { echo "FAIL: sonar tiles wrote no t/$f"; fails=$((fails + 1)); }
+done
+[ "$(png_w t/tile_000.png)" = 256 ] || { echo "FAIL: tile_000.png $(png_w t/tile_000.png) px wide (want 256)"; fails=$((fails + 1)); }
 
 # ---- vo ----
 err 2 "unknown option '--quik'.*'--quick'" "$Q" vo eval --quik
