@@ -36,4 +36,4 @@ mkdir -p "$D/jsf_tiles"
 "$QNAV" sonar simulate --out "$D/sim.jsf" --length-m 150 --samples 1024 --range-m 40
 "$QNAV" sonar tiles "$D/sim.jsf" --out "$D/jsf_tiles" --lines 500 --res 0.1
 echo
-echo "outputs: $D/scotsman_waterfall*.png, $D/tiles/tile_000.png, $D/sim_tiles/, $D/sim_truth.png"
+echo "outputs: $D/scotsman_waterfall*.png, $D/tiles/tile_000_plot.png (metres, scale bar, north arrow), $D/sim_tiles/, $D/sim_truth.png"

@@ -17,8 +17,9 @@
 //       draws the ground-truth reflectivity under the swath at 0.1 m (metric axes, scale bar, north
 //       arrow, colour bar). --candump / --dvl-log also record the dive's navigation sensors at each
 //       ping, as a vehicle logs them: the AHRS heading as QNAV_ATTITUDE_IN in a `candump -l` log, the
-//       DVL's body velocities as Water Linked wrz sentences (qnavd replays them: sim.pass.candump, sim.pass.dvl_log). --start-s: the first ping's time
-//       (s since the epoch), so that passes recorded one after the other have their own times.
+//       DVL's body velocities as Water Linked wrz sentences (qnavd replays them: sim.pass.candump,
+//       sim.pass.dvl_log). --start-s: the first ping's time (s since the epoch), so that passes
+//       recorded one after the other have their own times.
 #include <algorithm>
 #include <cerrno>
 #include <cinttypes>
