@@ -33,11 +33,12 @@ class Canvas {
     for (int y = y0; y < y0 + h; ++y)
       for (int x = x0; x < x0 + w; ++x) set(x, y, grey);
   }
-  void copy_grey(int x0, int y0, ConstImageViewU8 img) {
-    for (int r = 0; r < img.height(); ++r) {
-      const std::uint8_t* s = img.row(r);
-      for (int c = 0; c < img.width(); ++c) set(x0 + c, y0 + r, s[c]);
-    }
+  void set_rgb(int x, int y, const std::uint8_t* rgb) {
+    if (x < 0 || y < 0 || x >= w_ || y >= h_) return;
+    std::uint8_t* p = px_.data() + (static_cast<std::size_t>(y) * static_cast<std::size_t>(w_) + static_cast<std::size_t>(x)) * 3;
+    p[0] = rgb[0];
+    p[1] = rgb[1];
+    p[2] = rgb[2];
   }
   // Black text; left edge x, top y. rotated: reads bottom to top, (x, y) is then the bottom-left.
   void text(int x, int y, const std::string& t, bool rotated = false) {
@@ -103,9 +104,11 @@ std::string tick_label(double value, double step) {
   return b;
 }
 
-Status write_raster_plot_png(const char* path, ConstImageViewU8 image, const RasterPlot& plot) {
-  if (image.empty()) return Status(StatusCode::kInvalidArgument, "plot: empty image");
-  const int w = image.width(), h = image.height();
+namespace {
+
+// The plot around a w x h image whose pixel (c, r) is rgb_at(c, r) (3 bytes).
+template <typename RgbAt>
+Status write_plot(const char* path, int w, int h, RgbAt rgb_at, const RasterPlot& plot) {
   const int s = std::max(w, h) > 1500 ? 2 : 1;
   const int cw = kPlotFontWidth * s, ch = kPlotFontHeight * s, tick = 5 * s, pad = 8 * s;
 
@@ -147,7 +150,8 @@ Status write_raster_plot_png(const char* path, ConstImageViewU8 image, const Ras
   const int x0 = left, y0 = top;
 
   if (!plot.title.empty()) cv.text(pad, pad, plot.title);
-  cv.copy_grey(x0, y0, image);
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) cv.set_rgb(x0 + c, y0 + r, rgb_at(c, r));
   // Frame just outside the data.
   cv.fill(x0 - 1, y0 - 1, w + 2, 1, 0);
   cv.fill(x0 - 1, y0 + h, w + 2, 1, 0);
@@ -203,8 +207,15 @@ Status write_raster_plot_png(const char* path, ConstImageViewU8 image, const Ras
   if (draw_bar) {
     const int by = y0 + arrow_h, bw = 16 * s;
     for (int r = 0; r < bar_h; ++r) {
-      const int g = static_cast<int>(std::lround(255.0 * (1.0 - static_cast<double>(r) / std::max(1, bar_h - 1))));
-      cv.fill(rx, by + r, bw, 1, g);
+      const double t = 1.0 - static_cast<double>(r) / std::max(1, bar_h - 1);
+      std::uint8_t col[3];
+      if (plot.colour_map == PlotColourMap::kGrey) {
+        const std::uint8_t g = static_cast<std::uint8_t>(std::lround(255.0 * t));
+        col[0] = col[1] = col[2] = g;
+      } else {
+        plot_colour(plot.colour_map, t, col);
+      }
+      for (int x = 0; x < bw; ++x) cv.set_rgb(rx + x, by + r, col);
     }
     cv.fill(rx - 1, by - 1, bw + 2, 1, 0);
     cv.fill(rx - 1, by + bar_h, bw + 2, 1, 0);
@@ -224,6 +235,38 @@ Status write_raster_plot_png(const char* path, ConstImageViewU8 image, const Ras
       cv.text(rx + bw + 1 + tick + 3 * s + clab_w + pad, by + std::max(clab_len, (bar_h + clab_len) / 2) - 1, plot.colour_label, true);
   }
   return write_png_rgb8(path, cv.data(), W, H, W * 3);
+}
+
+}  // namespace
+
+void plot_colour(PlotColourMap map, double t, std::uint8_t rgb[3]) noexcept {
+  t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+  if (map == PlotColourMap::kBlueGreenRed) {
+    rgb[0] = static_cast<std::uint8_t>(255 * t);
+    rgb[1] = static_cast<std::uint8_t>(255 * (1 - std::fabs(2 * t - 1)));
+    rgb[2] = static_cast<std::uint8_t>(255 * (1 - t));
+    return;
+  }
+  rgb[0] = rgb[1] = rgb[2] = static_cast<std::uint8_t>(std::lround(255.0 * t));
+}
+
+Status write_raster_plot_png(const char* path, ConstImageViewU8 image, const RasterPlot& plot) {
+  if (image.empty()) return Status(StatusCode::kInvalidArgument, "plot: empty image");
+  std::uint8_t px[3];
+  return write_plot(path, image.width(), image.height(),
+                    [&](int c, int r) {
+                      px[0] = px[1] = px[2] = image.row(r)[c];
+                      return static_cast<const std::uint8_t*>(px);
+                    },
+                    plot);
+}
+
+Status write_raster_plot_png_rgb(const char* path, const std::uint8_t* rgb, int width, int height, int stride_bytes,
+                                 const RasterPlot& plot) {
+  if (rgb == nullptr || width <= 0 || height <= 0 || stride_bytes < width * 3)
+    return Status(StatusCode::kInvalidArgument, "plot: bad rgb buffer");
+  return write_plot(path, width, height,
+                    [&](int c, int r) { return rgb + static_cast<std::ptrdiff_t>(r) * stride_bytes + 3 * c; }, plot);
 }
 
 }  // namespace qnav::tools

@@ -7,6 +7,7 @@
 // (plot_font.hpp), twice that for images over 1500 px a side. Host-side only; allocates the canvas.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "nav/core/image.hpp"
@@ -22,6 +23,14 @@ struct PlotAxis {
   std::string label;  // with the unit, e.g. "east m"
 };
 
+// How a value maps to colour in the colour bar (and in the image, where the caller paints with it).
+enum class PlotColourMap : std::uint8_t {
+  kGrey,          // black (lo) .. white (hi)
+  kBlueGreenRed,  // blue (lo) .. green .. red (hi): points painted over a grey image
+};
+// The colour of t in [0, 1] (clamped) under `map`, as 8-bit RGB.
+void plot_colour(PlotColourMap map, double t, std::uint8_t rgb[3]) noexcept;
+
 struct RasterPlot {
   std::string title;
   PlotAxis x, y;
@@ -30,6 +39,7 @@ struct RasterPlot {
   bool colour_bar = false;  // grey level means a value: a bar from colour_lo (black) to colour_hi (white)
   double colour_lo = 0.0, colour_hi = 1.0;
   std::string colour_label;
+  PlotColourMap colour_map = PlotColourMap::kGrey;
 };
 
 // A "nice" tick step (1, 2 or 5 x 10^k) giving about `target` intervals over `span` (> 0).
@@ -39,5 +49,8 @@ std::string tick_label(double value, double step);
 
 // Writes the annotated raster as an 8-bit RGB PNG (atomically, like write_png_rgb8).
 Status write_raster_plot_png(const char* path, ConstImageViewU8 image, const RasterPlot& plot);
+// The same for an RGB image (width * 3 bytes a row, row stride in bytes given).
+Status write_raster_plot_png_rgb(const char* path, const std::uint8_t* rgb, int width, int height, int stride_bytes,
+                                 const RasterPlot& plot);
 
 }  // namespace qnav::tools

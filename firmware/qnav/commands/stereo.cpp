@@ -1,7 +1,8 @@
 // qnav stereo: the vision front end on image files.
 //   qnav stereo disparity LEFT RIGHT [--max-disparity N] [--corners N] [--out PNG]
 //       Harris corners on LEFT, ZNCC stereo at the corners; prints counts and counters; --out writes
-//       the left image with each matched corner coloured by disparity (red = near, blue = far).
+//       the left image with each matched corner coloured by disparity (red = near, blue = far), with
+//       pixel axes and a disparity colour bar (firmware/tools/raster_plot.hpp).
 //   qnav stereo aloe [--dir DIR]
 //       Disparity at Harris corners of the Middlebury Aloe pair against its ground truth.
 //   qnav stereo euroc-rectify [DIR] [--out PNG]
@@ -22,6 +23,7 @@
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/png_writer.hpp"
+#include "firmware/tools/raster_plot.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "firmware/tools/shared_dir.hpp"
 #include "firmware/tools/stereo_eval.hpp"
@@ -156,9 +158,8 @@ int cmd_disparity() {
         for (int c = 0; c < 3; ++c) rgb[static_cast<std::size_t>((y * l.width() + x) * 3 + c)] = l(x, y) / 2;
     const double dmax = ds.empty() ? 1.0 : std::max(1.0, *std::max_element(ds.begin(), ds.end()));
     for (const StereoPoint& p : pts) {
-      const double t = static_cast<double>(p.disparity_px) / dmax;  // 1 = near (red), 0 = far (blue)
-      const std::uint8_t col[3] = {static_cast<std::uint8_t>(255 * t), static_cast<std::uint8_t>(255 * (1 - std::fabs(2 * t - 1))),
-                                   static_cast<std::uint8_t>(255 * (1 - t))};
+      std::uint8_t col[3];  // 1 = near (red), 0 = far (blue)
+      tools::plot_colour(tools::PlotColourMap::kBlueGreenRed, static_cast<double>(p.disparity_px) / dmax, col);
       const int cx = static_cast<int>(std::lround(p.x_px)), cy = static_cast<int>(std::lround(p.y_px));
       for (int dy = -2; dy <= 2; ++dy)
         for (int dx = -2; dx <= 2; ++dx) {
@@ -167,7 +168,17 @@ int cmd_disparity() {
           for (int c = 0; c < 3; ++c) rgb[static_cast<std::size_t>((y * l.width() + x) * 3 + c)] = col[c];
         }
     }
-    const Status s = tools::write_png_rgb8(outp, rgb.data(), l.width(), l.height(), l.width() * 3);
+    tools::RasterPlot plot;
+    char title[96];
+    std::snprintf(title, sizeof title, "disparity at %zu matched Harris corners (left image, darkened)", pts.size());
+    plot.title = title;
+    plot.x = {0.0, 1.0, "column px"};
+    plot.y = {0.0, 1.0, "row px"};
+    plot.colour_bar = true;
+    plot.colour_hi = dmax;
+    plot.colour_label = "disparity px (red: near)";
+    plot.colour_map = tools::PlotColourMap::kBlueGreenRed;
+    const Status s = tools::write_raster_plot_png_rgb(outp, rgb.data(), l.width(), l.height(), l.width() * 3, plot);
     if (!s.is_ok()) {
       std::fprintf(stderr, "qnav stereo: %s: %s\n", outp, s.message());
       return 1;
@@ -326,7 +337,7 @@ void setup_stereo(CLI::App& cmd, qnav::cli::Runner& run) {
   add_text(*d, "--right", g_opt.right_opt, "the right image (instead of RIGHT)")->type_name("FILE");
   add_number(*d, "--max-disparity", g_opt.max_d, "largest disparity searched", "px", 3, 500);
   add_number(*d, "--corners", g_opt.corners, "Harris corners at most", "", 1, 100000);
-  add_text(*d, "--out", g_opt.out, "write the coloured corners here (folders created)")->type_name("PNG");
+  add_text(*d, "--out", g_opt.out, "write the coloured corners here, with axes and a disparity colour bar (folders created)")->type_name("PNG");
   run.on(d, cmd_disparity);
 
   CLI::App* a = cmd.add_subcommand("aloe", "disparity at Harris corners of the Middlebury Aloe pair against its ground truth");

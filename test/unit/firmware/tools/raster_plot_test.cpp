@@ -109,6 +109,47 @@ TEST(RasterPlot, DataIntactAxesOutsideIt) {
   std::remove(full.c_str());
 }
 
+// The disparity colours of `qnav stereo disparity` (blue far .. red near) and its colour bar come
+// from one function; an RGB image is copied as it is.
+TEST(RasterPlot, ColourMapAndRgbImage) {
+  std::uint8_t c[3];
+  plot_colour(PlotColourMap::kBlueGreenRed, 0.0, c);
+  EXPECT_EQ(c[0], 0);
+  EXPECT_EQ(c[1], 0);
+  EXPECT_EQ(c[2], 255);
+  plot_colour(PlotColourMap::kBlueGreenRed, 1.0, c);
+  EXPECT_EQ(c[0], 255);
+  EXPECT_EQ(c[2], 0);
+  plot_colour(PlotColourMap::kBlueGreenRed, 0.5, c);
+  EXPECT_EQ(c[1], 255);
+  plot_colour(PlotColourMap::kGrey, 2.0, c);  // clamped
+  EXPECT_EQ(c[0], 255);
+  const int w = 90, h = 40;
+  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(w * h * 3));
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>((i * 7) % 251);
+  RasterPlot p;
+  p.x = {0.0, 1.0, "column px"};
+  p.y = {0.0, 1.0, "row px"};
+  p.colour_bar = true;
+  p.colour_hi = 100.0;
+  p.colour_map = PlotColourMap::kBlueGreenRed;
+  const std::string path = ::testing::TempDir() + "qnav_plot_rgb.png";
+  ASSERT_TRUE(write_raster_plot_png_rgb(path.c_str(), rgb.data(), w, h, w * 3, p).is_ok());
+  const Rgb b = read_rgb(path);
+  bool found = false;
+  for (int y = 0; y < b.h && !found; ++y)
+    for (int x = 0; x + w <= b.w && !found; ++x) {
+      bool all = true;
+      for (int r = 0; r < h && all; ++r)
+        for (int k = 0; k < w * 3 && all; ++k)
+          all = y + r < b.h && b.at(x + k / 3, y + r, k % 3) == rgb[static_cast<std::size_t>(r * w * 3 + k)];
+      found = all;
+    }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(write_raster_plot_png_rgb(path.c_str(), rgb.data(), w, h, w, p).code(), StatusCode::kInvalidArgument);
+  std::remove(path.c_str());
+}
+
 TEST(RasterPlot, EmptyImageIsAnError) {
   RasterPlot p;
   EXPECT_EQ(write_raster_plot_png("/tmp/never.png", ConstImageViewU8(), p).code(), StatusCode::kInvalidArgument);
