@@ -13,6 +13,9 @@ start=$(date +%s.%N)
 "$QNAVD" --config firmware/qnavd/config/sim.toml > "$out/qnavd.jsonl"
 end=$(date +%s.%N)
 echo "qnavd flew the mission in $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }') s (wall clock): $(grep -c '"event":"tile"' "$out/qnavd.jsonl") tiles logged to $out/qnavd.jsonl"
+# The mission from the daemon's log against the simulator's truth: a table per repeat tile and
+# qnavd_mission.png (the track in the route's frame, the node estimate coloured by its belief, the
+# cross-track), qnavd_vo.png (the rover's VO track over the true one).
 /usr/bin/python3 scripts/qnavd_report.py "$out/qnavd.jsonl" "$out"
 # What the autopilot saw on the bus, decoded with the DBC (the companion ROUTE_STATUS frame carries
 # the guidance status, side and cross-track sigma).
