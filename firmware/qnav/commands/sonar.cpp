@@ -158,7 +158,7 @@ int waterfall() {
   plot.y = {0.0, 1.0, "ping (first at the top)"};
   plot.colour_bar = true;
   plot.colour_lo = 0.0;
-  plot.colour_hi = hi;
+  plot.colour_hi = static_cast<double>(hi);
   plot.colour_label = corrected ? "intensity (TVG + EGN)" : "raw sample value";
   const std::vector<std::uint8_t> grey = tools::gray8_from_float(v.value(), 0.0f, hi);
   const Status w = grey.empty() ? Status(StatusCode::kInvalidArgument, "bad intensity range")
