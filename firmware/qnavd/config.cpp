@@ -503,6 +503,33 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "vo.stale_s", [](auto& c) -> auto& { return c.vo_stale_s; }, 0.1, 60.0, "s",
       "No stereo pair for this long in Mode = Vo: camera lost (FaultCameraLost)"));
+  // [map]
+  t.push_back(bool_key(
+      "map.enabled", [](auto& c) -> auto& { return c.map_enabled; },
+      "Take downward-camera frames into the frame pool and accept Mode = Map (sizes the mapper's arena). Sim backend only: "
+      "the linux backend has no downward camera reader yet and refuses Mode = Map (UnsupportedMode)"));
+  t.push_back(int_key(
+      "map.width", [](auto& c) -> auto& { return c.map_width; }, 64, 2048, "px", "Width of a rectified downward frame"));
+  t.push_back(int_key(
+      "map.height", [](auto& c) -> auto& { return c.map_height; }, 64, 2048, "px", "Height of a rectified downward frame"));
+  t.push_back(float_key(
+      "map.focal_px", [](auto& c) -> auto& { return c.map_focal_px; }, 0.0, 20000.0, "px",
+      "Focal length of the downward camera; 0 = unknown (the map in mosaic pixels, as `qnav map` without --camera)"));
+  t.push_back(float_key(
+      "map.cu_px", [](auto& c) -> auto& { return c.map_cu_px; }, -1.0, 2047.0, "px", "Principal point, column; -1 = image centre"));
+  t.push_back(float_key(
+      "map.cv_px", [](auto& c) -> auto& { return c.map_cv_px; }, -1.0, 2047.0, "px", "Principal point, row; -1 = image centre"));
+  t.push_back(float_key(
+      "map.altitude_m", [](auto& c) -> auto& { return c.map_altitude_m; }, 0.0, 1000.0, "m",
+      "Camera altitude above the seabed (constant); with map.focal_px the map is in metres; 0 = unknown"));
+  t.push_back(float_key(
+      "map.node_spacing", [](auto& c) -> auto& { return c.map_node_spacing; }, 0.0, 1e6, "m or px",
+      "Topological map node spacing (metres when metric, else mosaic pixels); 0 = 0.2 m / 30 px (`qnav map`'s default)"));
+  t.push_back(int_key(
+      "map.max_nodes", [](auto& c) -> auto& { return c.map_max_nodes; }, 2, 65534, "nodes", "Topological map nodes at most (fixed memory)"));
+  t.push_back(queue_key(
+      "map.frame_queue", [](auto& c) -> auto& { return c.map_frame_queue; }, 2, 64, "frames",
+      "Downward frame queue depth between the camera reader and the navigation thread (frame pool slots)"));
   // [route]
   t.push_back(int_key(
       "route.id", [](auto& c) -> auto& { return c.route_id; }, 0, 65535, "",
@@ -585,6 +612,10 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(int_key(
       "budget.vo_us", [](auto& c) -> auto& { return c.vo_budget_us; }, 100, 10000000, "us",
       "Time budget of one stereo pair through the visual odometry"));
+  t.push_back(int_key(
+      "budget.map_us", [](auto& c) -> auto& { return c.map_budget_us; }, 100, 10000000, "us",
+      "Time budget of one downward frame in Mode = Map: homography chain, topological map (and the map file's "
+      "rewrite after a new node)"));
   // [sim]
   t.push_back(float_key(
       "sim.length_m", [](auto& c) -> auto& { return c.sim_length_m; }, 200.0, 50000.0, "m",
@@ -656,7 +687,7 @@ std::vector<KeySpec> build_key_table() {
     KeySpec mode = enum_key(
         "sim.pass.mode", [](auto& c) -> auto& { return pass_of(c).mode; },
         std::vector<std::pair<std::string, Mode>>{
-            {"teach", Mode::kTeach}, {"repeat", Mode::kRepeat}, {"hold", Mode::kHold}, {"vo", Mode::kVo}},
+            {"teach", Mode::kTeach}, {"repeat", Mode::kRepeat}, {"hold", Mode::kHold}, {"vo", Mode::kVo}, {"map", Mode::kMap}},
         "Mode the simulated autopilot commands (QNAV_MODE_CMD) for the pass, Idle after it; one `[[sim.pass]]` "
         "table per pass, 1 to 16, at least one with the sim backend");
     mode.required = true;
@@ -689,11 +720,13 @@ std::vector<KeySpec> build_key_table() {
       "sim.pass.dvl_log", [](auto& c) -> auto& { return pass_of(c).dvl_log; }, "DVL capture or \"\"", nullptr,
       "Replay this capture of the DVL's serial output (dvl.protocol, timed by its own sentences) instead of the simulated DVL"));
   t.push_back(string_key(
-      "sim.pass.images", [](auto& c) -> auto& { return pass_of(c).images; }, "stereo sequence folder or \"\"", nullptr,
-      "Mode vo: replay this rectified stereo sequence (KITTI layout left/ right/, or EuRoC cam0/ cam1/) instead of the simulated rover"));
+      "sim.pass.images", [](auto& c) -> auto& { return pass_of(c).images; }, "stereo sequence or frame folder, or \"\"", nullptr,
+      "Mode vo: replay this rectified stereo sequence (KITTI layout left/ right/, or EuRoC cam0/ cam1/) instead of the simulated rover; "
+      "mode map: the downward camera's frames, every .png/.jpg/.pgm of the folder in name order, map.width x map.height; \"\" = the "
+      "synthetic seabed loop (drivers/downward_sim: 320 x 240, f 300 px, 2 m up, 90 frames per lap of radius 0.8 m)"));
   t.push_back(int_key(
       "sim.pass.max_frames", [](auto& c) -> auto& { return pass_of(c).max_frames; }, 0, 1000000, "pairs",
-      "Pairs of sim.pass.images replayed; 0 = all"));
+      "Pairs (mode vo) or frames (mode map) of sim.pass.images replayed; 0 = all (the synthetic seabed loop: 120 frames)"));
   return t;
 }
 
@@ -703,7 +736,7 @@ const std::vector<KeySpec>& key_table() {
 }
 
 const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "leak", "vo", "route", "budget", "sim"};
+  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "leak", "vo", "map", "route", "budget", "sim"};
   return names;
 }
 
@@ -1007,8 +1040,11 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
                      "must be -1 or > first_ping (" + std::to_string(p.first_ping) + "), got " + std::to_string(p.last_ping));
     }
     if (c.backend != Backend::kSim) continue;  // the mission is the sim backend's
-    if (!p.images.empty() && p.mode != drivers::qnavcan::Mode::kVo)
-      return r.error(pk + "images", pass_at("images", "mode"), "a stereo sequence is replayed in a pass with mode = \"vo\"");
+    if (!p.images.empty() && p.mode != drivers::qnavcan::Mode::kVo && p.mode != drivers::qnavcan::Mode::kMap)
+      return r.error(pk + "images", pass_at("images", "mode"),
+                     "a stereo sequence is replayed in a pass with mode = \"vo\", a folder of downward frames with mode = \"map\"");
+    if (p.mode == drivers::qnavcan::Mode::kMap && (!p.file.empty() || !p.candump.empty() || !p.dvl_log.empty()))
+      return r.error(pk + "images", pass_at("file", "candump"), "a map pass replays its downward frames only (no file, candump or dvl_log)");
     if (p.mode == drivers::qnavcan::Mode::kVo && p.images.empty() && (!p.candump.empty() || !p.dvl_log.empty()))
       return r.error(pk + "images", pass_at("candump", "dvl_log"),
                      "a vo pass replays recorded sensor logs with its recorded stereo sequence (sim.pass.images), not with the simulated rover");
@@ -1019,6 +1055,14 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
     for (const SimPass& p : c.sim_mission)
       if (p.mode == drivers::qnavcan::Mode::kVo)
         return r.error("vo.enabled", at("vo.enabled", "sim.pass.mode"), "a [[sim.pass]] with mode = \"vo\" needs vo.enabled = true");
+  }
+  if (!c.map_enabled) {
+    for (const SimPass& p : c.sim_mission)
+      if (p.mode == drivers::qnavcan::Mode::kMap)
+        return r.error("map.enabled", at("map.enabled", "sim.pass.mode"), "a [[sim.pass]] with mode = \"map\" needs map.enabled = true");
+  }
+  if (c.map_cu_px >= c.map_width || c.map_cv_px >= c.map_height) {
+    return r.error("map.cu_px", at("map.cu_px", "map.width"), "the principal point must lie inside the map.width x map.height image");
   }
   if (c.backend == Backend::kLinux && c.vo_enabled && c.vo_camera == CameraSource::kSim) {
     return r.error("vo.camera", at("vo.camera", "daemon.backend"),
@@ -1049,6 +1093,36 @@ Pose3 vo_body_T_cam(const DaemonConfig& c) noexcept {
   p.R.col(2) = z;
   p.t = Vec3d(0.0, 0.0, -c.vo_mount_height_m);
   return p;
+}
+
+bool map_runs(const DaemonConfig& c) noexcept { return c.map_enabled && c.backend == Backend::kSim; }
+
+std::size_t frame_pool_slots(const DaemonConfig& c) noexcept {
+  return std::max(c.vo_enabled ? c.vo_frame_queue : 0, map_runs(c) ? c.map_frame_queue : 0);
+}
+
+std::size_t frame_slot_bytes(const DaemonConfig& c) noexcept {
+  const std::size_t pair = c.vo_enabled ? 2 * static_cast<std::size_t>(c.vo.max_width) * static_cast<std::size_t>(c.vo.max_height) : 0;
+  const std::size_t down = map_runs(c) ? static_cast<std::size_t>(c.map_width) * static_cast<std::size_t>(c.map_height) : 0;
+  return std::max(pair, down);
+}
+
+pipeline::TopoMapperConfig map_mapper_config(const DaemonConfig& c) noexcept {
+  const bool have_camera = c.map_focal_px > 0.0;
+  vision::PinholeRadTan k;
+  k.fx = k.fy = c.map_focal_px;
+  k.cx = c.map_cu_px;
+  k.cy = c.map_cv_px;
+  k.width = c.map_width;
+  k.height = c.map_height;
+  const bool metric = have_camera && c.map_altitude_m > 0.0;
+  pipeline::TopoMapperConfig m = pipeline::topo_mapper_config(c.map_width, c.map_height, have_camera, k, false, true, metric,
+                                                              c.map_node_spacing > 0.0 ? c.map_node_spacing : std::nan(""), c.map_max_nodes);
+  if (!have_camera) {  // the principal point alone (no focal length): where the chain's pose is measured from
+    m.chain.camera.cx = c.map_cu_px;
+    m.chain.camera.cy = c.map_cv_px;
+  }
+  return m;
 }
 
 std::string ConfigError::to_string() const {

@@ -12,6 +12,7 @@
 
 #include "drivers/qnavcan/messages.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
+#include "firmware/pipeline/topo_mapper.hpp"
 #include "firmware/pipeline/vo_defaults.hpp"
 #include "nav/core/fixed_vector.hpp"
 #include "nav/core/status.hpp"
@@ -44,8 +45,10 @@ struct SimPass {
   // Recorded sensors (firmware/qnavd/sim_replay.hpp); each replaces its simulated counterpart:
   std::string candump;      // sim.pass.candump: candump -l log of the CAN sensors (attitude, DroneCAN AHRS)
   std::string dvl_log;      // sim.pass.dvl_log: capture of the DVL's serial output (dvl.protocol)
-  std::string images;       // sim.pass.images: stereo sequence folder (KITTI or EuRoC layout), mode = "vo"
-  std::int64_t max_frames = 0;  // sim.pass.max_frames [0, 1e6]: pairs of sim.pass.images replayed; 0 = all
+  std::string images;       // sim.pass.images: mode = "vo": stereo sequence folder (KITTI or EuRoC layout);
+                            // mode = "map": a folder of downward frames (.png/.jpg/.pgm, name order), "" = the
+                            // synthetic seabed loop (drivers/downward_sim)
+  std::int64_t max_frames = 0;  // sim.pass.max_frames [0, 1e6]: pairs / frames of sim.pass.images replayed; 0 = all
 };
 
 struct DaemonConfig {
@@ -123,6 +126,22 @@ struct DaemonConfig {
   std::size_t vo_frame_queue = 4;             // vo.frame_queue [2, 64] pairs, power of two
   double vo_stale_s = 2.0;                    // vo.stale_s [0.1, 60]: no pair for this long in Mode = Vo: camera lost
 
+  // [map] downward-camera mapping (Mode = Map): the downward camera's rectified frames through
+  // pipeline::TopoMapper (the wiring `qnav map` runs), the topological map saved durably in
+  // daemon.route_dir as map_<id>.qmap (firmware/tools/map_file). Frames share the frame pool with
+  // the stereo pairs (a slot holds the larger of the two). Sim backend only (a [[sim.pass]] with
+  // mode = "map": a frame folder or the synthetic seabed; with the linux backend Mode = Map is refused, UnsupportedMode).
+  bool map_enabled = false;                   // map.enabled: the frame pool takes downward frames and Mode = Map is accepted
+  int map_width = 320;                        // map.width [64, 2048] px
+  int map_height = 240;                       // map.height [64, 2048] px
+  double map_focal_px = 0.0;                  // map.focal_px [0, 20000] px: 0 = unknown (the map in mosaic pixels)
+  double map_cu_px = -1.0;                    // map.cu_px [-1, 2047] px: principal point; -1 = image centre
+  double map_cv_px = -1.0;                    // map.cv_px [-1, 2047] px
+  double map_altitude_m = 0.0;                // map.altitude_m [0, 1000] m: above the seabed, constant; with focal_px: metres
+  double map_node_spacing = 0.0;              // map.node_spacing [0, 1e6] m or px: 0 = the tool's default (0.2 m / 30 px)
+  std::size_t map_max_nodes = 1024;           // map.max_nodes [2, 65534]
+  std::size_t map_frame_queue = 4;            // map.frame_queue [2, 64] frames, power of two
+
   // [leak] the leak detector: a GPIO input line (linux backend, libgpiod). Latched: the first edge to
   // the active level (or the level already active at start) sets HEALTH.Leak and FaultLeak until the
   // daemon restarts. The sim backend has a simulated line (sim.fault = "leak").
@@ -135,6 +154,7 @@ struct DaemonConfig {
   std::uint32_t tile_budget_us = 50000;      // budget.tile_us [100, 10000000]: features + localiser update
   std::uint32_t mode_budget_us = 200000;     // budget.mode_us [100, 10000000]: a mode change (route file open/close, fsync)
   std::uint32_t vo_budget_us = 100000;       // budget.vo_us [100, 10000000]: one stereo pair through the VO
+  std::uint32_t map_budget_us = 50000;       // budget.map_us [100, 10000000]: one downward frame through the mapper (+ map save)
 
   // [sim] (backend = "sim")
   double sim_length_m = 2000.0;              // sim.length_m [200, 50000]
@@ -184,6 +204,16 @@ struct ConfigError {
 // The left camera's mount on the body (FRD) from vo.tilt_down_deg and vo.mount_height_m: optical axis
 // forward and tilted down, image x to the right; the simulated rover's bench (drivers/stereo_sim).
 Pose3 vo_body_T_cam(const DaemonConfig& c) noexcept;
+
+// Mode = Map can run: map.enabled with the sim backend (the linux backend has no downward camera
+// reader yet: there the mode is refused with UnsupportedMode and nothing is sized for it).
+bool map_runs(const DaemonConfig& c) noexcept;
+// The frame pool: slots (the deeper of vo.frame_queue and map.frame_queue, of the enabled ones) of
+// the larger of a stereo pair (2 x vo.width x vo.height) and a downward frame (map.width x map.height).
+std::size_t frame_pool_slots(const DaemonConfig& c) noexcept;
+std::size_t frame_slot_bytes(const DaemonConfig& c) noexcept;
+// The mapper's settings from the [map] keys (pipeline::topo_mapper_config: the tool's defaults).
+pipeline::TopoMapperConfig map_mapper_config(const DaemonConfig& c) noexcept;
 
 // Reads and validates a file. On failure returns false and fills err; out is left default.
 bool load_config(const char* path, DaemonConfig& out, ConfigError& err);

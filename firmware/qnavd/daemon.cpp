@@ -34,6 +34,8 @@ class IoBackend {
   virtual ~IoBackend() = default;
   // Returns true when something was read or produced; false when the caller may wait.
   virtual bool poll_devices(Daemon& d, IoCounters& io) noexcept = 0;
+  // The nav worker and its output queue, once both exist (the sim backend's lockstep between passes).
+  virtual void set_worker(const NavWorker*, const SpscRing<hal::CanFrame>*) noexcept {}
   virtual void send(const hal::CanFrame& f, IoCounters& io) noexcept = 0;
   virtual void wait(int timeout_ms) noexcept = 0;
   virtual bool done() const noexcept { return false; }
@@ -118,7 +120,7 @@ bool poll_leak(drivers::camera::LeakMonitor& leak, IoCounters& io) noexcept {
 class SimBackend final : public IoBackend {
  public:
   SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
-      : net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
+      : clock_(clock), net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
         leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
   Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
     QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
@@ -131,17 +133,28 @@ class SimBackend final : public IoBackend {
     QNAV_RETURN_IF_ERROR(leak_.start());
     return vehicle_.init(vehicle_bus_, pipe_.a());
   }
+  // The nav worker and its output queue, for the lockstep between passes (SimVehicle::set_worker_caught_up).
+  void set_worker(const NavWorker* nav, const SpscRing<hal::CanFrame>* can_tx) noexcept override { nav_ = nav, can_tx_ = can_tx; }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
     // Replay paces itself to the nav worker: the vehicle moves on only while the worker keeps up
     // (a recorded dive loses nothing to the speed of the replay).
     bool did = false;
+    const std::uint64_t queued = io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed);
+    const std::int64_t t_before = clock_.now_ns();
     if (q_.can_rx->size() < kMaxBacklog && q_.dvl->size() < kMaxBacklog) {
+      // Caught up: every input queued so far taken, two whole worker steps since the last of them was
+      // queued or the clock last moved (one began after it: the worker saw that instant), and the
+      // frames those steps published sent to the vehicle.
+      vehicle_.set_worker_caught_up(nav_ == nullptr || (q_.can_rx->size() == 0 && q_.dvl->size() == 0 && can_tx_->size() == 0 &&
+                                                        nav_->progress() >= progress_gate_));
       const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
       done_ = r == SimVehicle::StepResult::kDone;
       did = r == SimVehicle::StepResult::kProduced;
     }
     did |= drain_can(daemon_bus_, *q_.can_rx, io);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
+    if (nav_ != nullptr && (clock_.now_ns() != t_before || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
+      progress_gate_ = nav_->progress() + 2;
     did |= poll_leak(leak_, io);
     vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
     vehicle_.release_pair(io);
@@ -156,6 +169,7 @@ class SimBackend final : public IoBackend {
 
  private:
   static constexpr std::size_t kMaxBacklog = 8;
+  const SimClock& clock_;
   hal::SimCanNetwork net_;
   hal::SimCanBus daemon_bus_, vehicle_bus_;
   hal::SimSerialPipe pipe_;
@@ -166,6 +180,9 @@ class SimBackend final : public IoBackend {
   drivers::camera::LeakMonitor leak_;
   std::uint32_t dvl_rejects_ = 0;
   bool done_ = false;
+  const NavWorker* nav_ = nullptr;
+  const SpscRing<hal::CanFrame>* can_tx_ = nullptr;
+  std::uint64_t progress_gate_ = 0;
 };
 
 // ---- linux: SocketCAN, termios DVL, JSF over TCP; reopened once a second when they fail ----
@@ -460,13 +477,17 @@ Status Daemon::init_pipeline() {
   QNAV_RETURN_IF_ERROR(make_ring(dvl_store_, dvl_q_, kDvlQueueCapacity));
   for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
   FramePool fp;
-  if (cfg_.vo_enabled) {
+  if (cfg_.vo_enabled || map_runs(cfg_)) {
+    const std::size_t slots = frame_pool_slots(cfg_);
     fp.width = cfg_.vo.max_width;
     fp.height = cfg_.vo.max_height;
-    frame_pool_.assign(cfg_.vo_frame_queue * 2 * static_cast<std::size_t>(fp.width) * static_cast<std::size_t>(fp.height), 0);
-    QNAV_RETURN_IF_ERROR(make_ring(frame_store_, frames_, cfg_.vo_frame_queue));
-    QNAV_RETURN_IF_ERROR(make_ring(free_frame_store_, free_frames_, cfg_.vo_frame_queue));
-    for (std::uint32_t s = 0; s < cfg_.vo_frame_queue; ++s) QNAV_RETURN_IF_ERROR(free_frames_.try_push(s));
+    fp.map_width = cfg_.map_width;
+    fp.map_height = cfg_.map_height;
+    fp.slot_bytes = frame_slot_bytes(cfg_);
+    frame_pool_.assign(slots * fp.slot_bytes, 0);
+    QNAV_RETURN_IF_ERROR(make_ring(frame_store_, frames_, slots));
+    QNAV_RETURN_IF_ERROR(make_ring(free_frame_store_, free_frames_, slots));
+    for (std::uint32_t s = 0; s < slots; ++s) QNAV_RETURN_IF_ERROR(free_frames_.try_push(s));
     fp.frames = &frames_;
     fp.free = &free_frames_;
     fp.pool = frame_pool_.data();
@@ -512,7 +533,9 @@ Status Daemon::init_pipeline() {
   nq.frames = fp.frames;
   nq.free_frames = fp.free;
   nq.frame_pool = fp.pool;
+  nq.frame_slot_bytes = fp.slot_bytes;
   nav_->set_frame_observer(frame_observer_, frame_ctx_);
+  backend_->set_worker(nav_.get(), &can_tx_);
   return nav_->init(nq, tile_observer_, tile_ctx_, nav_log_ ? nav_log_->stream() : nullptr);
 }
 

@@ -20,8 +20,8 @@ Deployment make_deployment(const DaemonConfig& c) {
        {"dvl", "io", "nav", 64, sizeof(drivers::dvl::DvlVelocity), "drop newest, count dvl_overflow"},
        {"pings", "io", "nav", c.ping_queue, sizeof(PingMsg), "drop the ping, count ping_overflow (replay waits instead)"},
        {"free_slots", "nav", "io", c.ping_queue, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"},
-       {"frames", "io", "nav", c.vo_enabled ? c.vo_frame_queue : 0, sizeof(FrameMsg), "drop the pair, count frame_overflow (the sim waits instead)"},
-       {"free_frames", "nav", "io", c.vo_enabled ? c.vo_frame_queue : 0, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"}},
+       {"frames", "io", "nav", frame_pool_slots(c), sizeof(FrameMsg), "drop the pair / frame, count frame_overflow (the sim waits instead)"},
+       {"free_frames", "nav", "io", frame_pool_slots(c), sizeof(std::uint32_t), "cannot overflow (one entry per slot)"}},
       {{"can_rx", "io", "per frame (AHRS 50 Hz, mode commands)", 0},
        {"dvl_rx", "io", "per DVL line (8 Hz)", 0},
        {"sonar_rx", "io", "per ping (5-10 Hz)", 0},
@@ -30,6 +30,7 @@ Deployment make_deployment(const DaemonConfig& c) {
        {"ping", "nav", "per ping: scanline correction, tile builder", c.ping_budget_us},
        {"tile", "nav", "per tile (every route.scanline_stride pings): features, teach append or repeat update", c.tile_budget_us},
        {"vo", "nav", "per stereo pair in Mode = Vo: Harris, stereo, matching, motion, track refinement", c.vo_budget_us},
+       {"map", "nav", "per downward frame in Mode = Map: homography chain, topological map, map file rewrite after a new node", c.map_budget_us},
        {"outputs", "nav", "every loop: CAN outputs at their DBC periods, health at daemon.health_period_s",
         static_cast<std::uint32_t>(periodic_budget_us)}}};
   d.ping_pool_bytes = c.ping_queue * 2 * c.max_samples_per_side * sizeof(float);
@@ -38,10 +39,9 @@ Deployment make_deployment(const DaemonConfig& c) {
                           route::TileFeatureExtractor::arena_bytes(c.tiles.features);
   d.localiser_bytes = route::RouteLocaliser::arena_bytes(c.localiser);
   d.route_meta_bytes = c.max_nodes * sizeof(route::NodeMeta);
-  if (c.vo_enabled) {
-    d.frame_pool_bytes = c.vo_frame_queue * 2 * static_cast<std::size_t>(c.vo.max_width) * static_cast<std::size_t>(c.vo.max_height);
-    d.vo_bytes = vo::StereoVo::arena_bytes(c.vo);
-  }
+  d.frame_pool_bytes = frame_pool_slots(c) * frame_slot_bytes(c);
+  if (c.vo_enabled) d.vo_bytes = vo::StereoVo::arena_bytes(c.vo);
+  if (map_runs(c)) d.map_bytes = pipeline::TopoMapper::arena_bytes(map_mapper_config(c));
   return d;
 }
 
@@ -69,10 +69,10 @@ std::string deployment_text(const Deployment& d) {
   }
   std::snprintf(line, sizeof line,
                 "static memory\n  ping pool %zu B, queues %zu B, tile pipeline %zu B, localiser %zu B, route metadata %zu B,\n"
-                "  frame pool %zu B, visual odometry %zu B (+ its matcher's working set, allocated at start-up)\n"
+                "  frame pool %zu B, visual odometry %zu B (+ its matcher's working set, allocated at start-up), mapper %zu B\n"
                 "  total %zu B (%.1f MB), allocated at start-up; no heap allocation after start\n",
                 d.ping_pool_bytes, d.queue_bytes, d.tile_pipeline_bytes, d.localiser_bytes, d.route_meta_bytes, d.frame_pool_bytes, d.vo_bytes,
-                d.total_static_bytes(),
+                d.map_bytes, d.total_static_bytes(),
                 static_cast<double>(d.total_static_bytes()) / 1e6);
   out += line;
   return out;

@@ -7,11 +7,11 @@
 //     waits on the devices, stamps every sample at reception, never blocks on a consumer:
 //     CAN rx -> [can_rx]  -> nav         DVL serial -> [dvl] -> nav
 //     sonar  -> [pings]   -> nav  (slots of the ping pool; [free_slots] returns them)
-//     camera -> [frames]  -> nav  (stereo pairs in the frame pool; [free_frames] returns them)
+//     camera -> [frames]  -> nav  (stereo pairs or downward frames in the frame pool; [free_frames] returns them)
 //     nav    -> [can_tx]  -> CAN tx
 //   nav thread (SCHED_FIFO daemon.nav_priority, CPU daemon.nav_cpu)
 //     mode commands, dead reckoning, ping -> tile -> teach append | repeat update,
-//     stereo pair -> visual odometry (Mode = Vo) -> outputs, health
+//     stereo pair -> visual odometry (Mode = Vo), downward frame -> mapper (Mode = Map) -> outputs, health
 //   main thread: signals, sd_notify READY / WATCHDOG (on the nav worker's progress) / STOPPING.
 #pragma once
 
@@ -47,7 +47,7 @@ struct StageSpec {
 };
 
 struct Deployment {
-  static constexpr std::size_t kThreads = 2, kQueues = 7, kStages = 9;
+  static constexpr std::size_t kThreads = 2, kQueues = 7, kStages = 10;
   ThreadSpec threads[kThreads];
   QueueSpec queues[kQueues];
   StageSpec stages[kStages];
@@ -56,10 +56,11 @@ struct Deployment {
   std::size_t tile_pipeline_bytes = 0; // corrector + tile builder + feature extractor arenas
   std::size_t localiser_bytes = 0;     // RouteLocaliser arena for route.max_nodes
   std::size_t route_meta_bytes = 0;    // per-node metadata of the loaded route (route.max_nodes)
-  std::size_t frame_pool_bytes = 0;    // vo.frame_queue x 2 x vo.width x vo.height (0 when vo.enabled = false)
+  std::size_t frame_pool_bytes = 0;    // frame_pool_slots x frame_slot_bytes (config.hpp; 0 when vo and map are disabled)
   std::size_t vo_bytes = 0;            // StereoVo arena for vo.width x vo.height and vo.max_corners
+  std::size_t map_bytes = 0;           // TopoMapper arena for map.width x map.height and map.max_nodes (0 when map.enabled = false)
   std::size_t total_static_bytes() const noexcept {
-    return ping_pool_bytes + queue_bytes + tile_pipeline_bytes + localiser_bytes + route_meta_bytes + frame_pool_bytes + vo_bytes;
+    return ping_pool_bytes + queue_bytes + tile_pipeline_bytes + localiser_bytes + route_meta_bytes + frame_pool_bytes + vo_bytes + map_bytes;
   }
 };
 
@@ -67,6 +68,6 @@ Deployment make_deployment(const DaemonConfig& c);
 std::string deployment_text(const Deployment& d);
 
 // Stage indices (Deployment::stages order), for budget accounting.
-enum class Stage : std::uint8_t { kCanRx, kDvlRx, kSonarRx, kInputs, kModes, kPing, kTile, kVo, kOutputs, kCount };
+enum class Stage : std::uint8_t { kCanRx, kDvlRx, kSonarRx, kInputs, kModes, kPing, kTile, kVo, kMap, kOutputs, kCount };
 
 }  // namespace qnav::daemon

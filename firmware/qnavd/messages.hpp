@@ -26,13 +26,15 @@ struct PingMsg {
   pipeline::PingTruth truth;
 };
 
-// A stereo pair in the frame pool (bytes owned by the Daemon, sized vo.frame_queue x 2 x vo.width x
-// vo.height): slot s holds the left image at s * 2 * W * H and the right one W * H after it; the slot
-// returns through the free-frame queue when the nav worker is done with it.
+// A stereo pair or a downward frame in the frame pool (bytes owned by the Daemon: frame_pool_slots
+// slots of frame_slot_bytes, config.hpp): slot s starts at s * slot_bytes and holds the left image
+// with the right one W * H after it, or the downward frame (downward = true); the slot returns
+// through the free-frame queue when the nav worker is done with it.
 struct FrameMsg {
   std::uint32_t slot = 0;
   std::uint32_t sequence = 0;
   std::uint16_t width = 0, height = 0;
+  bool downward = false;               // a downward camera's frame (Mode = Map), not a stereo pair
   hal::SampleStamp stamp;              // the pair's sample time (exposure)
   bool has_truth = false;              // sim backend: the rover's true body pose (NED, from its start)
   Pose3 truth_world_T_body;
@@ -44,8 +46,10 @@ struct FramePool {
   SpscRing<FrameMsg>* frames = nullptr;
   SpscRing<std::uint32_t>* free = nullptr;
   std::uint8_t* pool = nullptr;
-  int width = 0, height = 0;
-  std::size_t pair_bytes() const noexcept { return 2 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+  int width = 0, height = 0;          // a stereo image (vo.width x vo.height)
+  int map_width = 0, map_height = 0;  // a downward frame (map.width x map.height)
+  std::size_t slot_bytes = 0;         // bytes per slot (frame_slot_bytes)
+  std::uint8_t* slot(std::uint32_t s) const noexcept { return pool + static_cast<std::size_t>(s) * slot_bytes; }
 };
 
 // Counters the I/O thread owns and the nav worker reads for health (relaxed atomics, monotonic).

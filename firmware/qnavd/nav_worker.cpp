@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "firmware/qnavd/software_fault.hpp"
+#include "firmware/tools/map_file.hpp"
 #include "nav/core/geometry.hpp"
 
 namespace qnav::daemon {
@@ -83,6 +84,14 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   writer_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   tile_sink_ = [this](const pipeline::RouteTile& t) { return on_tile(t); };
+  if (map_runs(cfg_)) {
+    if (!q.frames || !q.free_frames || !q.frame_pool) return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
+    const pipeline::TopoMapperConfig mc = map_mapper_config(cfg_);
+    map_arena_ = std::make_unique<ArenaStorage>(pipeline::TopoMapper::arena_bytes(mc));
+    if (!map_arena_->valid()) return Status(StatusCode::kCapacityExceeded, "nav worker: no memory for the mapper");
+    QNAV_RETURN_IF_ERROR(mapper_.init(mc, *map_arena_));
+    map_ready_ = true;
+  }
   if (cfg_.vo_enabled) {
     if (!q.frames || !q.free_frames || !q.frame_pool) return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
     QNAV_RETURN_IF_ERROR(vo_.init(cfg_.vo, vo_body_T_cam(cfg_), cfg_.vo_prior));
@@ -318,6 +327,15 @@ void NavWorker::leave_mode() noexcept {
     teach_open_ = false;
   }
   if (mode_ == qc::Mode::kRepeat) reader_.close();
+  if (mode_ == qc::Mode::kMap && map_open_) {
+    save_map();  // the map as it ends (adapted since its last new node)
+    if (log_)
+      std::fprintf(log_, "{\"event\":\"map_closed\",\"route_id\":%u,\"nodes\":%zu,\"edges\":%zu,\"frames\":%u,\"bad_frames\":%u,"  // frames: since start
+                         "\"file\":\"%s\",\"saves\":%u,\"save_errors\":%u}\n",
+                   route_id_, mapper_.map().node_count(), mapper_.map().edge_count(), map_frames_, map_bad_frames_, map_path_, map_saves_,
+                   map_save_errors_);
+    map_open_ = false;
+  }
   tiles_.reset_pass();
   pass_ping_ = 0;
   forget_guidance();
@@ -342,9 +360,9 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
     dr_.reset();  // the autopilot sets the navigation origin anew (distance and position restart)
     ++nav_resets_;
   }
-  const bool uses_route = cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kRepeat;
+  const bool uses_route = cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kRepeat || cmd.mode == qc::Mode::kMap;
   const bool change = cmd.mode != mode_ || (uses_route && id != route_id_) || (cmd.mode == qc::Mode::kRepeat && cmd.reverse != reverse_);
-  if (cmd.mode == qc::Mode::kMap || (cmd.mode == qc::Mode::kVo && !vo_ready_)) why = ModeReject::kUnsupportedMode;
+  if ((cmd.mode == qc::Mode::kMap && !map_ready_) || (cmd.mode == qc::Mode::kVo && !vo_ready_)) why = ModeReject::kUnsupportedMode;
   if (why == ModeReject::kNone && change) {
     // Teach and 3D-VME need the heading; 6D-VME (a rig without an attitude sensor) measures its own rotation.
     const bool needs_heading = cmd.mode == qc::Mode::kTeach || (cmd.mode == qc::Mode::kVo && cfg_.vo.mode == vo::VmeMode::k3D);
@@ -365,6 +383,7 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
       leave_mode();
       if (cmd.mode == qc::Mode::kTeach) why = enter_teach(id);
       if (cmd.mode == qc::Mode::kRepeat) why = enter_repeat(id, cmd.reverse);
+      if (cmd.mode == qc::Mode::kMap) why = enter_map(id);
       if (cmd.mode == qc::Mode::kVo) {
         // A new chain: the body at the origin of this run, in the attitude of its first pair.
         vo_.reset();
@@ -439,6 +458,10 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
     return;
   }
   last_frame_ns_ = f.stamp.sample_ns;
+  if (f.downward) {
+    handle_downward(f, t0);
+    return;
+  }
   if (mode_ != qc::Mode::kVo || !vo_ready_) return;
   const int W = cfg_.vo.max_width, H = cfg_.vo.max_height;
   if (!QNAVD_CHECK(f.width == W && f.height == H, "stereo pair of another size than its pool slot")) return;
@@ -450,7 +473,7 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
   r.truth_world_T_body = f.truth_world_T_body;
   r.truth_path_m = f.truth_path_m;
   const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
-  const std::uint8_t* left = q_.frame_pool + static_cast<std::size_t>(f.slot) * 2 * n;
+  const std::uint8_t* left = frame_slot(f.slot);
   pipeline::VoFrameInput in;
   in.left = ConstImageViewU8::make(left, W, H).value();
   in.right = ConstImageViewU8::make(left + n, W, H).value();
@@ -504,6 +527,70 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
                  r.visual ? 1 : 0, r.inliers, r.world_T_body.t.x(), r.world_T_body.t.y());
   }
   if (frame_observer_) frame_observer_(frame_ctx_, r);
+}
+
+const std::uint8_t* NavWorker::frame_slot(std::uint32_t slot) const noexcept {
+  const std::size_t bytes = q_.frame_slot_bytes != 0
+                                ? q_.frame_slot_bytes
+                                : 2 * static_cast<std::size_t>(cfg_.vo.max_width) * static_cast<std::size_t>(cfg_.vo.max_height);
+  return q_.frame_pool + static_cast<std::size_t>(slot) * bytes;
+}
+
+// Mode = Map: a new map (the mapper re-initialised in its arena: no heap), written to
+// route_dir/map_<id>.qmap from its first node on; the file of an earlier map with this id stays whole
+// until then (save_map: temporary file + fsync + rename).
+ModeReject NavWorker::enter_map(std::uint16_t id) noexcept {
+  map_arena_->reset();
+  if (!mapper_.init(map_mapper_config(cfg_), *map_arena_)) return ModeReject::kUnsupportedMode;  // cannot happen: init sized it
+  std::snprintf(map_path_, sizeof map_path_, "%s/map_%u.qmap", cfg_.route_dir.c_str(), static_cast<unsigned>(id));
+  map_open_ = true;
+  return ModeReject::kNone;
+}
+
+void NavWorker::save_map() noexcept {
+  const Status s = tools::save_map(store_, map_path_, mapper_.map(), mapper_.metric());
+  ++map_saves_;
+  if (!s) {
+    ++map_save_errors_;
+    ++writer_errors_;
+    if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"map: %s not saved: %s\"}\n", map_path_, s.message());
+  }
+}
+
+// One downward frame through the shared mapper (pipeline::TopoMapper, as `qnav map` runs it). A frame
+// the chain refuses leaves the pose and the map as they were (counted, logged with its reason).
+void NavWorker::handle_downward(const FrameMsg& f, std::int64_t t0) noexcept {
+  if (mode_ != qc::Mode::kMap || !map_ready_) return;
+  if (!QNAVD_CHECK(f.width == cfg_.map_width && f.height == cfg_.map_height, "downward frame of another size than map.width x map.height"))
+    return;
+  ++map_frames_;
+  const ConstImageViewU8 img = ConstImageViewU8::make(frame_slot(f.slot), cfg_.map_width, cfg_.map_height).value();
+  pipeline::MapperStep& st = map_step_;
+  const Status s = mapper_.step(img, cfg_.map_altitude_m > 0.0 ? cfg_.map_altitude_m : -1.0, st);
+  if (!s) ++step_errors_;
+  if (st.chain.status != topo::StepStatus::kOk) ++map_bad_frames_;
+  if (st.observed && st.place.kind == topo::ObserveKind::kCreated) save_map();  // durable as it grows
+  stage_time(Stage::kMap, t0);
+  log_map_frame(f, st, static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6);
+}
+
+void NavWorker::log_map_frame(const FrameMsg& f, const pipeline::MapperStep& st, double latency_ms) noexcept {
+  const topo::ChainStep& c = st.chain;
+  if (log_ && cfg_.log == LogFormat::kJson) {
+    std::fprintf(log_,
+                 "{\"event\":\"map\",\"seq\":%u,\"t_s\":%.3f,\"status\":\"%s\",\"bad_input\":%u,\"keyframe\":%u,\"new_keyframe\":%s,"
+                 "\"keypoints\":%u,\"inliers\":%u,\"x_px\":%.4f,\"y_px\":%.4f,\"heading_deg\":%.5f,\"metric\":%s,\"x_m\":%.5f,"
+                 "\"y_m\":%.5f,\"node\":%d,\"kind\":\"%s\",\"revisit\":%s,\"nodes\":%zu,\"edges\":%zu,\"latency_ms\":%.2f}\n",
+                 f.sequence, static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, topo::to_string(c.status), c.bad_input, c.keyframe_index,
+                 c.new_keyframe ? "true" : "false", c.keypoints, c.inliers, c.pose.position_px.x(), c.pose.position_px.y(),
+                 rad_to_deg(c.pose.heading_rad), c.pose.metric ? "true" : "false", c.pose.position_m.x(), c.pose.position_m.y(),
+                 st.observed && st.place.node != topo::kNoNode ? static_cast<int>(st.place.node) : -1,
+                 st.observed ? topo::to_string(st.place.kind) : "none", st.observed && st.place.revisit ? "true" : "false",
+                 mapper_.map().node_count(), mapper_.map().edge_count(), latency_ms);
+  } else if (log_ && cfg_.log == LogFormat::kKeyValue) {
+    std::fprintf(log_, "map seq=%u status=%s x_px=%.2f y_px=%.2f heading_deg=%.2f nodes=%zu\n", f.sequence, topo::to_string(c.status),
+                 c.pose.position_px.x(), c.pose.position_px.y(), rad_to_deg(c.pose.heading_rad), mapper_.map().node_count());
+  }
 }
 
 // QNAV_VO_STEP carries the motion since the last one sent: while the publisher still holds the last
@@ -698,18 +785,20 @@ void NavWorker::log_health() noexcept {
                "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
                "\"teach_no_odometry\":%u,\"nav_resets\":%u,\"pings_rejected\":%u,\"pings_out_of_order\":%u,\"bus_off\":%s,"
                "\"frames\":%u,\"vo_frames\":%u,\"vo_visual\":%u,\"vo_no_attitude\":%u,\"frames_out_of_order\":%u,\"frame_overflow\":%u,"
-               "\"camera_rejected\":%u,\"vo_max_us\":%" PRId64 ","
-               "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"vo\":%u,\"outputs\":%u}}\n",
+               "\"camera_rejected\":%u,\"vo_max_us\":%" PRId64 ",\"map_frames\":%u,\"map_bad_frames\":%u,\"map_saves\":%u,"
+               "\"map_save_errors\":%u,\"map_max_us\":%" PRId64 ","
+               "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"vo\":%u,\"map\":%u,\"outputs\":%u}}\n",
                static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
                stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
                io.can_rx_overflow.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
                SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, pings_rejected(), pings_out_of_order_, bus_off_ ? "true" : "false",
                frames_, vo_.frames(), vo_.visual_steps(), vo_no_attitude_, frames_out_of_order_, io.frame_overflow.load(), io.camera_rejected.load(),
-               stage_max_ns_[static_cast<int>(Stage::kVo)] / 1000, stage_misses_[static_cast<int>(Stage::kInputs)],
+               stage_max_ns_[static_cast<int>(Stage::kVo)] / 1000, map_frames_, map_bad_frames_, map_saves_, map_save_errors_,
+               stage_max_ns_[static_cast<int>(Stage::kMap)] / 1000, stage_misses_[static_cast<int>(Stage::kInputs)],
                stage_misses_[static_cast<int>(Stage::kModes)], stage_misses_[static_cast<int>(Stage::kPing)],
                stage_misses_[static_cast<int>(Stage::kTile)], stage_misses_[static_cast<int>(Stage::kVo)],
-               stage_misses_[static_cast<int>(Stage::kOutputs)]);
+               stage_misses_[static_cast<int>(Stage::kMap)], stage_misses_[static_cast<int>(Stage::kOutputs)]);
   const std::uint32_t sw = SoftwareFaults::count();
   if (sw != software_faults_logged_) {
     const SoftwareFaultRecord r = SoftwareFaults::last();

@@ -3,11 +3,16 @@
 // preceded a ping is applied before the ping), then runs the stages:
 //   attitude  QNAV_ATTITUDE_IN or a DroneCAN AHRS Solution (29-bit frames): the heading.
 //   modes     QNAV_MODE_CMD (range- and counter-checked by QnavCanReceiver): idle, teach, repeat
-//             (forward or reverse), hold; map is refused (not built). A refused transition keeps the
-//             current mode and reports why (NAV_STATUS ModeReject, log).
+//             (forward or reverse), hold, vo, map (refused with UnsupportedMode unless map.enabled).
+//             A refused transition keeps the current mode and reports why (NAV_STATUS ModeReject, log).
 //   dead reckoning  DVL body velocity x attitude heading (pipeline::DeadReckoner); the ping's pose.
 //   ping -> tile (pipeline::RouteTilePipeline) -> teach: RouteFileWriter.append (durable per node)
 //                                               -> repeat: RouteRepeater.step -> guidance
+//   downward frame (Mode = Map) -> pipeline::TopoMapper (the `qnav map` wiring: homography chain,
+//             topological map) -> the map file daemon.route_dir/map_<id>.qmap rewritten durably
+//             (firmware/tools/map_file over the FileStore) after every new node and when the mode is
+//             left; a new map each time the mode is entered; a refused frame (black, saturated,
+//             textureless, unregistered) is counted and logged, the pose and the map left as they were
 //   stereo pair (Mode = Vo) -> pipeline::VoOdometry with the attitude at the pair's time -> the
 //             body's motion since the last QNAV_VO_STEP sent (an increment, never repeated)
 //   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
@@ -37,6 +42,7 @@
 #include "firmware/pipeline/dead_reckoner.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
+#include "firmware/pipeline/topo_mapper.hpp"
 #include "firmware/pipeline/vo_odometry.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/deployment.hpp"
@@ -97,7 +103,8 @@ struct NavQueues {
   std::size_t ping_pool_stride = 0;
   SpscRing<FrameMsg>* frames = nullptr;   // null when vo.enabled = false
   SpscRing<std::uint32_t>* free_frames = nullptr;
-  const std::uint8_t* frame_pool = nullptr;  // slot s: left at s * 2 * W * H, right W * H after it
+  const std::uint8_t* frame_pool = nullptr;  // slot s: at s * frame_slot_bytes: left, right W * H after it; or a downward frame
+  std::size_t frame_slot_bytes = 0;       // 0 = 2 * vo.width * vo.height (stereo pairs only)
   IoCounters* io = nullptr;
 };
 
@@ -151,6 +158,13 @@ class NavWorker {
   std::uint32_t vo_visual() const noexcept { return vo_.visual_steps(); }
   std::uint32_t vo_no_attitude() const noexcept { return vo_no_attitude_; }
   std::uint32_t frames_out_of_order() const noexcept { return frames_out_of_order_; }
+  // Mode = Map: downward frames given to the mapper; of those refused (flagged, map untouched); map
+  // file rewrites and failed ones.
+  std::uint32_t map_frames() const noexcept { return map_frames_; }
+  std::uint32_t map_bad_frames() const noexcept { return map_bad_frames_; }
+  std::uint32_t map_saves() const noexcept { return map_saves_; }
+  std::uint32_t map_save_errors() const noexcept { return map_save_errors_; }
+  const pipeline::TopoMapper& mapper() const noexcept { return mapper_; }
   // qnav CAN frames refused by the receiver (format, length, range, invalid, stale, error frames).
   std::uint32_t can_rejected() const noexcept {
     return receiver_.counters().total() - receiver_.counters().get(drivers::qnavcan::RxCounter::kUnknownId);
@@ -169,6 +183,11 @@ class NavWorker {
   void leave_mode() noexcept;
   void handle_ping(const PingMsg& p) noexcept;
   void handle_pair(const FrameMsg& f) noexcept;
+  void handle_downward(const FrameMsg& f, std::int64_t t0) noexcept;
+  ModeReject enter_map(std::uint16_t id) noexcept;
+  void save_map() noexcept;
+  void log_map_frame(const FrameMsg& f, const pipeline::MapperStep& st, double latency_ms) noexcept;
+  const std::uint8_t* frame_slot(std::uint32_t slot) const noexcept;
   void publish_vo_increment(std::uint32_t inliers) noexcept;
   bool on_tile(const pipeline::RouteTile& t) noexcept;
   void update_faults() noexcept;
@@ -196,6 +215,12 @@ class NavWorker {
   pipeline::RouteTileSink tile_sink_;
   pipeline::VoOdometry vo_;
   bool vo_ready_ = false;
+  pipeline::TopoMapper mapper_;              // Mode = Map (PlaceEncoder: 32 KB inside; the worker lives on the heap)
+  std::unique_ptr<ArenaStorage> map_arena_;  // sized once at init (Deployment::map_bytes); reused by each new map
+  pipeline::MapperStep map_step_{};
+  bool map_ready_ = false, map_open_ = false;
+  char map_path_[1024] = {};
+  std::uint32_t map_frames_ = 0, map_bad_frames_ = 0, map_saves_ = 0, map_save_errors_ = 0;
   FrameObserver frame_observer_ = nullptr;
   void* frame_ctx_ = nullptr;
   std::int64_t last_frame_ns_ = -1;

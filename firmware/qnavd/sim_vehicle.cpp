@@ -101,11 +101,14 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   if (cfg_.sim_mission.size() == 0) return Status(StatusCode::kInvalidArgument, "sim: the mission has no [[sim.pass]]");
   recordings_.clear();
   sensors_.clear();
+  map_files_.clear();
+  map_synthetic_.clear();
   for (const SimPass& p : cfg_.sim_mission) {
+    QNAV_RETURN_IF_ERROR(load_map_frames(p));
     QNAV_RETURN_IF_ERROR(load_sensors(p, sensors_.size()));
     // A stereo sequence replayed without its CAN log is a rig without an attitude sensor: the
     // simulated AHRS stays silent for the whole mission (the VO runs as `qnav vo --kitti` does).
-    if (!p.images.empty() && p.candump.empty()) no_ahrs_ = true;
+    if (p.mode == qc::Mode::kVo && !p.images.empty() && p.candump.empty()) no_ahrs_ = true;
     // A recorded DVL stamps its sentences with its own clock: the simulated one (mission time) stays
     // silent between passes, or its sentences would step that clock back.
     if (!p.dvl_log.empty()) no_sim_dvl_ = true;
@@ -132,9 +135,43 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
   return Status::ok();
 }
 
+// A map pass's downward frames: the folder's file names (read one by one as the pass flies); the first
+// must be map.width x map.height.
+Status SimVehicle::load_map_frames(const SimPass& p) {
+  map_files_.emplace_back();
+  map_synthetic_.push_back(0);
+  if (p.mode != qc::Mode::kMap) return Status::ok();
+  if (frames_.frames == nullptr || frames_.map_width <= 0)
+    return Status(StatusCode::kInvalidArgument, "sim: a map pass needs map.enabled (the frame pool)");
+  if (p.images.empty()) {  // the synthetic seabed loop, rendered into the frame pool as the pass flies
+    const sim::downward::Camera cam;
+    if (frames_.map_width != cam.width || frames_.map_height != cam.height)
+      return Status(StatusCode::kInvalidArgument, "sim: the synthetic seabed camera is 320 x 240: map.width and map.height must match");
+    if (!seabed_) seabed_ = std::make_unique<sim::downward::Seabed>();
+    map_synthetic_.back() = p.max_frames > 0 ? static_cast<std::size_t>(p.max_frames) : 120;
+    return Status::ok();
+  }
+  std::vector<std::string>& files = map_files_.back();
+  std::string err;
+  if (!tools::list_image_files(p.images.c_str(), files, err) || files.size() < 2) {
+    std::fprintf(stderr, "qnavd sim: sim.pass.images %s: %s\n", p.images.c_str(), err.empty() ? "fewer than two frames" : err.c_str());
+    return Status(StatusCode::kInvalidArgument, "sim: the map pass's frame folder cannot be read (see the line above)");
+  }
+  if (p.max_frames > 0 && files.size() > static_cast<std::size_t>(p.max_frames)) files.resize(static_cast<std::size_t>(p.max_frames));
+  const Result<ImageU8> first = tools::read_image_gray8(files.front().c_str());
+  if (!first || first->width() != frames_.map_width || first->height() != frames_.map_height) {
+    std::fprintf(stderr, "qnavd sim: sim.pass.images %s: the first frame %s is %s, map.width x map.height is %d x %d\n", p.images.c_str(),
+                 files.front().c_str(), first ? (std::to_string(first->width()) + " x " + std::to_string(first->height())).c_str() : first.status().message(),
+                 frames_.map_width, frames_.map_height);
+    return Status(StatusCode::kInvalidArgument, "sim: map.width and map.height must be the size of the replayed frames (see the line above)");
+  }
+  std::fprintf(stderr, "qnavd sim: pass %zu maps %zu downward frames of %s\n", map_files_.size() - 1, files.size(), p.images.c_str());
+  return Status::ok();
+}
+
 // A pass's recorded sensors (sim_replay.hpp), loaded whole here; a stereo sequence must fit the frame pool.
 Status SimVehicle::load_sensors(const SimPass& p, std::size_t index) {
-  if (p.candump.empty() && p.dvl_log.empty() && p.images.empty()) {
+  if (p.mode == qc::Mode::kMap || (p.candump.empty() && p.dvl_log.empty() && p.images.empty())) {
     sensors_.push_back(nullptr);
     return Status::ok();
   }
@@ -286,6 +323,7 @@ void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
 
 // Between passes the vehicle is alive: time passes and the AHRS streams.
 void SimVehicle::idle_tick() noexcept {
+  if (!worker_caught_up_) return;  // lockstep (set_worker_caught_up)
   const std::int64_t t = clock_.now_ns() + kIdleTickNs / 10;
   clock_.set(t);
   if (t >= next_idle_att_ns_) {
@@ -303,6 +341,11 @@ Status SimVehicle::start_pass() {
   replay_dvl_ = rs_ != nullptr && !rs_->dvl.empty();
   have_prev_ = false;
   pass_start_ns_ = clock_.now_ns();
+  if (p.mode == qc::Mode::kMap) {
+    map_next_ = 0;
+    map_t_ns_ = clock_.now_ns() + kPassLeadNs;
+    return Status::ok();
+  }
   if (p.mode == qc::Mode::kVo && rs_ != nullptr && !rs_->pairs.empty()) {
     align_sensors();
     return Status::ok();
@@ -497,7 +540,7 @@ SimVehicle::StepResult SimVehicle::fly_rover(IoCounters& io) noexcept {
   std::uint32_t slot = 0;
   if (!take_frame_slot(slot, io)) return StepResult::kProduced;
   const std::size_t n = static_cast<std::size_t>(frames_.width) * static_cast<std::size_t>(frames_.height);
-  std::uint8_t* left = frames_.pool + static_cast<std::size_t>(slot) * 2 * n;
+  std::uint8_t* left = frames_.slot(slot);
   const Status r = rover_->render(ImageViewU8::make(left, frames_.width, frames_.height).value(),
                                   ImageViewU8::make(left + n, frames_.width, frames_.height).value());
   if (!r) {
@@ -602,7 +645,7 @@ SimVehicle::StepResult SimVehicle::replay_pair(std::int64_t t, IoCounters& io) n
   std::uint32_t slot = 0;
   if (!take_frame_slot(slot, io)) return StepResult::kProduced;
   const std::size_t n = static_cast<std::size_t>(frames_.width) * static_cast<std::size_t>(frames_.height);
-  std::uint8_t* left = frames_.pool + static_cast<std::size_t>(slot) * 2 * n;
+  std::uint8_t* left = frames_.slot(slot);
   for (int y = 0; y < frames_.height; ++y) {
     std::memcpy(left + static_cast<std::size_t>(y) * static_cast<std::size_t>(frames_.width), l->view().row(y), static_cast<std::size_t>(frames_.width));
     std::memcpy(left + n + static_cast<std::size_t>(y) * static_cast<std::size_t>(frames_.width), r->view().row(y),
@@ -613,6 +656,52 @@ SimVehicle::StepResult SimVehicle::replay_pair(std::int64_t t, IoCounters& io) n
   m.sequence = seq;
   m.width = static_cast<std::uint16_t>(frames_.width);
   m.height = static_cast<std::uint16_t>(frames_.height);
+  m.stamp.sample_ns = m.stamp.arrival_ns = t;
+  pending_pair_ = m;
+  has_pending_pair_ = true;
+  return StepResult::kProduced;
+}
+
+SimVehicle::StepResult SimVehicle::fly_downward(IoCounters& io) noexcept {
+  if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
+  if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
+  const std::vector<std::string>& files = map_files_[pass_];
+  const std::size_t synthetic = map_synthetic_[pass_];
+  if (map_next_ >= (synthetic > 0 ? synthetic : files.size())) {
+    phase_ = Phase::kEndPass;
+    return StepResult::kWaiting;
+  }
+  const std::int64_t t = map_t_ns_;
+  map_t_ns_ += kMapFramePeriodNs;
+  const std::size_t seq = map_next_++;
+  clock_.set(t);
+  inject_bus_faults(t);
+  send_attitude(last_heading_);  // the vehicle's AHRS runs on (the mapper does not use it)
+  if (stalled("camera", t)) return StepResult::kProduced;
+  io.frames_in.fetch_add(1, std::memory_order_relaxed);
+  std::uint32_t slot = 0;
+  if (synthetic > 0) {  // rendered in place: no file, no heap
+    if (!take_frame_slot(slot, io)) return StepResult::kProduced;
+    const sim::downward::CameraPose pose = sim::downward::loop_pose(static_cast<int>(seq), kSeabedFramesPerLap);
+    sim::downward::render(*seabed_, sim::downward::Camera{}, pose,
+                          ImageViewU8::make(frames_.slot(slot), frames_.map_width, frames_.map_height).value());
+  } else {
+    const Result<ImageU8> img = tools::read_image_gray8(files[seq].c_str());
+    if (!img || img->width() != frames_.map_width || img->height() != frames_.map_height) {
+      io.camera_rejected.fetch_add(1, std::memory_order_relaxed);
+      return StepResult::kProduced;
+    }
+    if (!take_frame_slot(slot, io)) return StepResult::kProduced;
+    std::uint8_t* dst = frames_.slot(slot);
+    const std::size_t w = static_cast<std::size_t>(frames_.map_width);
+    for (int y = 0; y < frames_.map_height; ++y) std::memcpy(dst + static_cast<std::size_t>(y) * w, img->view().row(y), w);
+  }
+  FrameMsg m;
+  m.slot = slot;
+  m.sequence = static_cast<std::uint32_t>(seq);
+  m.width = static_cast<std::uint16_t>(frames_.map_width);
+  m.height = static_cast<std::uint16_t>(frames_.map_height);
+  m.downward = true;
   m.stamp.sample_ns = m.stamp.arrival_ns = t;
   pending_pair_ = m;
   has_pending_pair_ = true;
@@ -673,6 +762,7 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
         const std::int64_t sim_elapsed = clock_.now_ns() - sim_start_ns_;
         if (wall_.now_ns() - wall_start_ns_ < sim_elapsed) return StepResult::kWaiting;
       }
+      if (cfg_.sim_mission[pass_].mode == qc::Mode::kMap) return fly_downward(io);
       if (rs_ != nullptr) return fly_replay(free_slots, pings, pool, stride, io);
       if (cfg_.sim_mission[pass_].mode == qc::Mode::kVo) return fly_rover(io);
       Sample smp;

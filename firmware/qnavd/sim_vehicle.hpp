@@ -34,6 +34,7 @@
 #include <memory>
 #include <vector>
 
+#include "drivers/downward_sim/seabed_scene.hpp"
 #include "drivers/qnavcan/messages.hpp"
 #include "drivers/sidescan/sim_sidescan.hpp"
 #include "drivers/sidescan/sim_trajectory.hpp"
@@ -78,6 +79,11 @@ class SimVehicle {
   // Fault injection's reach: the CAN network (error frames) and the route store (a full disk).
   void set_fault_targets(hal::SimCanNetwork* net, hal::FaultFileStore* store) noexcept { net_ = net, store_ = store; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
+  // Lockstep between passes: while the vehicle waits for the daemon to report a commanded mode, its
+  // clock moves on (idle_tick) only once the nav worker has taken every input of the last tick and its
+  // answer is on the bus (the backend says so before each step). The length of a mode handshake in
+  // mission time then does not depend on thread timing, and a replay is reproducible run to run.
+  void set_worker_caught_up(bool v) noexcept { worker_caught_up_ = v; }
   // The leak detector's line (sim.fault = "leak" wets it for the fault's window).
   void set_leak_line(hal::SimGpioLine* line) noexcept { leak_line_ = line; }
   // The stereo pairs' pool and queues (vo passes need them: vo.enabled).
@@ -123,6 +129,10 @@ class SimVehicle {
   void send_mode(drivers::qnavcan::Mode m, bool reverse) noexcept;
   void send_attitude(double heading_rad, double roll_rad = 0.0, double pitch_rad = 0.0) noexcept;
   StepResult fly_rover(IoCounters& io) noexcept;
+  // A map pass: the next frame of its folder (sim.pass.images) into the frame pool, one every
+  // kMapFramePeriodNs of mission time; unreadable or wrong-size files counted (camera_rejected).
+  StepResult fly_downward(IoCounters& io) noexcept;
+  Status load_map_frames(const SimPass& p);
   StepResult fly_replay(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
                         IoCounters& io) noexcept;
   StepResult replay_pair(std::int64_t t, IoCounters& io) noexcept;
@@ -155,6 +165,7 @@ class SimVehicle {
   std::int64_t phase_start_ns_ = 0;
   std::int64_t pass_start_ns_ = 0;
   std::int64_t next_idle_att_ns_ = 0;
+  bool worker_caught_up_ = true;
   std::int64_t wall_start_ns_ = 0, sim_start_ns_ = 0;
   bool have_prev_ = false;
   Pose2 prev_nav_{};
@@ -194,6 +205,13 @@ class SimVehicle {
   bool no_sim_dvl_ = false;                                // the simulated DVL never sends (see init)
   FrameMsg pending_pair_{};
   bool has_pending_pair_ = false;
+  static constexpr std::int64_t kMapFramePeriodNs = 200000000;  // downward frames at 5 Hz (the sparus snippet's rate)
+  std::vector<std::vector<std::string>> map_files_;        // per pass: its downward frames (map passes), else empty
+  std::vector<std::size_t> map_synthetic_;                 // per pass: frames of the synthetic seabed loop (0 = none)
+  std::unique_ptr<sim::downward::Seabed> seabed_;          // the synthetic seabed (built once at init)
+  static constexpr int kSeabedFramesPerLap = 90;           // the loop `qnav map eval` flies
+  std::size_t map_next_ = 0;
+  std::int64_t map_t_ns_ = 0;
   std::int64_t spare_frame_ = -1;  // a frame slot taken from the free queue but not sent
 };
 

@@ -1,7 +1,13 @@
 #include "firmware/tools/image_reader.hpp"
 
+#include <dirent.h>
 #include <jpeglib.h>
 #include <png.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 
 #include <csetjmp>
 #include <cstdio>
@@ -286,6 +292,35 @@ Status write_pgm_gray8(const char* path, ConstImageViewU8 image) noexcept {
     return Status(StatusCode::kIoError, "pgm: write failed");
   }
   return Status::ok();
+}
+
+namespace {
+bool has_image_ext(const std::string& n) {
+  const std::size_t d = n.find_last_of('.');
+  if (d == std::string::npos) return false;
+  std::string e = n.substr(d + 1);
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e == "png" || e == "jpg" || e == "jpeg" || e == "pgm";
+}
+}  // namespace
+
+bool list_image_files(const char* dir, std::vector<std::string>& out, std::string& err) {
+  DIR* d = opendir(dir);
+  if (d == nullptr) {
+    err = std::string("cannot open directory ") + dir + ": " + std::strerror(errno);
+    return false;
+  }
+  while (dirent* e = readdir(d)) {
+    const std::string n = e->d_name;
+    if (n.empty() || n[0] == '.' || !has_image_ext(n)) continue;
+    const std::string p = std::string(dir) + "/" + n;
+    struct stat st {};
+    if (stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode)) out.push_back(p);
+  }
+  closedir(d);
+  std::sort(out.begin(), out.end());
+  if (out.empty()) err = std::string("no .png/.jpg/.pgm frames in ") + dir;
+  return !out.empty();
 }
 
 }  // namespace qnav::tools

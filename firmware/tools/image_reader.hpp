@@ -9,6 +9,9 @@
 // kMaxImageSide).
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "nav/core/image.hpp"
 #include "nav/core/status.hpp"
 
@@ -18,6 +21,11 @@ Result<ImageU8> read_image_gray8(const char* path) noexcept;
 Result<ImageU8> read_png_gray8(const char* path) noexcept;
 Result<ImageU8> read_jpeg_gray8(const char* path) noexcept;
 Result<ImageU8> read_pgm_gray8(const char* path) noexcept;
+
+// The frames of a directory: every regular .png/.jpg/.jpeg/.pgm file (extension case-insensitive, no
+// dot files), full paths in name order. False with a message (the directory, and why) when it
+// cannot be read or holds none. `qnav map --images` and qnavd's map passes (sim.pass.images).
+bool list_image_files(const char* dir, std::vector<std::string>& out, std::string& err);
 
 // Writes binary PGM (P5) atomically (temporary file + rename). For tests and debug output.
 Status write_pgm_gray8(const char* path, ConstImageViewU8 image) noexcept;

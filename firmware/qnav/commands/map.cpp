@@ -24,7 +24,6 @@
 //       DIR_OUT/map_nodes.csv and map_edges.csv; per frame the node, kind and revisit in the CSV.
 //   qnav map route --map FILE --from A --to B [--astar] [--json]: shortest path over the map's edges.
 //   qnav map eval [--json] ...: the synthetic loop under the Table-1 filters (see run_eval).
-#include <dirent.h>
 #include <time.h>
 #include <sys/stat.h>
 
@@ -67,33 +66,6 @@ double median(std::vector<double> v) {
 std::string basename_of(const std::string& p) {
   const std::size_t s = p.find_last_of('/');
   return s == std::string::npos ? p : p.substr(s + 1);
-}
-
-bool has_image_ext(const std::string& n) {
-  const std::size_t d = n.find_last_of('.');
-  if (d == std::string::npos) return false;
-  std::string e = n.substr(d + 1);
-  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e == "png" || e == "jpg" || e == "jpeg" || e == "pgm";
-}
-
-bool list_images(const char* dir, std::vector<std::string>& out, std::string& err) {
-  DIR* d = opendir(dir);
-  if (d == nullptr) {
-    err = std::string("cannot open directory ") + dir + ": " + std::strerror(errno);
-    return false;
-  }
-  while (dirent* e = readdir(d)) {
-    const std::string n = e->d_name;
-    if (n.empty() || n[0] == '.' || !has_image_ext(n)) continue;
-    const std::string p = std::string(dir) + "/" + n;
-    struct stat st {};
-    if (stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode)) out.push_back(p);
-  }
-  closedir(d);
-  std::sort(out.begin(), out.end());
-  if (out.empty()) err = std::string("no .png/.jpg/.pgm frames in ") + dir;
-  return !out.empty();
 }
 
 // Numbers of the first `[...]` after key (OpenCV-style YAML "data: [a, b, ...]").
@@ -553,7 +525,7 @@ int run_map() {
 
   std::vector<std::string> files;
   std::string err;
-  if (!list_images(images, files, err)) {
+  if (!tools::list_image_files(images, files, err)) {
     std::fprintf(stderr, "map: %s\n", err.c_str());
     return 1;
   }

@@ -130,6 +130,17 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(vo.max_step_m),
       QNAV_FIELD(vo_frame_queue),
       QNAV_FIELD(vo_stale_s),
+      QNAV_FIELD(map_enabled),
+      QNAV_FIELD(map_width),
+      QNAV_FIELD(map_height),
+      QNAV_FIELD(map_focal_px),
+      QNAV_FIELD(map_cu_px),
+      QNAV_FIELD(map_cv_px),
+      QNAV_FIELD(map_altitude_m),
+      QNAV_FIELD(map_node_spacing),
+      QNAV_FIELD(map_max_nodes),
+      QNAV_FIELD(map_frame_queue),
+      QNAV_FIELD(map_budget_us),
       QNAV_FIELD(sim_length_m),
       QNAV_FIELD(sim_seed),
       QNAV_FIELD(sim_speed),
@@ -426,6 +437,18 @@ max_step_m = 1.5
 frame_queue = 8
 stale_s = 5.0
 
+[map]
+enabled = true
+width = 384
+height = 288
+focal_px = 405.6
+cu_px = 189.9
+cv_px = 139.9
+altitude_m = 2.5
+node_spacing = 0.3
+max_nodes = 200
+frame_queue = 8
+
 [route]
 id = 7
 max_nodes = 20000
@@ -448,6 +471,7 @@ ping_us = 5000
 tile_us = 100000
 mode_us = 300000
 vo_us = 250000
+map_us = 80000
 
 [sim]
 length_m = 5000.0
@@ -651,7 +675,7 @@ const BadConfig kBadConfigs[] = {
     {"pass_without_mode", "[[sim.pass]]\nmode = \"teach\"\n\n[[sim.pass]]\noffset_pct = 5\n", "sim.pass[1]", 4,
      "missing mode"},
     {"pass_bad_mode", "[[sim.pass]]\nmode = \"fly\"\n", "sim.pass[0].mode", 2,
-     "must be one of teach, repeat, hold, vo, got \"fly\""},
+     "must be one of teach, repeat, hold, vo, map, got \"fly\""},
     {"pass_unknown_key", "[[sim.pass]]\nmode = \"teach\"\noffset = 5\n", "sim.pass[0].offset", 3,
      "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping, candump, dvl_log, images, max_frames"},
     {"images_in_a_teach_pass", "[[sim.pass]]\nmode = \"teach\"\nimages = \"seq\"\n", "sim.pass[0].images", 3,
