@@ -126,7 +126,15 @@ bool NavWorker::run_once() noexcept {
   const bool have_pair = take_pair && q_.frames->try_pop(pair).is_ok();
   // Every input sampled up to this ping or pair (mode commands, attitude, velocities), and none after
   // it: the sample is placed with the navigation of its own time, whatever the I/O thread queued since.
-  const std::int64_t until_ns = have_ping ? ping.stamp.sample_ns : (have_pair ? pair.stamp.sample_ns : INT64_MAX);
+  // And only the inputs that had arrived when the ping or pair arrived: one sampled before it but
+  // received after it (a DVL report stamped with its latency) waits for the next batch, so the ping
+  // sees the same navigation whether this worker pops it at once or late, and a replay is
+  // reproducible. Arrival stamps share one clock: monotonic (linux backend) or mission (sim).
+  // With no ping or pair in hand, a batch of inputs stops at the first ping or pair queued while it
+  // runs (the I/O thread queues a ping before any input that follows it): that ping is taken next,
+  // with none of the inputs after it.
+  std::int64_t until_ns = have_ping ? ping.stamp.sample_ns : (have_pair ? pair.stamp.sample_ns : INT64_MAX);
+  std::int64_t until_arrival_ns = have_ping ? ping.stamp.arrival_ns : (have_pair ? pair.stamp.arrival_ns : INT64_MAX);
   hal::CanRxFrame rx;
   std::int64_t t0 = cpu_clock_.now_ns();
   mode_ns_ = 0;
@@ -136,8 +144,14 @@ bool NavWorker::run_once() noexcept {
   for (;;) {
     const hal::CanRxFrame* cf = q_.can_rx->front();
     const drivers::dvl::DvlVelocity* dv = q_.dvl->front();
-    const bool can_due = cf != nullptr && cf->stamp.sample_ns <= until_ns;
-    const bool dvl_due = dv != nullptr && dv->stamp.sample_ns <= until_ns;
+    if (!have_ping && !have_pair) {  // after the input fronts: a ping queued before them is seen
+      const PingMsg* np = q_.pings->front();
+      const FrameMsg* nf = q_.frames != nullptr ? q_.frames->front() : nullptr;
+      if (np != nullptr) until_ns = std::min(until_ns, np->stamp.sample_ns), until_arrival_ns = std::min(until_arrival_ns, np->stamp.arrival_ns);
+      if (nf != nullptr) until_ns = std::min(until_ns, nf->stamp.sample_ns), until_arrival_ns = std::min(until_arrival_ns, nf->stamp.arrival_ns);
+    }
+    const bool can_due = cf != nullptr && cf->stamp.sample_ns <= until_ns && cf->stamp.arrival_ns <= until_arrival_ns;
+    const bool dvl_due = dv != nullptr && dv->stamp.sample_ns <= until_ns && dv->stamp.arrival_ns <= until_arrival_ns;
     if (!can_due && !dvl_due) break;
     if (can_due && (!dvl_due || cf->stamp.sample_ns <= dv->stamp.sample_ns)) {
       if (!q_.can_rx->try_pop(rx)) break;
