@@ -2,7 +2,8 @@
 """gen_plot_font.py > firmware/tools/plot_font.cpp: the glyph table of the tool's PNG plots.
 
 Renders printable ASCII (32..126) of DejaVu Sans Mono (fonts-dejavu-core) at 11 px into 7 x 14
-cells of 8-bit coverage with PIL, and prints them as a C++ table (firmware/tools/plot_font.hpp).
+cells of 8-bit coverage with PIL (python3-pil; only to regenerate, the build needs neither), and
+prints them as a C++ table (firmware/tools/plot_font.hpp).
 """
 from PIL import Image, ImageDraw, ImageFont
 
