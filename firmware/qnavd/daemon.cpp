@@ -56,7 +56,9 @@ namespace {
 using std::chrono::microseconds;
 
 // failed (optional): set when the bus reported an error this call (the device went away).
-bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io, bool* failed = nullptr) noexcept {
+// dropped_seen: the bus's running count of frames dropped before qnavd read them (the kernel's socket
+// queue, SO_RXQ_OVFL; the sim bus's queue) at the last call; 0 again when the bus is reopened.
+bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io, std::uint32_t& dropped_seen, bool* failed = nullptr) noexcept {
   bool did = false;
   hal::CanRxFrame rx;
   for (int i = 0; i < 64; ++i) {
@@ -74,6 +76,10 @@ bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io, b
     if (!q.try_push(rx)) io.can_rx_overflow.fetch_add(1, std::memory_order_relaxed);
     did = true;
   }
+  const std::uint32_t dropped = bus.stats().rx_dropped;
+  if (dropped < dropped_seen) dropped_seen = 0;  // a new socket counts from 0
+  if (dropped != dropped_seen) io.can_rx_dropped.fetch_add(dropped - dropped_seen, std::memory_order_relaxed);
+  dropped_seen = dropped;
   return did;
 }
 
@@ -151,7 +157,7 @@ class SimBackend final : public IoBackend {
       done_ = r == SimVehicle::StepResult::kDone;
       did = r == SimVehicle::StepResult::kProduced;
     }
-    did |= drain_can(daemon_bus_, *q_.can_rx, io);
+    did |= drain_can(daemon_bus_, *q_.can_rx, io, can_dropped_seen_);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
     if (nav_ != nullptr && (clock_.now_ns() != t_before || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
       progress_gate_ = nav_->progress() + 2;
@@ -179,6 +185,7 @@ class SimBackend final : public IoBackend {
   hal::SimGpioLine leak_line_;  // the simulated leak detector (sim.fault = "leak" wets it)
   drivers::camera::LeakMonitor leak_;
   std::uint32_t dvl_rejects_ = 0;
+  std::uint32_t can_dropped_seen_ = 0;
   bool done_ = false;
   const NavWorker* nav_ = nullptr;
   const SpscRing<hal::CanFrame>* can_tx_ = nullptr;
@@ -222,7 +229,7 @@ class LinuxBackend final : public IoBackend {
     bool did = false;
     if (can_.is_open()) {
       bool failed = false;
-      did |= drain_can(can_, *q_.can_rx, io, &failed);
+      did |= drain_can(can_, *q_.can_rx, io, can_dropped_seen_, &failed);
       if (failed) can_.close();  // reopened within a second
     }
     if (dvl_port_.is_open()) {
@@ -320,6 +327,7 @@ class LinuxBackend final : public IoBackend {
     static_cast<void>(sc.filters.push_back(inputs));
     static_cast<void>(sc.filters.push_back(mode));
     static_cast<void>(sc.filters.push_back(ahrs));
+    can_dropped_seen_ = 0;
     const Status s = can_.open(sc);
     if (!s && report && log_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", sc.interface, s.message());
     return s;
@@ -387,6 +395,7 @@ class LinuxBackend final : public IoBackend {
   IoCounters* io_ = nullptr;
   std::int64_t next_retry_ns_ = 0;
   std::uint32_t dvl_rejects_ = 0, sonar_rejects_ = 0;
+  std::uint32_t can_dropped_seen_ = 0;
   bool dvl_warned_ = false, sonar_warned_ = false;
   bool connect_started_ = false;  // the sonar's connect was in progress at the last retry
   std::unique_ptr<LinuxStereoSource> stereo_;  // vo.enabled: the V4L2 pair

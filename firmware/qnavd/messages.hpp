@@ -63,6 +63,7 @@ struct IoCounters {
   std::atomic<std::uint64_t> can_rx_in{0};
   std::atomic<std::uint32_t> faults_injected{0};  // sim backend, sim.fault: damaged samples it sent
   std::atomic<std::uint32_t> can_rx_overflow{0};
+  std::atomic<std::uint32_t> can_rx_dropped{0};  // dropped by the bus before qnavd read them (kernel socket queue: SO_RXQ_OVFL)
   std::atomic<std::uint32_t> can_tx_errors{0};
   std::atomic<std::uint32_t> ping_overflow{0};   // a ping arrived with no free slot / full queue: dropped
   std::atomic<std::uint32_t> dvl_overflow{0};

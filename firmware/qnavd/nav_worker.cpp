@@ -767,6 +767,7 @@ void NavWorker::publish() noexcept {
   rejected += ahrs_.counters().total() - ahrs_.counters().get(drivers::dronecan::AhrsCounter::kOtherNode);
   rejected += q_.io->dvl_rejected.load(std::memory_order_relaxed) + q_.io->sonar_rejected.load(std::memory_order_relaxed) + dr_rejected_;
   rejected += q_.io->can_rx_overflow.load(std::memory_order_relaxed) + q_.io->ping_overflow.load(std::memory_order_relaxed);
+  rejected += q_.io->can_rx_dropped.load(std::memory_order_relaxed);
   rejected += pings_rejected() + pings_out_of_order_;
   rejected += q_.io->frame_overflow.load(std::memory_order_relaxed) + q_.io->camera_rejected.load(std::memory_order_relaxed) + frames_out_of_order_;
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
@@ -794,7 +795,7 @@ void NavWorker::log_health() noexcept {
   const IoCounters& io = *q_.io;
   std::fprintf(log_,
                "{\"event\":\"health\",\"t_s\":%.1f,\"mode\":\"%s\",\"faults\":%u,\"pings\":%u,\"tiles\":%u,\"deadline_misses\":%u,"
-               "\"ping_max_us\":%" PRId64 ",\"tile_max_us\":%" PRId64 ",\"cpu_load_pct\":%.1f,\"can_rx_overflow\":%u,\"can_tx_overflow\":%u,"
+               "\"ping_max_us\":%" PRId64 ",\"tile_max_us\":%" PRId64 ",\"cpu_load_pct\":%.1f,\"can_rx_overflow\":%u,\"can_rx_dropped\":%u,\"can_tx_overflow\":%u,"
                "\"ping_overflow\":%u,\"dvl_rejected\":%u,\"sonar_rejected\":%u,\"device_errors\":%u,\"can_rejected\":%u,\"dr_rejected\":%u,"
                "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
                "\"teach_no_odometry\":%u,\"nav_resets\":%u,\"pings_rejected\":%u,\"pings_out_of_order\":%u,\"bus_off\":%s,"
@@ -804,7 +805,7 @@ void NavWorker::log_health() noexcept {
                "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"vo\":%u,\"map\":%u,\"outputs\":%u}}\n",
                static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
                stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
-               io.can_rx_overflow.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
+               io.can_rx_overflow.load(), io.can_rx_dropped.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
                SoftwareFaults::count(), io.dvl_overflow.load(), io.can_tx_errors.load(), teach_no_odometry_, nav_resets_, pings_rejected(), pings_out_of_order_, bus_off_ ? "true" : "false",
                frames_, vo_.frames(), vo_.visual_steps(), vo_no_attitude_, frames_out_of_order_, io.frame_overflow.load(), io.camera_rejected.load(),
