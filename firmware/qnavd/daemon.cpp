@@ -158,6 +158,7 @@ class SimBackend final : public IoBackend {
       did = r == SimVehicle::StepResult::kProduced;
     }
     did |= drain_can(daemon_bus_, *q_.can_rx, io, can_dropped_seen_);
+    did |= clock_.now_ns() != t_before;  // mission time moved: the nav thread has a new instant to see
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
     if (nav_ != nullptr && (clock_.now_ns() != t_before || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
       progress_gate_ = nav_->progress() + 2;
@@ -521,6 +522,7 @@ Status Daemon::init_pipeline() {
       route_swath_m_ = sim->vehicle().swath_m();
     }
     backend_ = std::move(sim);
+    nav_idle_wait_us_ = 200;
   } else {
     auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, io_log_ ? io_log_->stream() : nullptr);
     QNAV_RETURN_IF_ERROR(lb->init());
@@ -555,6 +557,13 @@ void Daemon::io_loop() noexcept {
   }
   while (!io_exit_.load(std::memory_order_relaxed)) {
     bool did = backend_->poll_devices(*this, io_);
+    if (did) {
+      {
+        const std::lock_guard<std::mutex> lock(bell_mu_);
+        bell_ = true;
+      }
+      bell_cv_.notify_one();
+    }
     hal::CanFrame f;
     while (can_tx_.try_pop(f)) {
       backend_->send(f, io_);
@@ -571,7 +580,10 @@ void Daemon::nav_loop() noexcept {
     if (!s && nav_log_) std::fprintf(nav_log_->stream(), "{\"event\":\"warning\",\"thread\":\"nav\",\"what\":\"realtime not set: %s\"}\n", s.message());
   }
   while (!stop_.load(std::memory_order_relaxed)) {
-    if (!nav_->run_once()) std::this_thread::sleep_for(microseconds(200));
+    if (nav_->run_once()) continue;
+    std::unique_lock<std::mutex> lock(bell_mu_);
+    bell_cv_.wait_for(lock, microseconds(nav_idle_wait_us_), [this] { return bell_ || stop_.load(std::memory_order_relaxed); });
+    bell_ = false;
   }
   nav_->shutdown();  // the node in progress finished or discarded, the route closed and fsynced
   nav_exited_.store(true);

@@ -12,8 +12,10 @@
 #pragma once
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -92,6 +94,15 @@ class Daemon {
   void* frame_ctx_ = nullptr;
   std::thread io_thread_, nav_thread_;
   std::atomic<bool> stop_{false}, io_exit_{false}, nav_exited_{false}, mission_done_{false};
+  // The nav thread's doorbell: the io thread rings it when it queued something (or moved the sim
+  // clock); with nothing to do the nav thread waits for it, at most nav_idle_wait_us_: 2 ms on the
+  // linux backend (time-driven work, outputs at >= 100 ms periods and staleness checks, needs no
+  // finer step; it used to poll 5,000 times a second), 200 us on the sim backend, whose idle clock
+  // waits for the worker's steps (SimVehicle::set_worker_caught_up) and whose CPU use is no concern.
+  std::mutex bell_mu_;
+  std::condition_variable bell_cv_;
+  bool bell_ = false;
+  long nav_idle_wait_us_ = 2000;
   std::int64_t started_wall_ns_ = 0;
   double route_spacing_m_ = 60.0;  // header of a route taught here: node spacing and swath (set by the backend)
   double route_swath_m_ = 100.0;
