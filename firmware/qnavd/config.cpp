@@ -1109,12 +1109,7 @@ std::size_t frame_slot_bytes(const DaemonConfig& c) noexcept {
 
 pipeline::TopoMapperConfig map_mapper_config(const DaemonConfig& c) noexcept {
   const bool have_camera = c.map_focal_px > 0.0;
-  vision::PinholeRadTan k;
-  k.fx = k.fy = c.map_focal_px;
-  k.cx = c.map_cu_px;
-  k.cy = c.map_cv_px;
-  k.width = c.map_width;
-  k.height = c.map_height;
+  const vision::PinholeRadTan k = vision::ideal_pinhole(c.map_focal_px, c.map_cu_px, c.map_cv_px, c.map_width, c.map_height);
   const bool metric = have_camera && c.map_altitude_m > 0.0;
   pipeline::TopoMapperConfig m = pipeline::topo_mapper_config(c.map_width, c.map_height, have_camera, k, false, true, metric,
                                                               c.map_node_spacing > 0.0 ? c.map_node_spacing : std::nan(""), c.map_max_nodes);

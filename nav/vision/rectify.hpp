@@ -37,6 +37,17 @@ struct PinholeRadTan {
   int width = 0, height = 0;                      // raw image size, pixels
 };
 
+// A camera without distortion: focal length f (pixels, fx = fy), principal point (cx, cy), size.
+inline PinholeRadTan ideal_pinhole(double f, double cx, double cy, int width, int height) noexcept {
+  PinholeRadTan k;
+  k.fx = k.fy = f;
+  k.cx = cx;
+  k.cy = cy;
+  k.width = width;
+  k.height = height;
+  return k;
+}
+
 // Underwater paper eq. 1: flat port, ray angle in water t_w, in air t_a = asin(n sin t_w).
 struct FlatPortRefraction {
   bool enabled = false;

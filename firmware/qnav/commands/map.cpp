@@ -397,12 +397,7 @@ int run_eval() {
   double recognised_none = std::nan("");
   int worst_rc = 0;
   for (int filter = 0; filter <= static_cast<int>(filters); ++filter) {
-    vision::PinholeRadTan pinhole;
-    pinhole.fx = pinhole.fy = cam.f;
-    pinhole.cx = cam.cx;
-    pinhole.cy = cam.cy;
-    pinhole.width = cam.width;
-    pinhole.height = cam.height;
+    const vision::PinholeRadTan pinhole = vision::ideal_pinhole(cam.f, cam.cx, cam.cy, cam.width, cam.height);
     const pipeline::TopoMapperConfig config =
         pipeline::topo_mapper_config(cam.width, cam.height, true, pinhole, false, true, true, spacing, 1024);
     ArenaStorage arena(pipeline::TopoMapper::arena_bytes(config));

@@ -28,12 +28,7 @@ const dw::Seabed& seabed() {
 // The settings `qnav map eval` runs: the simulator's pinhole, metres, the default 0.2 m spacing.
 TopoMapperConfig loop_config(bool undistort) {
   const dw::Camera cam;
-  vision::PinholeRadTan k;
-  k.fx = k.fy = cam.f;
-  k.cx = cam.cx;
-  k.cy = cam.cy;
-  k.width = cam.width;
-  k.height = cam.height;
+  const vision::PinholeRadTan k = vision::ideal_pinhole(cam.f, cam.cx, cam.cy, cam.width, cam.height);
   return topo_mapper_config(cam.width, cam.height, true, k, undistort, true, true, std::nan(""), 256);
 }
 
