@@ -30,6 +30,12 @@ function(qnav_add_test)
     add_test(NAME ${T_NAME} COMMAND ${T_NAME})
     set_tests_properties(${T_NAME} PROPERTIES LABELS "${T_LABELS};target" TIMEOUT 900)
   else()
-    gtest_discover_tests(${T_NAME} DISCOVERY_MODE PRE_TEST PROPERTIES LABELS "${T_LABELS}" TIMEOUT 600)
+    # The labels and the timeout are set by a script ctest runs after the discovery, on the list of
+    # discovered tests: gtest_discover_tests(PROPERTIES LABELS "a;b") splits the list (CMake issue
+    # 17812), so a second label became a property name and both it and TIMEOUT were lost.
+    gtest_discover_tests(${T_NAME} DISCOVERY_MODE PRE_TEST TEST_LIST ${T_NAME}_TESTS)
+    set(_props ${CMAKE_CURRENT_BINARY_DIR}/${T_NAME}_properties.cmake)
+    file(WRITE ${_props} "if(${T_NAME}_TESTS)\n  set_tests_properties(\${${T_NAME}_TESTS} PROPERTIES LABELS \"${T_LABELS}\" TIMEOUT 600)\nendif()\n")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${_props})
   endif()
 endfunction()
