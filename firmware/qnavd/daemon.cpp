@@ -157,10 +157,11 @@ class SimBackend final : public IoBackend {
       done_ = r == SimVehicle::StepResult::kDone;
       did = r == SimVehicle::StepResult::kProduced;
     }
+    const bool moved = clock_.now_ns() != t_before;  // mission time moved: the nav thread has a new instant to see
+    did |= moved;
     did |= drain_can(daemon_bus_, *q_.can_rx, io, can_dropped_seen_);
-    did |= clock_.now_ns() != t_before;  // mission time moved: the nav thread has a new instant to see
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
-    if (nav_ != nullptr && (clock_.now_ns() != t_before || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
+    if (nav_ != nullptr && (moved || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
       progress_gate_ = nav_->progress() + 2;
     did |= poll_leak(leak_, io);
     vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
