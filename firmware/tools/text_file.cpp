@@ -6,7 +6,8 @@
 
 namespace qnav::tools {
 
-Status read_text_file(const char* path, std::size_t max_bytes, std::string& out) {
+namespace {
+Status read_bounded(const char* path, std::size_t max_bytes, bool text, std::string& out) {
   static char msg[600];
   out.clear();
   std::FILE* f = std::fopen(path, "rb");
@@ -18,7 +19,7 @@ Status read_text_file(const char* path, std::size_t max_bytes, std::string& out)
   std::size_t n;
   Status result = Status::ok();
   while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) {
-    if (const void* z = std::memchr(buf, '\0', n)) {
+    if (const void* z = text ? std::memchr(buf, '\0', n) : nullptr) {
       std::snprintf(msg, sizeof msg, "%s: NUL byte at offset %zu: binary data, not a text file", path,
                     out.size() + static_cast<std::size_t>(static_cast<const char*>(z) - buf));
       result = Status(StatusCode::kCorrupt, msg);
@@ -39,5 +40,9 @@ Status read_text_file(const char* path, std::size_t max_bytes, std::string& out)
   if (!result.is_ok()) out.clear();
   return result;
 }
+}  // namespace
+
+Status read_text_file(const char* path, std::size_t max_bytes, std::string& out) { return read_bounded(path, max_bytes, true, out); }
+Status read_binary_file(const char* path, std::size_t max_bytes, std::string& out) { return read_bounded(path, max_bytes, false, out); }
 
 }  // namespace qnav::tools

@@ -12,5 +12,7 @@ namespace qnav::tools {
 
 // Status messages point into a per-call static buffer (valid until the next call).
 Status read_text_file(const char* path, std::size_t max_bytes, std::string& out);
+// The same for binary data (a JSF recording): bounded, NUL bytes allowed.
+Status read_binary_file(const char* path, std::size_t max_bytes, std::string& out);
 
 }  // namespace qnav::tools

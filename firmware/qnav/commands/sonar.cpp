@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -59,7 +60,7 @@ constexpr double kFalseEast_m = 500000.0;
 
 // Every sonar subcommand's options (one invocation per process), declared in setup_sonar below.
 struct SonarOptions {
-  std::string file, out, raster, nav = "fix", altitude = "detect", truth, candump, dvl_log;
+  std::string file, out, raster, nav = "fix", altitude = "detect", truth, candump, dvl_log, truth_csv;
   bool corrected = false, reverse = false;
   double res = 0.1, heading_off_deg = 0.0, nadir_gap = 1.0;
   long lines = 500, stride = -1, size = 1024;
@@ -389,6 +390,17 @@ int simulate() {
   }
   SensorLogs logs;
   if (!logs.open(g_opt.candump.empty() ? nullptr : g_opt.candump.c_str(), g_opt.dvl_log.empty() ? nullptr : g_opt.dvl_log.c_str())) return 1;
+  // The simulator's truth at each ping, for verdicts that join the daemon's outputs to the ping they answer.
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> truth_csv(nullptr, &std::fclose);
+  if (!g_opt.truth_csv.empty()) {
+    if (!make_out_parent("simulate", g_opt.truth_csv.c_str())) return 1;
+    truth_csv.reset(std::fopen(g_opt.truth_csv.c_str(), "w"));
+    if (!truth_csv) {
+      std::fprintf(stderr, "qnav sonar simulate: cannot write %s: %s\n", g_opt.truth_csv.c_str(), std::strerror(errno));
+      return 1;
+    }
+    std::fprintf(truth_csv.get(), "ping,time_s,along_m,north_m,east_m,heading_rad,nav_north_m,nav_east_m,nav_heading_rad\n");
+  }
   std::FILE* f = std::fopen(out, "wb");
   if (f == nullptr) {
     std::fprintf(stderr, "qnav sonar simulate: cannot write %s: %s\n", out, std::strerror(errno));
@@ -412,6 +424,10 @@ int simulate() {
     (void)sim.ping(ts.truth, ts.altitude_m, ts.index, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
     for (float v : port) peak = v > peak ? v : peak;
     logs.write(t0_ns + ts.stamp_ns, ts.nav);
+    if (truth_csv) {
+      std::fprintf(truth_csv.get(), "%u,%.3f,%.3f,%.3f,%.3f,%.5f,%.3f,%.3f,%.5f\n", ts.index, static_cast<double>(t0_ns + ts.stamp_ns) * 1e-9,
+                   ts.along_route_m, ts.truth.x_m, ts.truth.y_m, ts.truth.heading_rad, ts.nav.x_m, ts.nav.y_m, ts.nav.heading_rad);
+    }
     if (jsf) {
       // Two message-80 records per ping (port, starboard), positions in mm (coordinate units 1).
       bool ok = true;
@@ -529,6 +545,9 @@ void setup_sonar(CLI::App& cmd, qnav::cli::Runner& run) {
   add_text(*m, "--truth", g_opt.truth, "also write the ground-truth reflectivity under the swath at 0.1 m")->type_name("PNG");
   add_text(*m, "--candump", g_opt.candump, "also log the AHRS heading as QNAV_ATTITUDE_IN at each ping (candump -l)")->type_name("FILE");
   add_text(*m, "--dvl-log", g_opt.dvl_log, "also log the DVL's body velocities as Water Linked wrz sentences")->type_name("FILE");
+  add_text(*m, "--truth-csv", g_opt.truth_csv,
+           "also write the simulator's truth at each ping (ping, time, along-route m, true and dead-reckoned north/east m, heading)")
+      ->type_name("FILE");
   add_number(*m, "--start-s", g_opt.start_s, "the first ping's time since the epoch", "s", 0, 4000000000.0);
   run.on(m, simulate);
 }
