@@ -16,6 +16,9 @@ void DvlSerialDriver::handle_line(std::int64_t arrival_ns, int& produced) noexce
   if (protocol_ == DvlProtocol::kWaterLinked) {
     if (wl_.parse_line(lines_asm_.line(), lines_asm_.size(), arrival_ns, wl_msg_).is_ok() && wl_msg_.kind == WlKind::kVelocity) {
       v = wl_msg_.velocity;
+      // The DVL's own clock (time_of_validity) mapped onto ours: reports a lagging reader gets in one
+      // read keep their spacing (else all but the first share a time and dead reckoning refuses them).
+      v.stamp.sample_ns = clock_.map(v.device_time_us * 1000, v.stamp.sample_ns);
       have = true;
     }
   } else {

@@ -2,7 +2,10 @@
 // replay). poll() reads what the port has (waiting at most timeout_ms for the first bytes, then at
 // most kMaxReadsPerPoll non-blocking reads of kReadChunk bytes), assembles lines, parses them with
 // the protocol's parser and queues velocity samples (kQueueDepth; when full the oldest is dropped and
-// counted). Arrival time of a line = the read that delivered its terminator.
+// counted). Arrival time of a line = the read that delivered its terminator. Water Linked sample time:
+// the report's time_of_validity (the DVL's clock) mapped onto the monotonic clock by hal::SensorClockMap
+// from arrival - the DVL's stated latency, so reports read in one burst keep their spacing; PD6 (no
+// clock of its own in the velocity lines) keeps the ensemble's first arrival.
 // Bounded: one poll() handles at most kMaxReadsPerPoll * kReadChunk bytes. No heap after construction.
 #pragma once
 
@@ -12,6 +15,7 @@
 #include "drivers/dvl/line_assembler.hpp"
 #include "drivers/dvl/pd6_parser.hpp"
 #include "drivers/dvl/wl_parser.hpp"
+#include "hal/core/clock_map.hpp"
 #include "hal/core/serial.hpp"
 #include "nav/core/ring_buffer.hpp"
 
@@ -50,6 +54,7 @@ class DvlSerialDriver {
   WlMessage wl_msg_;
   Pd6Ensemble pd6_ens_;
   RingBuffer<DvlVelocity, kQueueDepth> queue_;
+  hal::SensorClockMap clock_;
   std::uint8_t buf_[kReadChunk] = {};
   std::uint32_t lines_ = 0;
   std::uint32_t dropped_ = 0;

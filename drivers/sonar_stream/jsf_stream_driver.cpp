@@ -33,6 +33,9 @@ Result<int> JsfStreamDriver::poll(hal::SerialPort& port, int timeout_ms, PingSin
         if (assembler_.add(m)) {
           ++pings_;
           ++delivered;
+          // The ping's own time (the sonar's clock) mapped onto ours: pings completed by one read keep
+          // their spacing instead of sharing the read's arrival time.
+          stamp.sample_ns = clock_.map(static_cast<std::int64_t>(assembler_.ping().stamp_ns), stamp.arrival_ns);
           if (sink != nullptr) sink(ctx, assembler_.ping(), stamp);
         }
       }

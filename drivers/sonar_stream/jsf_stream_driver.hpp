@@ -4,8 +4,10 @@
 // handing each complete ping to a sink -- the tile builder -- inside poll().
 // poll(): waits at most timeout_ms for the first chunk, then reads at most kMaxReadsPerPoll chunks of
 // kChunkBytes without waiting. The ping's spans are valid only during the sink call.
-// Stamps: sample_ns = arrival_ns = monotonic time of the read that completed the ping (the JSF time
-// field is the sonar's wall clock; it is passed on in SonarPing::stamp_ns untouched).
+// Stamps: arrival_ns = monotonic time of the read that completed the ping; sample_ns = the ping's JSF
+// time (the sonar's wall clock, passed on in SonarPing::stamp_ns untouched) mapped onto the monotonic
+// clock by hal::SensorClockMap (the smallest arrival - sonar offset seen), so that pings a lagging
+// reader gets in one read keep their spacing; a ping without a time is stamped with its arrival.
 // init() allocates the framer and assembler buffers; nothing allocates afterwards.
 #pragma once
 
@@ -13,6 +15,7 @@
 #include <cstdint>
 
 #include "drivers/sidescan/jsf_framer.hpp"
+#include "hal/core/clock_map.hpp"
 #include "hal/core/serial.hpp"
 #include "hal/core/stamp.hpp"
 
@@ -39,11 +42,14 @@ class JsfStreamDriver {
   const CounterSet<sidescan::JsfPingCounter>& ping_counters() const noexcept { return assembler_.counters(); }
   std::uint64_t bytes() const noexcept { return bytes_; }
   std::uint32_t pings() const noexcept { return pings_; }
+  // Times the sonar's clock stepped (a restarted sonar, a replayed recording) and the map restarted.
+  std::uint32_t clock_restarts() const noexcept { return clock_.restarts(); }
 
  private:
   sidescan::JsfFramer framer_;
   sidescan::JsfPingAssembler assembler_;
   std::uint8_t chunk_[kChunkBytes] = {};
+  hal::SensorClockMap clock_;
   bool ready_ = false;
   std::uint64_t bytes_ = 0;
   std::uint32_t pings_ = 0;

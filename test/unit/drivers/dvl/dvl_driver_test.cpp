@@ -77,3 +77,36 @@ TEST(DvlSerialDriver, CommandsCarryTheChecksum) {
   DvlSerialDriver pd6(pipe.b(), DvlProtocol::kPd6);
   EXPECT_EQ(pd6.send_command("wcv"), StatusCode::kUnsupported);
 }
+
+// A reader that lags gets several Water Linked reports in one read: they keep the DVL's own spacing
+// (time_of_validity, mapped onto our clock by the report read promptly before) instead of sharing the
+// read's arrival time, which would make dead reckoning refuse all but the first.
+TEST(DvlSerialDriver, WaterLinkedReportsOfOneReadKeepTheirSpacing) {
+  hal::ManualClock clock(5000000000);
+  hal::SimSerialPipe pipe(clock);
+  DvlSerialDriver drv(pipe.b(), DvlProtocol::kWaterLinked);
+  char line[240];
+  const long long t0_us = 1700000000000000;  // the DVL's clock: validity = transmission - 2 ms
+  auto report = [&](int k) {
+    const long long tov = t0_us + k * 100000;
+    const std::size_t n = wl_velocity_report(1.5, 0.0, 0.0, 10.0, tov, tov + 2000, line, sizeof line);
+    EXPECT_GT(n, 0u);
+    return std::string(line, n);
+  };
+  send(pipe.a(), report(0));  // prompt: read 5 ms after its validity
+  clock.set_ns(5005000000);
+  ASSERT_EQ(drv.poll(0).value(), 1);
+  clock.set_ns(5505000000);  // then the reader stalls, and gets reports 1..4 in one read
+  send(pipe.a(), report(1) + report(2) + report(3) + report(4));
+  ASSERT_EQ(drv.poll(0).value(), 4);
+  DvlVelocity v;
+  std::int64_t prev = 0;
+  for (int k = 0; k <= 4; ++k) {
+    ASSERT_TRUE(drv.pop(v));
+    EXPECT_LE(v.stamp.sample_ns, v.stamp.arrival_ns - 2000000);  // at least the DVL's stated latency before arrival
+    if (k > 0) {
+      EXPECT_NEAR(static_cast<double>(v.stamp.sample_ns - prev), 100e6, 0.021e6) << k;
+    }
+    prev = v.stamp.sample_ns;
+  }
+}

@@ -79,3 +79,45 @@ TEST(JsfStreamDriver, NotInitialisedIsAnError) {
   JsfStreamDriver drv;
   EXPECT_EQ(drv.poll(pipe.b(), 0, nullptr, nullptr).status(), StatusCode::kNotReady);
 }
+
+// A reader that lags gets several pings in one read: they keep the sonar's spacing (its clock mapped
+// onto ours by the delay of the ping read promptly before), none is stamped after its arrival, and
+// none shares another's time (the nav worker would drop it as out of order).
+TEST(JsfStreamDriver, PingsOfOneReadKeepTheSonarsSpacing) {
+  const std::vector<std::uint8_t> stream = qnav_test::jsf_stream(6, 32, false);  // pings 100 ms apart
+  ASSERT_FALSE(stream.empty());
+  ASSERT_LE(stream.size(), JsfStreamDriver::kChunkBytes);
+  hal::ManualClock clock(5000000000);
+  hal::SimSerialPipe pipe(clock);
+  JsfStreamDriver drv;
+  JsfStreamConfig cfg;
+  cfg.max_samples_per_side = 32;
+  cfg.max_message_bytes = 8192;
+  ASSERT_TRUE(drv.init(cfg).is_ok());
+  struct Stamps {
+    std::vector<hal::SampleStamp> v;
+    static void on_ping(void* ctx, const sonar::SonarPing&, const hal::SampleStamp& st) { static_cast<Stamps*>(ctx)->v.push_back(st); }
+  } stamps;
+  // The first ping read promptly (the map learns the sonar's offset), then the reader stalls for
+  // 600 ms and gets the next five in one read.
+  const std::size_t one = stream.size() / 6;
+  ASSERT_TRUE(pipe.a().write(Span<const std::uint8_t>(stream.data(), one)).is_ok());
+  auto r = drv.poll(pipe.b(), 0, &Stamps::on_ping, &stamps);
+  ASSERT_TRUE(r.is_ok());
+  ASSERT_EQ(r.value(), 1);
+  clock.advance_ns(600000000);
+  ASSERT_TRUE(pipe.a().write(Span<const std::uint8_t>(stream.data() + one, stream.size() - one)).is_ok());
+  r = drv.poll(pipe.b(), 0, &Stamps::on_ping, &stamps);
+  ASSERT_TRUE(r.is_ok());
+  ASSERT_EQ(r.value(), 5);
+  ASSERT_EQ(stamps.v.size(), 6u);
+  for (std::size_t i = 0; i < stamps.v.size(); ++i) {
+    if (i > 1) {
+      EXPECT_EQ(stamps.v[i].arrival_ns, stamps.v[1].arrival_ns);  // one read
+    }
+    EXPECT_LE(stamps.v[i].sample_ns, stamps.v[i].arrival_ns);
+    if (i > 0) {
+      EXPECT_NEAR(static_cast<double>(stamps.v[i].sample_ns - stamps.v[i - 1].sample_ns), 100e6, 0.021e6) << i;
+    }
+  }
+}
