@@ -249,7 +249,16 @@ class LinuxBackend final : public IoBackend {
         io.sonar_device_down.store(false);
         did |= *r > 0;
       }
-      const std::uint32_t rej = static_cast<std::uint32_t>(jsf_.framer_counters().total() + jsf_.ping_counters().total());
+      // Rejected: bytes skipped to resynchronise, bad headers, undecodable or unpaired sonar messages.
+      // Not rejected: the messages delivered, and other message types or subsystems, which a
+      // topside's stream carries as a matter of course (found by the HIL bench's mission scenario:
+      // every delivered message was counted here, two per ping, into HEALTH RejectedInputs).
+      using sidescan::JsfCounter;
+      using sidescan::JsfPingCounter;
+      const auto& fc = jsf_.framer_counters();
+      const auto& pc = jsf_.ping_counters();
+      const std::uint32_t rej = fc.get(JsfCounter::kResyncBytes) + fc.get(JsfCounter::kBadHeader) + fc.get(JsfCounter::kOversize) +
+                                pc.get(JsfPingCounter::kBadSonarMessage) + pc.get(JsfPingCounter::kUnpairedChannel);
       if (rej != sonar_rejects_) {
         io.sonar_rejected.fetch_add(rej - sonar_rejects_, std::memory_order_relaxed);
         sonar_rejects_ = rej;
