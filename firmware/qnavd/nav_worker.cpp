@@ -671,8 +671,9 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
     const route::GuidanceOutput& g = r.step.guidance;
     guidance_.cross_track_m = clampd(g.cross_track_m, -327.0, 327.0);
     guidance_.heading_error_rad = clampd(g.heading_error_rad, -3.1416, 3.1416);
-    // The next node in the direction of travel is one spacing ahead of the node the offsets refer to.
-    guidance_.dist_to_next_m = clampd(static_cast<double>(reader_.params().node_spacing_m) - g.along_track_m, 0.0, 6553.5);
+    // The next node in the direction of travel is one spacing ahead of the node the offsets refer to
+    // (the taught nodes' own spacing, as the localiser's motion model uses it).
+    guidance_.dist_to_next_m = clampd(repeater_.localiser().node_spacing_m() - g.along_track_m, 0.0, 6553.5);
     guidance_.target_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(g.node, 65535));
     route_status_.status = to_wire(g.status);
     route_status_.side = to_wire(g.side);

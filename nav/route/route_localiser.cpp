@@ -36,6 +36,14 @@ Status RouteLocaliser::init(const LocaliserConfig& c, Arena& arena) noexcept {
   return Status::ok();
 }
 
+double odometry_node_spacing_m(const RouteParams& params, Span<const NodeMeta> meta) noexcept {
+  if (meta.size() >= 2) {
+    const double s = (meta[meta.size() - 1].along_m - meta[0].along_m) / static_cast<double>(meta.size() - 1);
+    if (std::isfinite(s) && s > 1e-3) return s;
+  }
+  return static_cast<double>(params.node_spacing_m);
+}
+
 Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> meta, NodeSource& source) noexcept {
   if (!ready_) return Status(StatusCode::kNotReady, "localiser: not initialised");
   started_ = false;
@@ -48,7 +56,8 @@ Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> met
   for (std::size_t i = 0; i < meta.size(); ++i)
     if (meta[i].index != i || !meta[i].pose.is_finite())
       return Status(StatusCode::kInvalidArgument, "localiser: node metadata out of order or not finite");
-  QNAV_RETURN_IF_ERROR(filter_.reset(static_cast<std::uint32_t>(meta.size()), static_cast<double>(params.node_spacing_m)));
+  spacing_m_ = odometry_node_spacing_m(params, meta);
+  QNAV_RETURN_IF_ERROR(filter_.reset(static_cast<std::uint32_t>(meta.size()), spacing_m_));
   QNAV_RETURN_IF_ERROR(window_.bind(source));
   meta_ = meta;
   guidance_.reset();

@@ -50,6 +50,13 @@ struct LocaliserStep {
 enum class LocaliserCounter : std::uint8_t { kSensorMismatch, kEmptySensedTile, kLoadError, kBadSensedTile, kCount };
 inline constexpr const char* kLocaliserCounterNames[] = {"sensor_mismatch", "empty_sensed_tile", "load_error", "bad_sensed_tile"};
 
+// The spacing that turns a repeat's odometry (dead-reckoned metres) into nodes: the taught nodes' own
+// dead-reckoned spacing, (along_m of the last node - the first) / (nodes - 1), in the same units as the
+// odometry and with the same DVL scale; the header's nominal spacing when the nodes give none (fewer
+// than 2, or along_m not increasing). The header's value is what the teacher expected (on qnavd's linux
+// backend a fixed 60 m: it cannot know the vehicle's speed when the file is opened), not what was flown.
+double odometry_node_spacing_m(const RouteParams& params, Span<const NodeMeta> meta) noexcept;
+
 class RouteLocaliser {
  public:
   RouteLocaliser() noexcept : counters_(kLocaliserCounterNames) {}
@@ -68,6 +75,8 @@ class RouteLocaliser {
     config_.filter.motion = motion;
     filter_.set_motion(direction, motion);
   }
+  // The node spacing the motion model divides odometry by (odometry_node_spacing_m), set by start().
+  double node_spacing_m() const noexcept { return spacing_m_; }
   const RouteFilter& filter() const noexcept { return filter_; }
   const NodeWindow& window() const noexcept { return window_; }
   const Registrar& registrar() const noexcept { return registrar_; }
@@ -80,6 +89,7 @@ class RouteLocaliser {
   bool ready_ = false;
   bool started_ = false;
   RouteFilter filter_;
+  double spacing_m_ = 0.0;
   Registrar registrar_;
   NodeWindow window_;
   Guidance guidance_;

@@ -294,6 +294,14 @@ int cmd_info() {
     return 1;
   }
   std::printf("all %u records pass their CRC and field checks\n", r.node_count());
+  route::NodeMeta first, last;
+  if (r.node_count() >= 2 && r.load_meta(0, first) && r.load_meta(r.node_count() - 1, last)) {
+    // The localiser's motion model divides odometry by the spacing flown (route::odometry_node_spacing_m),
+    // here from the end nodes (n - 1 spacings between them).
+    const double flown = (last.along_m - first.along_m) / static_cast<double>(r.node_count() - 1);
+    std::printf("node spacing flown: %.2f m (dead-reckoned, first to last node; the header's nominal %.2f m)\n", flown,
+                static_cast<double>(p.node_spacing_m));
+  }
   return 0;
 }
 
