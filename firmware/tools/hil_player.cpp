@@ -436,8 +436,11 @@ bool play_hil_scenario(const HilScenario& sc, std::FILE* log, HilPlayStats& st, 
     std::fprintf(log, "hil play: pass %zu %s: %zu pings at %.1f Hz (%.1f s)%s\n", i, p.name.c_str(), n, sc.rate_hz,
                  static_cast<double>(n) / sc.rate_hz, p.send_mode ? ", mode command first" : "");
     std::fflush(log);
-    if (p.send_mode) v.mode(p.mode, p.route, p.reverse);
+    // The autopilot commands the mode once the vehicle is on station: after lead_s of hovering (the
+    // daemon refuses a mode without a recent heading), one ping period before the first ping.
     hover(v, d.ahrs.empty() ? nullptr : &d.ahrs.front(), sc.rate_hz, p.lead_s);
+    if (p.send_mode) v.mode(p.mode, p.route, p.reverse);
+    hover(v, d.ahrs.empty() ? nullptr : &d.ahrs.front(), sc.rate_hz, 1.0 / sc.rate_hz);
     const std::int64_t t0 = hal::monotonic_now_ns();
     for (std::size_t k = 0; k < n; ++k) {
       sleep_until_ns(t0 + static_cast<std::int64_t>(k) * period);

@@ -5,9 +5,9 @@
 //   - AHRS frames and the autopilot's QNAV_MODE_CMD onto a SocketCAN interface (vcan0 on the bench).
 // A scenario is a list of passes flown in order. Each pass plays one recorded dive of aligned files
 // (`qnav sonar simulate --out P.jsf --dvl-log P_dvl.txt --candump P_ahrs.log` writes one JSF ping, one
-// DVL sentence and one AHRS frame per ping) at `rate_hz` pings per second: the mode command first,
-// `lead_s` of hovering (the first ping's AHRS frame repeated, nothing else), the pings, then Idle and
-// `after_s` of hovering. [[pass.silence]] windows (seconds from the pass's first ping) hold one stream
+// DVL sentence and one AHRS frame per ping) at `rate_hz` pings per second: `lead_s` of hovering (the
+// first ping's AHRS frame repeated, nothing else: the daemon refuses a mode without a recent heading),
+// the mode command, one ping period, the pings, then Idle and `after_s` of hovering. [[pass.silence]] windows (seconds from the pass's first ping) hold one stream
 // back: the DVL that goes quiet, the AHRS that goes stale, the sonar that stops. AHRS frames are sent
 // with a rolling Counter (re-encoded through docs/qnav.dbc's codec), as a live AHRS would.
 // Every ping played is written to `played` (CSV: pass, ping, the wall-clock time it was sent on
@@ -40,7 +40,7 @@ struct HilPass {
   drivers::qnavcan::Mode mode = drivers::qnavcan::Mode::kIdle;
   std::uint16_t route = 0;
   bool reverse = false;
-  double lead_s = 1.0;     // hovering between the mode command and the first ping
+  double lead_s = 1.0;     // hovering before the mode command (then one ping period to the first ping)
   int pings = 0;           // play only the first N pings (0: all)
   bool idle_after = true;  // QNAV_MODE_CMD Idle after the last ping
   double after_s = 2.0;    // hovering after the pass

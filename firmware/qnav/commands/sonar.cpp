@@ -64,7 +64,7 @@ struct SonarOptions {
   bool corrected = false, reverse = false;
   double res = 0.1, heading_off_deg = 0.0, nadir_gap = 1.0;
   long lines = 500, stride = -1, size = 1024;
-  double length = 200.0, offset = 0.0, range = 40.0;
+  double length = 200.0, offset = 0.0, range = 40.0, speed = 1.5;
   long seed = 1, samples = 1024, pass_seed = -1, start_s = 1700000000;
 };
 SonarOptions g_opt;
@@ -378,6 +378,7 @@ int simulate() {
   (void)trc.waypoints_ne.push_back(Vec2d(0.0, 0.0));
   (void)trc.waypoints_ne.push_back(Vec2d(length, 0.0));
   trc.lateral_offset_m = offset;
+  trc.speed_mps = g_opt.speed;
   trc.reverse = g_opt.reverse;
   trc.seed = static_cast<std::uint64_t>(pass_seed);
   Trajectory traj;
@@ -537,6 +538,7 @@ void setup_sonar(CLI::App& cmd, qnav::cli::Runner& run) {
   add_text(*m, "--out", g_opt.out, "the file to write: FILE.xtf or FILE.jsf (folders created)")->required()->type_name("FILE");
   add_number(*m, "--length-m", g_opt.length, "route length (more than 1 m)", "m", 1, 1e6);
   add_number(*m, "--offset-m", g_opt.offset, "lateral offset of the pass from the route", "m", -1e4, 1e4);
+  add_number(*m, "--speed-mps", g_opt.speed, "the vehicle's speed over ground (10 pings/s)", "m/s", 0.2, 10);
   add_flag(*m, "--reverse", g_opt.reverse, "fly the route backwards");
   add_number(*m, "--seed", g_opt.seed, "seed of the seabed", "", 0, 2147483647);
   add_number(*m, "--pass-seed", g_opt.pass_seed, "seed of the pass's speckle and navigation noise (-1: --seed)", "", -1, 2147483647);
