@@ -6,6 +6,8 @@ pseudo-terminal named /tmp/dvl0, and the AHRS frame of the same time (ahrs.log, 
 vcan0. The daemon is stopped and restarted while this plays: a closed connection is dropped and the
 next one accepted, and the pseudo-terminal stays (an adapter that is not pulled). At the end of the
 dive it starts again from the first ping. Runs until killed; prints `ready` once the names exist.
+The DVL's name is $QNAV_HIL_DVL_LINK when set (hil_qnavd_unprivileged: /dev/ttyUSB0, since the
+daemon's private /tmp hides /tmp/dvl0).
 """
 import os
 import pty
@@ -34,13 +36,14 @@ for line in open("ahrs.log"):
     ahrs.append((int(cid, 16), bytes.fromhex(payload)))
 n = min(len(pings), len(dvl), len(ahrs))
 
+DVL_LINK = os.environ.get("QNAV_HIL_DVL_LINK", "/tmp/dvl0")
 master, slave = pty.openpty()
 tty.setraw(slave)
 try:
-    os.unlink("/tmp/dvl0")
+    os.unlink(DVL_LINK)
 except FileNotFoundError:
     pass
-os.symlink(os.ttyname(slave), "/tmp/dvl0")
+os.symlink(os.ttyname(slave), DVL_LINK)
 can = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
 can.bind(("vcan0",))
 srv = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
