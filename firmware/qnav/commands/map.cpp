@@ -15,7 +15,8 @@
 //       Writes DIR_OUT/map_trajectory.csv (per frame: status, keyframe, keypoints, matches, inliers,
 //       pose in mosaic pixels, heading, metres, the chain aligned to the navigation, nav pose, time) and
 //       DIR_OUT/map_trajectory.png (scripts/map_plot.py through /usr/bin/python3; skipped with a note
-//       when either is missing). Prints pairs registered / total, inliers per pair, chained image
+//       when either is missing) and DIR_OUT/map_mosaic.png (the frames warped into frame 0's grid
+//       through the chained homographies, the trajectory and the map over it; write_map_mosaic). Prints pairs registered / total, inliers per pair, chained image
 //       rotation vs the navigation's yaw change, path vs the navigation path, frame time; --json: one
 //       object. Exit 1 when no frame could be read or a pair did not register.
 //       --map-out FILE [--node-spacing D] [--max-nodes N]: the topological map (nav/topo TopoMap) beside
@@ -23,7 +24,8 @@
 //       file (firmware/tools/map_file) rewritten durably after every new node and at the end;
 //       DIR_OUT/map_nodes.csv and map_edges.csv; per frame the node, kind and revisit in the CSV.
 //   qnav map route --map FILE --from A --to B [--astar] [--json]: shortest path over the map's edges.
-//   qnav map eval [--json] ...: the synthetic loop under the Table-1 filters (see run_eval).
+//   qnav map eval [--json] [--fig3-csv FILE] ...: the synthetic loop under the Table-1 filters (see run_eval);
+//       --fig3-csv: the paper's Fig. 3 (keypoints and true matches per frame and run).
 #include <time.h>
 #include <sys/stat.h>
 
@@ -1035,7 +1037,7 @@ void setup_map(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(cmd, "--keyframe-gap", g_opt.keyframe_gap, "a new keyframe at least every N frames", "frames", 1, 100000)
       ->description("a new keyframe at least every N frames; 1 = the frame-to-frame chain (frames; default 30; 1..100000)");
   add_number(cmd, "--frames", g_opt.frames, "frames to use at most", "", 2, 1e9);
-  add_flag(cmd, "--no-plot", g_opt.no_plot, "do not draw map_trajectory.png");
+  add_flag(cmd, "--no-plot", g_opt.no_plot, "do not draw map_trajectory.png nor map_mosaic.png");
   add_text(cmd, "--map-out", g_opt.map_out, "build the topological map beside the chain, written durably here")->type_name("FILE");
   add_number(cmd, "--node-spacing", g_opt.node_spacing, "topological map node spacing", "", 1e-9, 1e9)
       ->description("topological map node spacing (m with --altitude, else mosaic px; default 0.2 m / 30 px; > 0)");
