@@ -287,6 +287,7 @@ double HomographyChain::overlap_of(const Mat3d& H_key_cur, int w, int h) const n
 Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, ChainStep& step) noexcept {
   step = ChainStep{};
   step.pose = pose_;
+  last_matches_ = 0;
   if (!ready_) return Status(StatusCode::kNotReady, "homography chain: process before init");
   step.frame_index = frame_count_++;
   step.keyframe_index = key_frame_index_;
@@ -365,6 +366,7 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     src_[i] = Vec2d(q.x, q.y);
     dst_[i] = Vec2d(t.x, t.y);
   }
+  last_matches_ = n;
   Span<const Vec2d> src(src_.data(), n), dst(dst_.data(), n);
   if (config_.fundamental_filter) {
     Result<match::FundamentalConsensus> f = match::robust_fundamental_both(

@@ -152,6 +152,11 @@ class HomographyChain {
   Span<const vision::OrientedDescriptor> current_keypoints() const noexcept {
     return Span<const vision::OrientedDescriptor>(last_->data(), last_->size());
   }
+  // The last frame's ratio-test matches as level-0 positions: matched_current()[i] in the frame,
+  // matched_keyframe()[i] in its keyframe (step.matches pairs; empty when the frame got no matching).
+  // For evaluation against a known truth (qnav map eval's true matches); valid until the next process().
+  Span<const Vec2d> matched_current() const noexcept { return Span<const Vec2d>(src_.data(), last_matches_); }
+  Span<const Vec2d> matched_keyframe() const noexcept { return Span<const Vec2d>(dst_.data(), last_matches_); }
 
  private:
   std::uint8_t check_frame(ConstImageViewU8 frame) const noexcept;
@@ -178,6 +183,7 @@ class HomographyChain {
   Span<Vec2d> predicted_, src_, dst_, src_f_, dst_f_;
   Span<std::uint8_t> mask_, mask2_;
   Span<double> scratch_;
+  std::size_t last_matches_ = 0;  // pairs in src_ / dst_ from the last process()
 
   bool have_reference_ = false;
   std::uint32_t frame_count_ = 0;

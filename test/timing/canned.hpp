@@ -100,4 +100,24 @@ class CannedRoute {
   std::unique_ptr<Impl> d_;
 };
 
+// One downward frame through the mapper qnavd's map mode runs (pipeline::TopoMapper::step: homography
+// chain + place signature + topological map; no map file save), on the synthetic seabed loop `qnav map
+// eval` flies (drivers/downward_sim: 320 x 240, f 300 px, 2 m up, 90 frames a lap, metric, node spacing
+// 0.2 m, 1024 nodes: qnavd's example map configuration). The frames are rendered at init() (the 6 MB
+// seabed raster is freed after); the mapper takes frame 0 as its reference outside the counted region.
+// (canned_map.cpp: not in the freestanding LEON3 image's workload.)
+class CannedMap {
+ public:
+  static constexpr int kSteps = 3;  // frames 1..3 registered against the keyframe (frame 0)
+  CannedMap();
+  ~CannedMap();
+  Status init();
+  void restart();                  // mapper re-initialised, frame 0 as the reference (not counted)
+  std::uint64_t step(int k);       // frame k + 1 (k = 0 .. kSteps - 1), in order after restart()
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> d_;
+};
+
 }  // namespace qnav::timing

@@ -21,6 +21,7 @@ struct Canned {
   CannedVo vo;
   CannedSonar sonar;
   CannedRoute route;
+  CannedMap map;
 };
 
 struct StageDef {
@@ -55,6 +56,7 @@ const StageDef kStages[] = {
     {"downsample", 1, nothing, [](Canned& c, int) { return c.vo.downsample(); }},
     {"xtf_decode", CannedSonar::kPings, nothing, [](Canned& c, int k) { return c.sonar.xtf_decode(k); }},
     {"route_predict_100k", 1, [](Canned& c, int) { c.route.predict_reset(); }, [](Canned& c, int) { return c.route.predict_100k(); }},
+    {"map", CannedMap::kSteps, [](Canned& c, int k) { if (k == 0) c.map.restart(); }, [](Canned& c, int k) { return c.map.step(k); }},
 };
 
 }  // namespace
@@ -70,7 +72,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   static Canned canned;
-  for (const qnav::Status& st : {canned.vo.init(), canned.sonar.init(), canned.route.init()}) {
+  for (const qnav::Status& st : {canned.vo.init(), canned.sonar.init(), canned.route.init(), canned.map.init()}) {
     if (!st.is_ok()) {
       std::fprintf(stderr, "timing_stages: canned inputs failed: %s\n", st.message());
       return 1;

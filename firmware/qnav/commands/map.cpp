@@ -15,7 +15,8 @@
 //       Writes DIR_OUT/map_trajectory.csv (per frame: status, keyframe, keypoints, matches, inliers,
 //       pose in mosaic pixels, heading, metres, the chain aligned to the navigation, nav pose, time) and
 //       DIR_OUT/map_trajectory.png (scripts/map_plot.py through /usr/bin/python3; skipped with a note
-//       when either is missing). Prints pairs registered / total, inliers per pair, chained image
+//       when either is missing) and DIR_OUT/map_mosaic.png (the frames warped into frame 0's grid
+//       through the chained homographies, the trajectory and the map over it; write_map_mosaic). Prints pairs registered / total, inliers per pair, chained image
 //       rotation vs the navigation's yaw change, path vs the navigation path, frame time; --json: one
 //       object. Exit 1 when no frame could be read or a pair did not register.
 //       --map-out FILE [--node-spacing D] [--max-nodes N]: the topological map (nav/topo TopoMap) beside
@@ -23,7 +24,8 @@
 //       file (firmware/tools/map_file) rewritten durably after every new node and at the end;
 //       DIR_OUT/map_nodes.csv and map_edges.csv; per frame the node, kind and revisit in the CSV.
 //   qnav map route --map FILE --from A --to B [--astar] [--json]: shortest path over the map's edges.
-//   qnav map eval [--json] ...: the synthetic loop under the Table-1 filters (see run_eval).
+//   qnav map eval [--json] [--fig3-csv FILE] ...: the synthetic loop under the Table-1 filters (see run_eval);
+//       --fig3-csv: the paper's Fig. 3 (keypoints and true matches per frame and run).
 #include <time.h>
 #include <sys/stat.h>
 
@@ -35,6 +37,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,6 +47,8 @@
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/map_file.hpp"
+#include "firmware/tools/mosaic.hpp"
+#include "firmware/tools/raster_plot.hpp"
 #include "firmware/tools/sequence_reader.hpp"
 #include "firmware/tools/text_file.hpp"
 #include "nav/vision/degrade.hpp"
@@ -234,6 +239,83 @@ struct MapBuilder {
   }
 };
 
+// DIR/map_mosaic.png: every registered frame warped into frame 0's pixel grid through its chained
+// homography (ChainPose::H_0_cur; the newest frame on top), the trajectory (the frames' principal
+// points; keyframes ringed), and the topological map's edges and nodes (revisited ones red) over it,
+// axes through tools/raster_plot: metres with a scale bar when the chain is metric, else mosaic
+// pixels. The canvas is at most kMosaicMaxSide a side: a larger mosaic is downscaled (said in the
+// title). frame(i, buf) gives frame i as the chain saw it (undistorted), false when it cannot.
+constexpr int kMosaicMaxSide = 1600;
+struct MosaicFrameSource {
+  std::function<bool(std::size_t, ImageU8&)> frame;
+  int width = 0, height = 0;
+};
+bool write_map_mosaic(const std::string& path, const MosaicFrameSource& src, const std::vector<FrameRecord>& rec,
+                      const topo::TopoMap* map, bool metric, double mpp, const char* what) {
+  std::vector<Mat3d> H;
+  std::vector<std::size_t> used;
+  for (std::size_t i = 0; i < rec.size(); ++i)
+    if (rec[i].step.status == topo::StepStatus::kOk) {
+      H.push_back(rec[i].step.pose.H_0_cur);
+      used.push_back(i);
+    }
+  Result<tools::MosaicGeometry> g = tools::mosaic_geometry(H, src.width, src.height, kMosaicMaxSide);
+  if (!g || used.empty()) {
+    std::fprintf(stderr, "map: no mosaic: %s\n", g ? "no registered frame" : g.status().message());
+    return false;
+  }
+  tools::MosaicCanvas canvas(g.value());
+  Result<ImageU8> buf = ImageU8::allocate(src.width, src.height);
+  if (!buf) return false;
+  int pasted = 0;
+  for (std::size_t j = 0; j < used.size(); ++j)
+    if (src.frame(used[j], buf.value()) && canvas.paste(ConstImageViewU8(buf->view()), H[j])) ++pasted;
+  std::vector<std::uint8_t> rgb = canvas.to_rgb();
+  const int w = g->width, h = g->height;
+  const Vec2d pp = rec[used[0]].step.pose.position_px;  // frame 0's principal point: the origin of position_m
+  auto node_px = [&](const Vec2d& p) { return g->to_canvas(metric && mpp > 0.0 ? Vec2d(pp + p / mpp) : p); };
+  int nodes = 0;
+  if (map != nullptr) {
+    for (std::uint16_t i = 0; i < map->capacity(); ++i) {
+      if (!map->active(i)) continue;
+      for (const topo::TopoEdge& e : map->edges(i))
+        if (e.to > i) tools::draw_line(rgb, w, h, node_px(map->node(i).position), node_px(map->node(e.to).position), {0, 170, 255}, 2.0);
+    }
+  }
+  for (std::size_t j = 1; j < used.size(); ++j)
+    tools::draw_line(rgb, w, h, g->to_canvas(rec[used[j - 1]].step.pose.position_px), g->to_canvas(rec[used[j]].step.pose.position_px),
+                     {255, 200, 0}, 1.5);
+  for (std::size_t i : used)
+    if (rec[i].step.new_keyframe) tools::draw_ring(rgb, w, h, g->to_canvas(rec[i].step.pose.position_px), 4.0, {255, 200, 0}, 1.5);
+  if (map != nullptr) {
+    for (std::uint16_t i = 0; i < map->capacity(); ++i) {
+      if (!map->active(i)) continue;
+      const topo::TopoNode& n = map->node(i);
+      const Vec2d c = node_px(n.position);
+      tools::draw_disc(rgb, w, h, c, 4.5, {0, 0, 0});
+      tools::draw_disc(rgb, w, h, c, 3.5, n.revisits > 0 ? tools::RgbColour{230, 30, 30} : tools::RgbColour{0, 170, 255});
+      ++nodes;
+    }
+  }
+  tools::RasterPlot plot;
+  char title[256];
+  std::snprintf(title, sizeof title, "%s: mosaic of %d frames, trajectory (yellow, keyframes ringed)%s%s", what, pasted,
+                map != nullptr ? (", map " + std::to_string(nodes) + " nodes (revisited red), edges").c_str() : "",
+                g->downscaled() ? (", downscaled 1:" + std::to_string(1.0 / g->scale).substr(0, 4)).c_str() : "");
+  plot.title = title;
+  if (metric && mpp > 0.0) {
+    plot.x = {(g->x0 - pp.x()) * mpp, mpp / g->scale, "x m (frame 0 camera axes)"};
+    plot.y = {(g->y0 - pp.y()) * mpp, mpp / g->scale, "y m"};
+    plot.scale_bar = true;
+  } else {
+    plot.x = {g->x0, 1.0 / g->scale, "mosaic x px (frame 0)"};
+    plot.y = {g->y0, 1.0 / g->scale, "mosaic y px"};
+  }
+  const Status s = tools::write_raster_plot_png_rgb(path.c_str(), rgb.data(), w, h, w * 3, plot);
+  if (!s) std::fprintf(stderr, "map: writing %s: %s\n", path.c_str(), s.message());
+  return s.is_ok();
+}
+
 // Least-squares 2D rotation + scale (+ optional reflection) about the start, mapping chain positions
 // a (pixels from frame 0's principal point) onto nav positions b (metres from the first nav pose):
 // b ~ s R F a; both start at the origin, so the aligned chain starts where the navigation does.
@@ -288,7 +370,7 @@ std::string source_root() {
 // Every map option (one invocation per process), declared in setup_map at the end of this file.
 // NaN / -1: not given (the default depends on other options).
 struct MapOptions {
-  std::string images, poses, camera, out, map_out, map;
+  std::string images, poses, camera, out, map_out, map, fig3_csv;
   bool json = false, no_undistort = false, fundamental = false, no_plot = false, astar = false;
   double altitude = -1.0, node_spacing = std::nan(""), laps = 1.35;
   long frames = 100000, keyframe_gap = -1, max_nodes = 1024, from = -1, to = -1, per_lap = 90, filters = 5;
@@ -356,6 +438,62 @@ int run_route() {
   return r.status == topo::PathStatus::kFound ? 0 : 1;
 }
 
+// The paper's Fig. 3 on the synthetic loop: per frame and per run (none, filter1..5) the keypoints
+// and the TRUE matches: ratio-test matches whose keyframe position is within kTrueMatchPx of where the
+// seabed point seen at the frame position really is in the keyframe (seabed_scene's exact projection).
+constexpr double kTrueMatchPx = 3.0;
+// A percentage for JSON: one decimal, or null when undefined (no second-pass frame: laps too short).
+std::string json_pct(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f", v);
+  return std::isfinite(v) ? std::string(b) : std::string("null");
+}
+struct Fig3 {
+  std::vector<std::vector<double>> keypoints, matches, true_matches, inliers;  // [run][frame]; NaN: none
+};
+
+// Pixel (u, v) of the camera at pose a, seen by the camera at pose b (same intrinsics, flat seabed).
+Vec2d transfer(const sim::downward::Camera& cam, const sim::downward::CameraPose& a, const sim::downward::CameraPose& b, const Vec2d& px) {
+  const double ma = a.altitude_m / cam.f, mb = b.altitude_m / cam.f;
+  const double ca = std::cos(a.yaw_rad), sa = std::sin(a.yaw_rad), cb = std::cos(b.yaw_rad), sb = std::sin(b.yaw_rad);
+  const double du = px.x() - cam.cx, dv = px.y() - cam.cy;
+  const double gx = a.x_m + ma * (ca * du - sa * dv) - b.x_m, gy = a.y_m + ma * (sa * du + ca * dv) - b.y_m;
+  return Vec2d(cam.cx + (cb * gx + sb * gy) / mb, cam.cy + (-sb * gx + cb * gy) / mb);
+}
+
+int count_true_matches(const topo::HomographyChain& chain, const sim::downward::Camera& cam, const sim::downward::CameraPose& cur,
+                       const sim::downward::CameraPose& key) {
+  const Span<const Vec2d> c = chain.matched_current(), k = chain.matched_keyframe();
+  int n = 0;
+  for (std::size_t i = 0; i < c.size(); ++i) n += (transfer(cam, cur, key, c[i]) - k[i]).norm() <= kTrueMatchPx ? 1 : 0;
+  return n;
+}
+
+bool write_fig3_csv(const char* path, const Fig3& f, int runs) {
+  FILE* out = std::fopen(path, "w");
+  if (out == nullptr) return false;
+  const char* name[] = {"none", "filter1", "filter2", "filter3", "filter4", "filter5"};
+  std::fprintf(out, "# qnav map eval --fig3-csv: per frame of the synthetic loop, keypoints, ratio-test matches, true matches (within %.1f px "
+                    "of the true transfer to the keyframe) and homography inliers, per run; empty: no matching (the reference frame)\n",
+               kTrueMatchPx);
+  std::fprintf(out, "frame");
+  for (int r = 0; r < runs; ++r) std::fprintf(out, ",keypoints_%s,matches_%s,true_matches_%s,inliers_%s", name[r], name[r], name[r], name[r]);
+  std::fprintf(out, "\n");
+  const std::size_t frames = f.keypoints.empty() ? 0 : f.keypoints[0].size();
+  for (std::size_t k = 0; k < frames; ++k) {
+    std::fprintf(out, "%zu", k);
+    for (int r = 0; r < runs; ++r)
+      for (const auto* col : {&f.keypoints, &f.matches, &f.true_matches, &f.inliers}) {
+        const double v = (*col)[static_cast<std::size_t>(r)][k];
+        if (std::isfinite(v)) std::fprintf(out, ",%.0f", v);
+        else std::fprintf(out, ",");
+      }
+    std::fprintf(out, "\n");
+  }
+  const bool ok = std::fflush(out) == 0;
+  return std::fclose(out) == 0 && ok;
+}
+
 // qnav map eval [--json] [--laps L] [--frames-per-lap N] [--filters K] [--map-out FILE] [--out DIR]: the synthetic
 // loop of the nav/topo tests (seabed_scene.hpp: radius 0.8 m, 320x240, f 300 px, 2 m altitude) run
 // through the chain and the topological map without degradation and under each of the paper's five
@@ -369,6 +507,8 @@ int run_eval() {
   const long per_lap = g_opt.per_lap, filters = g_opt.filters;
   const char* map_out = opt_or_null(g_opt.map_out);
   const char* out_dir = opt_or_null(g_opt.out);
+  const char* fig3_path = opt_or_null(g_opt.fig3_csv);
+  Fig3 fig3;
   if (out_dir != nullptr) {
     if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
       std::fprintf(stderr, "map eval: %s\n", e.c_str());
@@ -414,6 +554,8 @@ int run_eval() {
     std::vector<FrameRecord> rec;
     std::vector<int> created_frame(1024, -1);
     std::vector<double> ms, kps, inl, cpu;
+    const double none = std::nan("");
+    for (auto* col : {&fig3.keypoints, &fig3.matches, &fig3.true_matches, &fig3.inliers}) col->emplace_back(frames, none);
     double max_err = 0.0, final_err = std::nan("");
     int ok = 0, second = 0, recognised = 0;
     for (int k = 0; k < frames; ++k) {
@@ -443,6 +585,14 @@ int run_eval() {
       ms.push_back(r.ms);
       all_ms.push_back(r.ms);
       kps.push_back(r.step.keypoints);
+      const auto run = static_cast<std::size_t>(filter), fk = static_cast<std::size_t>(k);
+      fig3.keypoints[run][fk] = r.step.keypoints;
+      if (!r.step.reference) {  // a frame the chain refused before matching counts 0 matches
+        fig3.matches[run][fk] = r.step.matches;
+        fig3.true_matches[run][fk] = count_true_matches(mapper.chain(), cam, sim::downward::loop_pose(k, lap, radius, altitude),
+                                                        sim::downward::loop_pose(static_cast<int>(r.step.keyframe_index), lap, radius, altitude));
+        fig3.inliers[run][fk] = r.step.inliers;
+      }
       if (r.step.status == topo::StepStatus::kOk) {
         ++ok;
         if (k > 0) inl.push_back(r.step.inliers);
@@ -463,6 +613,15 @@ int run_eval() {
       rec.push_back(r);
     }
     if (builder.path != nullptr) builder.save();
+    if (filter == 0 && out_dir != nullptr) {  // the clean run's mosaic: the frames rendered again
+      const MosaicFrameSource src{[&](std::size_t i, ImageU8& buf) {
+                                    sim::downward::render(seabed, cam, sim::downward::loop_pose(static_cast<int>(i), lap, radius, altitude), buf.view());
+                                    return true;
+                                  },
+                                  cam.width, cam.height};
+      (void)write_map_mosaic(std::string(out_dir) + "/map_mosaic.png", src, rec, &builder.map(), true, mapper.chain().metres_per_px(),
+                             "qnav map eval (synthetic loop, no filter)");
+    }
     if (filter == 0 && out_dir != nullptr && !builder.write_csv(out_dir, altitude / cam.f)) {
       std::fprintf(stderr, "map eval: writing the map CSVs in %s failed\n", out_dir);
       return 1;
@@ -481,9 +640,9 @@ int run_eval() {
     std::snprintf(buf, sizeof buf,
                   "%s\"%s\": {\"traj_error_pct\": %.4f, \"final_error_pct\": %.4f, \"frames_ok\": %d, \"frames\": %d, "
                   "\"keypoints_median\": %.0f, \"inliers_median\": %.0f, \"nodes\": %zu, \"edges\": %zu, \"mismatch\": %u, "
-                  "\"revisits_recognised_pct\": %.1f, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
+                  "\"revisits_recognised_pct\": %s, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
                   filter ? ", " : "", name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map().node_count(),
-                  builder.map().edge_count(), c.get(topo::TopoCounter::kMismatch), rec_pct, median(ms), median(cpu));
+                  builder.map().edge_count(), c.get(topo::TopoCounter::kMismatch), json_pct(rec_pct).c_str(), median(ms), median(cpu));
     out += buf;
     std::snprintf(buf, sizeof buf, "%s\"%s\": %.4f", filter ? ", " : "", name[filter], err_pct);
     errs += buf;
@@ -493,9 +652,13 @@ int run_eval() {
                   name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map().node_count(), builder.map().edge_count(),
                   c.get(topo::TopoCounter::kMismatch), rec_pct, recognised, second, median(ms), median(cpu));
   }
+  if (fig3_path != nullptr && !write_fig3_csv(fig3_path, fig3, static_cast<int>(filters) + 1)) {
+    std::fprintf(stderr, "map eval: writing %s failed: %s\n", fig3_path, std::strerror(errno));
+    return 1;
+  }
   char tail[256];
-  std::snprintf(tail, sizeof tail, ", \"path_m\": %.4f, \"node_spacing_m\": %.2f, \"revisits_recognised_pct\": %.1f, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
-                path_m, spacing, recognised_none, median(all_ms), median(all_cpu));
+  std::snprintf(tail, sizeof tail, ", \"path_m\": %.4f, \"node_spacing_m\": %.2f, \"revisits_recognised_pct\": %s, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
+                path_m, spacing, json_pct(recognised_none).c_str(), median(all_ms), median(all_cpu));
   if (json) std::printf("{\"traj_error_pct\": {%s}, \"runs\": {%s}%s\n", errs.c_str(), out.c_str(), tail);
   return worst_rc;
 }
@@ -692,7 +855,7 @@ int run_map() {
   const double implied_alt = (al.valid && have_camera && !(mpp > 0.0)) ? al.scale * cam.fx : std::nan("");
 
   // Outputs.
-  std::string csv_path, png_path;
+  std::string csv_path, png_path, mosaic_path;
   if (out_dir != nullptr) {
     mkdir(out_dir, 0755);
     csv_path = std::string(out_dir) + "/map_trajectory.csv";
@@ -749,6 +912,19 @@ int run_map() {
         png_path.clear();
       }
     }
+    if (!g_opt.no_plot) {
+      const MosaicFrameSource src{[&](std::size_t i, ImageU8& buf) {
+                                    Result<ImageU8> img = tools::read_image_gray8(files[i].c_str());
+                                    ConstImageViewU8 v;
+                                    if (!img || !mapper.undistort(img->view(), v) || v.width() != buf.width() || v.height() != buf.height())
+                                      return false;
+                                    for (int r = 0; r < v.height(); ++r) std::memcpy(buf.view().row(r), v.row(r), static_cast<std::size_t>(v.width()));
+                                    return true;
+                                  },
+                                  W, H};
+      mosaic_path = std::string(out_dir) + "/map_mosaic.png";
+      if (!write_map_mosaic(mosaic_path, src, rec, mapping ? &builder.map() : nullptr, metric, mpp, "qnav map")) mosaic_path.clear();
+    }
   }
 
   const int pairs = static_cast<int>(n) - 1;
@@ -785,7 +961,7 @@ int run_map() {
                 "\"path_px\": %s, \"net_px\": %s, \"metres_per_px\": %s, \"path_m\": %s, \"nav_path_m\": %s, \"nav_net_m\": %s, "
                 "\"align_scale_m_per_px\": %s, \"align_rotation_deg\": %s, \"align_mirrored\": %s, \"align_rms_m\": %s, "
                 "\"implied_altitude_m\": %s, \"frame_ms_median\": %s, \"frame_ms_max\": %s, \"chain_ms_median\": %s, \"chain_cpu_ms_median\": %s, \"undistorted\": %s, "
-                "\"fundamental_filter\": %s, \"csv\": \"%s\", \"png\": \"%s\"}\n",
+                "\"fundamental_filter\": %s, \"csv\": \"%s\", \"png\": \"%s\", \"mosaic_png\": \"%s\"}\n",
                 map_json.c_str(), n, registered, pairs, chain.keyframes(), num(median(keypoints)).c_str(), num(median(inliers)).c_str(),
                 num(inliers.empty() ? std::nan("") : *std::min_element(inliers.begin(), inliers.end())).c_str(),
                 num(rot_chain).c_str(), num(rot_nav).c_str(), num(rot_chain - rot_nav).c_str(),
@@ -797,7 +973,7 @@ int run_map() {
                 num(al.valid ? rad_to_deg(al.rotation_rad) : std::nan("")).c_str(), al.valid ? (al.mirrored ? "true" : "false") : "null",
                 num(al.valid ? al.rms_m : std::nan("")).c_str(), num(implied_alt).c_str(), num(median(ms)).c_str(),
                 num(*std::max_element(ms.begin(), ms.end())).c_str(), num(median(chain_ms)).c_str(), num(median(chain_cpu)).c_str(), (have_camera && undistort) ? "true" : "false",
-                config.chain.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str());
+                config.chain.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str(), mosaic_path.c_str());
   } else {
     std::printf("frames %zu (%dx%d)%s%s\n", n, W, H, (have_camera && undistort) ? ", undistorted" : "",
                 config.chain.fundamental_filter ? ", F both-accept filter" : "");
@@ -833,7 +1009,9 @@ int run_map() {
       std::printf("map update            median %.3f ms per frame (signature + map); file %s rewritten %d times, median %.2f ms\n",
                   median(map_ms), map_out ? map_out : "(none)", builder.saves, median(builder.save_ms));
     }
-    if (!csv_path.empty()) std::printf("wrote %s%s%s\n", csv_path.c_str(), png_path.empty() ? "" : ", ", png_path.c_str());
+    if (!csv_path.empty())
+      std::printf("wrote %s%s%s%s%s\n", csv_path.c_str(), png_path.empty() ? "" : ", ", png_path.c_str(), mosaic_path.empty() ? "" : ", ",
+                  mosaic_path.c_str());
   }
   return registered == pairs ? 0 : 1;
 }
@@ -859,7 +1037,7 @@ void setup_map(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(cmd, "--keyframe-gap", g_opt.keyframe_gap, "a new keyframe at least every N frames", "frames", 1, 100000)
       ->description("a new keyframe at least every N frames; 1 = the frame-to-frame chain (frames; default 30; 1..100000)");
   add_number(cmd, "--frames", g_opt.frames, "frames to use at most", "", 2, 1e9);
-  add_flag(cmd, "--no-plot", g_opt.no_plot, "do not draw map_trajectory.png");
+  add_flag(cmd, "--no-plot", g_opt.no_plot, "do not draw map_trajectory.png nor map_mosaic.png");
   add_text(cmd, "--map-out", g_opt.map_out, "build the topological map beside the chain, written durably here")->type_name("FILE");
   add_number(cmd, "--node-spacing", g_opt.node_spacing, "topological map node spacing", "", 1e-9, 1e9)
       ->description("topological map node spacing (m with --altitude, else mosaic px; default 0.2 m / 30 px; > 0)");
@@ -881,6 +1059,7 @@ void setup_map(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*e, "--filters", g_opt.filters, "Table-1 filters applied (0: clean)", "", 0, 5);
   add_text(*e, "--map-out", g_opt.map_out, "write the map here")->type_name("FILE");
   add_text(*e, "--out", g_opt.out, "folder for the CSVs (created)")->type_name("DIR");
+  add_text(*e, "--fig3-csv", g_opt.fig3_csv, "the paper's Fig. 3: keypoints and true matches per frame and run, as CSV")->type_name("FILE");
   run.on(e, run_eval);
 }
 }  // namespace
