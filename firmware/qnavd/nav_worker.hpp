@@ -187,6 +187,7 @@ class NavWorker {
   ModeReject enter_map(std::uint16_t id) noexcept;
   void save_map() noexcept;
   void log_map_frame(const FrameMsg& f, const pipeline::MapperStep& st, double latency_ms) noexcept;
+  void publish_map_frame(const FrameMsg& f, const pipeline::MapperStep& st) noexcept;
   const std::uint8_t* frame_slot(std::uint32_t slot) const noexcept;
   void publish_vo_increment(std::uint32_t inliers) noexcept;
   bool on_tile(const pipeline::RouteTile& t) noexcept;
@@ -223,7 +224,9 @@ class NavWorker {
   std::uint32_t map_frames_ = 0, map_bad_frames_ = 0, map_saves_ = 0, map_save_errors_ = 0;
   FrameObserver frame_observer_ = nullptr;
   void* frame_ctx_ = nullptr;
-  std::int64_t last_frame_ns_ = -1;
+  std::int64_t last_frame_ns_ = -1;     // the last stereo pair's sample time
+  std::int64_t last_downward_ns_ = -1;  // the last downward frame's sample time
+  std::uint16_t map_node_ = topo::kNoNode;   // the node the last observed downward frame was placed at
   std::int64_t vo_mode_start_ns_ = 0;
   std::uint32_t frames_ = 0, vo_no_attitude_ = 0, frames_out_of_order_ = 0;
   Pose3 vo_anchor_, vo_last_set_;     // body poses: at the start of the pending increment, at its last update

@@ -131,6 +131,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(vo_frame_queue),
       QNAV_FIELD(vo_stale_s),
       QNAV_FIELD(map_enabled),
+      QNAV_FIELD(map_device),
       QNAV_FIELD(map_width),
       QNAV_FIELD(map_height),
       QNAV_FIELD(map_focal_px),
@@ -439,6 +440,7 @@ stale_s = 5.0
 
 [map]
 enabled = true
+device = "/dev/video2"
 width = 384
 height = 288
 focal_px = 405.6
@@ -564,6 +566,9 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_FALSE(c.sim_mission[1].reverse);
   EXPECT_TRUE(c.sim_mission[1].file.empty());
   EXPECT_EQ(c.sim_mission[1].last_ping, -1);
+  EXPECT_TRUE(map_runs(c));  // the linux backend with a downward camera
+  EXPECT_EQ(frame_pool_slots(c), 8u);
+  EXPECT_EQ(frame_slot_bytes(c), 384u * 288u);  // vo.enabled = false: downward frames only
   expect_stages_init(c);
 }
 
@@ -684,6 +689,8 @@ const BadConfig kBadConfigs[] = {
      "not with the simulated rover"},
     {"last_ping_before_first", "[[sim.pass]]\nmode = \"teach\"\nfile = \"dive.xtf\"\nfirst_ping = 50\nlast_ping = 20\n", "sim.pass[0].last_ping", 5,
      "must be -1 or > first_ping (50), got 20"},
+    {"downward_camera_on_sim", "[map]\nenabled = true\ndevice = \"/dev/video2\"\n\n[[sim.pass]]\nmode = \"map\"\n", "map.device", 3,
+     "daemon.backend = \"sim\" flies the simulated downward camera"},
     {"max_frames_negative", "[[sim.pass]]\nmode = \"vo\"\nmax_frames = -1\n", "sim.pass[0].max_frames", 3, "must be in [0, 1000000], got -1"},
     {"pass_misspelt_key", "[[sim.pass]]\nmode = \"teach\"\nreverse_ = true\n", "sim.pass[0].reverse_", 3,
      "did you mean reverse?"},
