@@ -327,6 +327,10 @@ TEST(QnavdConfig, VehicleExampleLoads) {
   EXPECT_EQ(c.vo_left_device, "/dev/video0");
   EXPECT_EQ(c.vo_right_device, "/dev/video1");
   EXPECT_EQ(c.vo_trigger_chip, "gpiochip0");
+  EXPECT_EQ(c.map_device, "/dev/video2");
+  EXPECT_FALSE(map_runs(c));  // map.enabled = false: the downward camera is not opened
+  c.map_enabled = true;
+  EXPECT_TRUE(map_runs(c));
   expect_stages_init(c);
 }
 
