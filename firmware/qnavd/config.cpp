@@ -536,6 +536,9 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(queue_key(
       "map.frame_queue", [](auto& c) -> auto& { return c.map_frame_queue; }, 2, 64, "frames",
       "Downward frame queue depth between the camera reader and the navigation thread (frame pool slots)"));
+  t.push_back(float_key(
+      "map.stale_s", [](auto& c) -> auto& { return c.map_stale_s; }, 0.1, 60.0, "s",
+      "No downward frame for this long in Mode = Map (or the camera device down): camera lost (FaultCameraLost)"));
   // [route]
   t.push_back(int_key(
       "route.id", [](auto& c) -> auto& { return c.route_id; }, 0, 65535, "",

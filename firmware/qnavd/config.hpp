@@ -144,6 +144,7 @@ struct DaemonConfig {
   double map_node_spacing = 0.0;              // map.node_spacing [0, 1e6] m or px: 0 = the tool's default (0.2 m / 30 px)
   std::size_t map_max_nodes = 1024;           // map.max_nodes [2, 65534]
   std::size_t map_frame_queue = 4;            // map.frame_queue [2, 64] frames, power of two
+  double map_stale_s = 2.0;                   // map.stale_s [0.1, 60]: no downward frame for this long in Mode = Map: camera lost
 
   // [leak] the leak detector: a GPIO input line (linux backend, libgpiod). Latched: the first edge to
   // the active level (or the level already active at start) sets HEALTH.Leak and FaultLeak until the

@@ -561,6 +561,7 @@ ModeReject NavWorker::enter_map(std::uint16_t id) noexcept {
   std::snprintf(map_path_, sizeof map_path_, "%s/map_%u.qmap", cfg_.route_dir.c_str(), static_cast<unsigned>(id));
   map_open_ = true;
   map_node_ = topo::kNoNode;
+  map_mode_start_ns_ = nav_now_ns_;
   return ModeReject::kNone;
 }
 
@@ -743,7 +744,9 @@ void NavWorker::update_faults() noexcept {
   const std::int64_t last_pair_ns = std::max(last_frame_ns_, vo_mode_start_ns_);
   const bool camera_lost = (mode_ == qc::Mode::kVo && (nav_now_ns_ - last_pair_ns > static_cast<std::int64_t>(cfg_.vo_stale_s * kNsPerS) ||
                                                        q_.io->camera_device_down.load(std::memory_order_relaxed))) ||
-                           (mode_ == qc::Mode::kMap && q_.io->downward_device_down.load(std::memory_order_relaxed));
+                           (mode_ == qc::Mode::kMap &&
+                            (nav_now_ns_ - std::max(last_downward_ns_, map_mode_start_ns_) > static_cast<std::int64_t>(cfg_.map_stale_s * kNsPerS) ||
+                             q_.io->downward_device_down.load(std::memory_order_relaxed)));
   const bool att_lost = dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s;
   const bool dvl_lost = cfg_.dvl_enabled && dr_.velocity_age_s(nav_now_ns_) > cfg_.dvl_stale_s;
   if (sonar_lost) f |= qc::fault::kSonarLost;

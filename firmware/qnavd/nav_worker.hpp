@@ -228,6 +228,7 @@ class NavWorker {
   void* frame_ctx_ = nullptr;
   std::int64_t last_frame_ns_ = -1;     // the last stereo pair's sample time
   std::int64_t last_downward_ns_ = -1;  // the last downward frame's sample time
+  std::int64_t map_mode_start_ns_ = 0;  // when Mode = Map was entered (map.stale_s counts from it)
   std::uint16_t map_node_ = topo::kNoNode;   // the node the last observed downward frame was placed at
   std::int64_t vo_mode_start_ns_ = 0;
   std::uint32_t frames_ = 0, vo_no_attitude_ = 0, frames_out_of_order_ = 0;

@@ -224,7 +224,6 @@ struct Worker {
     EXPECT_TRUE(can_tx.init(Span<hal::CanFrame>(tx_store.data(), tx_store.size())).is_ok());
     EXPECT_TRUE(dvl.init(Span<drivers::dvl::DvlVelocity>(dvl_store.data(), dvl_store.size())).is_ok());
     EXPECT_TRUE(frames.init(Span<FrameMsg>(frame_store.data(), frame_store.size())).is_ok());
-    for (std::uint32_t slot = 1; slot < 4; ++slot) EXPECT_TRUE(free_frames.try_push(slot).is_ok());  // slot 0: the hand-fed frames
     NavQueues q;
     q.pings = &pings;
     q.free_slots = &free_slots;
@@ -242,8 +241,10 @@ struct Worker {
     const Status s = nav->init(q, nullptr, nullptr, nullptr);
     EXPECT_TRUE(s.is_ok()) << s.message();
   }
-  // The frame pool as a camera source sees it.
+  // The frame pool as a camera source sees it, its slots free (the hand-fed frames above use slot 0
+  // and return it to the free queue themselves: not both in one test).
   FramePool pool_view() {
+    for (std::uint32_t slot = 0; slot < 4; ++slot) EXPECT_TRUE(free_frames.try_push(slot).is_ok());
     FramePool p;
     p.frames = &frames;
     p.free = &free_frames;
@@ -300,6 +301,7 @@ TEST(QnavdMap, ModeMapIsRefusedWithoutMapEnabled) {
 }
 
 TEST(QnavdMap, ABadFrameIsCountedAndTheMapWrittenWhenTheModeIsLeft) {
+  SoftwareFaults::reset_for_tests();
   Worker w(true);
   w.command(qc::Mode::kMap);
   ASSERT_EQ(w.nav->last_reject(), ModeReject::kNone);
@@ -337,6 +339,7 @@ TEST(QnavdMap, ABadFrameIsCountedAndTheMapWrittenWhenTheModeIsLeft) {
   EXPECT_TRUE(w.store.exists("r/map_1.qmap"));   // written (empty) when the mode was left
   EXPECT_EQ(w.nav->map_saves(), 1u);
   EXPECT_EQ(w.nav->map_save_errors(), 0u);
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
 }
 
 // The linux backend: Mode = Map is accepted when the downward camera is configured (map.device) and
@@ -364,6 +367,35 @@ TEST(QnavdMap, LinuxBackendAcceptsModeMapOnlyWithADownwardCamera) {
   EXPECT_NE(faults & qc::fault::kCameraLost, 0u);
 }
 
+// The camera falling silent in Mode = Map (no downward frame for map.stale_s) is FaultCameraLost in
+// NAV_STATUS, and the next frame clears it; in Idle the silence is no fault.
+TEST(QnavdMap, ASilentDownwardCameraIsCameraLostInModeMap) {
+  SoftwareFaults::reset_for_tests();
+  Worker w(true);
+  auto last_faults = [&w] {
+    std::uint16_t faults = 0;
+    hal::CanFrame f;
+    while (w.can_tx.try_pop(f)) {
+      qc::NavStatus ns;
+      if (f.id == qc::kIdNavStatus && qc::decode(f, ns)) faults = ns.fault_flags;
+    }
+    return faults;
+  };
+  w.clock.advance_ns(static_cast<std::int64_t>(3 * w.cfg.map_stale_s * 1e9));  // silent in Idle
+  for (int i = 0; i < 4; ++i) w.nav->run_once();
+  EXPECT_EQ(last_faults() & qc::fault::kCameraLost, 0u);
+  w.command(qc::Mode::kMap);
+  ASSERT_EQ(w.nav->mode(), qc::Mode::kMap);
+  w.black_frame();  // a frame 0.2 s after entering
+  EXPECT_EQ(last_faults() & qc::fault::kCameraLost, 0u);
+  w.clock.advance_ns(static_cast<std::int64_t>((w.cfg.map_stale_s + 0.5) * 1e9));
+  for (int i = 0; i < 4; ++i) w.nav->run_once();
+  EXPECT_NE(last_faults() & qc::fault::kCameraLost, 0u);
+  w.black_frame();
+  EXPECT_EQ(last_faults() & qc::fault::kCameraLost, 0u);
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
+}
+
 // /dev/videoN of the first vivid capture node, or "" when vivid is not loaded.
 std::string find_vivid() {
   for (int n = 0; n < 64; ++n) {
@@ -386,6 +418,7 @@ std::string find_vivid() {
 TEST(QnavdMap, LinuxDownwardCameraOnVividFeedsTheMapMode) {
   const std::string dev = find_vivid();
   if (dev.empty()) GTEST_SKIP() << "no vivid capture node (modprobe vivid; the bench's hil_v4l2_gpio_hal loads it)";
+  SoftwareFaults::reset_for_tests();
   Worker w(true, dev.c_str(), 320, 180);  // a size vivid's webcam input offers
   w.command(qc::Mode::kMap);
   ASSERT_EQ(w.nav->mode(), qc::Mode::kMap);
@@ -424,6 +457,7 @@ TEST(QnavdMap, LinuxDownwardCameraOnVividFeedsTheMapMode) {
   EXPECT_FALSE(w.io.downward_device_down.load());
   EXPECT_EQ(w.io.device_errors.load(), 0u);
   EXPECT_EQ(statuses, kFrames);
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
   EXPECT_GE(w.nav->map_frames(), static_cast<std::uint32_t>(kFrames));
   std::printf("vivid %s: %d map frames, %u bad (vivid's test pattern), format %s\n", dev.c_str(), statuses, w.nav->map_bad_frames(),
               src.format() == hal::PixelFormat::kGrey ? "GREY" : "YUYV");

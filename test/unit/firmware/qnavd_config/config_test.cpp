@@ -141,6 +141,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(map_node_spacing),
       QNAV_FIELD(map_max_nodes),
       QNAV_FIELD(map_frame_queue),
+      QNAV_FIELD(map_stale_s),
       QNAV_FIELD(map_budget_us),
       QNAV_FIELD(sim_length_m),
       QNAV_FIELD(sim_seed),
@@ -454,6 +455,7 @@ altitude_m = 2.5
 node_spacing = 0.3
 max_nodes = 200
 frame_queue = 8
+stale_s = 4.0
 
 [route]
 id = 7
@@ -635,8 +637,9 @@ const BadConfig kBadConfigs[] = {
     {"unknown_key", "[route]\nid = 3\n\nmax_node = 5000\n", "route.max_node", 4,
      "unknown key (did you mean route.max_nodes?)"},
     {"unknown_key_far", "[dvl]\nbaudrate = 9600\n", "dvl.baudrate", 2, "unknown key"},
-    {"unknown_key_other_table", "[can]\nstale_s = 1.0\n", "can.stale_s", 2,
-     "did you mean sonar.stale_s or dvl.stale_s or vo.stale_s?"},
+    {"unknown_key_other_table", "[leak]\nstale_s = 1.0\n", "leak.stale_s", 2,
+     "did you mean sonar.stale_s or dvl.stale_s or vo.stale_s or map.stale_s?"},
+    {"unknown_key_near_another_table", "[can]\nstale_s = 1.0\n", "can.stale_s", 2, "did you mean map.stale_s?"},
     {"key_outside_tables", "backend = \"linux\"\n", "backend", 1, "did you mean daemon.backend?"},
     {"unknown_table", "[daemon]\nlog = \"off\"\n[rout]\nid = 2\n", "rout", 3, "unknown table (did you mean [route]?)"},
     {"unknown_table_far", "[logging]\nlevel = 2\n", "logging", 1, "unknown table; the tables are [daemon], [can]"},
