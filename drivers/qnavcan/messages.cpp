@@ -74,6 +74,26 @@ constexpr SignalDef kRouteStatus[] = {
     {"TileSeq", 40, 16, false, false, 1, 0, 0, 65535, ""},
     {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
 };
+constexpr SignalDef kMapPose[] = {
+    {"X", 0, 21, false, true, 0.01, 0, -kMapPositionMax, kMapPositionMax, "m|px"},
+    {"Y", 21, 21, false, true, 0.01, 0, -kMapPositionMax, kMapPositionMax, "m|px"},
+    {"Heading", 42, 14, false, true, 0.0004, 0, -3.1416, 3.1416, "rad"},
+    {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
+};
+constexpr SignalDef kMapStatus[] = {
+    {"NodeId", 0, 16, false, false, 1, 0, 0, 65535, ""},
+    {"NodeCount", 16, 16, false, false, 1, 0, 0, 65535, ""},
+    {"FrameSeq", 32, 16, false, false, 1, 0, 0, 65535, ""},
+    {"Registered", 48, 1, false, false, 1, 0, 0, 1, ""},
+    {"Black", 49, 1, false, false, 1, 0, 0, 1, ""},
+    {"Saturated", 50, 1, false, false, 1, 0, 0, 1, ""},
+    {"Textureless", 51, 1, false, false, 1, 0, 0, 1, ""},
+    {"Lost", 52, 1, false, false, 1, 0, 0, 1, ""},
+    {"Metric", 53, 1, false, false, 1, 0, 0, 1, ""},
+    {"NewNode", 54, 1, false, false, 1, 0, 0, 1, ""},
+    {"Revisit", 55, 1, false, false, 1, 0, 0, 1, ""},
+    {"Counter", 56, 8, false, false, 1, 0, 0, 255, ""},
+};
 constexpr SignalDef kHealth[] = {
     {"FaultLeak", 0, 1, false, false, 1, 0, 0, 1, ""},
     {"FaultSensorTimeout", 1, 1, false, false, 1, 0, 0, 1, ""},
@@ -114,6 +134,8 @@ const MessageDef kMessages[] = {
     {"QNAV_ROUTE_GUIDANCE", kIdRouteGuidance, 8, "QNAV", sp(kGuidance), 100},
     {"QNAV_VO_STEP", kIdVoStep, 8, "QNAV", sp(kVoStep), 100},
     {"QNAV_ROUTE_STATUS", kIdRouteStatus, 8, "QNAV", sp(kRouteStatus), 100},
+    {"QNAV_MAP_POSE", kIdMapPose, 8, "QNAV", sp(kMapPose), 0},
+    {"QNAV_MAP_STATUS", kIdMapStatus, 8, "QNAV", sp(kMapStatus), 0},
     {"QNAV_HEALTH", kIdHealth, 8, "QNAV", sp(kHealth), 1000},
     {"QNAV_HEARTBEAT", kIdHeartbeat, 8, "QNAV", sp(kHeartbeat), 1000},
 };
@@ -260,6 +282,30 @@ Status decode(const hal::CanFrame& f, RouteStatus& o) noexcept {
       static_cast<GuidanceState>(u8(v[0])), static_cast<SideOfRoute>(u8(v[1])), v[2], u16(v[3]), u16(v[4]), u8(v[5])};
   return Status::ok();
 }
+Status decode(const hal::CanFrame& f, MapPose& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdMapPose, v));
+  o = MapPose{v[0], v[1], v[2], u8(v[3])};
+  return Status::ok();
+}
+Status decode(const hal::CanFrame& f, MapStatus& o) noexcept {
+  double v[kMaxSignals];
+  QNAV_RETURN_IF_ERROR(decode_all(f, kIdMapStatus, v));
+  o = MapStatus{};
+  o.node_id = u16(v[0]);
+  o.node_count = u16(v[1]);
+  o.frame_seq = u16(v[2]);
+  o.registered = v[3] > 0.5;
+  o.black = v[4] > 0.5;
+  o.saturated = v[5] > 0.5;
+  o.textureless = v[6] > 0.5;
+  o.lost = v[7] > 0.5;
+  o.metric = v[8] > 0.5;
+  o.new_node = v[9] > 0.5;
+  o.revisit = v[10] > 0.5;
+  o.counter = u8(v[11]);
+  return Status::ok();
+}
 Status decode(const hal::CanFrame& f, Health& o) noexcept {
   double v[kMaxSignals];
   QNAV_RETURN_IF_ERROR(decode_all(f, kIdHealth, v));
@@ -321,6 +367,17 @@ Status encode(const RouteStatus& m, hal::CanFrame& f) noexcept {
   static_assert(sizeof v / sizeof v[0] == sizeof kRouteStatus / sizeof kRouteStatus[0],
                 "one value per ROUTE_STATUS signal");
   return encode_all(f, kIdRouteStatus, v);
+}
+Status encode(const MapPose& m, hal::CanFrame& f) noexcept {
+  const double v[] = {m.x, m.y, m.heading_rad, double(m.counter)};
+  static_assert(sizeof v / sizeof v[0] == sizeof kMapPose / sizeof kMapPose[0], "one value per MAP_POSE signal");
+  return encode_all(f, kIdMapPose, v);
+}
+Status encode(const MapStatus& m, hal::CanFrame& f) noexcept {
+  const double v[] = {double(m.node_id), double(m.node_count), double(m.frame_seq), flag(m.registered), flag(m.black), flag(m.saturated),
+                      flag(m.textureless),  flag(m.lost),         flag(m.metric),      flag(m.new_node),   flag(m.revisit), double(m.counter)};
+  static_assert(sizeof v / sizeof v[0] == sizeof kMapStatus / sizeof kMapStatus[0], "one value per MAP_STATUS signal");
+  return encode_all(f, kIdMapStatus, v);
 }
 Status encode(const Health& m, hal::CanFrame& f) noexcept {
   double v[fault::kBitCount + 5] = {};

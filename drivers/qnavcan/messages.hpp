@@ -2,7 +2,7 @@
 // docs/qnav.dbc (ids, DLC, every signal's start/length/byte order/sign/factor/offset/range).
 // Inputs (qnav receives): ATTITUDE_IN 0x100, RATES_IN 0x101, DEPTH_IN 0x102, MODE_CMD 0x110.
 // Outputs (qnav sends):   NAV_STATUS 0x200, ROUTE_GUIDANCE 0x201, VO_STEP 0x202, ROUTE_STATUS 0x203,
-//                         HEALTH 0x210, HEARTBEAT 0x2FF.
+//                         MAP_POSE 0x204, MAP_STATUS 0x205, HEALTH 0x210, HEARTBEAT 0x2FF.
 // decode_*(): kNotFound (other id), kTruncated (frame shorter than the DBC's DLC), kOutOfRange (a
 // signal outside its DBC range), kUnsupported (extended/FD/RTR frame). encode_*(): kOutOfRange when a
 // value does not fit (or a fault word has a reserved bit set), kInvalidArgument for NaN.
@@ -86,6 +86,30 @@ struct VoStep {
   std::uint8_t inliers = 0;
   std::uint8_t counter = 0;
 };
+// Mode = Map, one pair per downward frame (MAP_POSE then MAP_STATUS): the homography chain's pose
+// of the frame in the map's frame (frame 0's image axes: x right, y down; heading from x towards y)
+// in metres when the map is metric (MapStatus::metric), else in mosaic pixels.
+constexpr double kMapPositionMax = 10485.75;  // MAP_POSE.X / Y range (+-); encode() refuses beyond it
+struct MapPose {
+  double x = 0, y = 0;   // m (metric) or mosaic px
+  double heading_rad = 0;
+  std::uint8_t counter = 0;
+};
+// The node the vehicle is at (the last observed frame's node; kMapNoNode before the first), the map
+// size and how this frame fared: registered, or refused as black / saturated / textureless (bad
+// input, the bits can combine) or lost (too few keypoints or matches, degenerate homography).
+constexpr std::uint16_t kMapNoNode = 65535;
+struct MapStatus {
+  std::uint16_t node_id = kMapNoNode;
+  std::uint16_t node_count = 0;
+  std::uint16_t frame_seq = 0;  // the daemon's frame sequence (its map log's seq), wraps at 65535
+  bool registered = false, black = false, saturated = false, textureless = false, lost = false;
+  bool metric = false;          // MAP_POSE in metres (else mosaic pixels)
+  bool new_node = false;        // this frame created node_id
+  bool revisit = false;         // this frame recognised node_id as a revisit
+  std::uint8_t counter = 0;
+};
+
 struct Health {
   std::uint16_t fault_flags = 0, rejected_inputs = 0, deadline_misses = 0;
   double cpu_load_pct = 0;
@@ -119,7 +143,7 @@ inline constexpr const char* kSignalNames[kBitCount] = {
 
 constexpr std::uint32_t kIdAttitudeIn = 0x100, kIdRatesIn = 0x101, kIdDepthIn = 0x102, kIdModeCmd = 0x110;
 constexpr std::uint32_t kIdNavStatus = 0x200, kIdRouteGuidance = 0x201, kIdVoStep = 0x202, kIdRouteStatus = 0x203,
-                        kIdHealth = 0x210, kIdHeartbeat = 0x2FF;
+                        kIdMapPose = 0x204, kIdMapStatus = 0x205, kIdHealth = 0x210, kIdHeartbeat = 0x2FF;
 
 // The most signals any message has (NAV_STATUS and HEALTH: 15); size decode_generic's array with it.
 constexpr std::size_t kMaxSignalsPerMessage = 16;
@@ -136,6 +160,8 @@ Status decode(const hal::CanFrame& f, NavStatus& out) noexcept;
 Status decode(const hal::CanFrame& f, RouteGuidance& out) noexcept;
 Status decode(const hal::CanFrame& f, VoStep& out) noexcept;
 Status decode(const hal::CanFrame& f, RouteStatus& out) noexcept;
+Status decode(const hal::CanFrame& f, MapPose& out) noexcept;
+Status decode(const hal::CanFrame& f, MapStatus& out) noexcept;
 Status decode(const hal::CanFrame& f, Health& out) noexcept;
 Status decode(const hal::CanFrame& f, Heartbeat& out) noexcept;
 
@@ -149,6 +175,8 @@ Status encode(const VoStep& m, hal::CanFrame& f) noexcept;
 // cross_track_sigma_m above kCrossTrackSigmaMaxM (or +inf) is sent as kCrossTrackSigmaMaxM; negative
 // is kOutOfRange, NaN kInvalidArgument.
 Status encode(const RouteStatus& m, hal::CanFrame& f) noexcept;
+Status encode(const MapPose& m, hal::CanFrame& f) noexcept;
+Status encode(const MapStatus& m, hal::CanFrame& f) noexcept;
 Status encode(const Health& m, hal::CanFrame& f) noexcept;
 Status encode(const Heartbeat& m, hal::CanFrame& f) noexcept;
 

@@ -4,7 +4,7 @@ namespace qnav::drivers::qnavcan {
 
 namespace {
 // Indexed by QnavCanPublisher::Output.
-constexpr std::uint32_t kIds[] = {kIdNavStatus, kIdRouteGuidance, kIdRouteStatus, kIdVoStep, kIdHealth, kIdHeartbeat};
+constexpr std::uint32_t kIds[] = {kIdNavStatus, kIdRouteGuidance, kIdRouteStatus, kIdVoStep, kIdMapPose, kIdMapStatus, kIdHealth, kIdHeartbeat};
 }  // namespace
 
 Status QnavCanPublisher::encode_output(int i, hal::CanFrame& f) noexcept {
@@ -23,6 +23,16 @@ Status QnavCanPublisher::encode_output(int i, hal::CanFrame& f) noexcept {
     }
     case kVo: {
       VoStep m = vo_;
+      m.counter = counter_[i];
+      return encode(m, f);
+    }
+    case kMapPose: {
+      MapPose m = map_pose_;
+      m.counter = counter_[i];
+      return encode(m, f);
+    }
+    case kMapStatus: {
+      MapStatus m = map_status_;
       m.counter = counter_[i];
       return encode(m, f);
     }
@@ -63,7 +73,7 @@ int QnavCanPublisher::poll(std::int64_t now_ns) noexcept {
     ++counter_[i];
     counters_.increment(TxCounter::kSent);
     ++sent;
-    if (i == kVo) has_[i] = false;  // an increment: sent once
+    if (is_event(i)) has_[i] = false;  // an increment or a frame's event: sent once
   }
   return sent;
 }

@@ -1,5 +1,5 @@
 // QnavCanPublisher: the output side of qnav's CAN interface. Holds the latest value of each output
-// message (NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, VO_STEP, HEALTH, HEARTBEAT), and poll(now_ns)
+// message (NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, VO_STEP, MAP_POSE, MAP_STATUS, HEALTH, HEARTBEAT), and poll(now_ns)
 // sends each one whose DBC period (GenMsgCycleTime) has elapsed, in that order (ROUTE_STATUS right
 // after its companion ROUTE_GUIDANCE), filling the rolling Counter itself. A full TX queue
 // (kCapacityExceeded from the bus) is counted as tx_busy and retried at the next poll; an encode
@@ -8,7 +8,10 @@
 // sent once (at most one frame per DBC period; a later set() before it went out replaces it) and never
 // repeated, so a receiver that sums the frames gets the whole path; vo_pending() says whether the
 // last value is still waiting (the caller accumulates into it) or went out (the caller starts anew).
-// poll() is O(6 messages x signals); no heap.
+// QNAV_MAP_POSE and QNAV_MAP_STATUS are per-frame events (DBC cycle 0): each set() value is sent once
+// at the next poll, MAP_POSE right before MAP_STATUS, never repeated (a later set() before it went
+// out replaces it: the autopilot sees the gap in MAP_STATUS.FrameSeq).
+// poll() is O(8 messages x signals); no heap.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +34,8 @@ class QnavCanPublisher {
   void set(const RouteStatus& m) noexcept { route_status_ = m, has_[kRouteStatus] = true; }
   void set(const VoStep& m) noexcept { vo_ = m, has_[kVo] = true; }
   bool vo_pending() const noexcept { return has_[kVo]; }
+  void set(const MapPose& m) noexcept { map_pose_ = m, has_[kMapPose] = true; }
+  void set(const MapStatus& m) noexcept { map_status_ = m, has_[kMapStatus] = true; }
   void set(const Health& m) noexcept { health_ = m, has_[kHealth] = true; }
   void set(const Heartbeat& m) noexcept { heartbeat_ = m, has_[kHeartbeat] = true; }
 
@@ -40,14 +45,17 @@ class QnavCanPublisher {
 
  private:
   // Output slots, in sending order.
-  enum Output : int { kNav, kGuidance, kRouteStatus, kVo, kHealth, kHeartbeat };
-  static constexpr int kOutputs = 6;
+  enum Output : int { kNav, kGuidance, kRouteStatus, kVo, kMapPose, kMapStatus, kHealth, kHeartbeat };
+  static constexpr int kOutputs = 8;
+  static constexpr bool is_event(int i) noexcept { return i == kVo || i == kMapPose || i == kMapStatus; }
   Status encode_output(int i, hal::CanFrame& f) noexcept;
   hal::CanBus& bus_;
   NavStatus nav_;
   RouteGuidance guidance_;
   RouteStatus route_status_;
   VoStep vo_;
+  MapPose map_pose_;
+  MapStatus map_status_;
   Health health_;
   Heartbeat heartbeat_;
   bool has_[kOutputs] = {};

@@ -506,8 +506,14 @@ std::vector<KeySpec> build_key_table() {
   // [map]
   t.push_back(bool_key(
       "map.enabled", [](auto& c) -> auto& { return c.map_enabled; },
-      "Take downward-camera frames into the frame pool and accept Mode = Map (sizes the mapper's arena). Sim backend only: "
-      "the linux backend has no downward camera reader yet and refuses Mode = Map (UnsupportedMode)"));
+      "Take downward-camera frames into the frame pool and accept Mode = Map (sizes the mapper's arena). Sim backend: the "
+      "simulated camera of a [[sim.pass]] with mode = \"map\"; linux backend: the V4L2 camera map.device (without one, "
+      "Mode = Map is refused with UnsupportedMode and nothing is sized for it)"));
+  t.push_back(string_key(
+      "map.device", [](auto& c) -> auto& { return c.map_device; }, "V4L2 capture device or \"\"", nullptr,
+      "Downward camera (linux backend): a V4L2 capture device giving rectified GREY or YUYV frames of map.width x map.height "
+      "(intrinsics: map.focal_px, cu_px, cv_px), opened at start and reopened once a second when it fails; \"\" = none. "
+      "The sim backend flies its simulated camera: must be \"\" there"));
   t.push_back(int_key(
       "map.width", [](auto& c) -> auto& { return c.map_width; }, 64, 2048, "px", "Width of a rectified downward frame"));
   t.push_back(int_key(
@@ -530,6 +536,9 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(queue_key(
       "map.frame_queue", [](auto& c) -> auto& { return c.map_frame_queue; }, 2, 64, "frames",
       "Downward frame queue depth between the camera reader and the navigation thread (frame pool slots)"));
+  t.push_back(float_key(
+      "map.stale_s", [](auto& c) -> auto& { return c.map_stale_s; }, 0.1, 60.0, "s",
+      "No downward frame for this long in Mode = Map (or the camera device down): camera lost (FaultCameraLost)"));
   // [route]
   t.push_back(int_key(
       "route.id", [](auto& c) -> auto& { return c.route_id; }, 0, 65535, "",
@@ -1061,6 +1070,10 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
       if (p.mode == drivers::qnavcan::Mode::kMap)
         return r.error("map.enabled", at("map.enabled", "sim.pass.mode"), "a [[sim.pass]] with mode = \"map\" needs map.enabled = true");
   }
+  if (c.backend == Backend::kSim && !c.map_device.empty()) {
+    return r.error("map.device", at("map.device", "daemon.backend"),
+                   "daemon.backend = \"sim\" flies the simulated downward camera ([[sim.pass]] mode = \"map\"): map.device must be \"\"");
+  }
   if (c.map_cu_px >= c.map_width || c.map_cv_px >= c.map_height) {
     return r.error("map.cu_px", at("map.cu_px", "map.width"), "the principal point must lie inside the map.width x map.height image");
   }
@@ -1095,7 +1108,7 @@ Pose3 vo_body_T_cam(const DaemonConfig& c) noexcept {
   return p;
 }
 
-bool map_runs(const DaemonConfig& c) noexcept { return c.map_enabled && c.backend == Backend::kSim; }
+bool map_runs(const DaemonConfig& c) noexcept { return c.map_enabled && (c.backend == Backend::kSim || !c.map_device.empty()); }
 
 std::size_t frame_pool_slots(const DaemonConfig& c) noexcept {
   return std::max(c.vo_enabled ? c.vo_frame_queue : 0, map_runs(c) ? c.map_frame_queue : 0);

@@ -129,9 +129,12 @@ struct DaemonConfig {
   // [map] downward-camera mapping (Mode = Map): the downward camera's rectified frames through
   // pipeline::TopoMapper (the wiring `qnav map` runs), the topological map saved durably in
   // daemon.route_dir as map_<id>.qmap (firmware/tools/map_file). Frames share the frame pool with
-  // the stereo pairs (a slot holds the larger of the two). Sim backend only (a [[sim.pass]] with
-  // mode = "map": a frame folder or the synthetic seabed; with the linux backend Mode = Map is refused, UnsupportedMode).
+  // the stereo pairs (a slot holds the larger of the two). The camera: on the sim backend a
+  // [[sim.pass]] with mode = "map" (a frame folder or the synthetic seabed); on the linux backend the
+  // V4L2 device map.device (LinuxDownwardSource; without one Mode = Map is refused, UnsupportedMode).
+  // The [map] table holds the camera because it serves this mode only and its intrinsics are [map] keys.
   bool map_enabled = false;                   // map.enabled: the frame pool takes downward frames and Mode = Map is accepted
+  std::string map_device;                     // map.device: the downward V4L2 camera (linux backend); "" = none
   int map_width = 320;                        // map.width [64, 2048] px
   int map_height = 240;                       // map.height [64, 2048] px
   double map_focal_px = 0.0;                  // map.focal_px [0, 20000] px: 0 = unknown (the map in mosaic pixels)
@@ -141,6 +144,7 @@ struct DaemonConfig {
   double map_node_spacing = 0.0;              // map.node_spacing [0, 1e6] m or px: 0 = the tool's default (0.2 m / 30 px)
   std::size_t map_max_nodes = 1024;           // map.max_nodes [2, 65534]
   std::size_t map_frame_queue = 4;            // map.frame_queue [2, 64] frames, power of two
+  double map_stale_s = 2.0;                   // map.stale_s [0.1, 60]: no downward frame for this long in Mode = Map: camera lost
 
   // [leak] the leak detector: a GPIO input line (linux backend, libgpiod). Latched: the first edge to
   // the active level (or the level already active at start) sets HEALTH.Leak and FaultLeak until the
@@ -205,8 +209,8 @@ struct ConfigError {
 // forward and tilted down, image x to the right; the simulated rover's bench (drivers/stereo_sim).
 Pose3 vo_body_T_cam(const DaemonConfig& c) noexcept;
 
-// Mode = Map can run: map.enabled with the sim backend (the linux backend has no downward camera
-// reader yet: there the mode is refused with UnsupportedMode and nothing is sized for it).
+// Mode = Map can run: map.enabled with the sim backend, or with the linux backend and a map.device
+// (without a camera the mode is refused with UnsupportedMode and nothing is sized for it).
 bool map_runs(const DaemonConfig& c) noexcept;
 // The frame pool: slots (the deeper of vo.frame_queue and map.frame_queue, of the enabled ones) of
 // the larger of a stereo pair (2 x vo.width x vo.height) and a downward frame (map.width x map.height).

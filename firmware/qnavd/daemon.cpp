@@ -9,6 +9,7 @@
 #include "drivers/camera/leak_monitor.hpp"
 #include "drivers/dvl/dvl_driver.hpp"
 #include "firmware/qnavd/deployment.hpp"
+#include "firmware/qnavd/linux_downward.hpp"
 #include "firmware/qnavd/linux_stereo.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
@@ -48,7 +49,7 @@ struct QueueRefs {
   SpscRing<drivers::dvl::DvlVelocity>* dvl;
   float* pool;
   std::size_t stride;
-  FramePool frames;  // stereo pairs (queues null when vo.enabled = false)
+  FramePool frames;  // stereo pairs and downward frames (queues null when neither vo.enabled nor map_runs)
 };
 
 namespace {
@@ -214,6 +215,7 @@ class LinuxBackend final : public IoBackend {
       return Status(StatusCode::kInvalidArgument, "sonar.address port must be a number in 1..65535");
     sonar_port_ = static_cast<std::uint16_t>(port);
     if (cfg_.vo_enabled) stereo_ = std::make_unique<LinuxStereoSource>(cfg_, q_.frames, log_);
+    if (map_runs(cfg_)) downward_ = std::make_unique<LinuxDownwardSource>(cfg_, q_.frames, log_);  // map.device
     // The leak detector is opened here and, when that fails, retried once a second like the other
     // devices (leak_device_down, FaultSensorTimeout meanwhile).
     // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
@@ -265,6 +267,7 @@ class LinuxBackend final : public IoBackend {
       }
     }
     if (stereo_) did |= stereo_->poll(now, io);
+    if (downward_) did |= downward_->poll(now, io);
 #ifdef QNAV_HAVE_GPIOD
     if (leak_open_) {
       did |= poll_leak(*leak_, io);
@@ -281,8 +284,9 @@ class LinuxBackend final : public IoBackend {
 #ifdef QNAV_HAVE_GPIOD
     if (leak_open_) leak_fd = leak_line_.fd();
 #endif
-    const int fds[6] = {can_.fd(), dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1, leak_fd};
-    hal::wait_readable(fds, 6, timeout_ms);
+    const int fds[7] = {can_.fd(),  dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1,
+                        leak_fd, downward_ ? downward_->fd() : -1};
+    hal::wait_readable(fds, 7, timeout_ms);
   }
 
  private:
@@ -410,6 +414,7 @@ class LinuxBackend final : public IoBackend {
   bool dvl_warned_ = false, sonar_warned_ = false;
   bool connect_started_ = false;  // the sonar's connect was in progress at the last retry
   std::unique_ptr<LinuxStereoSource> stereo_;  // vo.enabled: the V4L2 pair
+  std::unique_ptr<LinuxDownwardSource> downward_;  // map.enabled with map.device: the downward V4L2 camera
 #ifdef QNAV_HAVE_GPIOD
   hal::GpiodInputLine leak_line_;
   std::optional<drivers::camera::LeakMonitor> leak_;

@@ -5,10 +5,6 @@
 
 namespace qnav::daemon {
 
-void LinuxStereoSource::report(const char* device, const char* what) noexcept {
-  if (log_ && !warned_) std::fprintf(log_, "{\"event\":\"device\",\"device\":\"%s\",\"error\":\"%s\"}\n", device, what);
-}
-
 void LinuxStereoSource::close_devices() noexcept {
   left_.close();
   right_.close();
@@ -18,37 +14,25 @@ void LinuxStereoSource::close_devices() noexcept {
   open_ = false;
 }
 
-bool LinuxStereoSource::open_devices(IoCounters& io) noexcept {
+// Opens both cameras (GREY, or YUYV), the trigger line and the pairing; on failure everything is
+// closed again and `device` names what failed.
+Status LinuxStereoSource::open_devices(const char*& device) noexcept {
   hal::CameraConfig cc;
   cc.width = cfg_.vo.max_width;
   cc.height = cfg_.vo.max_height;
   cc.format = hal::PixelFormat::kGrey;
-  cc.device = cfg_.vo_left_device.c_str();
-  Status s = left_.open(cc);
+  cc.device = device = cfg_.vo_left_device.c_str();
+  QNAV_RETURN_IF_ERROR(open_grey_camera(left_, cc));  // the right camera tries the left one's format first
+  cc.device = device = cfg_.vo_right_device.c_str();
+  Status s = open_grey_camera(right_, cc);
   if (!s) {
-    cc.format = hal::PixelFormat::kYuyv;  // many cameras offer YUYV only; converted to grey per frame
-    s = left_.open(cc);
-  }
-  if (!s) {
-    report(cc.device, s.message());
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
-    return false;
-  }
-  cc.device = cfg_.vo_right_device.c_str();
-  s = right_.open(cc);
-  if (!s) {
-    cc.format = cc.format == hal::PixelFormat::kGrey ? hal::PixelFormat::kYuyv : hal::PixelFormat::kGrey;
-    s = right_.open(cc);
-  }
-  if (!s) {
-    report(cc.device, s.message());
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
     left_.close();
-    return false;
+    return s;
   }
   has_trigger_ = false;
   hal::GpioOutput* trigger = nullptr;
   if (!cfg_.vo_trigger_chip.empty()) {
+    device = cfg_.vo_trigger_chip.c_str();
 #ifdef QNAV_HAVE_GPIOD
     hal::GpioLineConfig gc;
     gc.chip = cfg_.vo_trigger_chip.c_str();
@@ -56,18 +40,14 @@ bool LinuxStereoSource::open_devices(IoCounters& io) noexcept {
     gc.consumer = "qnavd-trigger";
     s = trigger_.open(gc, false);
     if (!s) {
-      report(cfg_.vo_trigger_chip.c_str(), s.message());
-      io.device_errors.fetch_add(1, std::memory_order_relaxed);
       close_devices();
-      return false;
+      return s;
     }
     trigger = &trigger_;
     has_trigger_ = true;
 #else
-    report(cfg_.vo_trigger_chip.c_str(), "this build has no libgpiod: the trigger line cannot be driven");
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
     close_devices();
-    return false;
+    return Status(StatusCode::kUnsupported, "this build has no libgpiod: the trigger line cannot be driven");
 #endif
   }
   drivers::camera::StereoConfig sc;
@@ -75,29 +55,26 @@ bool LinuxStereoSource::open_devices(IoCounters& io) noexcept {
   sc.pair_tolerance_ns = static_cast<std::int64_t>(cfg_.vo_pair_tolerance_ms * 1e6);
   s = stereo_.open(left_, right_, sc, trigger);
   if (!s) {
-    char both[160];
-    std::snprintf(both, sizeof both, "%s + %s", cfg_.vo_left_device.c_str(), cfg_.vo_right_device.c_str());
-    report(both, s.message());
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
+    std::snprintf(both_, sizeof both_, "%s + %s", cfg_.vo_left_device.c_str(), cfg_.vo_right_device.c_str());
+    device = both_;
     close_devices();
-    return false;
+    return s;
   }
   open_ = true;
-  warned_ = false;
   rejects_ = 0;  // the reopened pair counts from zero (the totals already passed on stay in IoCounters)
-  return true;
+  return Status::ok();
 }
 
 bool LinuxStereoSource::poll(std::int64_t now_ns, IoCounters& io) noexcept {
   if (!open_) {
-    if (now_ns < next_open_ns_) return false;
-    next_open_ns_ = now_ns + 1000000000;
-    if (!open_devices(io)) {
-      io.camera_device_down.store(true);
-      warned_ = true;  // reported once until the devices come back
+    if (!outage_.reopen_due(now_ns)) return false;
+    const char* device = "";
+    const Status s = open_devices(device);
+    if (!s) {
+      outage_.failed(now_ns, device, s.message(), io, io.camera_device_down);  // reported once until the devices come back
       return false;
     }
-    io.camera_device_down.store(false);
+    outage_.opened(io.camera_device_down);
   }
   if (has_trigger_) {
     if (now_ns < next_trigger_ns_) return false;
@@ -115,11 +92,8 @@ bool LinuxStereoSource::poll(std::int64_t now_ns, IoCounters& io) noexcept {
   }
   if (!r) {
     // The device failed (unplugged, stream stopped): closed here, reopened within a second.
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
-    io.camera_device_down.store(true);
-    report(cfg_.vo_left_device.c_str(), r.status().message());
+    outage_.failed(now_ns, cfg_.vo_left_device.c_str(), r.status().message(), io, io.camera_device_down);
     close_devices();
-    next_open_ns_ = now_ns + 1000000000;
     return false;
   }
   if (!*r) return false;

@@ -70,10 +70,11 @@ struct IoCounters {
   std::atomic<std::uint32_t> dvl_rejected{0};    // the DVL parser's rejections (checksum, format, stale ...)
   std::atomic<std::uint32_t> sonar_rejected{0};  // the JSF framer's and assembler's rejections
   std::atomic<std::uint32_t> device_errors{0};   // read/open failures of a device (disappeared, EOF)
-  std::atomic<std::uint64_t> frames_in{0};         // stereo pairs the camera delivered
-  std::atomic<std::uint32_t> frame_overflow{0};    // a pair arrived with no free slot / full queue: dropped
-  std::atomic<std::uint32_t> camera_rejected{0};   // the stereo driver's rejections (corrupt, unpaired, timeouts)
-  std::atomic<bool> camera_device_down{false};
+  std::atomic<std::uint64_t> frames_in{0};         // stereo pairs and downward frames the cameras delivered
+  std::atomic<std::uint32_t> frame_overflow{0};    // a pair or frame arrived with no free slot / full queue: dropped
+  std::atomic<std::uint32_t> camera_rejected{0};   // the camera drivers' rejections (corrupt, unpaired, timeouts)
+  std::atomic<bool> camera_device_down{false};     // the stereo pair (vo.camera = "v4l2")
+  std::atomic<bool> downward_device_down{false};   // the downward camera (map.device; FaultCameraLost in Mode = Map)
   std::atomic<bool> leak{false};                   // the leak detector latched (HEALTH.Leak, FaultLeak)
   std::atomic<std::uint32_t> leak_events{0};       // edges to the active level the detector saw
   std::atomic<bool> leak_device_down{false};       // leak.chip set and its line cannot be read

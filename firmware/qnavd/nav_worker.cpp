@@ -466,12 +466,14 @@ void NavWorker::handle_ping(const PingMsg& p) noexcept {
 void NavWorker::handle_pair(const FrameMsg& f) noexcept {
   const std::int64_t t0 = cpu_clock_.now_ns();
   ++frames_;
-  // A pair stamped at or before the previous one cannot be a step forward in time: counted, dropped.
-  if (last_frame_ns_ >= 0 && f.stamp.sample_ns <= last_frame_ns_) {
+  // A pair (or a downward frame) stamped at or before the previous one of its camera cannot be a step
+  // forward in time: counted, dropped. The two cameras are separate devices: each has its own order.
+  std::int64_t& last_ns = f.downward ? last_downward_ns_ : last_frame_ns_;
+  if (last_ns >= 0 && f.stamp.sample_ns <= last_ns) {
     ++frames_out_of_order_;
     return;
   }
-  last_frame_ns_ = f.stamp.sample_ns;
+  last_ns = f.stamp.sample_ns;
   if (f.downward) {
     handle_downward(f, t0);
     return;
@@ -558,6 +560,8 @@ ModeReject NavWorker::enter_map(std::uint16_t id) noexcept {
   if (!mapper_.init(map_mapper_config(cfg_), *map_arena_)) return ModeReject::kUnsupportedMode;  // cannot happen: init sized it
   std::snprintf(map_path_, sizeof map_path_, "%s/map_%u.qmap", cfg_.route_dir.c_str(), static_cast<unsigned>(id));
   map_open_ = true;
+  map_node_ = topo::kNoNode;
+  map_mode_start_ns_ = nav_now_ns_;
   return ModeReject::kNone;
 }
 
@@ -584,8 +588,36 @@ void NavWorker::handle_downward(const FrameMsg& f, std::int64_t t0) noexcept {
   if (!s) ++step_errors_;
   if (st.chain.status != topo::StepStatus::kOk) ++map_bad_frames_;
   if (st.observed && st.place.kind == topo::ObserveKind::kCreated) save_map();  // durable as it grows
+  publish_map_frame(f, st);
   stage_time(Stage::kMap, t0);
   log_map_frame(f, st, static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6);
+}
+
+// QNAV_MAP_POSE + QNAV_MAP_STATUS for this frame (sent once, at this step's publish()).
+void NavWorker::publish_map_frame(const FrameMsg& f, const pipeline::MapperStep& st) noexcept {
+  const topo::ChainStep& c = st.chain;
+  if (st.observed && st.place.node != topo::kNoNode) map_node_ = st.place.node;
+  qc::MapPose p;
+  const Vec2d& pos = c.pose.metric ? c.pose.position_m : c.pose.position_px;
+  p.x = clampd(pos.x(), -qc::kMapPositionMax, qc::kMapPositionMax);
+  p.y = clampd(pos.y(), -qc::kMapPositionMax, qc::kMapPositionMax);
+  p.heading_rad = clampd(std::remainder(c.pose.heading_rad, 2.0 * kPi), -3.1416, 3.1416);
+  qc::MapStatus m;
+  static_assert(topo::kNoNode == qc::kMapNoNode, "no node: the same value in the map and on the wire");
+  m.node_id = map_node_;  // map.max_nodes <= 65534: a node id is below 65535
+  m.node_count = static_cast<std::uint16_t>(std::min<std::size_t>(mapper_.map().node_count(), 65535));
+  m.frame_seq = static_cast<std::uint16_t>(f.sequence & 0xFFFFu);
+  m.registered = c.status == topo::StepStatus::kOk;
+  const bool bad = c.status == topo::StepStatus::kBadInput;
+  m.black = bad && (c.bad_input & topo::kFrameDark) != 0;
+  m.saturated = bad && (c.bad_input & topo::kFrameSaturated) != 0;
+  m.textureless = bad && (c.bad_input & topo::kFrameTextureless) != 0;
+  m.lost = !m.registered && !bad;
+  m.metric = c.pose.metric;
+  m.new_node = st.observed && st.place.kind == topo::ObserveKind::kCreated;
+  m.revisit = st.observed && st.place.revisit;
+  publisher_->set(p);
+  publisher_->set(m);
 }
 
 void NavWorker::log_map_frame(const FrameMsg& f, const pipeline::MapperStep& st, double latency_ms) noexcept {
@@ -711,8 +743,11 @@ void NavWorker::update_faults() noexcept {
                           (last_ping_ns_ < 0 ? (nav_now_ns_ - start_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS)
                                              : (nav_now_ns_ - last_ping_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS));
   const std::int64_t last_pair_ns = std::max(last_frame_ns_, vo_mode_start_ns_);
-  const bool camera_lost = mode_ == qc::Mode::kVo && (nav_now_ns_ - last_pair_ns > static_cast<std::int64_t>(cfg_.vo_stale_s * kNsPerS) ||
-                                                      q_.io->camera_device_down.load(std::memory_order_relaxed));
+  const bool camera_lost = (mode_ == qc::Mode::kVo && (nav_now_ns_ - last_pair_ns > static_cast<std::int64_t>(cfg_.vo_stale_s * kNsPerS) ||
+                                                       q_.io->camera_device_down.load(std::memory_order_relaxed))) ||
+                           (mode_ == qc::Mode::kMap &&
+                            (nav_now_ns_ - std::max(last_downward_ns_, map_mode_start_ns_) > static_cast<std::int64_t>(cfg_.map_stale_s * kNsPerS) ||
+                             q_.io->downward_device_down.load(std::memory_order_relaxed)));
   const bool att_lost = dr_.heading_age_s(nav_now_ns_) > cfg_.attitude_stale_s;
   const bool dvl_lost = cfg_.dvl_enabled && dr_.velocity_age_s(nav_now_ns_) > cfg_.dvl_stale_s;
   if (sonar_lost) f |= qc::fault::kSonarLost;

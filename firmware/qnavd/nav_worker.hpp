@@ -3,7 +3,8 @@
 // preceded a ping is applied before the ping), then runs the stages:
 //   attitude  QNAV_ATTITUDE_IN or a DroneCAN AHRS Solution (29-bit frames): the heading.
 //   modes     QNAV_MODE_CMD (range- and counter-checked by QnavCanReceiver): idle, teach, repeat
-//             (forward or reverse), hold, vo, map (refused with UnsupportedMode unless map.enabled).
+//             (forward or reverse), hold, vo, map (refused with UnsupportedMode unless map_runs():
+//             map.enabled, and on the linux backend a downward camera map.device).
 //             A refused transition keeps the current mode and reports why (NAV_STATUS ModeReject, log).
 //   dead reckoning  DVL body velocity x attitude heading (pipeline::DeadReckoner); the ping's pose.
 //   ping -> tile (pipeline::RouteTilePipeline) -> teach: RouteFileWriter.append (durable per node)
@@ -12,10 +13,11 @@
 //             topological map) -> the map file daemon.route_dir/map_<id>.qmap rewritten durably
 //             (firmware/tools/map_file over the FileStore) after every new node and when the mode is
 //             left; a new map each time the mode is entered; a refused frame (black, saturated,
-//             textureless, unregistered) is counted and logged, the pose and the map left as they were
+//             textureless, unregistered) is counted and logged, the pose and the map left as they were;
+//             per frame QNAV_MAP_POSE + QNAV_MAP_STATUS (pose, node, node count, the frame's flags)
 //   stereo pair (Mode = Vo) -> pipeline::VoOdometry with the attitude at the pair's time -> the
 //             body's motion since the last QNAV_VO_STEP sent (an increment, never repeated)
-//   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
+//   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, VO_STEP, MAP_POSE, MAP_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
 //             into the can_tx queue; one log line per tile and per event; health every period.
 // Leaving or changing a repeat clears what was said about the old route (guidance, status, localised).
 // Sensor loss degrades, never stops: sonar or attitude lost -> guidance "hold course" (tiles are not
@@ -187,6 +189,7 @@ class NavWorker {
   ModeReject enter_map(std::uint16_t id) noexcept;
   void save_map() noexcept;
   void log_map_frame(const FrameMsg& f, const pipeline::MapperStep& st, double latency_ms) noexcept;
+  void publish_map_frame(const FrameMsg& f, const pipeline::MapperStep& st) noexcept;
   const std::uint8_t* frame_slot(std::uint32_t slot) const noexcept;
   void publish_vo_increment(std::uint32_t inliers) noexcept;
   bool on_tile(const pipeline::RouteTile& t) noexcept;
@@ -223,7 +226,10 @@ class NavWorker {
   std::uint32_t map_frames_ = 0, map_bad_frames_ = 0, map_saves_ = 0, map_save_errors_ = 0;
   FrameObserver frame_observer_ = nullptr;
   void* frame_ctx_ = nullptr;
-  std::int64_t last_frame_ns_ = -1;
+  std::int64_t last_frame_ns_ = -1;     // the last stereo pair's sample time
+  std::int64_t last_downward_ns_ = -1;  // the last downward frame's sample time
+  std::int64_t map_mode_start_ns_ = 0;  // when Mode = Map was entered (map.stale_s counts from it)
+  std::uint16_t map_node_ = topo::kNoNode;   // the node the last observed downward frame was placed at
   std::int64_t vo_mode_start_ns_ = 0;
   std::uint32_t frames_ = 0, vo_no_attitude_ = 0, frames_out_of_order_ = 0;
   Pose3 vo_anchor_, vo_last_set_;     // body poses: at the start of the pending increment, at its last update

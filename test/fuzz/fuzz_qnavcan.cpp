@@ -17,8 +17,8 @@ int qnav_fuzz_qnavcan(const std::uint8_t* data, std::size_t size) {
   }
   static drivers::qnavcan::QnavCanReceiver rx;
   hal::CanRxFrame f;
-  const std::uint32_t ids[] = {0x100, 0x101, 0x102, 0x110, 0x200, 0x201, 0x202, 0x203, 0x210, 0x2FF, 0x123};
-  f.frame.id = ids[data[1] % 10];
+  const std::uint32_t ids[] = {0x100, 0x101, 0x102, 0x110, 0x200, 0x201, 0x202, 0x203, 0x204, 0x205, 0x210, 0x2FF, 0x123};
+  f.frame.id = ids[data[1] % (sizeof ids / sizeof ids[0])];
   f.frame.len = static_cast<std::uint8_t>(data[2] % 9);
   const std::size_t n = size - 3 < f.frame.len ? size - 3 : f.frame.len;
   std::memcpy(f.frame.data, data + 3, n);

@@ -8,19 +8,29 @@
 //  - the mode-command rules: Mode = Map without map.enabled is refused (UnsupportedMode) and the
 //    worker stays in Idle; with it, a black frame is counted as bad and the map (empty) is still
 //    written through the worker's FileStore when the mode is left (NavWorker alone, a memory store).
-// The real snippet and bad frames against `qnav map`: test/unit/firmware/qnavd_cli/qnavd_map_test.sh.
+//  - the map mode's CAN output, from the autopilot's side of the bus: one QNAV_MAP_POSE and one
+//    QNAV_MAP_STATUS per frame (FrameSeq 0, 1, ... without a gap, the pair sharing its Counter), the
+//    last pose the worker's chained pose to the signals' resolution, the node count the map's, every
+//    node created announced once (NewNode); a black, a saturated and a textureless frame flagged on
+//    CAN with the pose and the node held (the worker alone).
+// The real snippet and bad frames against `qnav map` and the daemon's log, CAN decoded by
+// `qnav can decode`: test/unit/firmware/qnavd_cli/qnavd_map_test.sh.
 #include <gtest/gtest.h>
+#include <algorithm>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
 #include "drivers/downward_sim/seabed_scene.hpp"
+#include "drivers/qnavcan/messages.hpp"
 #include "firmware/qnavd/daemon.hpp"
+#include "firmware/qnavd/linux_downward.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "firmware/qnavd/nav_worker.hpp"
 #include "firmware/tools/map_file.hpp"
@@ -38,6 +48,36 @@ std::string temp_dir() {
   char t[] = "/tmp/qnavd_map_test_XXXXXX";
   const char* d = mkdtemp(t);
   return d ? std::string(d) : std::string("/tmp");
+}
+
+// What the autopilot heard in Mode = Map (bus observer, io thread; read after run() joined it).
+struct MapRecorder {
+  std::uint32_t poses = 0, statuses = 0, seq_gaps = 0, counter_mismatches = 0, not_registered = 0, not_metric = 0, new_nodes = 0;
+  std::uint32_t map_state_frames = 0;
+  int last_seq = -1, last_pose_counter = -1;
+  qc::MapPose last_pose;
+  qc::MapStatus last_status;
+};
+
+void on_map_bus(void* ctx, const hal::CanRxFrame& f) {
+  auto* rec = static_cast<MapRecorder*>(ctx);
+  if (f.frame.id == qc::kIdNavStatus) {
+    qc::NavStatus ns;
+    if (qc::decode(f.frame, ns) && ns.state == qc::Mode::kMap) ++rec->map_state_frames;
+  } else if (f.frame.id == qc::kIdMapPose) {
+    if (qc::decode(f.frame, rec->last_pose)) ++rec->poses, rec->last_pose_counter = rec->last_pose.counter;
+  } else if (f.frame.id == qc::kIdMapStatus) {
+    qc::MapStatus m;
+    if (!qc::decode(f.frame, m)) return;
+    ++rec->statuses;
+    if (m.frame_seq != rec->last_seq + 1) ++rec->seq_gaps;
+    if (m.counter != rec->last_pose_counter) ++rec->counter_mismatches;  // MAP_POSE right before, same Counter
+    rec->last_seq = m.frame_seq;
+    rec->not_registered += !m.registered;
+    rec->not_metric += !m.metric;
+    rec->new_nodes += m.new_node;
+    rec->last_status = m;
+  }
 }
 
 TEST(QnavdMap, SyntheticLoopMapsWithinTwoPercentOfPathWithoutHeap) {
@@ -66,6 +106,8 @@ TEST(QnavdMap, SyntheticLoopMapsWithinTwoPercentOfPathWithoutHeap) {
   c.route_id = 7;
 
   Daemon d(c);
+  MapRecorder rec;
+  d.set_bus_observer(on_map_bus, &rec);
   ASSERT_TRUE(d.init(nullptr));
   ASSERT_TRUE(d.start());
   test::AllocationGuard guard;
@@ -115,6 +157,25 @@ TEST(QnavdMap, SyntheticLoopMapsWithinTwoPercentOfPathWithoutHeap) {
   EXPECT_TRUE(info.metric);
   EXPECT_EQ(loaded.node_count(), map.node_count());
   EXPECT_EQ(loaded.edge_count(), map.edge_count());
+
+  // CAN: one MAP_POSE + MAP_STATUS per frame, in order, each pair with one Counter; the last pose the
+  // worker's (1 cm / 0.0004 rad signals: within half a step), in metres, the map's node count.
+  std::printf("qnavd map CAN: %u MAP_POSE, %u MAP_STATUS, last X %.2f m Y %.2f m heading %.4f rad, node %u of %u\n", rec.poses,
+              rec.statuses, rec.last_pose.x, rec.last_pose.y, rec.last_pose.heading_rad, rec.last_status.node_id, rec.last_status.node_count);
+  EXPECT_EQ(rec.poses, static_cast<std::uint32_t>(kFrames));
+  EXPECT_EQ(rec.statuses, static_cast<std::uint32_t>(kFrames));
+  EXPECT_EQ(rec.seq_gaps, 0u);
+  EXPECT_EQ(rec.counter_mismatches, 0u);
+  EXPECT_EQ(rec.not_registered, 0u);
+  EXPECT_EQ(rec.not_metric, 0u);
+  EXPECT_GT(rec.map_state_frames, 0u);
+  EXPECT_NEAR(rec.last_pose.x, pose.position_m.x(), 0.005 + 1e-9);
+  EXPECT_NEAR(rec.last_pose.y, pose.position_m.y(), 0.005 + 1e-9);
+  EXPECT_NEAR(rec.last_pose.heading_rad, std::remainder(pose.heading_rad, 2.0 * 3.14159265358979323846), 0.0002 + 1e-9);
+  EXPECT_LT(std::hypot(rec.last_pose.x - truth.x(), rec.last_pose.y - truth.y()), 0.02 * path);  // the autopilot's pose: the 2 % goal too
+  EXPECT_EQ(rec.last_status.node_count, map.node_count());
+  EXPECT_EQ(rec.new_nodes, map.node_count());  // every node announced once, when it was created
+  EXPECT_LT(rec.last_status.node_id, map.node_count());
 }
 
 
@@ -142,8 +203,12 @@ struct Worker {
   std::unique_ptr<NavWorker> nav;
   std::uint8_t counter = 0;
 
-  explicit Worker(bool map_enabled) {
-    cfg.backend = Backend::kSim;
+  // The sim backend, or (device given) the linux backend's downward camera map.device of W x H.
+  explicit Worker(bool map_enabled, const char* device = nullptr, int width = 320, int height = 240) {
+    cfg.backend = device ? Backend::kLinux : Backend::kSim;
+    if (device) cfg.map_device = device;
+    cfg.map_width = width;
+    cfg.map_height = height;
     cfg.route_dir = "r";
     cfg.log = LogFormat::kOff;
     cfg.vo_enabled = false;
@@ -176,6 +241,19 @@ struct Worker {
     const Status s = nav->init(q, nullptr, nullptr, nullptr);
     EXPECT_TRUE(s.is_ok()) << s.message();
   }
+  // The frame pool as a camera source sees it, its slots free (the hand-fed frames above use slot 0
+  // and return it to the free queue themselves: not both in one test).
+  FramePool pool_view() {
+    for (std::uint32_t slot = 0; slot < 4; ++slot) EXPECT_TRUE(free_frames.try_push(slot).is_ok());
+    FramePool p;
+    p.frames = &frames;
+    p.free = &free_frames;
+    p.pool = frame_pool.data();
+    p.map_width = cfg.map_width;
+    p.map_height = cfg.map_height;
+    p.slot_bytes = static_cast<std::size_t>(cfg.map_width) * static_cast<std::size_t>(cfg.map_height);
+    return p;
+  }
   void command(qc::Mode m) {
     qc::ModeCmd cmd;
     cmd.mode = m;
@@ -186,6 +264,21 @@ struct Worker {
     rx.stamp.sample_ns = rx.stamp.arrival_ns = clock.now_ns();
     ASSERT_TRUE(can_rx.try_push(rx).is_ok());
     for (int i = 0; i < 4; ++i) nav->run_once();
+  }
+  // One downward frame of a single grey level (0 black, 255 saturated, 128 textureless).
+  void flat_frame(std::uint8_t level) {
+    std::fill(frame_pool.begin(), frame_pool.begin() + static_cast<std::ptrdiff_t>(cfg.map_width) * cfg.map_height, level);
+    black_frame();
+  }
+  // The MAP_POSE and MAP_STATUS the worker queued since the last call (the last of each).
+  int take_map_frames(qc::MapPose& pose, qc::MapStatus& status) {
+    int n = 0;
+    hal::CanFrame f;
+    while (can_tx.try_pop(f)) {
+      if (f.id == qc::kIdMapPose && qc::decode(f, pose)) ++n;
+      if (f.id == qc::kIdMapStatus && qc::decode(f, status)) ++n;
+    }
+    return n;
   }
   void black_frame() {
     clock.advance_ns(200000000);
@@ -208,20 +301,166 @@ TEST(QnavdMap, ModeMapIsRefusedWithoutMapEnabled) {
 }
 
 TEST(QnavdMap, ABadFrameIsCountedAndTheMapWrittenWhenTheModeIsLeft) {
+  SoftwareFaults::reset_for_tests();
   Worker w(true);
   w.command(qc::Mode::kMap);
   ASSERT_EQ(w.nav->last_reject(), ModeReject::kNone);
   ASSERT_EQ(w.nav->mode(), qc::Mode::kMap);
+  qc::MapPose pose;
+  qc::MapStatus st;
+  w.take_map_frames(pose, st);
   w.black_frame();
+  ASSERT_EQ(w.take_map_frames(pose, st), 2);  // one MAP_POSE and one MAP_STATUS for the frame
+  EXPECT_TRUE(st.black);
+  EXPECT_FALSE(st.registered);
+  EXPECT_FALSE(st.lost);
+  EXPECT_EQ(st.node_id, qc::kMapNoNode);
+  EXPECT_EQ(st.node_count, 0u);
+  EXPECT_EQ(st.frame_seq, 0u);
+  EXPECT_EQ(pose.x, 0.0);
+  EXPECT_EQ(pose.y, 0.0);
   EXPECT_EQ(w.nav->map_frames(), 1u);
   EXPECT_EQ(w.nav->map_bad_frames(), 1u);
   EXPECT_EQ(w.nav->mapper().map().node_count(), 0u);
   EXPECT_FALSE(w.store.exists("r/map_1.qmap"));  // nothing learnt yet, nothing written
+  w.flat_frame(255);
+  ASSERT_EQ(w.take_map_frames(pose, st), 2);
+  EXPECT_TRUE(st.saturated);
+  EXPECT_FALSE(st.black);
+  EXPECT_FALSE(st.registered);
+  w.flat_frame(128);
+  ASSERT_EQ(w.take_map_frames(pose, st), 2);
+  EXPECT_TRUE(st.textureless);
+  EXPECT_FALSE(st.black || st.saturated || st.registered || st.lost);
+  EXPECT_EQ(st.node_id, qc::kMapNoNode);
+  EXPECT_EQ(w.nav->map_bad_frames(), 3u);
   w.command(qc::Mode::kIdle);
   EXPECT_EQ(w.nav->mode(), qc::Mode::kIdle);
   EXPECT_TRUE(w.store.exists("r/map_1.qmap"));   // written (empty) when the mode was left
   EXPECT_EQ(w.nav->map_saves(), 1u);
   EXPECT_EQ(w.nav->map_save_errors(), 0u);
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
+}
+
+// The linux backend: Mode = Map is accepted when the downward camera is configured (map.device) and
+// refused (UnsupportedMode) without one, as the config's map_runs() says.
+TEST(QnavdMap, LinuxBackendAcceptsModeMapOnlyWithADownwardCamera) {
+  Worker without(true, "");  // the linux backend, map.enabled, no map.device
+  EXPECT_FALSE(map_runs(without.cfg));
+  without.command(qc::Mode::kMap);
+  EXPECT_EQ(without.nav->last_reject(), ModeReject::kUnsupportedMode);
+  EXPECT_EQ(without.nav->mode(), qc::Mode::kIdle);
+  Worker with(true, "/dev/qnav-no-such-camera");  // the worker does not open it: the io thread's source does
+  EXPECT_TRUE(map_runs(with.cfg));
+  with.command(qc::Mode::kMap);
+  EXPECT_EQ(with.nav->last_reject(), ModeReject::kNone);
+  EXPECT_EQ(with.nav->mode(), qc::Mode::kMap);
+  // The camera's device reported down: FaultCameraLost in Mode = Map.
+  with.io.downward_device_down.store(true);
+  with.command(qc::Mode::kMap);
+  hal::CanFrame f;
+  std::uint16_t faults = 0;
+  while (with.can_tx.try_pop(f)) {
+    qc::NavStatus ns;
+    if (f.id == qc::kIdNavStatus && qc::decode(f, ns)) faults = ns.fault_flags;
+  }
+  EXPECT_NE(faults & qc::fault::kCameraLost, 0u);
+}
+
+// The camera falling silent in Mode = Map (no downward frame for map.stale_s) is FaultCameraLost in
+// NAV_STATUS, and the next frame clears it; in Idle the silence is no fault.
+TEST(QnavdMap, ASilentDownwardCameraIsCameraLostInModeMap) {
+  SoftwareFaults::reset_for_tests();
+  Worker w(true);
+  auto last_faults = [&w] {
+    std::uint16_t faults = 0;
+    hal::CanFrame f;
+    while (w.can_tx.try_pop(f)) {
+      qc::NavStatus ns;
+      if (f.id == qc::kIdNavStatus && qc::decode(f, ns)) faults = ns.fault_flags;
+    }
+    return faults;
+  };
+  w.clock.advance_ns(static_cast<std::int64_t>(3 * w.cfg.map_stale_s * 1e9));  // silent in Idle
+  for (int i = 0; i < 4; ++i) w.nav->run_once();
+  EXPECT_EQ(last_faults() & qc::fault::kCameraLost, 0u);
+  w.command(qc::Mode::kMap);
+  ASSERT_EQ(w.nav->mode(), qc::Mode::kMap);
+  w.black_frame();  // a frame 0.2 s after entering
+  EXPECT_EQ(last_faults() & qc::fault::kCameraLost, 0u);
+  w.clock.advance_ns(static_cast<std::int64_t>((w.cfg.map_stale_s + 0.5) * 1e9));
+  for (int i = 0; i < 4; ++i) w.nav->run_once();
+  EXPECT_NE(last_faults() & qc::fault::kCameraLost, 0u);
+  w.black_frame();
+  EXPECT_EQ(last_faults() & qc::fault::kCameraLost, 0u);
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
+}
+
+// /dev/videoN of the first vivid capture node, or "" when vivid is not loaded.
+std::string find_vivid() {
+  for (int n = 0; n < 64; ++n) {
+    char path[96];
+    std::snprintf(path, sizeof path, "/sys/class/video4linux/video%d/name", n);
+    FILE* f = std::fopen(path, "r");
+    if (!f) continue;
+    char name[128] = {};
+    const bool ok = std::fgets(name, sizeof name, f) != nullptr;
+    std::fclose(f);
+    if (ok && std::strncmp(name, "vivid", 5) == 0 && std::strstr(name, "vid-cap") != nullptr) return "/dev/video" + std::to_string(n);
+  }
+  return "";
+}
+
+// The linux backend's downward camera on vivid (the bench's hil_v4l2_gpio_hal loads it; skipped
+// without it): LinuxDownwardSource opens it, its frames reach the nav worker in Mode = Map as
+// downward frames of map.width x map.height with increasing kernel stamps, each answered on CAN by
+// a MAP_POSE + MAP_STATUS with FrameSeq counting up, and the device is not reported down.
+TEST(QnavdMap, LinuxDownwardCameraOnVividFeedsTheMapMode) {
+  const std::string dev = find_vivid();
+  if (dev.empty()) GTEST_SKIP() << "no vivid capture node (modprobe vivid; the bench's hil_v4l2_gpio_hal loads it)";
+  SoftwareFaults::reset_for_tests();
+  Worker w(true, dev.c_str(), 320, 180);  // a size vivid's webcam input offers
+  w.command(qc::Mode::kMap);
+  ASSERT_EQ(w.nav->mode(), qc::Mode::kMap);
+  LinuxDownwardSource src(w.cfg, w.pool_view(), nullptr);
+  constexpr int kFrames = 6;
+  int statuses = 0, last_seq = -1;
+  std::int64_t last_stamp = -1;
+  // Bounded by vivid's frame rate (10-60 frames/s): at most 20 s of 5 ms polls, never a timing assertion.
+  for (int i = 0; i < 4000 && statuses < kFrames; ++i) {
+    const std::int64_t now = w.clock.now_ns();
+    if (!src.poll(now, w.io)) {
+      usleep(5000);
+      w.clock.advance_ns(5000000);
+      continue;
+    }
+    const FrameMsg* f = w.frames.front();
+    if (f == nullptr) continue;  // corrupt or dropped: counted
+    EXPECT_TRUE(f->downward);
+    EXPECT_EQ(f->width, 320);
+    EXPECT_EQ(f->height, 180);
+    EXPECT_GT(f->stamp.sample_ns, last_stamp);
+    last_stamp = f->stamp.sample_ns;
+    // The worker runs on the camera's (monotonic) time: its clock is moved to the frame's.
+    if (w.clock.now_ns() < f->stamp.arrival_ns) w.clock.set_ns(f->stamp.arrival_ns);
+    for (int k = 0; k < 2; ++k) w.nav->run_once();
+    qc::MapPose pose;
+    qc::MapStatus st;
+    if (w.take_map_frames(pose, st) == 2) {
+      EXPECT_EQ(st.frame_seq, last_seq + 1);
+      last_seq = st.frame_seq;
+      ++statuses;
+    }
+  }
+  EXPECT_TRUE(src.is_open());
+  EXPECT_GE(src.fd(), 0);
+  EXPECT_FALSE(w.io.downward_device_down.load());
+  EXPECT_EQ(w.io.device_errors.load(), 0u);
+  EXPECT_EQ(statuses, kFrames);
+  EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
+  EXPECT_GE(w.nav->map_frames(), static_cast<std::uint32_t>(kFrames));
+  std::printf("vivid %s: %d map frames, %u bad (vivid's test pattern), format %s\n", dev.c_str(), statuses, w.nav->map_bad_frames(),
+              src.format() == hal::PixelFormat::kGrey ? "GREY" : "YUYV");
 }
 
 }  // namespace

@@ -380,3 +380,68 @@ TEST(QnavCanCodec, NavStatusCarriesTheModeRejectReason) {
 }
 }  // namespace
 }  // namespace qnav::drivers::qnavcan
+
+// MAP_POSE: 21-bit signed positions at 1 cm (m or mosaic px), a 14-bit heading at 0.0004 rad; a
+// known frame, the round trip within half a step, the range ends and NaN refused.
+TEST(QnavCanCodec, MapPoseKnownAnswerRoundTripAndRange) {
+  hal::CanFrame f;
+  ASSERT_TRUE(encode(MapPose{1.0, -1.0, 0.0004, 7}, f).is_ok());
+  // X raw 100 at bits 0..20, Y raw -100 (21-bit two's complement) at 21..41, Heading raw 1 at 42..55, Counter 7.
+  std::uint64_t raw = 0;
+  for (int i = 0; i < 8; ++i) raw |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);
+  EXPECT_EQ(raw & 0x1FFFFFu, 100u);
+  EXPECT_EQ((raw >> 21) & 0x1FFFFFu, (1u << 21) - 100u);
+  EXPECT_EQ((raw >> 42) & 0x3FFFu, 1u);
+  EXPECT_EQ(raw >> 56, 7u);
+  for (const MapPose m : {MapPose{123.456, -7890.12, -3.1416, 1}, MapPose{-kMapPositionMax, kMapPositionMax, 3.1416, 255},
+                          MapPose{0.004, -0.004, 2.0, 0}}) {
+    ASSERT_TRUE(encode(m, f).is_ok());
+    MapPose b;
+    ASSERT_TRUE(decode(f, b).is_ok());
+    EXPECT_NEAR(b.x, m.x, 0.005);
+    EXPECT_NEAR(b.y, m.y, 0.005);
+    EXPECT_NEAR(b.heading_rad, m.heading_rad, 0.0002);
+    EXPECT_EQ(b.counter, m.counter);
+  }
+  EXPECT_EQ(encode(MapPose{kMapPositionMax + 0.1, 0, 0, 0}, f), StatusCode::kOutOfRange);
+  EXPECT_EQ(encode(MapPose{0, 0, 3.2, 0}, f), StatusCode::kOutOfRange);
+  EXPECT_FALSE(encode(MapPose{std::numeric_limits<double>::quiet_NaN(), 0, 0, 0}, f).is_ok());
+}
+
+// MAP_STATUS: every field and flag round-trips on its own (a walking flag), and decodes generically
+// under its DBC names.
+TEST(QnavCanCodec, MapStatusFlagsRoundTripEachOnItsOwn) {
+  hal::CanFrame f;
+  MapStatus m;
+  m.node_id = 1234;
+  m.node_count = 4321;
+  m.frame_seq = 65535;
+  m.counter = 9;
+  ASSERT_TRUE(encode(m, f).is_ok());
+  MapStatus b;
+  ASSERT_TRUE(decode(f, b).is_ok());
+  EXPECT_EQ(b.node_id, 1234);
+  EXPECT_EQ(b.node_count, 4321);
+  EXPECT_EQ(b.frame_seq, 65535);
+  EXPECT_EQ(b.counter, 9);
+  EXPECT_FALSE(b.registered || b.black || b.saturated || b.textureless || b.lost || b.metric || b.new_node || b.revisit);
+  EXPECT_EQ(MapStatus{}.node_id, kMapNoNode);
+  bool MapStatus::*const flags[] = {&MapStatus::registered, &MapStatus::black,  &MapStatus::saturated, &MapStatus::textureless,
+                                    &MapStatus::lost,       &MapStatus::metric, &MapStatus::new_node,  &MapStatus::revisit};
+  const char* const names[] = {"Registered", "Black", "Saturated", "Textureless", "Lost", "Metric", "NewNode", "Revisit"};
+  for (std::size_t k = 0; k < 8; ++k) {
+    MapStatus one;
+    one.*flags[k] = true;
+    ASSERT_TRUE(encode(one, f).is_ok());
+    ASSERT_TRUE(decode(f, b).is_ok());
+    for (std::size_t j = 0; j < 8; ++j) EXPECT_EQ(b.*flags[j], j == k) << names[k] << " set, " << names[j] << " read";
+    const MessageDef* def = nullptr;
+    double v[kMaxSignalsPerMessage];
+    ASSERT_TRUE(decode_generic(f, def, v, kMaxSignalsPerMessage).is_ok());
+    ASSERT_NE(def, nullptr);
+    EXPECT_STREQ(def->name, "QNAV_MAP_STATUS");
+    EXPECT_STREQ(def->signals[3 + k].name, names[k]);
+    EXPECT_DOUBLE_EQ(v[3 + k], 1.0);
+    EXPECT_EQ(def->cycle_ms, 0u);  // per frame, not periodic
+  }
+}

@@ -215,7 +215,7 @@ TEST(QnavDbc, EveryEnumerationAndFlagHasAValueTableNamingEveryValue) {
   }
   EXPECT_EQ(enumerations,
             6);  // MODE_CMD.Mode, NAV_STATUS.State and .ModeReject, ROUTE_STATUS.GuidanceStatus and .Side, HEARTBEAT.State
-  EXPECT_EQ(flags, 28);  // Valid, DepthValid, AltitudeValid, ResetNav, Reverse, Localised, 2 x 10 Fault*, Leak, BusOff
+  EXPECT_EQ(flags, 36);  // Valid, DepthValid, AltitudeValid, ResetNav, Reverse, Localised, 2 x 10 Fault*, Leak, BusOff, 8 MAP_STATUS flags
 }
 
 TEST(QnavDbc, RouteStatusValueNamesAreTheCodecNames) {

@@ -136,3 +136,52 @@ TEST(QnavCanPublisher, DropsAFaultWordWithAReservedBit) {
   EXPECT_EQ(pub.poll(1000000), 1);
   EXPECT_EQ(bus.sent, 1);
 }
+
+// MAP_POSE and MAP_STATUS are per-frame events: each set() goes out once at the next poll, MAP_POSE
+// right before MAP_STATUS with the same counter, and is never repeated; the periodic outputs keep
+// their periods around them.
+TEST(QnavCanPublisher, SendsMapPoseThenMapStatusOncePerSet) {
+  hal::ManualClock clock(0);
+  hal::SimCanNetwork net(clock);
+  hal::SimCanBus tx, rx;
+  ASSERT_TRUE(tx.attach(net).is_ok());
+  ASSERT_TRUE(rx.attach(net).is_ok());
+  QnavCanPublisher pub(tx);
+  pub.set(Heartbeat{1, Mode::kMap, 0, 1, 0});
+  int poses = 0, statuses = 0;
+  std::uint32_t last_id = 0;
+  for (int frame = 0; frame < 5; ++frame) {
+    MapStatus s;
+    s.frame_seq = static_cast<std::uint16_t>(frame);
+    s.registered = true;
+    pub.set(MapPose{0.5 * frame, 0, 0, 0});
+    pub.set(s);
+    for (int k = 0; k < 3; ++k) {  // three polls per frame: the event goes out at the first only
+      const std::int64_t t = (3 * frame + k) * 10000000LL;
+      clock.set_ns(t);
+      pub.poll(t);
+      hal::CanRxFrame f;
+      while (rx.receive(f, 0).is_ok()) {
+        if (f.frame.id == kIdMapPose) {
+          MapPose p;
+          ASSERT_TRUE(decode(f.frame, p).is_ok());
+          EXPECT_EQ(k, 0);
+          EXPECT_NEAR(p.x, 0.5 * frame, 0.005);
+          EXPECT_EQ(p.counter, static_cast<std::uint8_t>(frame));
+          ++poses;
+        } else if (f.frame.id == kIdMapStatus) {
+          MapStatus m;
+          ASSERT_TRUE(decode(f.frame, m).is_ok());
+          EXPECT_EQ(k, 0);
+          EXPECT_EQ(last_id, kIdMapPose) << "MAP_STATUS right after MAP_POSE";
+          EXPECT_EQ(m.frame_seq, frame);
+          EXPECT_EQ(m.counter, static_cast<std::uint8_t>(frame));
+          ++statuses;
+        }
+        last_id = f.frame.id;
+      }
+    }
+  }
+  EXPECT_EQ(poses, 5);
+  EXPECT_EQ(statuses, 5);
+}

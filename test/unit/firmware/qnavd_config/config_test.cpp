@@ -131,6 +131,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(vo_frame_queue),
       QNAV_FIELD(vo_stale_s),
       QNAV_FIELD(map_enabled),
+      QNAV_FIELD(map_device),
       QNAV_FIELD(map_width),
       QNAV_FIELD(map_height),
       QNAV_FIELD(map_focal_px),
@@ -140,6 +141,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(map_node_spacing),
       QNAV_FIELD(map_max_nodes),
       QNAV_FIELD(map_frame_queue),
+      QNAV_FIELD(map_stale_s),
       QNAV_FIELD(map_budget_us),
       QNAV_FIELD(sim_length_m),
       QNAV_FIELD(sim_seed),
@@ -326,6 +328,10 @@ TEST(QnavdConfig, VehicleExampleLoads) {
   EXPECT_EQ(c.vo_left_device, "/dev/video0");
   EXPECT_EQ(c.vo_right_device, "/dev/video1");
   EXPECT_EQ(c.vo_trigger_chip, "gpiochip0");
+  EXPECT_EQ(c.map_device, "/dev/video2");
+  EXPECT_FALSE(map_runs(c));  // map.enabled = false: the downward camera is not opened
+  c.map_enabled = true;
+  EXPECT_TRUE(map_runs(c));
   expect_stages_init(c);
 }
 
@@ -439,6 +445,7 @@ stale_s = 5.0
 
 [map]
 enabled = true
+device = "/dev/video2"
 width = 384
 height = 288
 focal_px = 405.6
@@ -448,6 +455,7 @@ altitude_m = 2.5
 node_spacing = 0.3
 max_nodes = 200
 frame_queue = 8
+stale_s = 4.0
 
 [route]
 id = 7
@@ -564,6 +572,9 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_FALSE(c.sim_mission[1].reverse);
   EXPECT_TRUE(c.sim_mission[1].file.empty());
   EXPECT_EQ(c.sim_mission[1].last_ping, -1);
+  EXPECT_TRUE(map_runs(c));  // the linux backend with a downward camera
+  EXPECT_EQ(frame_pool_slots(c), 8u);
+  EXPECT_EQ(frame_slot_bytes(c), 384u * 288u);  // vo.enabled = false: downward frames only
   expect_stages_init(c);
 }
 
@@ -626,8 +637,9 @@ const BadConfig kBadConfigs[] = {
     {"unknown_key", "[route]\nid = 3\n\nmax_node = 5000\n", "route.max_node", 4,
      "unknown key (did you mean route.max_nodes?)"},
     {"unknown_key_far", "[dvl]\nbaudrate = 9600\n", "dvl.baudrate", 2, "unknown key"},
-    {"unknown_key_other_table", "[can]\nstale_s = 1.0\n", "can.stale_s", 2,
-     "did you mean sonar.stale_s or dvl.stale_s or vo.stale_s?"},
+    {"unknown_key_other_table", "[leak]\nstale_s = 1.0\n", "leak.stale_s", 2,
+     "did you mean sonar.stale_s or dvl.stale_s or vo.stale_s or map.stale_s?"},
+    {"unknown_key_near_another_table", "[can]\nstale_s = 1.0\n", "can.stale_s", 2, "did you mean map.stale_s?"},
     {"key_outside_tables", "backend = \"linux\"\n", "backend", 1, "did you mean daemon.backend?"},
     {"unknown_table", "[daemon]\nlog = \"off\"\n[rout]\nid = 2\n", "rout", 3, "unknown table (did you mean [route]?)"},
     {"unknown_table_far", "[logging]\nlevel = 2\n", "logging", 1, "unknown table; the tables are [daemon], [can]"},
@@ -684,6 +696,8 @@ const BadConfig kBadConfigs[] = {
      "not with the simulated rover"},
     {"last_ping_before_first", "[[sim.pass]]\nmode = \"teach\"\nfile = \"dive.xtf\"\nfirst_ping = 50\nlast_ping = 20\n", "sim.pass[0].last_ping", 5,
      "must be -1 or > first_ping (50), got 20"},
+    {"downward_camera_on_sim", "[map]\nenabled = true\ndevice = \"/dev/video2\"\n\n[[sim.pass]]\nmode = \"map\"\n", "map.device", 3,
+     "daemon.backend = \"sim\" flies the simulated downward camera"},
     {"max_frames_negative", "[[sim.pass]]\nmode = \"vo\"\nmax_frames = -1\n", "sim.pass[0].max_frames", 3, "must be in [0, 1000000], got -1"},
     {"pass_misspelt_key", "[[sim.pass]]\nmode = \"teach\"\nreverse_ = true\n", "sim.pass[0].reverse_", 3,
      "did you mean reverse?"},

@@ -1,0 +1,89 @@
+// qnavd's downward V4L2 camera (linux backend, map.device) on devices that are not there or are not
+// cameras: the failure is counted, flagged (downward_device_down, which the nav worker reports as
+// FaultCameraLost in Mode = Map), logged once with the OS's reason, and retried once a second,
+// without blocking the io thread or touching the frame pool. (On vivid:
+// QnavdMap.LinuxDownwardCameraOnVividFeedsTheMapMode in qnavd_map_test.cpp.)
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "firmware/qnavd/linux_downward.hpp"
+
+namespace qnav::daemon {
+namespace {
+
+struct Pool {
+  std::vector<std::uint8_t> pixels;
+  std::vector<FrameMsg> msg_store;
+  std::vector<std::uint32_t> free_store;
+  SpscRing<FrameMsg> frames;
+  SpscRing<std::uint32_t> free;
+  FramePool view;
+  explicit Pool(const DaemonConfig& c) {
+    const std::size_t slot = static_cast<std::size_t>(c.map_width) * static_cast<std::size_t>(c.map_height);
+    pixels.assign(4 * slot, 0);
+    msg_store.assign(4, FrameMsg{});
+    free_store.assign(4, 0);
+    EXPECT_TRUE(frames.init(Span<FrameMsg>(msg_store.data(), msg_store.size())));
+    EXPECT_TRUE(free.init(Span<std::uint32_t>(free_store.data(), free_store.size())));
+    for (std::uint32_t s = 0; s < 4; ++s) EXPECT_TRUE(free.try_push(s));
+    view.frames = &frames;
+    view.free = &free;
+    view.pool = pixels.data();
+    view.map_width = c.map_width;
+    view.map_height = c.map_height;
+    view.slot_bytes = slot;
+  }
+};
+
+std::string read_all(FILE* f) {
+  std::rewind(f);
+  std::string s;
+  char buf[512];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, n);
+  return s;
+}
+
+void expect_down_and_retried(const char* device) {
+  DaemonConfig c;
+  c.backend = Backend::kLinux;
+  c.vo_enabled = false;
+  c.map_enabled = true;
+  c.map_device = device;
+  ASSERT_TRUE(map_runs(c));
+  Pool pool(c);
+  FILE* log = std::tmpfile();
+  ASSERT_NE(log, nullptr);
+  IoCounters io;
+  LinuxDownwardSource src(c, pool.view, log);
+  const std::int64_t t0 = 5000000000;
+  EXPECT_FALSE(src.poll(t0, io));
+  EXPECT_TRUE(io.downward_device_down.load());
+  EXPECT_FALSE(io.camera_device_down.load());  // the stereo pair's flag is its own
+  EXPECT_EQ(io.device_errors.load(), 1u);
+  EXPECT_FALSE(src.poll(t0 + 500000000, io));  // not retried within the second
+  EXPECT_EQ(io.device_errors.load(), 1u);
+  EXPECT_FALSE(src.poll(t0 + 1000000000, io));  // retried after it
+  EXPECT_EQ(io.device_errors.load(), 2u);
+  EXPECT_TRUE(io.downward_device_down.load());
+  EXPECT_EQ(io.frames_in.load(), 0u);
+  EXPECT_EQ(pool.frames.size(), 0u);
+  EXPECT_EQ(pool.free.size(), 4u);  // no slot taken while the device is down
+  EXPECT_EQ(src.fd(), -1);
+  EXPECT_FALSE(src.is_open());
+  const std::string text = read_all(log);
+  std::fclose(log);
+  EXPECT_NE(text.find("\"event\":\"device\""), std::string::npos) << text;
+  EXPECT_NE(text.find(device), std::string::npos) << text;
+  EXPECT_EQ(text.find("\"event\":\"device\""), text.rfind("\"event\":\"device\"")) << "logged once until the device is back:\n" << text;
+}
+
+TEST(LinuxDownward, MissingCameraIsDownCountedLoggedAndRetried) { expect_down_and_retried("/dev/qnav-no-such-downward-camera"); }
+
+TEST(LinuxDownward, ADeviceThatIsNotACameraIsRefused) { expect_down_and_retried("/dev/null"); }
+
+}  // namespace
+}  // namespace qnav::daemon
