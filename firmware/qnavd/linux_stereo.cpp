@@ -104,7 +104,9 @@ bool LinuxStereoSource::poll(std::int64_t now_ns, IoCounters& io) noexcept {
     return true;
   }
   const std::size_t n = static_cast<std::size_t>(pool_.width) * static_cast<std::size_t>(pool_.height);
-  std::uint8_t* dst = pool_.pool + static_cast<std::size_t>(slot) * 2 * n;
+  // The pool's own slot size (frame_slot_bytes: the larger of a stereo pair and a downward frame),
+  // the stride the nav worker reads with; a pair fills the first 2 n bytes of its slot.
+  std::uint8_t* dst = pool_.slot(slot);
   for (int y = 0; y < pool_.height; ++y) {
     std::memcpy(dst + static_cast<std::size_t>(y) * static_cast<std::size_t>(pool_.width), f.left.row(y), static_cast<std::size_t>(pool_.width));
     std::memcpy(dst + n + static_cast<std::size_t>(y) * static_cast<std::size_t>(pool_.width), f.right.row(y), static_cast<std::size_t>(pool_.width));

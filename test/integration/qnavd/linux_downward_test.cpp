@@ -9,34 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "test/integration/qnavd/test_frame_pool.hpp"
 #include "firmware/qnavd/linux_downward.hpp"
 
 namespace qnav::daemon {
 namespace {
 
-struct Pool {
-  std::vector<std::uint8_t> pixels;
-  std::vector<FrameMsg> msg_store;
-  std::vector<std::uint32_t> free_store;
-  SpscRing<FrameMsg> frames;
-  SpscRing<std::uint32_t> free;
-  FramePool view;
-  explicit Pool(const DaemonConfig& c) {
-    const std::size_t slot = static_cast<std::size_t>(c.map_width) * static_cast<std::size_t>(c.map_height);
-    pixels.assign(4 * slot, 0);
-    msg_store.assign(4, FrameMsg{});
-    free_store.assign(4, 0);
-    EXPECT_TRUE(frames.init(Span<FrameMsg>(msg_store.data(), msg_store.size())));
-    EXPECT_TRUE(free.init(Span<std::uint32_t>(free_store.data(), free_store.size())));
-    for (std::uint32_t s = 0; s < 4; ++s) EXPECT_TRUE(free.try_push(s));
-    view.frames = &frames;
-    view.free = &free;
-    view.pool = pixels.data();
-    view.map_width = c.map_width;
-    view.map_height = c.map_height;
-    view.slot_bytes = slot;
-  }
-};
 
 std::string read_all(FILE* f) {
   std::rewind(f);
@@ -54,7 +32,7 @@ void expect_down_and_retried(const char* device) {
   c.map_enabled = true;
   c.map_device = device;
   ASSERT_TRUE(map_runs(c));
-  Pool pool(c);
+  TestFramePool pool(c);
   FILE* log = std::tmpfile();
   ASSERT_NE(log, nullptr);
   IoCounters io;

@@ -8,32 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "test/integration/qnavd/test_frame_pool.hpp"
 #include "firmware/qnavd/linux_stereo.hpp"
 
 namespace qnav::daemon {
 namespace {
 
-struct Pool {
-  std::vector<std::uint8_t> pixels;
-  std::vector<FrameMsg> msg_store;
-  std::vector<std::uint32_t> free_store;
-  SpscRing<FrameMsg> frames;
-  SpscRing<std::uint32_t> free;
-  FramePool view;
-  explicit Pool(const DaemonConfig& c) {
-    pixels.assign(4 * 2 * static_cast<std::size_t>(c.vo.max_width) * static_cast<std::size_t>(c.vo.max_height), 0);
-    msg_store.assign(4, FrameMsg{});
-    free_store.assign(4, 0);
-    EXPECT_TRUE(frames.init(Span<FrameMsg>(msg_store.data(), msg_store.size())));
-    EXPECT_TRUE(free.init(Span<std::uint32_t>(free_store.data(), free_store.size())));
-    for (std::uint32_t s = 0; s < 4; ++s) EXPECT_TRUE(free.try_push(s));
-    view.frames = &frames;
-    view.free = &free;
-    view.pool = pixels.data();
-    view.width = c.vo.max_width;
-    view.height = c.vo.max_height;
-  }
-};
 
 std::string read_all(FILE* f) {
   std::rewind(f);
@@ -47,10 +27,11 @@ std::string read_all(FILE* f) {
 void expect_down_and_retried(const char* left, const char* right, const char* reason) {
   DaemonConfig c;
   c.backend = Backend::kLinux;
+  c.vo_enabled = true;
   c.vo_camera = CameraSource::kV4l2;
   c.vo_left_device = left;
   c.vo_right_device = right;
-  Pool pool(c);
+  TestFramePool pool(c);
   FILE* log = std::tmpfile();
   ASSERT_NE(log, nullptr);
   IoCounters io;
