@@ -12,8 +12,9 @@
 # The maintainer scripts (toolchain/deb/postinst, prerm, postrm) create the system user `qnav` and
 # /var/lib/qnav/routes, and stop/disable the service on removal; they never start it.
 #
-# Included from the root CMakeLists.txt before the firmware/ folders, which call qnav_install_program().
-# Host builds only (QNAV_HOST_TOOLS): cross builds do not build qnavd (docs/install.md says what is missing).
+# Included from the root CMakeLists.txt before the firmware/ folders, which call qnav_install_program();
+# the root calls qnav_package() last (the cross Depends need to know whether hal/linux links libgpiod).
+# Host builds (QNAV_HOST_TOOLS) and the cross presets' target daemon (QNAV_TARGET_DAEMON: arm64, armhf).
 include_guard(GLOBAL)
 
 set(QNAV_PACKAGING_DIR ${CMAKE_CURRENT_LIST_DIR}/deb)
@@ -89,11 +90,30 @@ find_program(QNAV_DPKG_SHLIBDEPS dpkg-shlibdeps)
 if(QNAV_DPKG_SHLIBDEPS AND NOT CMAKE_CROSSCOMPILING)
   set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 else()
-  # No dpkg-shlibdeps (or a cross build, whose target libraries dpkg does not know): glibc + libstdc++.
+  # No dpkg-shlibdeps (or a cross build, whose target libraries dpkg does not know): a fixed list,
+  # glibc + libstdc++ and, in the target daemon build, the sysroot's libraries the programs link (the
+  # minimum versions are the packages' shlibs files). test/package checks it against the programs' NEEDED.
   set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser, libc6 (>= 2.36), libstdc++6 (>= 12), libgcc-s1")
 endif()
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
   ${QNAV_PACKAGING_DIR}/postinst ${QNAV_PACKAGING_DIR}/prerm ${QNAV_PACKAGING_DIR}/postrm
   ${QNAV_PACKAGING_DIR}/conffiles)
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION TRUE)
-include(CPack)
+
+# qnav_package(): the last call of the root CMakeLists.txt, when every program is defined. A macro: CPack
+# reads the CPACK_* variables of the root scope.
+macro(qnav_package)
+  if(CMAKE_CROSSCOMPILING AND NOT CPACK_DEBIAN_PACKAGE_SHLIBDEPS)
+    # qnav_tools (qnav, and qnavd's recorded-file backends) links libpng and libjpeg (zlib comes with
+    # libpng16-16; the programs do not load libz themselves).
+    string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS
+      ", libpng16-16 (>= 1.6.2-1), libjpeg62-turbo (>= 1:2.1.5)")
+    if(TARGET qnav_hal_linux)
+      get_target_property(_qnav_hal_defs qnav_hal_linux INTERFACE_COMPILE_DEFINITIONS)
+      if("QNAV_HAVE_GPIOD=1" IN_LIST _qnav_hal_defs)
+        string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", libgpiod2 (>= 1.6.3)")
+      endif()
+    endif()
+  endif()
+  include(CPack)
+endmacro()

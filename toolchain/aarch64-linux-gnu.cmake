@@ -11,3 +11,7 @@ set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 # Header-only Eigen is shared with the host.
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE BOTH)
 set(CMAKE_CROSSCOMPILING_EMULATOR ${CMAKE_CURRENT_LIST_DIR}/run-emulator;aarch64)
+# The target's libgpiod, libpng, libjpeg (scripts/fetch-sysroot arm64): the daemon build (QNAV_TARGET_DAEMON).
+set(QNAV_TARGET_DEB_ARCH arm64)
+set(QNAV_TARGET_TRIPLE aarch64-linux-gnu)
+include(${CMAKE_CURRENT_LIST_DIR}/QnavTargetSysroot.cmake)

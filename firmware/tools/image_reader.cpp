@@ -99,7 +99,9 @@ struct JpegErr {
   jpeg_error_mgr mgr;
   std::jmp_buf jump;
 };
-void jpeg_fail(j_common_ptr cinfo) { std::longjmp(reinterpret_cast<JpegErr*>(cinfo->err)->jump, 1); }
+// cinfo->err is &JpegErr::mgr, the first member of a standard-layout JpegErr, so the JpegErr is at the
+// same address and aligned for it; through void* because a direct cast warns on armhf (-Wcast-align).
+void jpeg_fail(j_common_ptr cinfo) { std::longjmp(static_cast<JpegErr*>(static_cast<void*>(cinfo->err))->jump, 1); }
 // Silent, but counted: a warning (msg_level -1) is damaged data; trace messages (>= 0) are not.
 void jpeg_silent(j_common_ptr cinfo, int msg_level) {
   if (msg_level < 0) ++cinfo->err->num_warnings;

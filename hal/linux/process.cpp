@@ -116,7 +116,10 @@ ServiceNotifier::~ServiceNotifier() {
 
 Status ServiceNotifier::notify(const char* state) noexcept {
   if (fd_ < 0) return Status::ok();
-  const ssize_t n = sendto(fd_, state, std::strlen(state), MSG_NOSIGNAL, reinterpret_cast<const sockaddr*>(addr_), addr_len_);
+  // Through void*: addr_ is aligned for the sockaddr it holds (alignas in process.hpp), which a char*
+  // cast cannot show (-Wcast-align on armhf, a strict-alignment target).
+  const auto* to = static_cast<const sockaddr*>(static_cast<const void*>(addr_));
+  const ssize_t n = sendto(fd_, state, std::strlen(state), MSG_NOSIGNAL, to, addr_len_);
   if (n < 0) return os_error(StatusCode::kIoError, "sd_notify sendto", errno);
   return Status::ok();
 }

@@ -46,7 +46,7 @@ class ServiceNotifier {
  private:
   int fd_ = -1;
   std::uint64_t watchdog_usec_ = 0;
-  char addr_[128] = {};
+  alignas(8) char addr_[128] = {};  // a sockaddr_un (alignment 2), without the socket headers here
   unsigned addr_len_ = 0;
 };
 

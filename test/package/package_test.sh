@@ -5,9 +5,16 @@
 # root, checks the file list, runs the unpacked qnavd (--version, --check-config on the packaged
 # configurations, and a refusal of a file that is no configuration), and checks the control fields
 # and the maintainer scripts. Exit 0 pass, 1 fail (every failure printed), 77 skip (no dpkg-deb).
+# Cross packages (arm64, armhf; test/package/CMakeLists.txt): the programs run under
+# QNAV_PACKAGE_EMULATOR (the toolchain's run-emulator with the target sysroot), every library they
+# need (ELF NEEDED) must come from a package in Depends, and QNAV_PACKAGE_SKIP set is a skip with
+# that reason (the build has no target daemon: no sysroot).
 set -u
 BUILD=$1 WORK=$2 VERSION=$3 ARCH=$4
+EMU=${QNAV_PACKAGE_EMULATOR:-}
+[ -z "${QNAV_PACKAGE_SKIP:-}" ] || { echo "SKIP: $QNAV_PACKAGE_SKIP"; exit 77; }
 command -v dpkg-deb >/dev/null || { echo "SKIP: no dpkg-deb on this machine"; exit 77; }
+run() { $EMU "$@"; }  # EMU unquoted: the emulator and its arguments (empty for the host package)
 fails=0
 fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
 mark=0
@@ -54,17 +61,17 @@ ok "file list ($(cd "$root" && find . -type f | wc -l) files)"
 
 # The unpacked programs run.
 qnavd=$root/usr/bin/qnavd
-out=$("$qnavd" --version 2>&1); rc=$?
+out=$(run "$qnavd" --version 2>&1); rc=$?
 [ $rc -eq 0 ] && [ "$out" = "qnavd $VERSION" ] || fail "qnavd --version: exit $rc, '$out' (expected 'qnavd $VERSION')"
 for c in usr/share/qnav/examples/sim.toml usr/share/qnav/examples/vehicle.toml etc/qnav/qnavd.toml; do
-  out=$("$qnavd" --check-config "$root/$c" 2>&1); rc=$?
+  out=$(run "$qnavd" --check-config "$root/$c" 2>&1); rc=$?
   [ $rc -eq 0 ] && [ "$out" = "$root/$c: valid" ] || fail "qnavd --check-config $c: exit $rc, '$out'"
 done
-out=$("$qnavd" --check-config "$root/usr/share/qnav/qnav.dbc" 2>&1); rc=$?
+out=$(run "$qnavd" --check-config "$root/usr/share/qnav/qnav.dbc" 2>&1); rc=$?
 [ $rc -ne 0 ] || fail "qnavd --check-config accepted qnav.dbc: '$out'"
-out=$("$root/usr/bin/qnav" version 2>&1); rc=$?
+out=$(run "$root/usr/bin/qnav" version 2>&1); rc=$?
 [ $rc -eq 0 ] && echo "$out" | grep -q "$VERSION" || fail "qnav version: exit $rc, '$out'"
-ok "unpacked qnavd --version, --check-config on 3 configurations, refusal of a DBC; qnav version"
+ok "unpacked qnavd${EMU:+ (under $(basename "${EMU%% *}"))} --version, --check-config on 3 configurations, refusal of a DBC; qnav version"
 
 # The control file and the maintainer scripts.
 field() { dpkg-deb -f "$deb" "$1"; }
@@ -74,6 +81,28 @@ field() { dpkg-deb -f "$deb" "$1"; }
 deps=$(field Depends)
 [ -n "$deps" ] || fail "Depends empty"
 for d in libc6 adduser; do echo "$deps" | grep -qw "$d" || fail "Depends lacks $d: '$deps'"; done
+# Cross packages: Depends is a fixed list (no dpkg-shlibdeps for the target), so every shared library
+# the programs load must map to a package of that list, and the ELF machine must be the package's.
+if [ -n "$EMU" ]; then
+  case $ARCH in arm64) machine=AArch64 ;; armhf) machine=ARM ;; *) machine=? ;; esac
+  for p in qnavd qnav; do
+    readelf -h "$root/usr/bin/$p" | grep -q "Machine: *$machine" || fail "$p is not an $ARCH ($machine) program"
+    for lib in $(readelf -d "$root/usr/bin/$p" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
+      case $lib in
+        libc.so.6|libm.so.6|ld-linux-*) pkg=libc6 ;;
+        libstdc++.so.6) pkg=libstdc++6 ;;
+        libgcc_s.so.1) pkg=libgcc-s1 ;;
+        libgpiod.so.2) pkg=libgpiod2 ;;
+        libpng16.so.16) pkg=libpng16-16 ;;
+        libjpeg.so.62) pkg=libjpeg62-turbo ;;
+        libz.so.1) pkg=zlib1g ;;
+        *) fail "$p needs $lib, which no Depends entry is known to provide"; continue ;;
+      esac
+      echo "$deps" | tr ',' '\n' | awk '{print $1}' | grep -qxF "$pkg" || fail "$p needs $lib ($pkg), not in Depends: '$deps'"
+    done
+  done
+  ok "NEEDED of qnavd, qnav ($machine): $(readelf -d "$root/usr/bin/qnavd" "$root/usr/bin/qnav" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p' | sort -u | tr '\n' ' ')all in Depends"
+fi
 for s in postinst prerm postrm; do
   [ -f "$WORK/control/$s" ] && [ -x "$WORK/control/$s" ] || { fail "$s missing or not executable"; continue; }
   sh -n "$WORK/control/$s" || fail "$s: sh -n"

@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -1175,7 +1176,7 @@ int cmd_xtf() {
 // written durably one by one (fdatasync each) once the pass's node spacing is known.
 int cmd_train_file(const char* path) {
   const char* out = g_opt.out.c_str();
-  long a = 0, b = 1L << 40;
+  long a = 0, b = std::numeric_limits<long>::max();  // all pings (32-bit long on armhf)
   if (!parse_range(opt_or_null(g_opt.pings), a, b)) return usage("train", "--pings: give A:B, pings A to B-1 with 0 <= A < B");
   FilePass fp;
   if (const int rc = open_file_pass(path, fp); rc != 0) return rc;
@@ -1219,7 +1220,7 @@ int cmd_train_file(const char* path) {
 // No ground truth: the CSV's true_node is -1.
 int cmd_repeat_file(const char* path) {
   const char* route_path = g_opt.route.c_str();
-  long a = 0, b = 1L << 40;
+  long a = 0, b = std::numeric_limits<long>::max();  // all pings (32-bit long on armhf)
   if (!parse_range(opt_or_null(g_opt.pings), a, b)) return usage("repeat", "--pings: give A:B, pings A to B-1 with 0 <= A < B");
   tools::RouteFileReader reader;
   std::vector<route::NodeMeta> meta;
