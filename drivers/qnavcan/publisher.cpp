@@ -28,12 +28,12 @@ Status QnavCanPublisher::encode_output(int i, hal::CanFrame& f) noexcept {
     }
     case kMapPose: {
       MapPose m = map_pose_;
-      m.counter = counter_[i];
+      m.counter = map_counter_;
       return encode(m, f);
     }
     case kMapStatus: {
       MapStatus m = map_status_;
-      m.counter = counter_[i];
+      m.counter = map_counter_;
       return encode(m, f);
     }
     case kHealth: return encode(health_, f);

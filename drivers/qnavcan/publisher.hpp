@@ -34,7 +34,10 @@ class QnavCanPublisher {
   void set(const RouteStatus& m) noexcept { route_status_ = m, has_[kRouteStatus] = true; }
   void set(const VoStep& m) noexcept { vo_ = m, has_[kVo] = true; }
   bool vo_pending() const noexcept { return has_[kVo]; }
-  void set(const MapPose& m) noexcept { map_pose_ = m, has_[kMapPose] = true; }
+  // A map frame's pair: MAP_POSE and MAP_STATUS carry one Counter, taken when the pose is set (a pair
+  // replaced before it went out is skipped whole: the autopilot sees the Counter jump, never a pose
+  // paired with another frame's status).
+  void set(const MapPose& m) noexcept { map_pose_ = m, has_[kMapPose] = true, map_counter_ = map_next_counter_++; }
   void set(const MapStatus& m) noexcept { map_status_ = m, has_[kMapStatus] = true; }
   void set(const Health& m) noexcept { health_ = m, has_[kHealth] = true; }
   void set(const Heartbeat& m) noexcept { heartbeat_ = m, has_[kHeartbeat] = true; }
@@ -62,6 +65,7 @@ class QnavCanPublisher {
   bool sent_once_[kOutputs] = {};
   std::int64_t last_ns_[kOutputs] = {};
   std::uint8_t counter_[kOutputs] = {};
+  std::uint8_t map_counter_ = 0, map_next_counter_ = 0;
   CounterSet<TxCounter> counters_{kTxCounterNames};
 };
 
