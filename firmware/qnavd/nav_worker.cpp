@@ -738,8 +738,9 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
 
 void NavWorker::update_faults() noexcept {
   std::uint16_t f = faults_ & qc::fault::kRouteDamaged;
-  // The sonar is not used in Mode = Vo and the camera only there: each is lost only where it is used.
-  const bool sonar_lost = mode_ != qc::Mode::kVo &&
+  // The sonar is not used in Mode = Vo or Mode = Map, the cameras only there: each is lost only where
+  // it is used (a camera-only survey with the sonar off raises no sonar fault).
+  const bool sonar_lost = mode_ != qc::Mode::kVo && mode_ != qc::Mode::kMap &&
                           (last_ping_ns_ < 0 ? (nav_now_ns_ - start_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS)
                                              : (nav_now_ns_ - last_ping_ns_) > static_cast<std::int64_t>(cfg_.sonar_stale_s * kNsPerS));
   const std::int64_t last_pair_ns = std::max(last_frame_ns_, vo_mode_start_ns_);
