@@ -14,16 +14,6 @@
 namespace qnav::daemon {
 namespace {
 
-
-std::string read_all(FILE* f) {
-  std::rewind(f);
-  std::string s;
-  char buf[512];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, n);
-  return s;
-}
-
 void expect_down_and_retried(const char* left, const char* right, const char* reason) {
   DaemonConfig c;
   c.backend = Backend::kLinux;

@@ -1,10 +1,13 @@
-// A FramePool of 4 slots over vectors, as qnavd's daemon sets it up (frame_slot_bytes per slot), for
-// the V4L2 frame sources' tests (linux_stereo_test, linux_downward_test).
+// A FramePool of 4 slots over vectors, as qnavd's daemon sets it up (frame_slot_bytes per slot), and
+// read_all (what a source logged to its tmpfile), for the V4L2 frame sources' tests (linux_stereo_test,
+// linux_downward_test).
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "firmware/qnavd/config.hpp"
@@ -37,5 +40,14 @@ struct TestFramePool {
     view.map_height = c.map_height;
   }
 };
+
+inline std::string read_all(std::FILE* f) {
+  std::rewind(f);
+  std::string s;
+  char buf[512];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, n);
+  return s;
+}
 
 }  // namespace qnav::daemon
