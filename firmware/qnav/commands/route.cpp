@@ -276,9 +276,9 @@ int cmd_info() {
   report_route_end(stdout, "", r);
   // Every record checked in full (CRC, magic, index, every field and keypoint); every damaged one named.
   std::uint32_t damaged = 0, first_bad = r.node_count();
+  std::vector<route::NodeMeta> meta(r.node_count());
   for (std::uint32_t i = 0; i < r.node_count(); ++i) {
-    route::NodeMeta m;
-    const Status ms = r.load_meta(i, m);
+    const Status ms = r.load_meta(i, meta[i]);
     if (ms) continue;
     std::printf("DAMAGED: node %u: %s\n", i, ms.message());
     first_bad = std::min(first_bad, i);
@@ -295,14 +295,11 @@ int cmd_info() {
     return 1;
   }
   std::printf("all %u records pass their CRC and field checks\n", r.node_count());
-  route::NodeMeta first, last;
-  if (r.node_count() >= 2 && r.load_meta(0, first) && r.load_meta(r.node_count() - 1, last)) {
-    // The localiser's motion model divides odometry by the spacing flown (route::odometry_node_spacing_m),
-    // here from the end nodes (n - 1 spacings between them).
-    const double flown = (last.along_m - first.along_m) / static_cast<double>(r.node_count() - 1);
-    std::printf("node spacing flown: %.2f m (dead-reckoned, first to last node; the header's nominal %.2f m)\n", flown,
+  // The spacing the localiser's motion model divides odometry by, from the nodes just read.
+  if (meta.size() >= 2)
+    std::printf("node spacing flown: %.2f m (dead-reckoned, first to last node; the header's nominal %.2f m)\n",
+                route::odometry_node_spacing_m(p, Span<const route::NodeMeta>(meta.data(), meta.size())),
                 static_cast<double>(p.node_spacing_m));
-  }
   return 0;
 }
 

@@ -48,17 +48,21 @@ TEST(QnavCanPublisher, SendsEachOutputAtItsDbcPeriodWithRollingCounters) {
 }
 
 namespace {
-// A bus whose TX queue is full for the first `busy` sends.
+// A bus whose TX queue is full for the first `busy` sends, and for frames of `refuse_id` (0: none);
+// it records what it sent.
 class BusyBus final : public hal::CanBus {
  public:
   int busy = 2;
   int sent = 0;
-  Status send(const hal::CanFrame&) noexcept override {
-    if (busy > 0) {
-      --busy;
+  std::uint32_t refuse_id = 0;
+  std::vector<hal::CanFrame> frames;
+  Status send(const hal::CanFrame& f) noexcept override {
+    if (busy > 0 || (refuse_id != 0 && f.id == refuse_id)) {
+      busy -= busy > 0 ? 1 : 0;
       return Status(StatusCode::kCapacityExceeded, "full");
     }
     ++sent;
+    frames.push_back(f);
     return Status::ok();
   }
   Status receive(hal::CanRxFrame&, int) noexcept override { return Status(StatusCode::kTimeout, "none"); }
@@ -189,27 +193,12 @@ TEST(QnavCanPublisher, SendsMapPoseThenMapStatusOncePerSet) {
   EXPECT_EQ(statuses, 5);
 }
 
-namespace {
-// A bus that refuses the frames of one id (its TX queue full for them) and records what it sent.
-class PickyBus final : public hal::CanBus {
- public:
-  std::uint32_t refuse_id = 0;
-  std::vector<hal::CanFrame> sent;
-  Status send(const hal::CanFrame& f) noexcept override {
-    if (f.id == refuse_id) return Status(StatusCode::kCapacityExceeded, "full");
-    sent.push_back(f);
-    return Status::ok();
-  }
-  Status receive(hal::CanRxFrame&, int) noexcept override { return Status(StatusCode::kTimeout, "none"); }
-  hal::CanBusStats stats() const noexcept override { return {}; }
-};
-}  // namespace
-
 // A map frame's MAP_STATUS that could not go out before the next frame replaced it: the next pair
 // still carries one Counter in both frames (the lost status shows as a jump), never a pose paired with
 // another frame's status (found in review: with a counter per message they drifted apart for good).
 TEST(QnavCanPublisher, MapPoseAndMapStatusOfOneFrameShareTheirCounter) {
-  PickyBus bus;
+  BusyBus bus;
+  bus.busy = 0;
   QnavCanPublisher pub(bus);
   MapStatus st;
   st.frame_seq = 0;
@@ -223,7 +212,7 @@ TEST(QnavCanPublisher, MapPoseAndMapStatusOfOneFrameShareTheirCounter) {
   pub.set(st);
   pub.poll(10000000);
   std::vector<std::pair<std::uint32_t, std::uint8_t>> pairs;  // (id, counter) of the map frames sent
-  for (const hal::CanFrame& f : bus.sent) {
+  for (const hal::CanFrame& f : bus.frames) {
     if (f.id == kIdMapPose) {
       MapPose p;
       ASSERT_TRUE(decode(f, p).is_ok());
