@@ -309,6 +309,7 @@ class Vehicle {
       hal::SocketCanConfig c;
       c.interface = sc_.can_interface.c_str();
       c.error_mask = 0;
+      c.receive = false;  // the player only sends: nothing of the bus's traffic is queued for it
       if (Status s = can_.open(c); !s) return fail(error, "CAN " + sc_.can_interface + ": " + s.message());
     }
     if (!sc_.dvl_pty.empty()) {
@@ -366,9 +367,6 @@ class Vehicle {
 
  private:
   bool send(const hal::CanFrame& f) {
-    hal::CanRxFrame rx;
-    while (can_.is_open() && can_.receive(rx, 0)) {
-    }  // the bus's other traffic: not ours to keep
     if (can_.is_open() && can_.send(f)) return true;
     ++st_.can_errors;
     return false;

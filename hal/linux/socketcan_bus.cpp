@@ -48,7 +48,12 @@ Status SocketCanBus::open(const SocketCanConfig& c) noexcept {
       return Status(StatusCode::kIoError, "CAN_RAW_FD_FRAMES failed");
     }
   }
-  if (!c.filters.empty()) {
+  if (!c.receive) {
+    if (::setsockopt(s, SOL_CAN_RAW, CAN_RAW_FILTER, nullptr, 0) < 0) {
+      ::close(s);
+      return Status(StatusCode::kIoError, "CAN_RAW_FILTER (receive nothing) failed");
+    }
+  } else if (!c.filters.empty()) {
     can_filter kf[16];
     std::size_t n = 0;
     for (const CanFilter& f : c.filters) {

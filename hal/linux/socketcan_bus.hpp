@@ -17,6 +17,7 @@ namespace qnav::hal {
 struct SocketCanConfig {
   const char* interface = "can0";
   FixedVector<CanFilter, 16> filters;  // empty = receive everything
+  bool receive = true;                 // false: a sender only (no filter at all: the kernel queues nothing for it)
   bool fd = false;
   std::uint32_t error_mask = can_error::kTxTimeout | can_error::kController | can_error::kBusOff |
                              can_error::kRestarted | can_error::kNoAck | can_error::kProtocol;
