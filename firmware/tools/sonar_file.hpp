@@ -14,13 +14,13 @@
 
 #include "drivers/sidescan/jsf_framer.hpp"
 #include "drivers/sidescan/xtf_reader.hpp"
+#include "firmware/tools/file_source.hpp"
 #include "nav/core/geometry.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
 #include "nav/sonar/tile_builder.hpp"
 
 namespace qnav::tools {
 
-using sidescan::FileSource;
 using sidescan::JsfFramer;
 using sidescan::JsfMessageView;
 using sidescan::JsfPingAssembler;

@@ -10,11 +10,13 @@
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
+#include "firmware/tools/file_source.hpp"
 
 namespace {
 
 using namespace qnav;
 using namespace qnav::sidescan;
+using qnav::tools::FileSource;
 
 const char* channel_type(std::uint8_t t) {
   switch (t) {

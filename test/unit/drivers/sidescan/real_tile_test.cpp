@@ -12,6 +12,7 @@
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
 #include "nav/sonar/tile_builder.hpp"
+#include "firmware/tools/file_source.hpp"
 #include "firmware/tools/shared_dir.hpp"
 
 namespace qnav::sidescan {
@@ -19,7 +20,7 @@ namespace {
 
 TEST(RealIver2, WreckIsVisibleInTheNorthUpTile) {
   const std::string path = qnav::tools::shared_dir() + "/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf";
-  FileSource src;
+  tools::FileSource src;
   if (!src.open(path.c_str())) GTEST_SKIP() << "missing " << path;
   XtfReader reader;
   ASSERT_TRUE(reader.init(XtfReaderConfig{}).is_ok());
