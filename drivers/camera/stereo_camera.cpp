@@ -1,4 +1,5 @@
 #include "drivers/camera/stereo_camera.hpp"
+#include "nav/core/assert.hpp"
 
 #include <new>
 
@@ -59,7 +60,8 @@ int StereoCamera::free_slot(Side side) const noexcept {
   const std::uint32_t used = pairer_.queued_slots(side) | busy_[static_cast<int>(side)];
   for (int i = 0; i < kSlots; ++i)
     if (!(used & (1u << i))) return i;
-  return -1;  // cannot happen: kSlots > kDepth + 1
+  QNAV_ASSERT(false, "stereo camera: no free frame slot (kSlots > kDepth + 1 guarantees one)");
+  return -1;
 }
 
 Status StereoCamera::capture_side(Side side, hal::Camera& cam, FrameRef& ref) noexcept {

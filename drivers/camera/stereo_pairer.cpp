@@ -1,4 +1,5 @@
 #include "drivers/camera/stereo_pairer.hpp"
+#include "nav/core/assert.hpp"
 
 namespace qnav::drivers::camera {
 
@@ -62,7 +63,7 @@ bool StereoPairer::push(Side side, const FrameRef& f, PairRef& out, std::uint8_t
     dropped[n_dropped++] = old.slot;
     counters_.increment(PairCounter::kUnmatched);
   }
-  mine.push(f).ignore();
+  QNAV_ASSERT(mine.push(f).is_ok(), "stereo pairer: push on a side queue just made non-full");
   return false;
 }
 

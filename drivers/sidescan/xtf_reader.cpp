@@ -1,4 +1,5 @@
 #include "drivers/sidescan/xtf_reader.hpp"
+#include "nav/core/assert.hpp"
 
 #include <new>
 
@@ -105,7 +106,7 @@ Result<bool> XtfReader::next(XtfRecord& out, Span<float> port, Span<float> stbd)
       }
     }
     const Result<XtfPacketHeader> ph = parse_xtf_packet_header(Span<const std::uint8_t>(hdr, kXtfPacketHeaderBytes));
-    if (!ph) {  // cannot happen after the checks above; counted defensively
+    if (!QNAV_ASSERT(ph.is_ok(), "xtf: a packet header that passed the magic and length checks failed to parse")) {
       counters_.increment(XtfCounter::kBadMagic);
       continue;
     }

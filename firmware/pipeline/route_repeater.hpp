@@ -16,13 +16,18 @@ namespace qnav::pipeline {
 
 class RouteRepeater {
  public:
+  // Allocates its own arena of RouteLocaliser::arena_bytes(config).
   Status init(const route::LocaliserConfig& config) {
+    arena_ = std::make_unique<ArenaStorage>(route::RouteLocaliser::arena_bytes(config));
+    if (!arena_->valid()) return Status(StatusCode::kCapacityExceeded, "route repeater: cannot allocate the localiser arena");
+    return init(config, *arena_);
+  }
+  // Takes the localiser's buffers from the caller's arena (qnavd: its static block), which outlives this.
+  Status init(const route::LocaliserConfig& config, Arena& arena) {
     config_ = config;
     bytes_ = route::RouteLocaliser::arena_bytes(config);
-    arena_ = std::make_unique<ArenaStorage>(bytes_);
-    if (!arena_->valid()) return Status(StatusCode::kCapacityExceeded, "route repeater: cannot allocate the localiser arena");
     localiser_ = std::make_unique<route::RouteLocaliser>();
-    return localiser_->init(config, *arena_);
+    return localiser_->init(config, arena);
   }
   Status start(const route::RouteParams& params, Span<const route::NodeMeta> meta, route::NodeSource& source) noexcept {
     if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: start() before init()");

@@ -4,19 +4,26 @@
 
 namespace qnav::pipeline {
 
+std::size_t RouteTilePipeline::arena_bytes(const RouteTileConfig& config) noexcept {
+  return sonar::ScanlineCorrector::arena_bytes(config.corrector) + sonar::TileBuilder::arena_bytes(config.tiles) +
+         route::TileFeatureExtractor::arena_bytes(config.features) + 4096;
+}
+
 Status RouteTilePipeline::init(const RouteTileConfig& config) {
-  cfg_ = config;
-  const std::size_t bytes = sonar::ScanlineCorrector::arena_bytes(config.corrector) + sonar::TileBuilder::arena_bytes(config.tiles) +
-                            route::TileFeatureExtractor::arena_bytes(config.features) + 4096;
-  arena_ = std::make_unique<ArenaStorage>(bytes);
+  arena_ = std::make_unique<ArenaStorage>(arena_bytes(config));
   if (!arena_->valid()) return Status(StatusCode::kCapacityExceeded, "route tiles: cannot allocate arena");
+  return init(config, *arena_);
+}
+
+Status RouteTilePipeline::init(const RouteTileConfig& config, Arena& arena) {
+  cfg_ = config;
   corrector_ = std::make_unique<sonar::ScanlineCorrector>();
   builder_ = std::make_unique<sonar::TileBuilder>();
   features_ = std::make_unique<route::TileFeatureExtractor>();
   tile_ = std::make_unique<RouteTile>();
-  QNAV_RETURN_IF_ERROR(corrector_->init(config.corrector, *arena_));
-  QNAV_RETURN_IF_ERROR(builder_->init(config.tiles, *arena_));
-  QNAV_RETURN_IF_ERROR(features_->init(config.features, *arena_));
+  QNAV_RETURN_IF_ERROR(corrector_->init(config.corrector, arena));
+  QNAV_RETURN_IF_ERROR(builder_->init(config.tiles, arena));
+  QNAV_RETURN_IF_ERROR(features_->init(config.features, arena));
   std::size_t ring = 1;
   while (ring < 2 * static_cast<std::size_t>(std::max(1, config.tiles.scanlines_per_tile))) ring <<= 1;
   ring_.assign(ring, PingRecord{});

@@ -52,7 +52,12 @@ struct PingTruth {
 
 class RouteTilePipeline {
  public:
+  // The arena the stages take from (corrector + tile builder + feature extractor, with alignment slack).
+  static std::size_t arena_bytes(const RouteTileConfig& config) noexcept;
+  // Allocates its own arena of arena_bytes(config).
   Status init(const RouteTileConfig& config);
+  // Takes the stages' buffers from the caller's arena (qnavd: its static block); the arena outlives this.
+  Status init(const RouteTileConfig& config, Arena& arena);
   // Flies a simulated pass over the seabed; calls sink for every tile.
   Status run_sim_pass(const sidescan::Seabed& seabed, const sidescan::SideScanSimConfig& sonar,
                       const sidescan::TrajectoryConfig& trajectory, const RouteTileSink& sink);

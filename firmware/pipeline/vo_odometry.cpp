@@ -19,10 +19,16 @@ PlanarIncrement planar_increment(const Pose3& a, const Pose3& b) noexcept {
 }
 
 Status VoOdometry::init(const vo::VoConfig& config, const Pose3& body_T_cam, const VoPriorConfig& prior) {
+  arena_.reset(new ArenaStorage(vo::StereoVo::arena_bytes(config)));
+  if (!arena_->valid()) return Status(StatusCode::kCapacityExceeded, "vo: cannot allocate the arena");
+  return init(config, body_T_cam, prior, *arena_);
+}
+
+Status VoOdometry::init(const vo::VoConfig& config, const Pose3& body_T_cam, const VoPriorConfig& prior, Arena& arena) {
   if (!body_T_cam.is_finite()) return Status(StatusCode::kInvalidArgument, "vo: camera mount is not finite");
   if (!(prior.zero_sigma_m > 0.0) || !(prior.first_sigma_m >= 0.0)) return Status(StatusCode::kInvalidArgument, "vo: bad prior sigma");
-  arena_.reset(new ArenaStorage(vo::StereoVo::arena_bytes(config)));
-  QNAV_RETURN_IF_ERROR(vo_.init(config, *arena_));
+  arena_bytes_ = vo::StereoVo::arena_bytes(config);
+  QNAV_RETURN_IF_ERROR(vo_.init(config, arena));
   body_T_cam_ = body_T_cam;
   cam_T_body_ = body_T_cam.inverse();
   prior_ = prior;

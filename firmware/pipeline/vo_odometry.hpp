@@ -62,6 +62,9 @@ class VoOdometry {
   VoOdometry& operator=(const VoOdometry&) = delete;
   // Allocates the StereoVo arena and initialises it (kInvalidArgument for a bad configuration).
   Status init(const vo::VoConfig& config, const Pose3& body_T_cam, const VoPriorConfig& prior = VoPriorConfig{});
+  // The same with the StereoVo arena taken from the caller's (qnavd: its static block; at least
+  // StereoVo::arena_bytes(config)), which outlives this.
+  Status init(const vo::VoConfig& config, const Pose3& body_T_cam, const VoPriorConfig& prior, Arena& arena);
   // Starts a new chain with the body at world_T_body.
   void reset(const Pose3& world_T_body = Pose3{}) noexcept;
   // Processes one pair. Returns the StereoVo step (flags say visual / lost / dead-reckoned), or
@@ -73,10 +76,11 @@ class VoOdometry {
   const vo::StereoVo& vo() const noexcept { return vo_; }
   std::uint32_t frames() const noexcept { return frames_; }
   std::uint32_t visual_steps() const noexcept { return visual_; }
-  std::size_t arena_bytes() const noexcept { return arena_ ? arena_->capacity() : 0; }
+  std::size_t arena_bytes() const noexcept { return arena_bytes_; }
 
  private:
   std::unique_ptr<ArenaStorage> arena_;
+  std::size_t arena_bytes_ = 0;
   vo::StereoVo vo_;
   Pose3 body_T_cam_, cam_T_body_;
   VoPriorConfig prior_;

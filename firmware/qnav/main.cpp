@@ -8,9 +8,11 @@
 
 #include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
+#include "nav/core/assert.hpp"
 
 namespace {
 using qnav::cli::Command;
+bool g_software_faults = false;
 
 int run(int argc, char** argv) {
   CLI::App app("qnav: the engineers' tool for the qnav navigation daemon (train, replay, evaluate, plot, simulate).\n"
@@ -37,7 +39,15 @@ int run(int argc, char** argv) {
 }
 }  // namespace
 
+// A broken invariant (QNAV_ASSERT, nav/core/assert.hpp) in the tool: named on stderr, and the exit code
+// says so (3), whatever the command printed.
+static void on_software_fault(const char* what, const char* file, int line) noexcept {
+  std::fprintf(stderr, "qnav: software fault (a bug, please report it): %s (%s:%d)\n", what, file, line);
+  g_software_faults = true;
+}
+
 int main(int argc, char** argv) {
+  qnav::set_assert_handler(&on_software_fault);
   if (argc < 2) {
     std::vector<char*> args{argv[0], const_cast<char*>("--help")};
     run(2, args.data());
@@ -68,5 +78,6 @@ int main(int argc, char** argv) {
                  near.empty() ? "" : (" (did you mean '" + near + "'?)").c_str());
     return 2;
   }
-  return run(argc, argv);
+  const int rc = run(argc, argv);
+  return g_software_faults && rc == 0 ? 3 : rc;
 }

@@ -1,5 +1,7 @@
 #include "firmware/qnavd/daemon.hpp"
 
+#include "nav/core/assert.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -129,6 +131,11 @@ class SimBackend final : public IoBackend {
   SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
       : clock_(clock), net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
         leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
+  // The queues and pools once the static block holds them (init() only checks the frame geometry).
+  void set_queues(const QueueRefs& q) noexcept {
+    q_ = q;
+    vehicle_.set_frame_pool(q.frames);
+  }
   Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
     QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
     QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
@@ -422,10 +429,12 @@ class LinuxBackend final : public IoBackend {
   bool leak_open_ = false, leak_warned_ = false;
 };
 
+// A queue's ring over its buffer in the static block (deployment.hpp names it "queue.<name>").
 template <typename T>
-Status make_ring(std::vector<T>& store, SpscRing<T>& ring, std::size_t depth) {
-  store.assign(depth, T{});
-  return ring.init(Span<T>(store.data(), store.size()));
+Status make_ring(StaticMemory& mem, const char* queue, SpscRing<T>& ring, std::size_t depth) {
+  Result<Span<T>> r = mem.take_array<T>(queue_buffer_name(queue), depth);
+  if (!r) return r.status();
+  return ring.init(r.value());
 }
 
 }  // namespace
@@ -477,49 +486,39 @@ const hal::Clock& Daemon::sample_clock() const noexcept {
 
 Status Daemon::init(FILE* log) {
   log_ = log;
-  if (log_ != nullptr) {
-    // The io and nav threads log through rings the main thread drains: a slow or full log pipe
-    // (journald) costs lines (counted), never a deadline.
-    nav_log_ = std::make_unique<hal::LogRing>();
-    io_log_ = std::make_unique<hal::LogRing>();
-    QNAV_RETURN_IF_ERROR(nav_log_->open(kNavLogBytes));
-    QNAV_RETURN_IF_ERROR(io_log_->open(kIoLogBytes));
-  }
+  // A broken invariant in nav/, drivers/ or hal/ (QNAV_ASSERT) is a software fault here: counted,
+  // FaultSoftware raised, logged; the daemon goes on in the defined state the call site leaves.
+  set_assert_handler(&SoftwareFaults::record);
   const Status s = init_pipeline();
+  if (!s && static_ && log_ != nullptr && static_->failed_name()[0] != '\0')
+    std::fprintf(log_, "{\"event\":\"error\",\"what\":\"deployment table: buffer %s %s\"}\n", static_->failed_name(), s.message());
   flush_logs();
   return s;
 }
 
+// Start-up, in the deployment table's terms: the sim backend first resolves a recorded pass's
+// geometry (it sets the tile and localiser sizes); then the table is made from the configuration in
+// force, its static block allocated (StaticMemory), and every queue, pool, log ring and nav arena
+// carved from it by name; complete() proves nothing in the table was left out.
 Status Daemon::init_pipeline() {
   wall_ = std::make_unique<hal::MonotonicClock>();
-  if (cfg_.backend == Backend::kSim) sim_clock_ = std::make_unique<SimClock>();
-  stride_ = 2 * cfg_.max_samples_per_side;
-  pool_.assign(cfg_.ping_queue * stride_, 0.0f);
-  QNAV_RETURN_IF_ERROR(make_ring(ping_store_, pings_, cfg_.ping_queue));
-  QNAV_RETURN_IF_ERROR(make_ring(free_store_, free_slots_, cfg_.ping_queue));
-  QNAV_RETURN_IF_ERROR(make_ring(can_rx_store_, can_rx_, cfg_.can_rx_queue));
-  QNAV_RETURN_IF_ERROR(make_ring(can_tx_store_, can_tx_, cfg_.can_tx_queue));
-  QNAV_RETURN_IF_ERROR(make_ring(dvl_store_, dvl_q_, kDvlQueueCapacity));
-  for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
+  std::unique_ptr<SimBackend> sim;
   FramePool fp;
-  if (cfg_.vo_enabled || map_runs(cfg_)) {
-    const std::size_t slots = frame_pool_slots(cfg_);
+  const bool frames_on = cfg_.vo_enabled || map_runs(cfg_);
+  if (frames_on) {
     fp.width = cfg_.vo.max_width;
     fp.height = cfg_.vo.max_height;
     fp.map_width = cfg_.map_width;
     fp.map_height = cfg_.map_height;
     fp.slot_bytes = frame_slot_bytes(cfg_);
-    frame_pool_.assign(slots * fp.slot_bytes, 0);
-    QNAV_RETURN_IF_ERROR(make_ring(frame_store_, frames_, slots));
-    QNAV_RETURN_IF_ERROR(make_ring(free_frame_store_, free_frames_, slots));
-    for (std::uint32_t s = 0; s < slots; ++s) QNAV_RETURN_IF_ERROR(free_frames_.try_push(s));
-    fp.frames = &frames_;
+    fp.frames = &frames_;  // the rings' storage is carved below, before any frame moves
     fp.free = &free_frames_;
-    fp.pool = frame_pool_.data();
   }
-  const QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, pool_.data(), stride_, fp};
+  stride_ = 2 * cfg_.max_samples_per_side;
+  QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, nullptr, stride_, fp};
   if (cfg_.backend == Backend::kSim) {
-    auto sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
+    sim_clock_ = std::make_unique<SimClock>();
+    sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
     // The route store behind a switch that can make the disk full (sim.fault = "disk_full").
     fault_store_ = std::make_unique<hal::FaultFileStore>(hal::host_file_store());
     QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, fault_store_.get(), refs.frames));
@@ -536,6 +535,45 @@ Status Daemon::init_pipeline() {
       route_spacing_m_ = sim->vehicle().node_spacing_m(cfg_.tiles.tiles.scanline_stride);
       route_swath_m_ = sim->vehicle().swath_m();
     }
+  }
+  static_ = std::make_unique<StaticMemory>(make_deployment(cfg_));
+  StaticMemory& mem = *static_;
+  {  // the threads' log rings (drained by the main thread); taken whether or not there is a log
+    Result<Span<char>> nav_mem = mem.take_array<char>("log.nav", kNavLogBytes + kLogLineBytes);
+    if (!nav_mem) return nav_mem.status();
+    Result<Span<char>> io_mem = mem.take_array<char>("log.io", kIoLogBytes + kLogLineBytes);
+    if (!io_mem) return io_mem.status();
+    if (log_ != nullptr) {
+      // The io and nav threads log through rings the main thread drains: a slow or full log pipe
+      // (journald) costs lines (counted), never a deadline.
+      nav_log_ = std::make_unique<hal::LogRing>();
+      io_log_ = std::make_unique<hal::LogRing>();
+      QNAV_RETURN_IF_ERROR(nav_log_->open(nav_mem.value(), kLogLineBytes));
+      QNAV_RETURN_IF_ERROR(io_log_->open(io_mem.value(), kLogLineBytes));
+    }
+  }
+  Result<Span<float>> pool = mem.take_array<float>("ping_pool", cfg_.ping_queue * stride_);
+  if (!pool) return pool.status();
+  pool_ = pool.value().data();
+  QNAV_RETURN_IF_ERROR(make_ring(mem, "pings", pings_, cfg_.ping_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(mem, "free_slots", free_slots_, cfg_.ping_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(mem, "can_rx", can_rx_, cfg_.can_rx_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(mem, "can_tx", can_tx_, cfg_.can_tx_queue));
+  QNAV_RETURN_IF_ERROR(make_ring(mem, "dvl", dvl_q_, kDvlQueueCapacity));
+  for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
+  if (frames_on) {
+    const std::size_t slots = frame_pool_slots(cfg_);
+    Result<Span<std::uint8_t>> frames = mem.take_array<std::uint8_t>("frame_pool", slots * fp.slot_bytes);
+    if (!frames) return frames.status();
+    fp.pool = frames.value().data();
+    QNAV_RETURN_IF_ERROR(make_ring(mem, "frames", frames_, slots));
+    QNAV_RETURN_IF_ERROR(make_ring(mem, "free_frames", free_frames_, slots));
+    for (std::uint32_t s = 0; s < slots; ++s) QNAV_RETURN_IF_ERROR(free_frames_.try_push(s));
+  }
+  refs.pool = pool_;
+  refs.frames = fp;
+  if (sim) {
+    sim->set_queues(refs);
     backend_ = std::move(sim);
     nav_idle_wait_us_ = 200;
   } else {
@@ -553,16 +591,19 @@ Status Daemon::init_pipeline() {
   nq.can_rx = &can_rx_;
   nq.can_tx = &can_tx_;
   nq.dvl = &dvl_q_;
-  nq.ping_pool = pool_.data();
+  nq.ping_pool = pool_;
   nq.ping_pool_stride = stride_;
   nq.io = &io_;
-  nq.frames = fp.frames;
-  nq.free_frames = fp.free;
-  nq.frame_pool = fp.pool;
-  nq.frame_slot_bytes = fp.slot_bytes;
+  if (frames_on) {
+    nq.frames = fp.frames;
+    nq.free_frames = fp.free;
+    nq.frame_pool = fp.pool;
+    nq.frame_slot_bytes = fp.slot_bytes;
+  }
   nav_->set_frame_observer(frame_observer_, frame_ctx_);
   backend_->set_worker(nav_.get(), &can_tx_);
-  return nav_->init(nq, tile_observer_, tile_ctx_, nav_log_ ? nav_log_->stream() : nullptr);
+  QNAV_RETURN_IF_ERROR(nav_->init(nq, tile_observer_, tile_ctx_, nav_log_ ? nav_log_->stream() : nullptr, &mem));
+  return mem.complete();
 }
 
 void Daemon::io_loop() noexcept {
@@ -612,11 +653,11 @@ Status Daemon::start() {
   }
   started_wall_ns_ = wall_->now_ns();
   if (log_ && cfg_.log != LogFormat::kOff) {
-    const Deployment d = make_deployment(cfg_);
+    const Deployment& d = static_->table();
     std::fprintf(log_,
-                 "{\"event\":\"started\",\"backend\":\"%s\",\"route_dir\":\"%s\",\"static_bytes\":%zu,\"ping_queue\":%zu,"
+                 "{\"event\":\"started\",\"backend\":\"%s\",\"route_dir\":\"%s\",\"static_bytes\":%zu,\"heap_bytes\":%zu,\"ping_queue\":%zu,"
                  "\"can_interface\":\"%s\",\"realtime\":%s}\n",
-                 cfg_.backend == Backend::kSim ? "sim" : "linux", cfg_.route_dir.c_str(), d.total_static_bytes(), cfg_.ping_queue,
+                 cfg_.backend == Backend::kSim ? "sim" : "linux", cfg_.route_dir.c_str(), d.total_static_bytes(), d.total_heap_bytes(), cfg_.ping_queue,
                  cfg_.can_interface.c_str(), cfg_.realtime ? "true" : "false");
     std::fflush(log_);
   }

@@ -22,6 +22,7 @@
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/nav_worker.hpp"
 #include "firmware/qnavd/sim_vehicle.hpp"
+#include "firmware/qnavd/static_memory.hpp"
 #include "hal/linux/log_ring.hpp"
 
 namespace qnav::daemon {
@@ -51,6 +52,8 @@ class Daemon {
   const hal::Clock& sample_clock() const noexcept;
   // The configuration in force (after recorded passes set their geometry).
   const DaemonConfig& config() const noexcept { return cfg_; }
+  // The static block and the table it was built from (after init()).
+  const StaticMemory& static_memory() const noexcept { return *static_; }
 
  private:
   void io_loop() noexcept;
@@ -60,20 +63,14 @@ class Daemon {
 
   DaemonConfig cfg_;  // a copy: recorded passes set the tile and localiser geometry from their files
   FILE* log_ = nullptr;
-  static constexpr std::size_t kNavLogBytes = 256 * 1024, kIoLogBytes = 64 * 1024;
   std::unique_ptr<hal::LogRing> nav_log_, io_log_;  // the threads' log lines, drained by the main thread
   std::uint64_t log_dropped_reported_ = 0;
   std::unique_ptr<hal::Clock> wall_;
   std::unique_ptr<SimClock> sim_clock_;
-  std::vector<float> pool_;
-  std::vector<PingMsg> ping_store_;
-  std::vector<std::uint32_t> free_store_;
-  std::vector<hal::CanRxFrame> can_rx_store_;
-  std::vector<hal::CanFrame> can_tx_store_;
-  std::vector<drivers::dvl::DvlVelocity> dvl_store_;
-  std::vector<std::uint8_t> frame_pool_;     // vo.frame_queue stereo pairs (empty when vo.enabled = false)
-  std::vector<FrameMsg> frame_store_;
-  std::vector<std::uint32_t> free_frame_store_;
+  // Every queue, pool, log ring and nav arena below lives in this block, carved by the deployment
+  // table's names (static_memory.hpp).
+  std::unique_ptr<StaticMemory> static_;
+  float* pool_ = nullptr;                    // the ping pool
   SpscRing<FrameMsg> frames_;
   SpscRing<std::uint32_t> free_frames_;
   SpscRing<PingMsg> pings_;

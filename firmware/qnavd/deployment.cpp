@@ -1,23 +1,80 @@
 #include "firmware/qnavd/deployment.hpp"
 
 #include <cstdio>
+#include <cstring>
 
+#include "drivers/camera/stereo_pairer.hpp"
+#include "drivers/dvl/dvl_driver.hpp"
 #include "drivers/dvl/dvl_types.hpp"
+#include "drivers/route_store/route_file.hpp"
+#include "drivers/camera/stereo_camera.hpp"
+#include "drivers/sidescan/jsf_framer.hpp"
+#include "drivers/sonar_stream/jsf_stream_driver.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "hal/core/camera.hpp"
 #include "hal/core/can.hpp"
+#include "nav/route/route_format.hpp"
 #include "nav/route/route_localiser.hpp"
 #include "nav/vo/stereo_vo.hpp"
 
 namespace qnav::daemon {
 
+namespace {
+constexpr std::size_t round_up(std::size_t n, std::size_t a) noexcept { return (n + a - 1) / a * a; }
+
+void add(Deployment& d, const char* name, const char* owner, BufferKind kind, std::size_t bytes, const char* what) noexcept {
+  if (bytes == 0 || d.buffer_count >= Deployment::kMaxBuffers) return;  // kMaxBuffers holds every entry below
+  if (kind == BufferKind::kStatic) bytes = round_up(bytes, Deployment::kStaticAlign);
+  d.buffers[d.buffer_count++] = BufferSpec{name, owner, kind, bytes, what};
+}
+}  // namespace
+
+const char* to_string(BufferKind k) noexcept {
+  switch (k) {
+    case BufferKind::kStatic: return "static";
+    case BufferKind::kOwned: return "owned";
+    case BufferKind::kDevice: return "device";
+    case BufferKind::kKernel: return "kernel";
+  }
+  return "?";
+}
+
+const char* queue_buffer_name(const char* queue) noexcept {
+  static const char* const kNames[][2] = {{"can_rx", "queue.can_rx"}, {"can_tx", "queue.can_tx"}, {"dvl", "queue.dvl"}, {"pings", "queue.pings"},
+                                          {"free_slots", "queue.free_slots"}, {"frames", "queue.frames"}, {"free_frames", "queue.free_frames"}};
+  for (const auto& n : kNames)
+    if (std::strcmp(n[0], queue) == 0) return n[1];
+  return "queue.?";
+}
+
+const BufferSpec* Deployment::buffer(const char* name) const noexcept {
+  for (std::size_t i = 0; i < buffer_count; ++i)
+    if (std::strcmp(buffers[i].name, name) == 0) return &buffers[i];
+  return nullptr;
+}
+
+std::size_t Deployment::bytes(BufferKind k) const noexcept {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < buffer_count; ++i)
+    if (buffers[i].kind == k) n += buffers[i].bytes;
+  return n;
+}
+
+route::LocaliserConfig repeat_localiser_config(const DaemonConfig& c) noexcept {
+  route::LocaliserConfig lc = c.localiser;
+  lc.filter.max_nodes = c.max_nodes;
+  return lc;
+}
+
 Deployment make_deployment(const DaemonConfig& c) {
   const std::size_t periodic_budget_us = 500;
   Deployment d{
-      {{"io", c.io_priority, c.io_cpu, "devices: wait, read, stamp at reception, push; CAN tx"},
+      {{"main", 0, -1, "signals, sd_notify READY / WATCHDOG / STOPPING, drains the log rings to the log"},
+       {"io", c.io_priority, c.io_cpu, "devices: wait, read, stamp at reception, push; CAN tx"},
        {"nav", c.nav_priority, c.nav_cpu, "modes, dead reckoning, route pipeline, visual odometry, outputs, health"}},
       {{"can_rx", "io", "nav", c.can_rx_queue, sizeof(hal::CanRxFrame), "drop newest, count can_rx_overflow"},
        {"can_tx", "nav", "io", c.can_tx_queue, sizeof(hal::CanFrame), "not sent now: counted (can_tx_overflow), sent at its next period"},
-       {"dvl", "io", "nav", 64, sizeof(drivers::dvl::DvlVelocity), "drop newest, count dvl_overflow"},
+       {"dvl", "io", "nav", kDvlQueueCapacity, sizeof(drivers::dvl::DvlVelocity), "drop newest, count dvl_overflow"},
        {"pings", "io", "nav", c.ping_queue, sizeof(PingMsg), "drop the ping, count ping_overflow (replay waits instead)"},
        {"free_slots", "nav", "io", c.ping_queue, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"},
        {"frames", "io", "nav", frame_pool_slots(c), sizeof(FrameMsg), "drop the pair / frame, count frame_overflow (the sim waits instead)"},
@@ -33,15 +90,46 @@ Deployment make_deployment(const DaemonConfig& c) {
        {"map", "nav", "per downward frame in Mode = Map: homography chain, topological map, map file rewrite after a new node", c.map_budget_us},
        {"outputs", "nav", "every loop: CAN outputs at their DBC periods, health at daemon.health_period_s",
         static_cast<std::uint32_t>(periodic_budget_us)}}};
-  d.ping_pool_bytes = c.ping_queue * 2 * c.max_samples_per_side * sizeof(float);
-  for (const QueueSpec& q : d.queues) d.queue_bytes += q.depth * q.item_bytes;
-  d.tile_pipeline_bytes = sonar::ScanlineCorrector::arena_bytes(c.tiles.corrector) + sonar::TileBuilder::arena_bytes(c.tiles.tiles) +
-                          route::TileFeatureExtractor::arena_bytes(c.tiles.features);
-  d.localiser_bytes = route::RouteLocaliser::arena_bytes(c.localiser);
-  d.route_meta_bytes = c.max_nodes * sizeof(route::NodeMeta);
-  d.frame_pool_bytes = frame_pool_slots(c) * frame_slot_bytes(c);
-  if (c.vo_enabled) d.vo_bytes = vo::StereoVo::arena_bytes(c.vo);
-  if (map_runs(c)) d.map_bytes = pipeline::TopoMapper::arena_bytes(map_mapper_config(c));
+  const bool linux_backend = c.backend == Backend::kLinux;
+  // Static: one block, carved by name at start-up (Daemon::init_pipeline, NavWorker::init).
+  add(d, "ping_pool", "io -> nav", BufferKind::kStatic, c.ping_queue * 2 * c.max_samples_per_side * sizeof(float),
+      "sonar.ping_queue slots x 2 sides x sonar.max_samples_per_side floats");
+  for (const QueueSpec& q : d.queues) add(d, queue_buffer_name(q.name), "queue", BufferKind::kStatic, q.depth * q.item_bytes, "depth x item");
+  add(d, "frame_pool", "io -> nav", BufferKind::kStatic, frame_pool_slots(c) * frame_slot_bytes(c), "stereo pairs / downward frames (0 when vo and map are off)");
+  add(d, "log.nav", "nav thread", BufferKind::kStatic, kNavLogBytes + kLogLineBytes, "the nav thread's log ring + its stdio line buffer");
+  add(d, "log.io", "io thread", BufferKind::kStatic, kIoLogBytes + kLogLineBytes, "the io thread's log ring + its stdio line buffer");
+  add(d, "tile_pipeline", "nav: RouteTilePipeline", BufferKind::kStatic, pipeline::RouteTilePipeline::arena_bytes(c.tiles),
+      "corrector + tile builder + feature extractor arena");
+  add(d, "localiser", "nav: RouteRepeater", BufferKind::kStatic, route::RouteLocaliser::arena_bytes(repeat_localiser_config(c)),
+      "RouteLocaliser arena for route.max_nodes");
+  if (c.vo_enabled) add(d, "vo", "nav: VoOdometry", BufferKind::kStatic, vo::StereoVo::arena_bytes(c.vo), "StereoVo arena for vo.width x vo.height, vo.max_corners");
+  if (map_runs(c))
+    add(d, "map", "nav: TopoMapper", BufferKind::kStatic, pipeline::TopoMapper::arena_bytes(map_mapper_config(c)),
+        "mapper arena for map.width x map.height, map.max_nodes");
+  // Owned: allocated by their components at start-up with exactly these bytes.
+  add(d, "route_meta", "nav: route reader", BufferKind::kOwned, c.max_nodes * sizeof(route::NodeMeta), "per-node metadata of the loaded route (route.max_nodes)");
+  add(d, "route_records", "nav: route writer + reader", BufferKind::kOwned, 2 * route::record_bytes(route::kMaxKeypointsPerNode),
+      "one node record buffer each");
+  add(d, "dvl_driver_queue", "io: DvlSerialDriver", BufferKind::kOwned, sizeof(drivers::dvl::DvlVelocity) * drivers::dvl::DvlSerialDriver::kQueueDepth,
+      "velocities parsed in one read, before the dvl queue");
+  if (linux_backend) {
+    add(d, "jsf_framer", "io: JsfStreamDriver", BufferKind::kOwned, drivers::sonar_stream::JsfStreamConfig{}.max_message_bytes,
+        "one JSF message (the framer's reassembly buffer)");
+    add(d, "jsf_assembler", "io: JsfStreamDriver", BufferKind::kOwned, 3 * c.max_samples_per_side * sizeof(float), "a ping's port + starboard samples");
+  }
+  if (c.vo_enabled && linux_backend && c.vo_camera == CameraSource::kV4l2) {
+    add(d, "stereo_pairer", "io: StereoCamera", BufferKind::kOwned, sizeof(drivers::camera::StereoPairer), "frames waiting for their other side");
+    add(d, "stereo_frame_slots", "io: StereoCamera", BufferKind::kDevice,
+        static_cast<std::size_t>(c.vo.max_width) * static_cast<std::size_t>(c.vo.max_height) * static_cast<std::size_t>(drivers::camera::StereoCamera::kSlots) * 2,
+        "grey frames of both cameras while they are paired (allocated at the first open)");
+    add(d, "stereo_v4l2", "kernel", BufferKind::kKernel,
+        2 * static_cast<std::size_t>(hal::CameraConfig{}.buffer_count) * static_cast<std::size_t>(c.vo.max_width) * static_cast<std::size_t>(c.vo.max_height) * 2,
+        "mmap buffers of both cameras (YUYV worst case)");
+  }
+  if (map_runs(c) && linux_backend)
+    add(d, "downward_v4l2", "kernel", BufferKind::kKernel,
+        static_cast<std::size_t>(hal::CameraConfig{}.buffer_count) * static_cast<std::size_t>(c.map_width) * static_cast<std::size_t>(c.map_height) * 2,
+        "mmap buffers of the downward camera (YUYV worst case)");
   return d;
 }
 
@@ -67,13 +155,20 @@ std::string deployment_text(const Deployment& d) {
       std::snprintf(line, sizeof line, "  %-9s %-6s %10s  %s\n", s.name, s.thread, "-", s.trigger);
     out += line;
   }
+  out += "buffers (static: carved from one block at start-up; owned: allocated by their component at start-up;\n"
+         "         device: at the device's first open; kernel: mapped by the driver, not the heap)\n"
+         "  name                kind         bytes  owner                        what\n";
+  for (std::size_t i = 0; i < d.buffer_count; ++i) {
+    const BufferSpec& b = d.buffers[i];
+    std::snprintf(line, sizeof line, "  %-18s  %-6s %12zu  %-27s  %s\n", b.name, to_string(b.kind), b.bytes, b.owner, b.what);
+    out += line;
+  }
   std::snprintf(line, sizeof line,
-                "static memory\n  ping pool %zu B, queues %zu B, tile pipeline %zu B, localiser %zu B, route metadata %zu B,\n"
-                "  frame pool %zu B, visual odometry %zu B (+ its matcher's working set, allocated at start-up), mapper %zu B\n"
-                "  total %zu B (%.1f MB), allocated at start-up; no heap allocation after start\n",
-                d.ping_pool_bytes, d.queue_bytes, d.tile_pipeline_bytes, d.localiser_bytes, d.route_meta_bytes, d.frame_pool_bytes, d.vo_bytes,
-                d.map_bytes, d.total_static_bytes(),
-                static_cast<double>(d.total_static_bytes()) / 1e6);
+                "static memory\n  static %zu B (one block), owned %zu B, device %zu B, kernel %zu B\n"
+                "  total %zu B (%.1f MB) of heap, allocated at start-up (device buffers at first open); no heap allocation after\n"
+                "  (+ the visual odometry matcher's working set, allocated at start-up outside the table)\n",
+                d.bytes(BufferKind::kStatic), d.bytes(BufferKind::kOwned), d.bytes(BufferKind::kDevice), d.bytes(BufferKind::kKernel),
+                d.total_heap_bytes(), static_cast<double>(d.total_heap_bytes()) / 1e6);
   out += line;
   return out;
 }

@@ -12,7 +12,10 @@
 //   nav thread (SCHED_FIFO daemon.nav_priority, CPU daemon.nav_cpu)
 //     mode commands, dead reckoning, ping -> tile -> teach append | repeat update,
 //     stereo pair -> visual odometry (Mode = Vo), downward frame -> mapper (Mode = Map) -> outputs, health
-//   main thread: signals, sd_notify READY / WATCHDOG (on the nav worker's progress) / STOPPING.
+//   main thread: signals, sd_notify READY / WATCHDOG (on the nav worker's progress) / STOPPING,
+//     drains the io and nav threads' log rings to the log.
+//   buffers: every buffer start-up allocates (name, owner, kind, bytes); the kStatic ones are carved
+//     from one block (static_memory.hpp) whose size is their sum: the table builds the daemon.
 #pragma once
 
 #include <cstddef>
@@ -46,25 +49,58 @@ struct StageSpec {
   std::uint32_t budget_us; // 0 = not budgeted (I/O waits)
 };
 
+// Where a buffer's bytes come from.
+enum class BufferKind : std::uint8_t {
+  kStatic,  // carved from the one static block (StaticMemory) that start-up allocates from this table
+  kOwned,   // allocated at start-up by the component that owns it (a fixed-size member, or its init),
+            // with exactly these bytes (the deployment test compares them with the component's own)
+  kDevice,  // allocated when its device first opens (a reopen reuses it); may be after start
+  kKernel,  // kernel memory the driver maps (V4L2 mmap buffers): not the daemon's heap
+};
+const char* to_string(BufferKind k) noexcept;
+
+struct BufferSpec {
+  const char* name;
+  const char* owner;       // the component that uses it
+  BufferKind kind;
+  std::size_t bytes;       // kStatic: rounded up to kStaticAlign (what StaticMemory hands out)
+  const char* what;
+};
+
 struct Deployment {
-  static constexpr std::size_t kThreads = 2, kQueues = 7, kStages = 10;
+  static constexpr std::size_t kThreads = 3, kQueues = 7, kStages = 10, kMaxBuffers = 32;
+  // Static buffer sizes are rounded up to kStaticAlign bytes, and the block is carved in that order at
+  // alignof(std::max_align_t): no padding between buffers, so the block is exactly their sum.
+  static constexpr std::size_t kStaticAlign = 64;
   ThreadSpec threads[kThreads];
   QueueSpec queues[kQueues];
   StageSpec stages[kStages];
-  std::size_t ping_pool_bytes = 0;     // sonar.ping_queue x 2 x sonar.max_samples_per_side floats
-  std::size_t queue_bytes = 0;         // all queue storage
-  std::size_t tile_pipeline_bytes = 0; // corrector + tile builder + feature extractor arenas
-  std::size_t localiser_bytes = 0;     // RouteLocaliser arena for route.max_nodes
-  std::size_t route_meta_bytes = 0;    // per-node metadata of the loaded route (route.max_nodes)
-  std::size_t frame_pool_bytes = 0;    // frame_pool_slots x frame_slot_bytes (config.hpp; 0 when vo and map are disabled)
-  std::size_t vo_bytes = 0;            // StereoVo arena for vo.width x vo.height and vo.max_corners
-  std::size_t map_bytes = 0;           // TopoMapper arena for map.width x map.height and map.max_nodes (0 when map.enabled = false)
-  std::size_t total_static_bytes() const noexcept {
-    return ping_pool_bytes + queue_bytes + tile_pipeline_bytes + localiser_bytes + route_meta_bytes + frame_pool_bytes + vo_bytes + map_bytes;
+  BufferSpec buffers[kMaxBuffers] = {};
+  std::size_t buffer_count = 0;
+
+  // The buffer called `name`, or nullptr.
+  const BufferSpec* buffer(const char* name) const noexcept;
+  // Bytes of every buffer of one kind; total_static_bytes() is the static block start-up allocates.
+  std::size_t bytes(BufferKind k) const noexcept;
+  std::size_t total_static_bytes() const noexcept { return bytes(BufferKind::kStatic); }
+  // Heap the daemon's buffers take: static + owned + device (kernel memory apart).
+  std::size_t total_heap_bytes() const noexcept {
+    return bytes(BufferKind::kStatic) + bytes(BufferKind::kOwned) + bytes(BufferKind::kDevice);
   }
 };
 
+// The queue storage buffer of queue `name` ("queue.<name>").
+const char* queue_buffer_name(const char* queue) noexcept;
+
+// The table for a configuration. The daemon builds itself from it (StaticMemory carves every
+// kStatic buffer by name and start-up fails if a carve disagrees), so the printed table is what runs.
 Deployment make_deployment(const DaemonConfig& c);
+// The repeat localiser's configuration (route.max_nodes applied): what the table sizes and the nav
+// worker initialises, from one place.
+route::LocaliserConfig repeat_localiser_config(const DaemonConfig& c) noexcept;
+
+// The threads' log rings (hal::LogRing): ring bytes and the stdio line buffer.
+constexpr std::size_t kNavLogBytes = 256 * 1024, kIoLogBytes = 64 * 1024, kLogLineBytes = 4096;
 std::string deployment_text(const Deployment& d);
 
 // Stage indices (Deployment::stages order), for budget accounting.

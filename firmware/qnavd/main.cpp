@@ -72,7 +72,21 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (print_deployment) {
-    std::fputs(qnav::daemon::deployment_text(qnav::daemon::make_deployment(cfg)).c_str(), stdout);
+    // The table the daemon builds itself from. On the sim backend a recorded pass sets the tile and
+    // localiser geometry from its file at start-up: the table is then the one that start-up made.
+    bool recorded = false;
+    for (const qnav::daemon::SimPass& p : cfg.sim_mission) recorded |= !p.file.empty();
+    if (cfg.backend == qnav::daemon::Backend::kSim && recorded) {
+      qnav::daemon::Daemon d(cfg);
+      const qnav::Status s = d.init(nullptr);
+      if (!s) {
+        std::fprintf(stderr, "qnavd: start-up failed: %s\n", s.message());
+        return 1;
+      }
+      std::fputs(qnav::daemon::deployment_text(d.static_memory().table()).c_str(), stdout);
+    } else {
+      std::fputs(qnav::daemon::deployment_text(qnav::daemon::make_deployment(cfg)).c_str(), stdout);
+    }
     return 0;
   }
   const qnav::Status ss = qnav::hal::StopSignals::install();

@@ -6,7 +6,7 @@
 #include <cstring>
 
 #include "firmware/qnavd/software_fault.hpp"
-#include "firmware/tools/map_file.hpp"
+#include "drivers/map_store/map_file.hpp"
 #include "nav/core/geometry.hpp"
 
 namespace qnav::daemon {
@@ -67,7 +67,21 @@ NavWorker::NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock,
 
 NavWorker::~NavWorker() { shutdown(); }
 
-Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log) {
+// A nav stage's arena: its buffer in the static block (qnavd), or one of its own (a worker built alone).
+Result<Arena*> NavWorker::stage_arena(StaticMemory* mem, const char* name, std::size_t bytes, std::unique_ptr<ArenaStorage>& own,
+                                      std::unique_ptr<Arena>& view) {
+  if (mem != nullptr) {
+    Result<Span<std::byte>> r = mem->take(name);
+    if (!r) return r.status();
+    view = std::make_unique<Arena>(r.value());
+    return view.get();
+  }
+  own = std::make_unique<ArenaStorage>(bytes);
+  if (!own->valid()) return Status(StatusCode::kCapacityExceeded, "nav worker: cannot allocate a stage arena");
+  return static_cast<Arena*>(own.get());
+}
+
+Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log, StaticMemory* mem) {
   q_ = q;
   observer_ = observer;
   observer_ctx_ = observer_ctx;
@@ -76,10 +90,13 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
     return Status(StatusCode::kInvalidArgument, "nav worker: queues missing");
   tx_bus_ = std::make_unique<QueueCanBus>(q.can_tx);
   publisher_ = std::make_unique<qc::QnavCanPublisher>(*tx_bus_);
-  QNAV_RETURN_IF_ERROR(tiles_.init(cfg_.tiles));
-  route::LocaliserConfig lc = cfg_.localiser;
-  lc.filter.max_nodes = cfg_.max_nodes;
-  QNAV_RETURN_IF_ERROR(repeater_.init(lc));
+  Result<Arena*> a = stage_arena(mem, "tile_pipeline", pipeline::RouteTilePipeline::arena_bytes(cfg_.tiles), own_arenas_[0], arena_views_[0]);
+  if (!a) return a.status();
+  QNAV_RETURN_IF_ERROR(tiles_.init(cfg_.tiles, *a.value()));
+  const route::LocaliserConfig lc = repeat_localiser_config(cfg_);
+  a = stage_arena(mem, "localiser", route::RouteLocaliser::arena_bytes(lc), own_arenas_[1], arena_views_[1]);
+  if (!a) return a.status();
+  QNAV_RETURN_IF_ERROR(repeater_.init(lc, *a.value()));
   meta_.reserve(cfg_.max_nodes);
   writer_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
@@ -87,14 +104,17 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   if (map_runs(cfg_)) {
     if (!q.frames || !q.free_frames || !q.frame_pool) return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
     const pipeline::TopoMapperConfig mc = map_mapper_config(cfg_);
-    map_arena_ = std::make_unique<ArenaStorage>(pipeline::TopoMapper::arena_bytes(mc));
-    if (!map_arena_->valid()) return Status(StatusCode::kCapacityExceeded, "nav worker: no memory for the mapper");
+    a = stage_arena(mem, "map", pipeline::TopoMapper::arena_bytes(mc), own_arenas_[2], arena_views_[2]);
+    if (!a) return a.status();
+    map_arena_ = a.value();
     QNAV_RETURN_IF_ERROR(mapper_.init(mc, *map_arena_));
     map_ready_ = true;
   }
   if (cfg_.vo_enabled) {
     if (!q.frames || !q.free_frames || !q.frame_pool) return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
-    QNAV_RETURN_IF_ERROR(vo_.init(cfg_.vo, vo_body_T_cam(cfg_), cfg_.vo_prior));
+    a = stage_arena(mem, "vo", vo::StereoVo::arena_bytes(cfg_.vo), own_arenas_[3], arena_views_[3]);
+    if (!a) return a.status();
+    QNAV_RETURN_IF_ERROR(vo_.init(cfg_.vo, vo_body_T_cam(cfg_), cfg_.vo_prior, *a.value()));
     vo_ready_ = true;
   }
   const Deployment d = make_deployment(cfg_);
@@ -566,7 +586,7 @@ ModeReject NavWorker::enter_map(std::uint16_t id) noexcept {
 }
 
 void NavWorker::save_map() noexcept {
-  const Status s = tools::save_map(store_, map_path_, mapper_.map(), mapper_.metric());
+  const Status s = drivers::map_store::save_map(store_, map_path_, mapper_.map(), mapper_.metric());
   ++map_saves_;
   if (!s) {
     ++map_save_errors_;

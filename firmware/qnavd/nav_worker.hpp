@@ -49,6 +49,7 @@
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/deployment.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "firmware/qnavd/static_memory.hpp"
 #include "drivers/route_store/route_file.hpp"
 #include "hal/core/file_store.hpp"
 #include "hal/core/clock.hpp"
@@ -127,7 +128,9 @@ class NavWorker {
   // store: where route files live (the host's file system in qnavd; a memory store in tests).
   NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock, const hal::Clock& cpu_clock, hal::FileStore& store) noexcept;
   ~NavWorker();
-  Status init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log);
+  // mem: the daemon's static block; the stage arenas (tile_pipeline, localiser, vo, map) are carved
+  // from it by their deployment-table names. nullptr: each arena is allocated here (a worker built alone).
+  Status init(const NavQueues& q, TileObserver observer, void* observer_ctx, FILE* log, StaticMemory* mem = nullptr);
   void set_frame_observer(FrameObserver f, void* ctx) noexcept { frame_observer_ = f, frame_ctx_ = ctx; }
   // The node spacing and swath written into the header of a route taught here (before start).
   void set_route_geometry(double spacing_m, double swath_m) noexcept { spacing_m_ = spacing_m, swath_m_ = swath_m; }
@@ -176,8 +179,12 @@ class NavWorker {
   std::uint32_t writer_errors() const noexcept { return writer_errors_; }
   // The last teach could not be committed (the route stays under .new; the exit code says so).
   bool commit_failed() const noexcept { return commit_failed_; }
+  // The bytes its "route_meta" buffer holds (the deployment test compares them with the table).
+  std::size_t route_meta_bytes() const noexcept { return meta_.capacity() * sizeof(route::NodeMeta); }
 
  private:
+  static Result<Arena*> stage_arena(StaticMemory* mem, const char* name, std::size_t bytes, std::unique_ptr<ArenaStorage>& own,
+                                    std::unique_ptr<Arena>& view);
   void handle_frame(const hal::CanRxFrame& rx) noexcept;
   void handle_mode(const drivers::qnavcan::ModeCmd& cmd) noexcept;
   ModeReject enter_teach(std::uint16_t id) noexcept;
@@ -219,7 +226,9 @@ class NavWorker {
   pipeline::VoOdometry vo_;
   bool vo_ready_ = false;
   pipeline::TopoMapper mapper_;              // Mode = Map (PlaceEncoder: 32 KB inside; the worker lives on the heap)
-  std::unique_ptr<ArenaStorage> map_arena_;  // sized once at init (Deployment::map_bytes); reused by each new map
+  Arena* map_arena_ = nullptr;                 // the table's "map" buffer; reused by each new map
+  std::unique_ptr<ArenaStorage> own_arenas_[4];  // tile pipeline, localiser, map, vo: a worker built without a static block
+  std::unique_ptr<Arena> arena_views_[4];        // the same over the static block's buffers
   pipeline::MapperStep map_step_{};
   bool map_ready_ = false, map_open_ = false;
   char map_path_[1024] = {};

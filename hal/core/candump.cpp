@@ -1,4 +1,5 @@
 #include "hal/core/candump.hpp"
+#include "nav/core/assert.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -216,7 +217,9 @@ std::size_t format_can_log_line(const CanLogRecord& rec, char* out, std::size_t 
   if (rec.has_time) {
     const int w = std::snprintf(buf, sizeof buf, "(%lld.%06lld) %s ", static_cast<long long>(rec.time_us / 1000000),
                                 static_cast<long long>(rec.time_us % 1000000), rec.interface[0] ? rec.interface : "can0");
-    if (w < 0) return 0;
+    // The prefix is at most ~47 characters (a 64-bit time, a 16-character interface): the buffer
+    // holds it and the longest frame after it.
+    if (!QNAV_ASSERT(w >= 0 && w < 64, "candump: time and interface prefix longer than the line buffer allows")) return 0;
     k = static_cast<std::size_t>(w);
   }
   const CanFrame& f = rec.frame;

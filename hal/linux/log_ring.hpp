@@ -15,6 +15,8 @@
 #include <cstdio>
 #include <memory>
 
+#include "nav/core/span.hpp"
+
 #include "nav/core/status.hpp"
 
 namespace qnav::hal {
@@ -29,6 +31,9 @@ class LogRing {
   // capacity: bytes the ring holds (a power of two is not required); line_max: the stdio buffer (a
   // longer line is handed over in pieces).
   Status open(std::size_t capacity, std::size_t line_max = 4096);
+  // The same over caller memory (qnavd: its static block) that outlives the ring: the ring takes
+  // memory.size() - line_max bytes, the stdio buffer line_max. Only the FILE is allocated (by glibc).
+  Status open(Span<char> memory, std::size_t line_max);
   FILE* stream() const noexcept { return file_; }
   // Consumer side: writes pending bytes to fd without blocking; returns the bytes written. -1 on a
   // write error (the bytes stay in the ring).
@@ -40,8 +45,9 @@ class LogRing {
   static long cookie_write(void* self, const char* data, std::size_t size) noexcept;
   long push(const char* data, std::size_t size) noexcept;
 
-  std::unique_ptr<char[]> ring_;
-  std::unique_ptr<char[]> stdio_buf_;
+  std::unique_ptr<char[]> owned_;  // open(capacity, ...): the ring + the stdio buffer
+  char* ring_ = nullptr;
+  char* stdio_buf_ = nullptr;
   std::size_t cap_ = 0;
   std::atomic<std::size_t> head_{0};  // total bytes written (producer)
   std::atomic<std::size_t> tail_{0};  // total bytes drained (consumer)

@@ -1,4 +1,5 @@
 #include "nav/vision/harris.hpp"
+#include "nav/core/assert.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -409,7 +410,7 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
       heap[i].y += oy;
     }
   }
-  for (std::size_t i = 0; i < hn; ++i) out.push_back(heap[i]).ignore();  // hn <= out.capacity()
+  for (std::size_t i = 0; i < hn; ++i) QNAV_ASSERT(out.push_back(heap[i]).is_ok(), "harris: more corners kept than the output holds (hn <= capacity)");
   return Status::ok();
 }
 

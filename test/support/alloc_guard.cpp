@@ -12,9 +12,18 @@ std::atomic<std::size_t> g_news{0};
 std::atomic<std::size_t> g_deletes{0};
 std::atomic<std::size_t> g_mallocs{0};
 std::atomic<std::size_t> g_frees{0};
+std::atomic<std::size_t> g_new_bytes{0};     // bytes asked of operator new (every form)
+std::atomic<std::size_t> g_watch_size{0};    // watch_new_size(): count the news of exactly this size
+std::atomic<std::size_t> g_watch_hits{0};
+void count_new(std::size_t n) noexcept {
+  g_news.fetch_add(1, std::memory_order_relaxed);
+  g_new_bytes.fetch_add(n, std::memory_order_relaxed);
+  const std::size_t w = g_watch_size.load(std::memory_order_relaxed);
+  if (w != 0 && n == w) g_watch_hits.fetch_add(1, std::memory_order_relaxed);
+}
 
 void* counted_new(std::size_t n) {
-  g_news.fetch_add(1, std::memory_order_relaxed);
+  count_new(n);
   // With malloc counting on, this malloc would count twice; undo that so one new == one count.
 #if defined(QNAV_COUNT_MALLOC)
   g_mallocs.fetch_sub(1, std::memory_order_relaxed);
@@ -23,7 +32,7 @@ void* counted_new(std::size_t n) {
   return p;
 }
 void* counted_new_aligned(std::size_t n, std::align_val_t al) {
-  g_news.fetch_add(1, std::memory_order_relaxed);  // posix_memalign is not itself counted
+  count_new(n);  // posix_memalign is not itself counted
   const std::size_t a = static_cast<std::size_t>(al) < sizeof(void*) ? sizeof(void*) : static_cast<std::size_t>(al);
   void* p = nullptr;
   if (posix_memalign(&p, a, n == 0 ? a : n) != 0) return nullptr;
@@ -147,4 +156,13 @@ std::string AllocationGuard::report() const {
   return buf;
 }
 
+}  // namespace qnav::test
+
+namespace qnav::test {
+std::size_t new_bytes() noexcept { return g_new_bytes.load(std::memory_order_relaxed); }
+void watch_new_size(std::size_t n) noexcept {
+  g_watch_hits.store(0, std::memory_order_relaxed);
+  g_watch_size.store(n, std::memory_order_relaxed);
+}
+std::size_t watched_new_count() noexcept { return g_watch_hits.load(std::memory_order_relaxed); }
 }  // namespace qnav::test

@@ -55,6 +55,12 @@ struct AllocationCounts {
 };
 
 AllocationCounts allocation_counts() noexcept;
+// Bytes asked of operator new so far (every form, every thread).
+std::size_t new_bytes() noexcept;
+// Counts, from now on, the operator new calls of exactly n bytes (0 = off): a test that a block of a
+// known size was allocated once.
+void watch_new_size(std::size_t n) noexcept;
+std::size_t watched_new_count() noexcept;
 bool malloc_counted() noexcept;
 
 class AllocationGuard {
