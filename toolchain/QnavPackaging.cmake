@@ -2,12 +2,12 @@
 #
 # Everything the package holds is installed in the component `qnav`; CPack packs that component only
 # (CPACK_INSTALL_CMAKE_PROJECTS), so a third-party install() rule never slips into the .deb.
-#   /usr/bin/qnavd, /usr/bin/qnav                     the daemon and the tool
+#   /usr/bin/qnavd, /usr/bin/qnavd-sim, /usr/bin/qnav the daemon, with the sim backend, and the tool
 #   /usr/lib/systemd/system/qnavd.service             the unit (not enabled, not started on install)
 #   /etc/qnav/qnavd.toml                              conffile: the vehicle example the unit reads
 #   /usr/share/qnav/examples/{vehicle,sim}.toml       the example configurations, untouched by edits
 #   /usr/share/qnav/qnav.dbc                          the CAN interface
-#   /usr/share/man/man1/{qnavd,qnav}.1.gz             generated from the programs' own --help
+#   /usr/share/man/man1/{qnavd,qnavd-sim,qnav}.1.gz            generated from the programs' own --help
 #   /usr/share/doc/qnav/*.md                          README, install, qnavd, configuration, interfaces
 # The maintainer scripts (toolchain/deb/postinst, prerm, postrm) create the system user `qnav` and
 # /var/lib/qnav/routes, and stop/disable the service on removal; they never start it.

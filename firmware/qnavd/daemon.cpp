@@ -11,6 +11,7 @@
 #include "drivers/camera/leak_monitor.hpp"
 #include "drivers/dvl/dvl_driver.hpp"
 #include "firmware/qnavd/deployment.hpp"
+#include "firmware/qnavd/io_backend.hpp"
 #include "firmware/qnavd/linux_downward.hpp"
 #include "firmware/qnavd/linux_stereo.hpp"
 #include "firmware/qnavd/software_fault.hpp"
@@ -25,182 +26,12 @@
 #include "hal/linux/socketcan_bus.hpp"
 #include "hal/linux/tcp_client_port.hpp"
 #include "hal/linux/termios_serial.hpp"
-#include "hal/sim/sim_can.hpp"
-#include "hal/sim/sim_gpio.hpp"
-#include "hal/sim/sim_serial.hpp"
 
 namespace qnav::daemon {
-
-// What the io thread drives: one poll of every device, pushing into the nav worker's queues.
-class IoBackend {
- public:
-  virtual ~IoBackend() = default;
-  // Returns true when something was read or produced; false when the caller may wait.
-  virtual bool poll_devices(Daemon& d, IoCounters& io) noexcept = 0;
-  // The nav worker and its output queue, once both exist (the sim backend's lockstep between passes).
-  virtual void set_worker(const NavWorker*, const SpscRing<hal::CanFrame>*) noexcept {}
-  virtual void send(const hal::CanFrame& f, IoCounters& io) noexcept = 0;
-  virtual void wait(int timeout_ms) noexcept = 0;
-  virtual bool done() const noexcept { return false; }
-};
-
-struct QueueRefs {
-  SpscRing<PingMsg>* pings;
-  SpscRing<std::uint32_t>* free_slots;
-  SpscRing<hal::CanRxFrame>* can_rx;
-  SpscRing<drivers::dvl::DvlVelocity>* dvl;
-  float* pool;
-  std::size_t stride;
-  FramePool frames;  // stereo pairs and downward frames (queues null when neither vo.enabled nor map_runs)
-};
 
 namespace {
 
 using std::chrono::microseconds;
-
-// failed (optional): set when the bus reported an error this call (the device went away).
-// dropped_seen: the bus's running count of frames dropped before qnavd read them (the kernel's socket
-// queue, SO_RXQ_OVFL; the sim bus's queue) at the last call; 0 again when the bus is reopened.
-bool drain_can(hal::CanBus& bus, SpscRing<hal::CanRxFrame>& q, IoCounters& io, std::uint32_t& dropped_seen, bool* failed = nullptr) noexcept {
-  bool did = false;
-  hal::CanRxFrame rx;
-  for (int i = 0; i < 64; ++i) {
-    const Status s = bus.receive(rx, 0);
-    if (!s) {
-      if (s.code() != StatusCode::kTimeout) {
-        io.device_errors.fetch_add(1, std::memory_order_relaxed);
-        io.can_device_down.store(true);
-        if (failed) *failed = true;
-      }
-      break;
-    }
-    io.can_device_down.store(false);
-    io.can_rx_in.fetch_add(1, std::memory_order_relaxed);
-    if (!q.try_push(rx)) io.can_rx_overflow.fetch_add(1, std::memory_order_relaxed);
-    did = true;
-  }
-  const std::uint32_t dropped = bus.stats().rx_dropped;
-  if (dropped < dropped_seen) dropped_seen = 0;  // a new socket counts from 0
-  if (dropped != dropped_seen) io.can_rx_dropped.fetch_add(dropped - dropped_seen, std::memory_order_relaxed);
-  dropped_seen = dropped;
-  return did;
-}
-
-bool drain_dvl(drivers::dvl::DvlSerialDriver& dvl, SpscRing<drivers::dvl::DvlVelocity>& q, IoCounters& io, std::uint32_t& last_rejects) noexcept {
-  bool did = false;
-  Result<int> r = dvl.poll(0);
-  if (!r) {
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
-    io.dvl_device_down.store(true);
-    return false;
-  }
-  io.dvl_device_down.store(false);
-  drivers::dvl::DvlVelocity v;
-  while (dvl.pop(v)) {
-    io.dvl_in.fetch_add(1, std::memory_order_relaxed);
-    if (!q.try_push(v)) io.dvl_overflow.fetch_add(1, std::memory_order_relaxed);
-    did = true;
-  }
-  std::uint32_t rej = 0;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(drivers::dvl::DvlCounter::kCount); ++i)
-    if (static_cast<drivers::dvl::DvlCounter>(i) != drivers::dvl::DvlCounter::kNoLock) rej += dvl.counter(static_cast<drivers::dvl::DvlCounter>(i));
-  if (rej != last_rejects) {
-    io.dvl_rejected.fetch_add(rej - last_rejects, std::memory_order_relaxed);
-    last_rejects = rej;
-  }
-  return did;
-}
-
-// The leak detector's line (either backend): a latched LeakMonitor. Returns true on a new leak.
-bool poll_leak(drivers::camera::LeakMonitor& leak, IoCounters& io) noexcept {
-  const Result<bool> r = leak.poll(0);
-  if (!r) {
-    io.device_errors.fetch_add(1, std::memory_order_relaxed);
-    io.leak_device_down.store(true);
-    return false;
-  }
-  io.leak_device_down.store(false);
-  io.leak_events.store(leak.leak_events(), std::memory_order_relaxed);
-  if (leak.fault()) io.leak.store(true);
-  return r.value();
-}
-
-// ---- sim: the simulated vehicle on in-process buses, mission time ----
-class SimBackend final : public IoBackend {
- public:
-  SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
-      : clock_(clock), net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
-        leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
-  // The queues and pools once the static block holds them (init() only checks the frame geometry).
-  void set_queues(const QueueRefs& q) noexcept {
-    q_ = q;
-    vehicle_.set_frame_pool(q.frames);
-  }
-  Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
-    QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
-    QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
-    daemon_bus_.set_error_frames(true);  // as the SocketCAN backend subscribes to them
-    vehicle_.set_bus_observer(obs, ctx);
-    vehicle_.set_fault_targets(&net_, store);
-    vehicle_.set_frame_pool(frames);
-    vehicle_.set_leak_line(&leak_line_);
-    QNAV_RETURN_IF_ERROR(leak_.start());
-    return vehicle_.init(vehicle_bus_, pipe_.a());
-  }
-  // The nav worker and its output queue, for the lockstep between passes (SimVehicle::set_worker_caught_up).
-  void set_worker(const NavWorker* nav, const SpscRing<hal::CanFrame>* can_tx) noexcept override { nav_ = nav, can_tx_ = can_tx; }
-  bool poll_devices(Daemon&, IoCounters& io) noexcept override {
-    // Replay paces itself to the nav worker: the vehicle moves on only while the worker keeps up
-    // (a recorded dive loses nothing to the speed of the replay).
-    bool did = false;
-    const std::uint64_t queued = io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed);
-    const std::int64_t t_before = clock_.now_ns();
-    if (q_.can_rx->size() < kMaxBacklog && q_.dvl->size() < kMaxBacklog) {
-      // Caught up: every input queued so far taken, two whole worker steps since the last of them was
-      // queued or the clock last moved (one began after it: the worker saw that instant), and the
-      // frames those steps published sent to the vehicle.
-      vehicle_.set_worker_caught_up(nav_ == nullptr || (q_.can_rx->size() == 0 && q_.dvl->size() == 0 && can_tx_->size() == 0 &&
-                                                        nav_->progress() >= progress_gate_));
-      const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
-      done_ = r == SimVehicle::StepResult::kDone;
-      did = r == SimVehicle::StepResult::kProduced;
-    }
-    const bool moved = clock_.now_ns() != t_before;  // mission time moved: the nav thread has a new instant to see
-    did |= moved;
-    did |= drain_can(daemon_bus_, *q_.can_rx, io, can_dropped_seen_);
-    did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
-    if (nav_ != nullptr && (moved || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
-      progress_gate_ = nav_->progress() + 2;
-    did |= poll_leak(leak_, io);
-    vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
-    vehicle_.release_pair(io);
-    return did;
-  }
-  void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
-    if (!daemon_bus_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
-  }
-  void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
-  bool done() const noexcept override { return done_; }
-  const SimVehicle& vehicle() const noexcept { return vehicle_; }
-
- private:
-  static constexpr std::size_t kMaxBacklog = 8;
-  const SimClock& clock_;
-  hal::SimCanNetwork net_;
-  hal::SimCanBus daemon_bus_, vehicle_bus_;
-  hal::SimSerialPipe pipe_;
-  SimVehicle vehicle_;
-  drivers::dvl::DvlSerialDriver dvl_;
-  QueueRefs q_;
-  hal::SimGpioLine leak_line_;  // the simulated leak detector (sim.fault = "leak" wets it)
-  drivers::camera::LeakMonitor leak_;
-  std::uint32_t dvl_rejects_ = 0;
-  std::uint32_t can_dropped_seen_ = 0;
-  bool done_ = false;
-  const NavWorker* nav_ = nullptr;
-  const SpscRing<hal::CanFrame>* can_tx_ = nullptr;
-  std::uint64_t progress_gate_ = 0;
-};
 
 // ---- linux: SocketCAN, termios DVL, JSF over TCP; reopened once a second when they fail ----
 class LinuxBackend final : public IoBackend {
@@ -502,7 +333,7 @@ Status Daemon::init(FILE* log) {
 // carved from it by name; complete() proves nothing in the table was left out.
 Status Daemon::init_pipeline() {
   wall_ = std::make_unique<hal::MonotonicClock>();
-  std::unique_ptr<SimBackend> sim;
+  std::unique_ptr<SimIoBackend> sim;
   FramePool fp;
   const bool frames_on = cfg_.vo_enabled || map_runs(cfg_);
   if (frames_on) {
@@ -517,13 +348,16 @@ Status Daemon::init_pipeline() {
   stride_ = 2 * cfg_.max_samples_per_side;
   QueueRefs refs{&pings_, &free_slots_, &can_rx_, &dvl_q_, nullptr, stride_, fp};
   if (cfg_.backend == Backend::kSim) {
-    sim_clock_ = std::make_unique<SimClock>();
-    sim = std::make_unique<SimBackend>(cfg_, *sim_clock_, *wall_, refs);
-    // The route store behind a switch that can make the disk full (sim.fault = "disk_full").
-    fault_store_ = std::make_unique<hal::FaultFileStore>(hal::host_file_store());
-    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, fault_store_.get(), refs.frames));
+    // The simulated vehicle is a library of its own (qnavd_sim) that the flight binary does not link.
+    const SimBackendFactory make_sim = sim_backend_factory();
+    if (make_sim == nullptr)
+      return Status(StatusCode::kUnsupported, "daemon.backend = \"sim\" needs the simulator, which this binary does not link: run qnavd-sim");
+    sim = make_sim(cfg_, *wall_);
+    QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, refs.frames));
+    sim_clock_ = &sim->clock();
+    sim_store_ = &sim->store();
     double range_m = 0.0;
-    if (sim->vehicle().recorded_geometry(range_m, route_spacing_m_)) {
+    if (sim->recorded_geometry(range_m, route_spacing_m_)) {
       // Recorded passes: tiles and registration as `qnav route train|repeat --sonar` sets them for
       // the file (pipeline/route_defaults), the route header's spacing and swath from the file.
       cfg_.tiles = pipeline::file_route_tile_config(range_m, cfg_.sim_replay_lines, cfg_.sim_replay_stride);
@@ -532,8 +366,8 @@ Status Daemon::init_pipeline() {
       cfg_.localiser.window_slots = std::max<std::size_t>(cfg_.localiser.window_slots, cfg_.localiser.filter.max_registrations() + 1u);
       route_swath_m_ = 2.0 * range_m;
     } else {
-      route_spacing_m_ = sim->vehicle().node_spacing_m(cfg_.tiles.tiles.scanline_stride);
-      route_swath_m_ = sim->vehicle().swath_m();
+      route_spacing_m_ = sim->node_spacing_m(cfg_.tiles.tiles.scanline_stride);
+      route_swath_m_ = sim->swath_m();
     }
   }
   static_ = std::make_unique<StaticMemory>(make_deployment(cfg_));
@@ -582,7 +416,7 @@ Status Daemon::init_pipeline() {
     backend_ = std::move(lb);
   }
   QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));
-  hal::FileStore& store = fault_store_ ? static_cast<hal::FileStore&>(*fault_store_) : hal::host_file_store();
+  hal::FileStore& store = sim_store_ != nullptr ? *sim_store_ : hal::host_file_store();
   nav_ = std::make_unique<NavWorker>(cfg_, sample_clock(), *wall_, store);
   nav_->set_route_geometry(route_spacing_m_, route_swath_m_);
   NavQueues nq;

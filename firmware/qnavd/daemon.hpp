@@ -21,7 +21,7 @@
 
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/nav_worker.hpp"
-#include "firmware/qnavd/sim_vehicle.hpp"
+#include "firmware/qnavd/io_backend.hpp"
 #include "firmware/qnavd/static_memory.hpp"
 #include "hal/linux/log_ring.hpp"
 
@@ -66,7 +66,8 @@ class Daemon {
   std::unique_ptr<hal::LogRing> nav_log_, io_log_;  // the threads' log lines, drained by the main thread
   std::uint64_t log_dropped_reported_ = 0;
   std::unique_ptr<hal::Clock> wall_;
-  std::unique_ptr<SimClock> sim_clock_;
+  const hal::Clock* sim_clock_ = nullptr;     // sim backend: mission time (the backend owns it)
+  hal::FileStore* sim_store_ = nullptr;       // sim backend: the route store it provides
   // Every queue, pool, log ring and nav arena below lives in this block, carved by the deployment
   // table's names (static_memory.hpp).
   std::unique_ptr<StaticMemory> static_;
@@ -80,7 +81,6 @@ class Daemon {
   SpscRing<drivers::dvl::DvlVelocity> dvl_q_;
   std::size_t stride_ = 0;
   IoCounters io_;
-  std::unique_ptr<hal::FaultFileStore> fault_store_;  // sim backend: the host store with a "disk full" switch
   std::unique_ptr<IoBackend> backend_;
   std::unique_ptr<NavWorker> nav_;
   TileObserver tile_observer_ = nullptr;

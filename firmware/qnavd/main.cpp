@@ -5,6 +5,9 @@
 //   qnavd --print-deployment [--config FILE]   the deployment table with the configured sizes
 //   qnavd --print-config-keys      every configuration key (markdown table)
 //   qnavd --help | --version
+// Built twice: qnavd (the flight binary: linux backend, no simulator or image library linked; a
+// configuration with daemon.backend = "sim" is handed to qnavd-sim) and qnavd-sim (QNAVD_SIM_BUILD:
+// the same daemon with the sim backend, firmware/qnavd/sim_backend.cpp).
 #include <cstdio>
 #include <string>
 
@@ -71,6 +74,15 @@ int main(int argc, char** argv) {
     std::printf("%s: valid\n", check);
     return 0;
   }
+#ifndef QNAVD_SIM_BUILD
+  // The flight binary links no simulator: a simulated vehicle is run by qnavd-sim, with the same
+  // arguments, from this program's directory.
+  if (cfg.backend == qnav::daemon::Backend::kSim) {
+    const qnav::Status es = qnav::hal::exec_sibling("qnavd-sim", argv);
+    std::fprintf(stderr, "qnavd: daemon.backend = \"sim\": %s\n", es.message());
+    return 1;
+  }
+#endif
   if (print_deployment) {
     // The table the daemon builds itself from. On the sim backend a recorded pass sets the tile and
     // localiser geometry from its file at start-up: the table is then the one that start-up made.

@@ -34,6 +34,7 @@
 #include <memory>
 #include <vector>
 
+#include "firmware/qnavd/io_backend.hpp"
 #include "drivers/downward_sim/seabed_scene.hpp"
 #include "drivers/qnavcan/messages.hpp"
 #include "drivers/sidescan/sim_sidescan.hpp"
@@ -64,7 +65,6 @@ class SimClock final : public hal::Clock {
 };
 
 // A frame the autopilot saw on the bus (the daemon's outputs), for logs and tests.
-using BusObserver = void (*)(void* ctx, const hal::CanRxFrame& f);
 
 class SimVehicle {
  public:

@@ -74,6 +74,21 @@ Status ensure_dir(const char* path) noexcept {
   return Status::ok();
 }
 
+Status exec_sibling(const char* name, char* const argv[]) noexcept {
+  static char path[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", path, sizeof path - 1);
+  if (n <= 0) return os_error(StatusCode::kIoError, "readlink /proc/self/exe", errno);
+  path[n] = '\0';
+  char* slash = std::strrchr(path, '/');
+  const std::size_t dir = slash != nullptr ? static_cast<std::size_t>(slash - path) + 1 : 0;
+  if (dir + std::strlen(name) + 1 > sizeof path) return Status(StatusCode::kInvalidArgument, "exec_sibling: path too long");
+  std::memcpy(path + dir, name, std::strlen(name) + 1);
+  ::execv(path, argv);
+  static char what[160];
+  std::snprintf(what, sizeof what, "cannot run %.140s", path);
+  return os_error(StatusCode::kNotFound, what, errno, "is the package's qnavd-sim installed beside qnavd?");
+}
+
 bool path_exists(const char* path) noexcept {
   struct stat st{};
   return stat(path, &st) == 0;

@@ -22,6 +22,10 @@ Status lock_memory() noexcept;
 Status set_thread_realtime(int priority, int cpu) noexcept;
 Status ensure_dir(const char* path) noexcept;
 bool path_exists(const char* path) noexcept;
+// Replaces this process with the program `name` from this executable's own directory
+// (/proc/self/exe), with the same arguments: qnavd runs qnavd-sim for a simulated vehicle. Returns
+// only on failure, with the path it tried and the OS reason.
+Status exec_sibling(const char* name, char* const argv[]) noexcept;
 
 class StopSignals {
  public:

@@ -35,12 +35,12 @@ dpkg-deb -x "$deb" "$root" || { echo "FAIL: dpkg-deb -x"; exit 1; }
 dpkg-deb -e "$deb" "$WORK/control" || { echo "FAIL: dpkg-deb -e"; exit 1; }
 
 # The file list: everything the install promises, and nothing else at the top.
-for f in usr/bin/qnavd usr/bin/qnav; do
+for f in usr/bin/qnavd usr/bin/qnavd-sim usr/bin/qnav; do
   [ -f "$root/$f" ] && [ -x "$root/$f" ] || fail "$f missing or not executable"
 done
 for f in usr/lib/systemd/system/qnavd.service etc/qnav/qnavd.toml usr/share/qnav/examples/vehicle.toml \
          usr/share/qnav/examples/sim.toml usr/share/qnav/qnav.dbc usr/share/man/man1/qnavd.1.gz \
-         usr/share/man/man1/qnav.1.gz usr/share/doc/qnav/qnavd.md usr/share/doc/qnav/install.md; do
+         usr/share/man/man1/qnavd-sim.1.gz usr/share/man/man1/qnav.1.gz usr/share/doc/qnav/qnavd.md usr/share/doc/qnav/install.md; do
   [ -f "$root/$f" ] || fail "$f missing"
 done
 top=$(cd "$root" && ls -A | tr '\n' ' ')
@@ -57,6 +57,9 @@ for m in qnavd qnav; do
   echo "$page" | grep -q "^\.TH ${m^^} 1" || fail "$m.1.gz has no .TH header"
 done
 gzip -dc "$root/usr/share/man/man1/qnavd.1.gz" | grep -q -- "--check-config" || fail "qnavd.1 lacks the --help text"
+# The flight binary links no image-file library (the simulator and the tools' PNG/JPEG are in qnavd-sim and qnav).
+needed=$(readelf -d "$root/usr/bin/qnavd" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p' | tr '\n' ' ')
+case "$needed" in *libpng*|*libjpeg*) fail "the flight binary qnavd loads an image library: $needed" ;; esac
 ok "file list ($(cd "$root" && find . -type f | wc -l) files)"
 
 # The unpacked programs run.
@@ -85,7 +88,7 @@ for d in libc6 adduser; do echo "$deps" | grep -qw "$d" || fail "Depends lacks $
 # the programs load must map to a package of that list, and the ELF machine must be the package's.
 if [ -n "$EMU" ]; then
   case $ARCH in arm64) machine=AArch64 ;; armhf) machine=ARM ;; *) machine=? ;; esac
-  for p in qnavd qnav; do
+  for p in qnavd qnavd-sim qnav; do
     readelf -h "$root/usr/bin/$p" | grep -q "Machine: *$machine" || fail "$p is not an $ARCH ($machine) program"
     for lib in $(readelf -d "$root/usr/bin/$p" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
       case $lib in

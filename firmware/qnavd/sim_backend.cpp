@@ -1,0 +1,113 @@
+// qnavd's sim backend (io_backend.hpp: SimIoBackend): the simulated vehicle (sim_vehicle: autopilot,
+// AHRS, DVL, side-scan, the rover's stereo bench, recorded passes) on in-process CAN and serial
+// buses, in mission time. Part of the library qnavd_sim, which the flight binary qnavd does not link
+// (it runs qnavd-sim for a configuration with daemon.backend = "sim"); linking it registers the
+// backend with the daemon's start-up.
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "firmware/qnavd/daemon.hpp"
+#include "firmware/qnavd/io_backend.hpp"
+#include "firmware/qnavd/nav_worker.hpp"
+#include "firmware/qnavd/sim_vehicle.hpp"
+#include "hal/linux/posix_file_store.hpp"
+#include "hal/sim/fault_file_store.hpp"
+#include "hal/sim/sim_can.hpp"
+#include "hal/sim/sim_gpio.hpp"
+#include "hal/sim/sim_serial.hpp"
+
+namespace qnav::daemon {
+namespace {
+
+using std::chrono::microseconds;
+
+// ---- sim: the simulated vehicle on in-process buses, mission time ----
+class SimBackend final : public SimIoBackend {
+ public:
+  SimBackend(const DaemonConfig& c, const hal::Clock& wall)
+      : net_(clock_), pipe_(clock_), vehicle_(c, clock_, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_{},
+        store_(hal::host_file_store()), leak_line_(clock_, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
+  // The queues and pools once the static block holds them (init() only checks the frame geometry).
+  void set_queues(const QueueRefs& q) noexcept override {
+    q_ = q;
+    vehicle_.set_frame_pool(q.frames);
+  }
+  Status init(BusObserver obs, void* ctx, const FramePool& frames) override {
+    QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
+    QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
+    daemon_bus_.set_error_frames(true);  // as the SocketCAN backend subscribes to them
+    vehicle_.set_bus_observer(obs, ctx);
+    vehicle_.set_fault_targets(&net_, &store_);
+    vehicle_.set_frame_pool(frames);
+    vehicle_.set_leak_line(&leak_line_);
+    QNAV_RETURN_IF_ERROR(leak_.start());
+    return vehicle_.init(vehicle_bus_, pipe_.a());
+  }
+  // The nav worker and its output queue, for the lockstep between passes (SimVehicle::set_worker_caught_up).
+  void set_worker(const NavWorker* nav, const SpscRing<hal::CanFrame>* can_tx) noexcept override { nav_ = nav, can_tx_ = can_tx; }
+  bool poll_devices(Daemon&, IoCounters& io) noexcept override {
+    // Replay paces itself to the nav worker: the vehicle moves on only while the worker keeps up
+    // (a recorded dive loses nothing to the speed of the replay).
+    bool did = false;
+    const std::uint64_t queued = io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed);
+    const std::int64_t t_before = clock_.now_ns();
+    if (q_.can_rx->size() < kMaxBacklog && q_.dvl->size() < kMaxBacklog) {
+      // Caught up: every input queued so far taken, two whole worker steps since the last of them was
+      // queued or the clock last moved (one began after it: the worker saw that instant), and the
+      // frames those steps published sent to the vehicle.
+      vehicle_.set_worker_caught_up(nav_ == nullptr || (q_.can_rx->size() == 0 && q_.dvl->size() == 0 && can_tx_->size() == 0 &&
+                                                        nav_->progress() >= progress_gate_));
+      const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
+      done_ = r == SimVehicle::StepResult::kDone;
+      did = r == SimVehicle::StepResult::kProduced;
+    }
+    const bool moved = clock_.now_ns() != t_before;  // mission time moved: the nav thread has a new instant to see
+    did |= moved;
+    did |= drain_can(daemon_bus_, *q_.can_rx, io, can_dropped_seen_);
+    did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
+    if (nav_ != nullptr && (moved || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
+      progress_gate_ = nav_->progress() + 2;
+    did |= poll_leak(leak_, io);
+    vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
+    vehicle_.release_pair(io);
+    return did;
+  }
+  void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
+    if (!daemon_bus_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
+  }
+  void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
+  bool done() const noexcept override { return done_; }
+  bool recorded_geometry(double& range_m, double& spacing_m) const override { return vehicle_.recorded_geometry(range_m, spacing_m); }
+  double node_spacing_m(int scanline_stride) const override { return vehicle_.node_spacing_m(scanline_stride); }
+  double swath_m() const override { return vehicle_.swath_m(); }
+  const hal::Clock& clock() const noexcept override { return clock_; }
+  hal::FileStore& store() noexcept override { return store_; }
+
+ private:
+  static constexpr std::size_t kMaxBacklog = 8;
+  SimClock clock_;  // mission time
+  hal::SimCanNetwork net_;
+  hal::SimCanBus daemon_bus_, vehicle_bus_;
+  hal::SimSerialPipe pipe_;
+  SimVehicle vehicle_;
+  drivers::dvl::DvlSerialDriver dvl_;
+  QueueRefs q_;
+  hal::FaultFileStore store_;   // the route store behind a switch that can make the disk full (sim.fault = "disk_full")
+  hal::SimGpioLine leak_line_;  // the simulated leak detector (sim.fault = "leak" wets it)
+  drivers::camera::LeakMonitor leak_;
+  std::uint32_t dvl_rejects_ = 0;
+  std::uint32_t can_dropped_seen_ = 0;
+  bool done_ = false;
+  const NavWorker* nav_ = nullptr;
+  const SpscRing<hal::CanFrame>* can_tx_ = nullptr;
+  std::uint64_t progress_gate_ = 0;
+};
+
+std::unique_ptr<SimIoBackend> make_sim_backend(const DaemonConfig& c, const hal::Clock& wall) { return std::make_unique<SimBackend>(c, wall); }
+
+// Registered before main() runs: qnavd_sim is an object library, so this object is always linked.
+const bool g_registered = (set_sim_backend_factory(&make_sim_backend), true);
+
+}  // namespace
+}  // namespace qnav::daemon
