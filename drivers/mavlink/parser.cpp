@@ -68,7 +68,7 @@ Parser::Step Parser::check(std::size_t& frame_len) noexcept {
     counters_.increment(ParserCounter::kUnknownMessage);
     return Step::kDropFrame;
   }
-  const bool length_ok = v2 ? (plen >= 1 && plen <= info->full_len) : (plen >= info->base_len && plen <= info->full_len);
+  const bool length_ok = v2 ? (plen <= info->full_len) : (plen >= info->base_len && plen <= info->full_len);
   if (!length_ok) {
     counters_.increment(ParserCounter::kBadLength);
     return Step::kDropOne;

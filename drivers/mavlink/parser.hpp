@@ -32,7 +32,7 @@ enum class ParserCounter : std::uint8_t {
   kGarbageBytes,     // bytes outside any frame (no magic)
   kBadCrc,           // checksum does not match (corrupt frame or false magic)
   kUnknownMessage,   // a frame whose id is not in message_info() (skipped by its length)
-  kBadLength,        // length 0, or longer than the message (MAVLink 1: not the base length)
+  kBadLength,        // longer than the message (MAVLink 1: also shorter than its base length)
   kIncompatFlags,    // incompat flags other than signing
   kSignedRefused,    // signed frame and no signing key configured
   kBadSignature,     // signature does not match the key
