@@ -9,6 +9,7 @@
 #include "drivers/mavlink/messages.hpp"
 #include "drivers/mavlink/parser.hpp"
 #include "nav/core/byte_order.hpp"
+#include "test/support/alloc_guard.hpp"
 #include "test/unit/drivers/mavlink/mavlink_test_util.hpp"
 
 namespace qnav::drivers::mavlink {
@@ -340,6 +341,35 @@ TEST(MavlinkParser, RandomBytesNeverCrashAndEveryFrameAfterThemArrives) {
   // than a max-length frame's worth (280 bytes = 13 heartbeats of 21 bytes).
   EXPECT_GE(ours, sent - 200u * 14u);
   EXPECT_GT(p.counters().get(ParserCounter::kGarbageBytes), 0u);
+}
+
+TEST(MavlinkParser, EncodeSignParseAndDecodeAllocateNothing) {
+  const SigningKey key = key_of(5, 1);
+  FrameEncoder enc(1, 197);
+  Parser p;
+  p.set_signing_key(key);
+  std::uint8_t buf[kMaxFrameBytes];
+  int decoded = 0;
+  auto on_frame = [&](const Frame& f) {
+    Odometry o;
+    if (decode(f, o)) ++decoded;
+  };
+  QNAV_EXPECT_NO_ALLOC({
+    for (int i = 0; i < 100; ++i) {
+      Odometry o;
+      o.time_usec = static_cast<std::uint64_t>(i);
+      o.quality = 50;
+      auto n = encode(enc, o, Span<std::uint8_t>(buf));
+      std::size_t len = n.is_ok() ? n.value() : 0;
+      if (i % 2 == 0) {
+        auto s = sign_frame(buf, len, sizeof(buf), key, static_cast<std::uint64_t>(100 + i));
+        len = s.is_ok() ? s.value() : 0;
+      }
+      p.feed(Span<const std::uint8_t>(buf, len), on_frame);
+    }
+  });
+  EXPECT_EQ(decoded, 100);
+  EXPECT_EQ(p.stats().frames_signed, 50u);
 }
 
 }  // namespace
