@@ -67,6 +67,12 @@ class Parser {
   template <typename OnFrame>
   void feed(Span<const std::uint8_t> bytes, OnFrame&& on_frame) noexcept {
     for (std::uint8_t b : bytes) {
+      // extract() always leaves len_ < kMaxFrameBytes (a complete candidate is resolved at once);
+      // the guard keeps the buffer bounded should that ever change.
+      if (len_ == kMaxFrameBytes) {
+        counters_.increment(ParserCounter::kGarbageBytes);
+        drop(1);
+      }
       buf_[len_++] = b;
       while (extract()) on_frame(static_cast<const Frame&>(frame_));
     }
