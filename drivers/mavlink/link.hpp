@@ -10,7 +10,7 @@
 //    (set_signing_key) the frame is signed with the timestamp the caller gives (10 us units since
 //    2015-01-01, strictly increasing: the caller owns the clock). A short write (full buffer) or a
 //    port error is counted and returned; a frame is never half-retried.
-// Memory: a Parser (~600 B) and one 280-byte frame buffer, no heap; time per poll bounded by
+// Memory: a Parser (~600 B), a 2 KiB read buffer and one 280-byte frame buffer, no heap; time per poll bounded by
 // kMaxReadsPerPoll * kReadChunk bytes through the parser. Not thread-safe: one thread per link (qnavd's
 // io thread), or a reader and a writer thread using separate Link objects over separate ports.
 #pragma once
@@ -38,7 +38,7 @@ struct LinkStats {
 
 class Link {
  public:
-  static constexpr std::size_t kReadChunk = 512;
+  static constexpr std::size_t kReadChunk = 2048;  // one UDP datagram of several frames (MTU 1500) whole
   static constexpr int kMaxReadsPerPoll = 16;
 
   Link(hal::SerialPort& port, std::uint8_t sysid, std::uint8_t compid) noexcept : port_(port), encoder_(sysid, compid) {}
