@@ -126,7 +126,7 @@ bool poll_leak(drivers::camera::LeakMonitor& leak, IoCounters& io) noexcept {
 // ---- sim: the simulated vehicle on in-process buses, mission time ----
 class SimBackend final : public IoBackend {
  public:
-  SimBackend(const DaemonConfig& c, SimClock& clock, const hal::Clock& wall, QueueRefs q)
+  SimBackend(const DaemonConfig& c, SimClock& clock, hal::Clock& wall, QueueRefs q)
       : clock_(clock), net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
         leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
   Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
@@ -167,16 +167,46 @@ class SimBackend final : public IoBackend {
     did |= poll_leak(leak_, io);
     vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
     vehicle_.release_pair(io);
+    log_pace(false);
     return did;
   }
+  void set_log(FILE* log) noexcept { log_ = log; }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
     if (!daemon_bus_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
   }
-  void wait(int) noexcept override { std::this_thread::sleep_for(microseconds(50)); }
+  // Waiting for the lockstep: 50 us. Waiting for a paced step's deadline (sim.speed > 0): a sleep to
+  // that absolute deadline, in slices of SimPacer::kPollSliceNs so the daemon's frames still reach the
+  // vehicle within a slice.
+  void wait(int) noexcept override {
+    if (vehicle_.pacer().waiting())
+      vehicle_.pacer().sleep(SimPacer::kPollSliceNs);
+    else
+      std::this_thread::sleep_for(microseconds(50));
+  }
   bool done() const noexcept override { return done_; }
   const SimVehicle& vehicle() const noexcept { return vehicle_; }
 
  private:
+  // sim.speed > 0: a `sim_pace` line every kPaceLogNs of wall time and one when the mission is done:
+  // the pace kept (mission and wall time since the first step), the steps, the late ones.
+  static constexpr std::int64_t kPaceLogNs = 10000000000;
+  void log_pace(bool force) noexcept {
+    const SimPacer& p = vehicle_.pacer();
+    if (log_ == nullptr || !p.paced() || !p.started() || pace_logged_at_end_) return;
+    const std::int64_t wall_ns = p.wall_elapsed_ns();
+    if (!force && !done_ && wall_ns < next_pace_log_ns_) return;
+    next_pace_log_ns_ = wall_ns + kPaceLogNs;
+    pace_logged_at_end_ = done_;
+    std::fprintf(log_,
+                 "{\"event\":\"sim_pace\",\"speed\":%g,\"mission_s\":%.3f,\"wall_s\":%.3f,\"steps\":%llu,\"sim_late_steps\":%u,"
+                 "\"max_late_ms\":%.2f,\"done\":%s}\n",
+                 p.speed(), static_cast<double>(clock_.now_ns() - p.mission_start_ns()) * 1e-9, static_cast<double>(wall_ns) * 1e-9,
+                 static_cast<unsigned long long>(p.steps()), p.late_steps(), static_cast<double>(p.max_late_ns()) * 1e-6,
+                 done_ ? "true" : "false");
+  }
+  FILE* log_ = nullptr;
+  std::int64_t next_pace_log_ns_ = kPaceLogNs;
+  bool pace_logged_at_end_ = false;
   static constexpr std::size_t kMaxBacklog = 8;
   const SimClock& clock_;
   hal::SimCanNetwork net_;
@@ -523,6 +553,7 @@ Status Daemon::init_pipeline() {
     // The route store behind a switch that can make the disk full (sim.fault = "disk_full").
     fault_store_ = std::make_unique<hal::FaultFileStore>(hal::host_file_store());
     QNAV_RETURN_IF_ERROR(sim->init(bus_observer_, bus_ctx_, fault_store_.get(), refs.frames));
+    sim->set_log(io_log_ ? io_log_->stream() : nullptr);
     double range_m = 0.0;
     if (sim->vehicle().recorded_geometry(range_m, route_spacing_m_)) {
       // Recorded passes: tiles and registration as `qnav route train|repeat --sonar` sets them for
@@ -537,7 +568,9 @@ Status Daemon::init_pipeline() {
       route_swath_m_ = sim->vehicle().swath_m();
     }
     backend_ = std::move(sim);
-    nav_idle_wait_us_ = 200;
+    // Paced (sim.speed > 0): a quarter of a handshake tick's wall time (10 ms of mission time), 200 us
+    // to 2 ms, so the lockstep between passes keeps the pace and an idle worker does not spin at 1x.
+    nav_idle_wait_us_ = cfg_.sim_speed > 0.0 ? std::clamp(static_cast<long>(2500.0 / cfg_.sim_speed), 200L, 2000L) : 200;
   } else {
     auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, io_log_ ? io_log_->stream() : nullptr);
     QNAV_RETURN_IF_ERROR(lb->init());
