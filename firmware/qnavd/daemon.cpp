@@ -23,6 +23,7 @@
 #include "hal/linux/socketcan_bus.hpp"
 #include "hal/linux/tcp_client_port.hpp"
 #include "hal/linux/termios_serial.hpp"
+#include "hal/sim/clocked_can_link.hpp"
 #include "hal/sim/sim_can.hpp"
 #include "hal/sim/sim_gpio.hpp"
 #include "hal/sim/sim_serial.hpp"
@@ -123,22 +124,35 @@ bool poll_leak(drivers::camera::LeakMonitor& leak, IoCounters& io) noexcept {
   return r.value();
 }
 
-// ---- sim: the simulated vehicle on in-process buses, mission time ----
+// ---- sim: the simulated vehicle on in-process buses (or a SocketCAN interface), mission time ----
 class SimBackend final : public IoBackend {
  public:
   SimBackend(const DaemonConfig& c, SimClock& clock, hal::Clock& wall, QueueRefs q)
-      : clock_(clock), net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
-        leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true) {}
+      : cfg_(c), clock_(clock), net_(clock), pipe_(clock), vehicle_(c, clock, wall), dvl_(pipe_.b(), drivers::dvl::DvlProtocol::kWaterLinked), q_(q),
+        leak_line_(clock, hal::GpioEdge::kBoth), leak_(leak_line_, true), daemon_node_(daemon_sock_, clock, wall),
+        vehicle_node_(vehicle_sock_, clock, wall) {}
   Status init(BusObserver obs, void* ctx, hal::FaultFileStore* store, const FramePool& frames) {
-    QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
-    QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
-    daemon_bus_.set_error_frames(true);  // as the SocketCAN backend subscribes to them
+    hal::CanBus* vehicle_bus = &vehicle_bus_;
+    if (cfg_.sim_can_interface.empty()) {
+      QNAV_RETURN_IF_ERROR(daemon_bus_.attach(net_));
+      QNAV_RETURN_IF_ERROR(vehicle_bus_.attach(net_));
+      daemon_bus_.set_error_frames(true);  // as the SocketCAN backend subscribes to them
+      daemon_can_ = &daemon_bus_;
+      vehicle_.set_fault_targets(&net_, store);
+    } else {
+      // sim.can_interface: both ends on the interface (unfiltered sockets, as the in-process bus),
+      // stamped with mission time by the link; the lockstep waits for the kernel's round trip.
+      QNAV_RETURN_IF_ERROR(open_interface());
+      daemon_node_.link(vehicle_node_);
+      daemon_can_ = &daemon_node_;
+      vehicle_bus = &vehicle_node_;
+      vehicle_.set_fault_targets(nullptr, store);  // no error frames from user space on a real interface
+    }
     vehicle_.set_bus_observer(obs, ctx);
-    vehicle_.set_fault_targets(&net_, store);
     vehicle_.set_frame_pool(frames);
     vehicle_.set_leak_line(&leak_line_);
     QNAV_RETURN_IF_ERROR(leak_.start());
-    return vehicle_.init(vehicle_bus_, pipe_.a());
+    return vehicle_.init(*vehicle_bus, pipe_.a());
   }
   // The nav worker and its output queue, for the lockstep between passes (SimVehicle::set_worker_caught_up).
   void set_worker(const NavWorker* nav, const SpscRing<hal::CanFrame>* can_tx) noexcept override { nav_ = nav, can_tx_ = can_tx; }
@@ -148,31 +162,35 @@ class SimBackend final : public IoBackend {
     bool did = false;
     const std::uint64_t queued = io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed);
     const std::int64_t t_before = clock_.now_ns();
-    if (q_.can_rx->size() < kMaxBacklog && q_.dvl->size() < kMaxBacklog) {
+    // On an interface the vehicle moves on only once its frames of the last instant have reached the
+    // daemon's socket (in process they arrive as they are sent).
+    if (q_.can_rx->size() < kMaxBacklog && q_.dvl->size() < kMaxBacklog && in_flight_to_daemon() == 0) {
       // Caught up: every input queued so far taken, two whole worker steps since the last of them was
       // queued or the clock last moved (one began after it: the worker saw that instant), and the
-      // frames those steps published sent to the vehicle.
+      // frames those steps published sent to the vehicle (and on an interface, arrived there).
       vehicle_.set_worker_caught_up(nav_ == nullptr || (q_.can_rx->size() == 0 && q_.dvl->size() == 0 && can_tx_->size() == 0 &&
-                                                        nav_->progress() >= progress_gate_));
+                                                        nav_->progress() >= progress_gate_ && in_flight_to_vehicle() == 0));
       const SimVehicle::StepResult r = vehicle_.step(*q_.free_slots, *q_.pings, q_.pool, q_.stride, io);
       done_ = r == SimVehicle::StepResult::kDone;
       did = r == SimVehicle::StepResult::kProduced;
     }
     const bool moved = clock_.now_ns() != t_before;  // mission time moved: the nav thread has a new instant to see
     did |= moved;
-    did |= drain_can(daemon_bus_, *q_.can_rx, io, can_dropped_seen_);
+    did |= drain_can(*daemon_can_, *q_.can_rx, io, can_dropped_seen_);
     did |= drain_dvl(dvl_, *q_.dvl, io, dvl_rejects_);
     if (nav_ != nullptr && (moved || io.can_rx_in.load(std::memory_order_relaxed) + io.dvl_in.load(std::memory_order_relaxed) != queued))
       progress_gate_ = nav_->progress() + 2;
     did |= poll_leak(leak_, io);
-    vehicle_.release_ping(*q_.pings, io);  // after the navigation of its instant
-    vehicle_.release_pair(io);
+    if (in_flight_to_daemon() == 0) {  // after the navigation of its instant (on an interface: once it arrived)
+      vehicle_.release_ping(*q_.pings, io);
+      vehicle_.release_pair(io);
+    }
     log_pace(false);
     return did;
   }
   void set_log(FILE* log) noexcept { log_ = log; }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
-    if (!daemon_bus_.send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
+    if (!daemon_can_->send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
   }
   // Waiting for the lockstep: 50 us. Waiting for a paced step's deadline (sim.speed > 0): a sleep to
   // that absolute deadline, in slices of SimPacer::kPollSliceNs so the daemon's frames still reach the
@@ -207,6 +225,24 @@ class SimBackend final : public IoBackend {
   FILE* log_ = nullptr;
   std::int64_t next_pace_log_ns_ = kPaceLogNs;
   bool pace_logged_at_end_ = false;
+  // sim.can_interface: one socket for each end; a missing interface is a start-up error that names it.
+  Status open_interface() noexcept {
+    hal::SocketCanConfig sc;
+    sc.interface = cfg_.sim_can_interface.c_str();
+    Status s = daemon_sock_.open(sc);  // error frames as the linux backend subscribes to them
+    if (s) {
+      sc.error_mask = 0;  // the simulated autopilot, as on the in-process bus, reads no error frames
+      s = vehicle_sock_.open(sc);
+    }
+    if (s) return s;
+    std::fprintf(stderr, "qnavd: sim.can_interface \"%s\": %s (a virtual one: modprobe vcan; ip link add %s type vcan; ip link set up %s)\n",
+                 sc.interface, s.message(), sc.interface, sc.interface);
+    return Status(s.code() == StatusCode::kNotFound ? StatusCode::kNotFound : StatusCode::kIoError,
+                  "sim.can_interface: the CAN interface cannot be opened (see the line above)");
+  }
+  std::size_t in_flight_to_daemon() noexcept { return daemon_can_ == &daemon_node_ ? daemon_node_.in_flight() : 0; }
+  std::size_t in_flight_to_vehicle() noexcept { return daemon_can_ == &daemon_node_ ? vehicle_node_.in_flight() : 0; }
+  const DaemonConfig& cfg_;
   static constexpr std::size_t kMaxBacklog = 8;
   const SimClock& clock_;
   hal::SimCanNetwork net_;
@@ -217,6 +253,9 @@ class SimBackend final : public IoBackend {
   QueueRefs q_;
   hal::SimGpioLine leak_line_;  // the simulated leak detector (sim.fault = "leak" wets it)
   drivers::camera::LeakMonitor leak_;
+  hal::SocketCanBus daemon_sock_, vehicle_sock_;      // sim.can_interface: the two ends on the interface
+  hal::ClockedCanNode daemon_node_, vehicle_node_;    // ... stamped with mission time, counted in flight
+  hal::CanBus* daemon_can_ = &daemon_bus_;            // what qnavd's side reads and sends on
   std::uint32_t dvl_rejects_ = 0;
   std::uint32_t can_dropped_seen_ = 0;
   bool done_ = false;
