@@ -196,10 +196,7 @@ class SimBackend final : public IoBackend {
   // that absolute deadline, in slices of SimPacer::kPollSliceNs so the daemon's frames still reach the
   // vehicle within a slice.
   void wait(int) noexcept override {
-    if (vehicle_.pacer().waiting())
-      vehicle_.pacer().sleep(SimPacer::kPollSliceNs);
-    else
-      std::this_thread::sleep_for(microseconds(50));
+    if (!vehicle_.pacer().sleep(SimPacer::kPollSliceNs)) std::this_thread::sleep_for(microseconds(50));
   }
   bool done() const noexcept override { return done_; }
   const SimVehicle& vehicle() const noexcept { return vehicle_; }

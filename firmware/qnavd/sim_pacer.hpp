@@ -66,10 +66,17 @@ class SimPacer {
   // A step is waiting for its deadline (the last due() said not yet).
   bool waiting() const noexcept { return pending_deadline_ns_ >= 0; }
   // Sleeps to that step's deadline, at most to now + max_ns (an absolute wake-up either way), so the
-  // caller still polls its buses that often. Returns at once when no step waits.
-  void sleep(std::int64_t max_ns) noexcept {
-    if (!waiting()) return;
-    wall_.sleep_until_ns(std::min(pending_deadline_ns_, wall_.now_ns() + max_ns));
+  // caller still polls its buses that often. False, without sleeping, when no step waits for a
+  // deadline still ahead (the caller is waiting for something else: the lockstep).
+  bool sleep(std::int64_t max_ns) noexcept {
+    if (!waiting()) return false;
+    const std::int64_t now = wall_.now_ns();
+    if (pending_deadline_ns_ <= now) {
+      pending_deadline_ns_ = -1;
+      return false;
+    }
+    wall_.sleep_until_ns(std::min(pending_deadline_ns_, now + max_ns));
+    return true;
   }
 
   std::uint64_t steps() const noexcept { return steps_.load(std::memory_order_relaxed); }

@@ -73,7 +73,7 @@ TEST(SimPacer, SpeedZeroIsAsFastAsTheCallerGoes) {
   EXPECT_FALSE(p.paced());
   EXPECT_TRUE(p.due(3600000 * kMs));
   EXPECT_FALSE(p.waiting());
-  p.sleep(SimPacer::kPollSliceNs);
+  EXPECT_FALSE(p.sleep(SimPacer::kPollSliceNs));
   EXPECT_EQ(wall.now_ns(), 0);
 }
 
@@ -82,10 +82,12 @@ TEST(SimPacer, ASleepIsSlicedSoTheCallerStillPolls) {
   SimPacer p(wall, 1.0);
   p.start(0);
   ASSERT_FALSE(p.due(7 * kMs));
-  p.sleep(SimPacer::kPollSliceNs);
+  EXPECT_TRUE(p.sleep(SimPacer::kPollSliceNs));
   EXPECT_EQ(wall.now_ns(), SimPacer::kPollSliceNs);
-  p.sleep(100 * kMs);
+  EXPECT_TRUE(p.sleep(100 * kMs));
   EXPECT_EQ(wall.now_ns(), 7 * kMs);  // never past the deadline
+  EXPECT_FALSE(p.sleep(100 * kMs));   // its deadline has come: nothing to sleep for (the lockstep may hold the step)
+  EXPECT_EQ(wall.now_ns(), 7 * kMs);
   EXPECT_TRUE(p.due(7 * kMs));
 }
 
