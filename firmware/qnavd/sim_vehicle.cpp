@@ -79,7 +79,9 @@ void SimVehicle::record(const hal::CanFrame& f, std::int64_t t_ns) noexcept {
   r.frame = f;
   r.has_time = true;
   r.time_us = t_ns / 1000;
-  std::memcpy(r.interface, "vcan0", 6);
+  // The interface the frames are on (sim.can_interface; names are at most 15 characters), else vcan0.
+  const char* name = cfg_.sim_can_interface.empty() ? "vcan0" : cfg_.sim_can_interface.c_str();
+  std::strncpy(r.interface, name, sizeof r.interface - 1);
   char line[hal::kMaxCanLogLine];
   if (hal::format_can_log_line(r, line, sizeof line) > 0) std::fprintf(candump_, "%s\n", line);
 }
