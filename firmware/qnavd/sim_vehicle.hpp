@@ -1,7 +1,7 @@
 // SimVehicle: qnavd's sim backend -- the vehicle around the daemon, inside the I/O thread. It flies
 // the configured mission over pipeline::SimSurvey (the same survey `qnav route eval` uses) and plays
 // every peer on the daemon's buses as the real ones would:
-//   - the autopilot on the in-process CAN bus: QNAV_MODE_CMD before each pass (mode, reverse, route
+//   - the autopilot on the CAN bus (in process, or sim.can_interface): QNAV_MODE_CMD before each pass (mode, reverse, route
 //     id) and Idle after it, waiting for QNAV_NAV_STATUS to report the commanded state (or a refusal);
 //   - the AHRS on the same bus: QNAV_ATTITUDE_IN with the compass heading, one per ping and every
 //     100 ms between passes;
