@@ -49,6 +49,7 @@ struct KeySpec {
   bool power_of_two = false;                // kInt
   std::vector<std::int64_t> int_choices;    // kInt: the accepted values, when not a range
   std::vector<std::string> names;           // kEnum: the accepted strings
+  std::vector<std::pair<std::string, double>> aliases;  // kFloat: words that stand for a number (sim.speed)
   std::string rule;                         // a cross-key rule, appended to the allowed column
   bool required = false;                    // no default (sim.pass.mode)
   std::string meaning;
@@ -162,6 +163,7 @@ std::string allowed_text(const KeySpec& k) {
       break;
     case Kind::kFloat:
       s = "[" + format_number(k.float_min, false) + ", " + format_number(k.float_max, false) + "]";
+      for (const auto& a : k.aliases) s += ", `" + quoted(a.first) + "` (" + format_number(a.second, false) + ")";
       break;
     case Kind::kString: return k.rule.empty() ? "any" : k.rule;
     case Kind::kEnum: {
@@ -632,10 +634,20 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(int_key(
       "sim.seed", [](auto& c) -> auto& { return c.sim_seed; }, 0, 4294967295LL, "",
       "Seed of the simulated seabed and sensors"));
-  t.push_back(enum_key(
-      "sim.speed", [](auto& c) -> auto& { return c.sim_speed; },
-      std::vector<std::pair<std::string, SimSpeed>>{{"fast", SimSpeed::kFast}, {"recorded", SimSpeed::kRecorded}},
-      "fast: as fast as the pipeline takes it; recorded: in sample time"));
+  {
+    KeySpec speed = float_key(
+        "sim.speed", [](auto& c) -> auto& { return c.sim_speed; }, SimSpeed::kFast, SimSpeed::kMax, "x real time",
+        "Pace of the simulated mission: 0 = as fast as the pipeline takes it; a factor of real time (1 = real time, 10 = ten "
+        "times faster), slept to absolute deadlines on the monotonic clock, a late step counted (sim_late_steps), never "
+        "skipped; the lockstep with the daemon holds at every speed (docs/fly-along.md)");
+    speed.aliases = {{"fast", SimSpeed::kFast}, {"recorded", SimSpeed::kRecorded}};
+    t.push_back(speed);
+  }
+  t.push_back(string_key(
+      "sim.can_interface", [](auto& c) -> auto& { return c.sim_can_interface; }, "an interface name; \"\" = in process",
+      [](const std::string& s) { return s.empty() ? std::string() : check_interface(s); },
+      "The SocketCAN interface (vcan0, can0) the simulated vehicle and qnavd exchange their CAN frames on, so candump "
+      "and SavvyCAN see the mission; \"\" = an in-process bus. It must exist when qnavd starts"));
   t.push_back(bool_key(
       "sim.exit_at_end", [](auto& c) -> auto& { return c.sim_exit_at_end; },
       "qnavd exits 0 when the mission is flown"));
@@ -953,7 +965,18 @@ class Reader {
         break;
       }
       case Kind::kFloat:
-        if (node.is_floating_point()) {
+        if (node.is_string() && !k.aliases.empty()) {
+          const std::string& word = node.as_string()->get();
+          const auto it = std::find_if(k.aliases.begin(), k.aliases.end(), [&](const auto& a) { return a.first == word; });
+          if (it == k.aliases.end()) {
+            std::vector<std::string> words;
+            for (const auto& a : k.aliases) words.push_back(quoted(a.first));
+            return error(name, at,
+                         "must be a number in [" + format_number(k.float_min, false) + ", " + format_number(k.float_max, false) +
+                             "] or one of " + join(words, ", ") + ", got " + quoted(word));
+          }
+          v.f = it->second;
+        } else if (node.is_floating_point()) {
           v.f = node.as_floating_point()->get();
         } else if (node.is_integer()) {
           v.f = static_cast<double>(node.as_integer()->get());
@@ -1035,6 +1058,11 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
     return r.error("sim.stall_pass", at("sim.stall_pass", "sim.stall"),
                    "must be < the number of [[sim.pass]] (" + std::to_string(c.sim_mission.size()) + "), got " +
                        std::to_string(c.sim_stall_pass));
+  }
+  if (c.backend == Backend::kSim && !c.sim_can_interface.empty() && (c.sim_fault == "can_error_frames" || c.sim_fault == "can_bus_off")) {
+    return r.error("sim.fault", at("sim.fault", "sim.can_interface"),
+                   "puts error frames on the in-process bus; user space cannot send them on a SocketCAN interface: not with "
+                   "sim.can_interface = \"" + c.sim_can_interface + "\"");
   }
   if (c.sim_replay_stride > c.sim_replay_lines) {
     return r.error("sim.replay_stride", at("sim.replay_stride", "sim.replay_lines"),
@@ -1206,7 +1234,7 @@ std::string config_keys_markdown() {
   md << "|---|---|---|---|---|---|\n";
   for (const KeySpec& k : key_table()) {
     const std::string def = k.required ? "(required)" : "`" + value_text(k, k.get(defaults)) + "`";
-    md << "| `" << k.name << "` | " << type_name(k.kind) << " | " << def << " | " << k.unit << " | " << allowed_text(k)
+    md << "| `" << k.name << "` | " << (k.aliases.empty() ? type_name(k.kind) : "float or string") << " | " << def << " | " << k.unit << " | " << allowed_text(k)
        << " | " << k.meaning << " |\n";
   }
   return md.str();

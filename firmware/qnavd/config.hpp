@@ -22,7 +22,13 @@ namespace qnav::daemon {
 enum class Backend : std::uint8_t { kSim, kLinux };
 enum class LogFormat : std::uint8_t { kJson, kKeyValue, kOff };
 enum class SonarSource : std::uint8_t { kSim, kJsfTcp };
-enum class SimSpeed : std::uint8_t { kFast, kRecorded };  // as fast as the pipeline takes it / in sample time
+// sim.speed's named values: 0 = as fast as the pipeline takes it ("fast"), 1 = real time ("recorded":
+// a recorded file at its own timing). Any factor in (0, 1000] paces the mission that many times real time.
+struct SimSpeed {
+  static constexpr double kFast = 0.0;
+  static constexpr double kRecorded = 1.0;
+  static constexpr double kMax = 1000.0;
+};
 enum class CameraSource : std::uint8_t { kSim, kV4l2 };
 // The tuned VO settings a rig starts from (firmware/pipeline/vo_defaults): the simulated Mars-yard
 // bench with an attitude sensor (3D-VME), a car's stereo pair without one (KITTI), a hand-held or
@@ -163,7 +169,10 @@ struct DaemonConfig {
   // [sim] (backend = "sim")
   double sim_length_m = 2000.0;              // sim.length_m [200, 50000]
   std::uint64_t sim_seed = 1;                // sim.seed [0, 2^32)
-  SimSpeed sim_speed = SimSpeed::kFast;      // sim.speed = "fast" | "recorded"
+  double sim_speed = SimSpeed::kFast;        // sim.speed [0, 1000] x real time, or "fast" (0) | "recorded" (1)
+  // sim.can_interface: "" = the vehicle and qnavd share an in-process CAN bus; else the SocketCAN
+  // interface (vcan0, can0) both put their frames on (candump sees them, a person can send commands).
+  std::string sim_can_interface;
   bool sim_exit_at_end = true;               // sim.exit_at_end: qnavd exits 0 when the mission is flown
   FixedVector<SimPass, 16> sim_mission;      // [[sim.pass]] mode = "teach"|"repeat"|"hold", offset_pct, reverse
   // Recorded passes (a [[sim.pass]] with a file): the tiles and the localiser take the recorded

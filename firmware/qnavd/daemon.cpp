@@ -408,8 +408,11 @@ Status Daemon::init_pipeline() {
   refs.frames = fp;
   if (sim) {
     sim->set_queues(refs);
+    sim->set_log(io_log_ ? io_log_->stream() : nullptr);
     backend_ = std::move(sim);
-    nav_idle_wait_us_ = 200;
+    // Paced (sim.speed > 0): a quarter of a handshake tick's wall time (10 ms of mission time), 200 us
+    // to 2 ms, so the lockstep between passes keeps the pace and an idle worker does not spin at 1x.
+    nav_idle_wait_us_ = cfg_.sim_speed > 0.0 ? std::clamp(static_cast<long>(2500.0 / cfg_.sim_speed), 200L, 2000L) : 200;
   } else {
     auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, io_log_ ? io_log_->stream() : nullptr);
     QNAV_RETURN_IF_ERROR(lb->init());

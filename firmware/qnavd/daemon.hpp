@@ -1,8 +1,9 @@
 // Daemon: qnavd's process structure (deployment.hpp): it owns the queues, the ping pool, the I/O
 // backend and the NavWorker, starts the io and nav threads, and runs the main thread's duties
 // (signals, sd_notify READY / WATCHDOG / STOPPING, bounded shutdown).
-// Backends: sim (SimVehicle on an in-process CAN network and serial line, mission time; its rover's
-// stereo bench in vo passes) or linux (SocketCAN on can.interface, the DVL on dvl.device through
+// Backends: sim (SimVehicle on an in-process CAN network, or a SocketCAN interface with
+// sim.can_interface, and serial line, mission time, paced by sim.speed; its rover's stereo bench in vo
+// passes) or linux (SocketCAN on can.interface, the DVL on dvl.device through
 // termios, the sonar's JSF stream over TCP from sonar.address, the stereo pair on two V4L2 devices
 // with an optional GPIO trigger). A device that fails or disappears is counted (device_errors), flagged
 // (its *_device_down bit; the nav worker reports the sensor lost) and reopened once a second.
@@ -95,7 +96,8 @@ class Daemon {
   // clock); with nothing to do the nav thread waits for it, at most nav_idle_wait_us_: 2 ms on the
   // linux backend (time-driven work, outputs at >= 100 ms periods and staleness checks, needs no
   // finer step; it used to poll 5,000 times a second), 200 us on the sim backend, whose idle clock
-  // waits for the worker's steps (SimVehicle::set_worker_caught_up) and whose CPU use is no concern.
+  // waits for the worker's steps (SimVehicle::set_worker_caught_up); paced (sim.speed > 0) a quarter of
+  // a handshake tick's wall time, 200 us to 2 ms, so a real-time mission does not spin.
   std::mutex bell_mu_;
   std::condition_variable bell_cv_;
   bool bell_ = false;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 
 #include "drivers/camera/leak_monitor.hpp"
@@ -68,9 +69,11 @@ class SimIoBackend : public IoBackend {
   virtual const hal::Clock& clock() const noexcept = 0;
   // The route store: the host's file system behind a switch that can make the disk full (sim.fault).
   virtual hal::FileStore& store() noexcept = 0;
+  // Where its `sim_pace` lines go (the io thread's log ring; nullptr: none).
+  virtual void set_log(FILE* log) noexcept = 0;
 };
 
-using SimBackendFactory = std::unique_ptr<SimIoBackend> (*)(const DaemonConfig& c, const hal::Clock& wall);
+using SimBackendFactory = std::unique_ptr<SimIoBackend> (*)(const DaemonConfig& c, hal::Clock& wall);
 // Set by the sim library at static initialisation; nullptr in the flight binary.
 void set_sim_backend_factory(SimBackendFactory f) noexcept;
 SimBackendFactory sim_backend_factory() noexcept;

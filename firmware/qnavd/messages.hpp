@@ -62,6 +62,8 @@ struct IoCounters {
   std::atomic<std::uint64_t> dvl_in{0};
   std::atomic<std::uint64_t> can_rx_in{0};
   std::atomic<std::uint32_t> faults_injected{0};  // sim backend, sim.fault: damaged samples it sent
+  std::atomic<std::uint32_t> sim_late_steps{0};   // sim backend, sim.speed > 0: steps past their deadline by > 10 ms (SimPacer)
+  std::atomic<std::uint32_t> sim_max_late_us{0};  // sim backend, sim.speed > 0: the latest step's lateness
   std::atomic<std::uint32_t> can_rx_overflow{0};
   std::atomic<std::uint32_t> can_rx_dropped{0};  // dropped by the bus before qnavd read them (kernel socket queue: SO_RXQ_OVFL)
   std::atomic<std::uint32_t> can_tx_errors{0};

@@ -79,12 +79,14 @@ void SimVehicle::record(const hal::CanFrame& f, std::int64_t t_ns) noexcept {
   r.frame = f;
   r.has_time = true;
   r.time_us = t_ns / 1000;
-  std::memcpy(r.interface, "vcan0", 6);
+  // The interface the frames are on (sim.can_interface; names are at most 15 characters), else vcan0.
+  const char* name = cfg_.sim_can_interface.empty() ? "vcan0" : cfg_.sim_can_interface.c_str();
+  std::strncpy(r.interface, name, sizeof r.interface - 1);
   char line[hal::kMaxCanLogLine];
   if (hal::format_can_log_line(r, line, sizeof line) > 0) std::fprintf(candump_, "%s\n", line);
 }
 
-Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
+Status SimVehicle::init(hal::CanBus& autopilot, hal::SerialPort& dvl_out) {
   if (!cfg_.sim_candump.empty()) {
     candump_ = std::fopen(cfg_.sim_candump.c_str(), "w");
     if (!candump_) {
@@ -129,8 +131,6 @@ Status SimVehicle::init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out) {
     recordings_.push_back(std::move(r));
   }
   phase_ = Phase::kCommand;
-  wall_start_ns_ = wall_.now_ns();
-  sim_start_ns_ = clock_.now_ns();
   next_idle_att_ns_ = clock_.now_ns();
   return Status::ok();
 }
@@ -325,6 +325,7 @@ void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
 void SimVehicle::idle_tick() noexcept {
   if (!worker_caught_up_) return;  // lockstep (set_worker_caught_up)
   const std::int64_t t = clock_.now_ns() + kIdleTickNs / 10;
+  if (!pace(t, false)) return;  // the handshake's ticks keep their mission-time lengths (no following)
   clock_.set(t);
   if (t >= next_idle_att_ns_) {
     send_attitude(last_heading_);
@@ -376,6 +377,28 @@ Status SimVehicle::start_pass() {
   QNAV_RETURN_IF_ERROR(traj_.init(pass_cfg_));
   QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar_for(pass_cfg_.seed), &survey_->seabed));
   return Status::ok();
+}
+
+// Pacing (sim.speed, SimPacer): the step at mission time t goes when it is due. While it waits and
+// `follow` is set (a pass's next sample), mission time follows the wall up to just before t, in steps
+// of the pacer's poll slice, so the daemon's periodic outputs (NAV_STATUS every 100 ms) keep their
+// periods in wall time too; the samples' own times do not change. Between passes (follow = false)
+// the clock moves only by the handshake's ticks, whose mission-time lengths the lockstep fixes.
+bool SimVehicle::pace(std::int64_t t, bool follow) noexcept {
+  if (pacer_.due(t)) {
+    if (io_ != nullptr) {
+      io_->sim_late_steps.store(pacer_.late_steps(), std::memory_order_relaxed);
+      io_->sim_max_late_us.store(static_cast<std::uint32_t>(std::min<std::int64_t>(pacer_.max_late_ns() / 1000, UINT32_MAX)),
+                                 std::memory_order_relaxed);
+    }
+    return true;
+  }
+  if (follow) {
+    const std::int64_t step_ns = static_cast<std::int64_t>(static_cast<double>(SimPacer::kPollSliceNs) * pacer_.speed());
+    const std::int64_t m = std::min(pacer_.mission_now_ns(), t - 1);
+    if (m >= clock_.now_ns() + step_ns) clock_.set(m);
+  }
+  return false;
 }
 
 void SimVehicle::release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept {
@@ -523,13 +546,18 @@ bool SimVehicle::take_frame_slot(std::uint32_t& slot, IoCounters& io) noexcept {
 }
 
 SimVehicle::StepResult SimVehicle::fly_rover(IoCounters& io) noexcept {
-  if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
+  if (frames_.frames->size() >= 1) return StepResult::kWaiting;  // the consumer sets the pace
   if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
-  RoverSample s;
-  if (!rover_->next(s)) {
-    phase_ = Phase::kEndPass;
-    return StepResult::kWaiting;
+  if (!has_held_rover_) {
+    if (!rover_->next(held_rover_)) {
+      phase_ = Phase::kEndPass;
+      return StepResult::kWaiting;
+    }
+    has_held_rover_ = true;
   }
+  if (!pace(held_rover_.t_ns, true)) return StepResult::kWaiting;
+  has_held_rover_ = false;
+  const RoverSample& s = held_rover_;
   clock_.set(s.t_ns);
   inject_bus_faults(s.t_ns);
   send_attitude(s.heading_rad, s.roll_rad, s.pitch_rad);
@@ -590,6 +618,9 @@ SimVehicle::StepResult SimVehicle::fly_replay(SpscRing<std::uint32_t>& free_slot
     return StepResult::kWaiting;
   }
   const std::int64_t t = std::max(best, clock_.now_ns());
+  if (which == kPair && (frames_.frames->size() >= 1 || (spare_frame_ < 0 && frames_.free->front() == nullptr)))
+    return StepResult::kWaiting;  // the consumer sets the pace
+  if (!pace(t, true)) return StepResult::kWaiting;
   switch (which) {
     case kPing: {
       Sample smp;
@@ -627,8 +658,6 @@ SimVehicle::StepResult SimVehicle::fly_replay(SpscRing<std::uint32_t>& free_slot
 // The next recorded stereo pair into a free slot of the frame pool (decoded here, on the sim's io
 // thread: replay only). A pair that cannot be read or has the wrong size is counted and skipped.
 SimVehicle::StepResult SimVehicle::replay_pair(std::int64_t t, IoCounters& io) noexcept {
-  if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
-  if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
   clock_.set(t);
   inject_bus_faults(t);
   const tools::StereoFrame& pf = rs_->pairs[pair_i_];
@@ -663,7 +692,7 @@ SimVehicle::StepResult SimVehicle::replay_pair(std::int64_t t, IoCounters& io) n
 }
 
 SimVehicle::StepResult SimVehicle::fly_downward(IoCounters& io) noexcept {
-  if (frames_.frames->size() >= 1 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // the consumer sets the pace
+  if (frames_.frames->size() >= 1) return StepResult::kWaiting;  // the consumer sets the pace
   if (spare_frame_ < 0 && frames_.free->front() == nullptr) return StepResult::kWaiting;
   const std::vector<std::string>& files = map_files_[pass_];
   const std::size_t synthetic = map_synthetic_[pass_];
@@ -671,6 +700,7 @@ SimVehicle::StepResult SimVehicle::fly_downward(IoCounters& io) noexcept {
     phase_ = Phase::kEndPass;
     return StepResult::kWaiting;
   }
+  if (!pace(map_t_ns_, true)) return StepResult::kWaiting;
   const std::int64_t t = map_t_ns_;
   map_t_ns_ += kMapFramePeriodNs;
   const std::size_t seq = map_next_++;
@@ -720,6 +750,7 @@ void SimVehicle::release_pair(IoCounters& io) noexcept {
 SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, SpscRing<PingMsg>& pings, float* pool, std::size_t stride,
                                         IoCounters& io) noexcept {
   io_ = &io;
+  if (!pacer_.started()) pacer_.start(clock_.now_ns());  // the pace's anchor: the mission's first step
   drain_bus();
   switch (phase_) {
     case Phase::kCommand: {
@@ -756,21 +787,20 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
       return StepResult::kWaiting;
     }
     case Phase::kFly: {
-      if (pings.size() >= 2 && cfg_.sim_speed == SimSpeed::kFast) return StepResult::kWaiting;  // replay waits for the consumer
-      if (cfg_.sim_speed == SimSpeed::kRecorded) {
-        // in sample time: wait for the wall clock to catch up with the mission clock
-        const std::int64_t sim_elapsed = clock_.now_ns() - sim_start_ns_;
-        if (wall_.now_ns() - wall_start_ns_ < sim_elapsed) return StepResult::kWaiting;
-      }
+      if (pings.size() >= 2) return StepResult::kWaiting;  // the consumer sets the pace (every speed: the lockstep)
       if (cfg_.sim_mission[pass_].mode == qc::Mode::kMap) return fly_downward(io);
       if (rs_ != nullptr) return fly_replay(free_slots, pings, pool, stride, io);
       if (cfg_.sim_mission[pass_].mode == qc::Mode::kVo) return fly_rover(io);
-      Sample smp;
-      if (!(recording_ ? next_recorded(smp) : next_simulated(smp))) {
-        phase_ = Phase::kEndPass;
-        return StepResult::kWaiting;
+      if (!has_held_) {
+        if (!(recording_ ? next_recorded(held_) : next_simulated(held_))) {
+          phase_ = Phase::kEndPass;
+          return StepResult::kWaiting;
+        }
+        has_held_ = true;
       }
-      return emit(smp, free_slots, pool, stride, io);
+      if (!pace(held_.t_ns, true)) return StepResult::kWaiting;
+      has_held_ = false;
+      return emit(held_, free_slots, pool, stride, io);
     }
     case Phase::kEndPass:
       // Let the nav worker finish the pass: every slot back (the last ping processed, not only popped).

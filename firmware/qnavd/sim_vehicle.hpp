@@ -1,7 +1,7 @@
 // SimVehicle: qnavd's sim backend -- the vehicle around the daemon, inside the I/O thread. It flies
 // the configured mission over pipeline::SimSurvey (the same survey `qnav route eval` uses) and plays
 // every peer on the daemon's buses as the real ones would:
-//   - the autopilot on the in-process CAN bus: QNAV_MODE_CMD before each pass (mode, reverse, route
+//   - the autopilot on the CAN bus (in process, or sim.can_interface): QNAV_MODE_CMD before each pass (mode, reverse, route
 //     id) and Idle after it, waiting for QNAV_NAV_STATUS to report the commanded state (or a refusal);
 //   - the AHRS on the same bus: QNAV_ATTITUDE_IN with the compass heading, one per ping and every
 //     100 ms between passes;
@@ -11,9 +11,12 @@
 //   - in a `vo` pass, the rover (SimRover): the Mars-yard stereo pair rendered into a free slot of the
 //     frame pool at each step, with the body's measured roll, pitch and heading on QNAV_ATTITUDE_IN
 //     (or the DroneCAN AHRS) at the pair's time; no pings and no DVL during the pass.
-// Time is simulated (SimClock): sample stamps are mission time; sim.speed = "fast" runs as fast as
-// the nav worker takes pings (at most two in flight, so nothing is dropped), "recorded" paces the
-// pings at their sample times. Truth (along-route, lateral, pose) travels with each ping.
+// Time is simulated (SimClock): sample stamps are mission time. The vehicle runs in lockstep with the
+// nav worker at every speed (at most two pings or one frame in flight, so nothing is dropped); with
+// sim.speed > 0 each step also waits for its deadline on the wall clock (SimPacer: absolute deadlines
+// from the mission's start, late steps counted, never skipped), and while a pass's next sample waits,
+// mission time follows the wall up to just before it, so the daemon's periodic outputs keep their
+// periods in wall time too. Truth (along-route, lateral, pose) travels with each ping.
 // A [[sim.pass]] with a file replays a recorded XTF/JSF pass instead: its pings, its navigation (the
 // file's fixes or dead reckoning) as the AHRS heading and DVL velocities, its timing. Recorded sensor
 // logs (sim_replay.hpp: a candump log, a DVL capture, a stereo sequence in a vo pass) replace the
@@ -42,6 +45,7 @@
 #include "firmware/pipeline/sim_survey.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "firmware/qnavd/sim_pacer.hpp"
 #include "firmware/qnavd/sim_replay.hpp"
 #include "firmware/qnavd/sim_rover.hpp"
 #include "firmware/tools/sonar_file.hpp"
@@ -70,12 +74,17 @@ class SimVehicle {
  public:
   enum class StepResult : std::uint8_t { kProduced, kWaiting, kDone };
 
-  SimVehicle(const DaemonConfig& config, SimClock& clock, const hal::Clock& wall) noexcept : cfg_(config), clock_(clock), wall_(wall) {}
+  SimVehicle(const DaemonConfig& config, SimClock& clock, hal::Clock& wall) noexcept
+      : cfg_(config), clock_(clock), pacer_(wall, config.sim_speed) {}
   ~SimVehicle();
   SimVehicle(const SimVehicle&) = delete;
   SimVehicle& operator=(const SimVehicle&) = delete;
-  // autopilot: this vehicle's node on the daemon's CAN network; dvl_out: the DVL's end of the serial line.
-  Status init(hal::SimCanBus& autopilot, hal::SerialPort& dvl_out);
+  // autopilot: this vehicle's node on the daemon's CAN bus (in process, or its end of a SocketCAN
+  // interface); dvl_out: the DVL's end of the serial line.
+  Status init(hal::CanBus& autopilot, hal::SerialPort& dvl_out);
+  // The pace against the wall clock (sim.speed): its counters, and the io thread's sleep to the next deadline.
+  SimPacer& pacer() noexcept { return pacer_; }
+  const SimPacer& pacer() const noexcept { return pacer_; }
   // Fault injection's reach: the CAN network (error frames) and the route store (a full disk).
   void set_fault_targets(hal::SimCanNetwork* net, hal::FaultFileStore* store) noexcept { net_ = net, store_ = store; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
@@ -147,8 +156,8 @@ class SimVehicle {
 
   const DaemonConfig& cfg_;
   SimClock& clock_;
-  const hal::Clock& wall_;
-  hal::SimCanBus* bus_ = nullptr;
+  SimPacer pacer_;
+  hal::CanBus* bus_ = nullptr;
   hal::SerialPort* dvl_ = nullptr;
   BusObserver observer_ = nullptr;
   void* observer_ctx_ = nullptr;
@@ -166,7 +175,12 @@ class SimVehicle {
   std::int64_t pass_start_ns_ = 0;
   std::int64_t next_idle_att_ns_ = 0;
   bool worker_caught_up_ = true;
-  std::int64_t wall_start_ns_ = 0, sim_start_ns_ = 0;
+  // Pacing (sim.speed): a pass's next sample, drawn and held until its deadline (pace()).
+  bool pace(std::int64_t t_ns, bool follow) noexcept;
+  bool has_held_ = false;
+  Sample held_{};
+  bool has_held_rover_ = false;
+  RoverSample held_rover_{};
   bool have_prev_ = false;
   Pose2 prev_nav_{};
   double last_heading_ = 0.0;

@@ -16,6 +16,8 @@ std::int64_t realtime_to_monotonic_ns(std::int64_t realtime_ns) noexcept;
 class MonotonicClock final : public Clock {
  public:
   std::int64_t now_ns() const noexcept override { return monotonic_now_ns(); }
+  // clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME), resumed after a signal. Always true.
+  bool sleep_until_ns(std::int64_t t_ns) noexcept override;
 };
 
 }  // namespace qnav::hal

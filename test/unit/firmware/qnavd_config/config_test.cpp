@@ -146,6 +146,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(sim_length_m),
       QNAV_FIELD(sim_seed),
       QNAV_FIELD(sim_speed),
+      QNAV_FIELD(sim_can_interface),
       QNAV_FIELD(sim_exit_at_end),
       QNAV_FIELD(sim_replay_lines),
       QNAV_FIELD(sim_replay_stride),
@@ -485,6 +486,7 @@ map_us = 80000
 length_m = 5000.0
 seed = 42
 speed = "recorded"
+can_interface = "vcan1"
 exit_at_end = false
 replay_lines = 300
 replay_stride = 150
@@ -603,6 +605,18 @@ TEST(QnavdConfig, EveryConfigurationTheBoundsAllowInitialisesTheStages) {
   }
 }
 
+// sim.speed: a factor of real time, or the words it had before it was a number (issue #31).
+TEST(QnavdConfig, SimSpeedIsAFactorOfRealTimeOrAWord) {
+  EXPECT_EQ(expect_ok(kOnePass).sim_speed, 0.0);
+  EXPECT_EQ(expect_ok("[sim]\nspeed = \"fast\"\n" + std::string(kOnePass)).sim_speed, SimSpeed::kFast);
+  EXPECT_EQ(expect_ok("[sim]\nspeed = \"recorded\"\n" + std::string(kOnePass)).sim_speed, 1.0);
+  EXPECT_EQ(expect_ok("[sim]\nspeed = 20\n" + std::string(kOnePass)).sim_speed, 20.0);
+  EXPECT_EQ(expect_ok("[sim]\nspeed = 0.5\n" + std::string(kOnePass)).sim_speed, 0.5);
+  const DaemonConfig c = expect_ok("[sim]\ncan_interface = \"vcan0\"\nspeed = 1\n" + std::string(kOnePass));
+  EXPECT_EQ(c.sim_can_interface, "vcan0");
+  EXPECT_EQ(c.sim_speed, 1.0);
+}
+
 // ---- Errors ---------------------------------------------------------------------------------------
 
 struct BadConfig {
@@ -712,6 +726,13 @@ const BadConfig kBadConfigs[] = {
      "sim.stall_pass", 3, "must be < the number of [[sim.pass]] (2), got 2"},
     {"stall_default_pass_beyond_the_mission", "[sim]\nstall = \"sonar\"\n" + std::string(kOnePass), "sim.stall_pass", 2,
      "must be < the number of [[sim.pass]] (1), got 1"},
+    {"speed_bad_word", "[sim]\nspeed = \"slow\"\n", "sim.speed", 2, "must be a number in [0, 1000] or one of \"fast\", \"recorded\", got \"slow\""},
+    {"speed_negative", "[sim]\nspeed = -1\n", "sim.speed", 2, "must be in [0, 1000]"},
+    {"speed_too_fast", "[sim]\nspeed = 1e4\n", "sim.speed", 2, "must be in [0, 1000]"},
+    {"speed_nan", "[sim]\nspeed = nan\n", "sim.speed", 2, "must be a finite number"},
+    {"sim_can_interface_bad_name", "[sim]\ncan_interface = \"vcan0:1\"\n", "sim.can_interface", 2, "must be a network interface name"},
+    {"error_frames_on_a_real_interface", "[sim]\ncan_interface = \"vcan0\"\nfault = \"can_error_frames\"\nfault_pass = 0\n" + std::string(kOnePass),
+     "sim.fault", 3, "user space cannot send them on a SocketCAN interface"},
     {"bad_stall", "[sim]\nstall = \"gps\"\n", "sim.stall", 2, "must be one of none, dvl, attitude, sonar, camera, got \"gps\""},
     // toml++ keeps a table's keys sorted by name, not by line: the error nearest the top is reported.
     {"first_error_by_line", "[daemon]\nnav_priority = 0\n[can]\nrx_queue = 3\n", "daemon.nav_priority", 2,
