@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <cstdio>
+#include <cstdlib>
 
 #include "drivers/qnavcan/publisher.hpp"
 #include "firmware/pipeline/route_can.hpp"
@@ -83,6 +85,10 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
     first = false;
     out.nav_end = s.nav;
   }
+  out.track.clear();
+  out.track.push_back(out.nav_start);
+  for (const route::NodeMeta& m : out.meta) out.track.push_back(m.pose);
+  out.track.push_back(out.nav_end);
   return Status::ok();
 }
 
@@ -99,15 +105,10 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   const double h0 = std::atan2(d0.y(), d0.x());
   const Vec2d p0 = truth_poly[0] + sc.start_offset_m * Vec2d(-std::sin(h0), std::cos(h0));
   const Pose2 truth0{p0.x(), p0.y(), h0};
-  // The baseline's taught track: the nodes in the teach's dead-reckoned frame, from the pass's first
-  // to its last dead-reckoned pose; its dead reckoning continues that frame.
-  std::vector<Vec2d> taught;
-  taught.push_back(route.nav_start.translation());
-  for (const RouteTile& t : route.tiles) taught.push_back(t.node.meta.pose.translation());
-  taught.push_back(route.nav_end.translation());
-  if (sc.reverse) std::reverse(taught.begin(), taught.end());
-  const double taught_length = poly_length(taught);
-  const Pose2 dr0 = qnav ? truth0 : Pose2{taught.front().x(), taught.front().y(), h0};
+  // The baseline's dead reckoning continues the teach's frame from the taught track's start (its end
+  // in reverse): it believes it starts where the teach began (or ended).
+  const Pose2& track0 = sc.reverse ? route.track.back() : route.track.front();
+  const Pose2 dr0 = qnav ? truth0 : Pose2{track0.x_m, track0.y_m, h0};
 
   const double dt = 1.0 / w.route.ping_rate_hz;
   const double speed = w.route.speed_mps;
@@ -118,8 +119,10 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   apc.cruise_speed_mps = speed;
   if (qnav) apc.guidance_age_s = route.tile_age_s;
   else apc.guidance_age_s = 0.0;
+  apc.reverse = sc.reverse;
   RouteAutopilot ap;
-  ap.reset(apc, veh.t_ns(), veh.dr_pose());
+  QNAV_RETURN_IF_ERROR(ap.reset(apc, Span<const Pose2>(route.track.data(), route.track.size()), veh.t_ns(), veh.dr_pose()));
+  if (!qnav) ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
 
   // qnav's side: tiles -> repeater -> CAN publisher on a sim bus; the autopilot is another node.
   std::unique_ptr<RouteTilePipeline> pipe;
@@ -156,6 +159,7 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
     publisher.set(g);
     publisher.set(s);
     ++out.tiles;
+    if (std::getenv("QNAV_FOLLOW_DIAG")) std::fprintf(stderr, "DIAG tile %u est %u status %d xt %.2f he %.4f truth_lat %.2f truth_along %.1f truth_head %.4f nav_head %.4f\n", seq, st.estimate, (int)s.status, g.cross_track_m, g.heading_error_rad, t.truth_lateral_m, t.truth_along_m, t.truth_pose.heading_rad, t.node.meta.pose.heading_rad);
     return true;
   };
 
@@ -186,14 +190,6 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
       publisher.poll(t);
       hal::CanRxFrame rx;
       while (autopilot_node.receive(rx, 0)) ap.on_frame(rx.frame, t).ignore();  // decode errors are counted by the autopilot
-    } else {
-      double a = 0.0, e = 0.0, hs = 0.0;
-      polyline_offsets(taught, dr.translation(), a, e, hs);
-      RouteFix fx;
-      fx.status = a >= taught_length ? qc::GuidanceState::kRouteEnd : qc::GuidanceState::kTracking;
-      fx.cross_track_m = e;
-      fx.heading_error_rad = wrap_angle_rad(dr.heading_rad - hs);
-      ap.on_fix(fx, t, 0.0);
     }
     out.abs_cross_track_m.push_back(std::fabs(cross));
     travelled.push_back(veh.travelled_m());

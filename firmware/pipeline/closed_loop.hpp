@@ -34,6 +34,7 @@ struct TaughtSimRoute {
   double spacing_m = 0.0;
   double tile_age_s = 0.0;   // age of a tile's pose when the tile is finished (half a tile of pings)
   Pose2 nav_start{}, nav_end{};  // the teach pass's dead-reckoned first and last poses
+  std::vector<Pose2> track;      // the autopilot's taught track: nav_start, every node's pose, nav_end (teach frame)
   std::uint64_t seed = 0;
 };
 Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRoute& out);
