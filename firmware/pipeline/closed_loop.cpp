@@ -53,7 +53,7 @@ double poly_length(const std::vector<Vec2d>& poly) {
 }
 }  // namespace
 
-Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRoute& out) {
+Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRoute& out, double track_step_m) {
   out.seed = seed;
   QNAV_RETURN_IF_ERROR(out.survey.init(length_m, seed));
   auto pipe = std::make_unique<RouteTilePipeline>();
@@ -75,19 +75,40 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
     m.index = static_cast<std::uint32_t>(i);
     out.meta.push_back(m);
   }
-  // The teach pass's dead-reckoned ends (the same trajectory, without rendering).
+  // The autopilot's log of the teach: its dead-reckoned pose every track_step_m, and each node's
+  // pose (the tile centre's) where the pass reached it (the same trajectory, without rendering).
   sidescan::Trajectory traj;
   QNAV_RETURN_IF_ERROR(traj.init(t0));
   sidescan::TrajectorySample s;
+  out.track.clear();
+  out.node_at.clear();
+  std::size_t next_node = 0;
+  double since = 0.0;
+  Pose2 prev{};
   bool first = true;
   while (traj.next(s)) {
+    const double step = first ? 0.0 : (s.nav.translation() - prev.translation()).norm();
+    since += step;
+    const double travelled = s.along_route_m;  // the nodes' along_m is the teach's nav distance ~ the route's
+    while (next_node < out.meta.size() && out.tiles[next_node].truth_along_m <= travelled) {
+      out.node_at.push_back(static_cast<std::uint32_t>(out.track.size()));
+      out.track.push_back(out.meta[next_node].pose);
+      ++next_node;
+      since = 0.0;
+    }
+    if (first || since >= track_step_m) {
+      out.track.push_back(s.nav);
+      since = 0.0;
+    }
     if (first) out.nav_start = s.nav;
     first = false;
+    prev = s.nav;
     out.nav_end = s.nav;
   }
-  out.track.clear();
-  out.track.push_back(out.nav_start);
-  for (const route::NodeMeta& m : out.meta) out.track.push_back(m.pose);
+  while (next_node < out.meta.size()) {
+    out.node_at.push_back(static_cast<std::uint32_t>(out.track.size()));
+    out.track.push_back(out.meta[next_node++].pose);
+  }
   out.track.push_back(out.nav_end);
   return Status::ok();
 }
@@ -121,7 +142,8 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   else apc.guidance_age_s = 0.0;
   apc.reverse = sc.reverse;
   RouteAutopilot ap;
-  QNAV_RETURN_IF_ERROR(ap.reset(apc, Span<const Pose2>(route.track.data(), route.track.size()), veh.t_ns(), veh.dr_pose()));
+  QNAV_RETURN_IF_ERROR(ap.reset(apc, Span<const Pose2>(route.track.data(), route.track.size()),
+                                Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()), veh.t_ns(), veh.dr_pose()));
   if (!qnav) ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
 
   // qnav's side: tiles -> repeater -> CAN publisher on a sim bus; the autopilot is another node.

@@ -34,10 +34,12 @@ struct TaughtSimRoute {
   double spacing_m = 0.0;
   double tile_age_s = 0.0;   // age of a tile's pose when the tile is finished (half a tile of pings)
   Pose2 nav_start{}, nav_end{};  // the teach pass's dead-reckoned first and last poses
-  std::vector<Pose2> track;      // the autopilot's taught track: nav_start, every node's pose, nav_end (teach frame)
+  std::vector<Pose2> track;      // the autopilot's taught track: the teach's dead-reckoned poses every track_step_m,
+  std::vector<std::uint32_t> node_at;  // with every node's pose inserted (node i = track[node_at[i]]), teach frame
   std::uint64_t seed = 0;
 };
-Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRoute& out);
+// track_step_m: how often the autopilot logs its dead-reckoned pose while teaching.
+Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRoute& out, double track_step_m = 10.0);
 
 struct ClosedLoopScenario {
   bool reverse = false;

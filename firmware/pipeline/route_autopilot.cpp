@@ -21,18 +21,24 @@ Vec2d RouteAutopilot::pt(std::size_t i) const noexcept {
   return track_[cfg_.reverse ? n - 1 - i : i].translation();
 }
 
-Status RouteAutopilot::reset(const RouteAutopilotConfig& config, Span<const Pose2> track, std::int64_t t_ns, const Pose2& dr_pose) noexcept {
-  if (track.size() < 3) return Status(StatusCode::kInvalidArgument, "route autopilot: the taught track needs a start, >= 1 node and an end");
+Status RouteAutopilot::reset(const RouteAutopilotConfig& config, Span<const Pose2> track, Span<const std::uint32_t> node_at, std::int64_t t_ns,
+                             const Pose2& dr_pose) noexcept {
+  if (track.size() < 2 || node_at.size() < 1) return Status(StatusCode::kInvalidArgument, "route autopilot: the taught track needs >= 2 poses and >= 1 node");
+  for (std::size_t i = 0; i < node_at.size(); ++i)
+    if (node_at[i] >= track.size() || (i > 0 && node_at[i] <= node_at[i - 1]))
+      return Status(StatusCode::kInvalidArgument, "route autopilot: node indices must increase and lie inside the track");
   if (!(config.lookahead_m > 0.0) || !(config.max_intercept_rad > 0.0) || !(config.cross_track_gain >= 0.0))
     return Status(StatusCode::kInvalidArgument, "route autopilot: lookahead, intercept limit or gain out of range");
   cfg_ = config;
   track_ = track;
+  node_at_ = node_at;
   track_length_m_ = 0.0;
   for (std::size_t i = 0; i + 1 < track.size(); ++i) track_length_m_ += (track[i + 1].translation() - track[i].translation()).norm();
-  // The mean node spacing (nodes only, not the ends): DistToNext is counted from the next node.
-  const std::size_t nodes = track.size() - 2;
-  spacing_m_ = nodes >= 2 ? 0.0 : track_length_m_;
-  for (std::size_t i = 1; i + 1 < nodes + 1; ++i) spacing_m_ += (track[i + 1].translation() - track[i].translation()).norm() / static_cast<double>(nodes - 1);
+  // The mean node spacing: DistToNext is counted from the next node.
+  const std::size_t nodes = node_at.size();
+  spacing_m_ = 0.0;
+  for (std::size_t i = 0; i + 1 < nodes; ++i)
+    spacing_m_ += (track[node_at[i + 1]].translation() - track[node_at[i]].translation()).norm() / static_cast<double>(nodes - 1);
   seg_hint_ = 0;
   cum_hint_ = 0.0;
   pose_ = dr_pose;
@@ -131,7 +137,7 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
       return;
     case qc::GuidanceState::kTracking:
     case qc::GuidanceState::kDeadReckoned: {
-      const std::size_t nodes = track_.size() - 2;
+      const std::size_t nodes = node_at_.size();
       if (!std::isfinite(fix.cross_track_m) || !std::isfinite(fix.heading_error_rad) || !std::isfinite(fix.dist_to_next_m) || fix.node >= nodes)
         return;
       counters_.increment(AutopilotCounter::kSteerFixes);
@@ -140,10 +146,10 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
       const double sgn = cfg_.reverse ? -1.0 : 1.0;
       const Pose2 in_node{sgn * (spacing_m_ - fix.dist_to_next_m), sgn * fix.cross_track_m,
                           wrap_angle_rad(fix.heading_error_rad - (cfg_.reverse ? kPi : 0.0))};
-      const Pose2 v = track_[1 + fix.node].compose(in_node);
+      const Pose2 v = track_[node_at_[fix.node]].compose(in_node);
       dr_to_teach_ = v.compose(a.inverse());
       // The foot-point search restarts at the node's segment (travel order).
-      const std::size_t idx = cfg_.reverse ? track_.size() - 2 - fix.node : 1 + fix.node;
+      const std::size_t idx = cfg_.reverse ? track_.size() - 1 - node_at_[fix.node] : node_at_[fix.node];
       seg_hint_ = idx > 0 ? idx - 1 : 0;
       cum_hint_ = 0.0;
       for (std::size_t i = 0; i < seg_hint_; ++i) cum_hint_ += (pt(i + 1) - pt(i)).norm();

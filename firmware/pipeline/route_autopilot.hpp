@@ -4,17 +4,18 @@
 // qnav-guided vehicle and the dead-reckoning-only baseline) and is meant for qnavd's sim vehicle; the
 // law is written down in docs/route.md ("Closed loop: the autopilot law") for ArduSub / PX4.
 //
-// The taught track: the autopilot's own dead-reckoned pose at each node while qnav taught the route
-// (NAV_STATUS.NodeIndex counts the nodes), in the TEACH frame, plus the teach's first and last poses:
-// track[0] = start, track[1 + i] = node i, track[N + 1] = end (route order; the route file's node
-// poses are the same numbers). T maps the autopilot's dead-reckoned frame NOW into the teach frame.
+// The taught track: the autopilot's own dead-reckoned poses logged while qnav taught the route (every
+// few metres, from the teach's first to its last pose, route order) in the TEACH frame, and for each
+// node the index of its pose in that log (node_at[i]: the pose logged when NAV_STATUS.NodeIndex
+// reported node i; the route file's node poses are the same numbers). T maps the autopilot's
+// dead-reckoned frame NOW into the teach frame.
 // Per new fix (a ROUTE_STATUS whose TileSeq differs from the last, paired with the ROUTE_GUIDANCE sent
 // right before it) with status Tracking or DeadReckoned, node n = TargetNode:
 //   A  = own dead-reckoned pose guidance_age_s before the frame arrived (qnav's offsets describe the
 //        vehicle at the sensed tile's centre, half a tile of pings earlier);
 //   in = (sgn * (spacing - DistToNext), sgn * CrossTrack, HeadingError - (reverse ? pi : 0)),
 //        sgn = +1 forward / -1 reverse, spacing = the track's mean node spacing;
-//   V  = track[1 + n] (+) in          (the vehicle in the teach frame at A's time)
+//   V  = track[node_at[n]] (+) in          (the vehicle in the teach frame at A's time)
 //   T  = V (+) A^-1
 // Every control step, P = T (+) own dead-reckoned position now; on the track in the direction of
 // travel: foot point F at along-track s (searched near the last one), cross-track e (+ starboard),
@@ -83,9 +84,11 @@ class RouteAutopilot {
   static constexpr std::size_t kHistory = 512;
   static constexpr double kHistoryStepS = 0.5;  // 256 s of history
 
-  // Starts afresh: no frame (hold the heading of dr_pose), cruise. track: the taught track as above
-  // (>= 3 poses, borrowed: must outlive the autopilot's use). kInvalidArgument for a short track.
-  Status reset(const RouteAutopilotConfig& config, Span<const Pose2> track, std::int64_t t_ns, const Pose2& dr_pose) noexcept;
+  // Starts afresh: no frame (hold the heading of dr_pose), cruise. track, node_at: the taught track as
+  // above (>= 2 poses, >= 1 node, indices increasing and inside the track; borrowed: they must outlive
+  // the autopilot's use). kInvalidArgument otherwise.
+  Status reset(const RouteAutopilotConfig& config, Span<const Pose2> track, Span<const std::uint32_t> node_at, std::int64_t t_ns,
+               const Pose2& dr_pose) noexcept;
   // Follows the track now with a known frame (dead reckoning -> teach frame): the baseline, or a
   // vehicle that knows where it starts on the route.
   void set_frame(const Pose2& dr_to_teach) noexcept;
@@ -110,6 +113,7 @@ class RouteAutopilot {
   Vec2d point_at(double along_m) const noexcept;
   RouteAutopilotConfig cfg_{};
   Span<const Pose2> track_{};
+  Span<const std::uint32_t> node_at_{};
   std::size_t seg_hint_ = 0;  // segment of the last foot point (travel order)
   double cum_hint_ = 0.0;     // along-track at the start of that segment
   double spacing_m_ = 0.0, track_length_m_ = 0.0;
