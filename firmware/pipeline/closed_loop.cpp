@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <cstdio>
-#include <cstdlib>
 
 #include "drivers/qnavcan/publisher.hpp"
 #include "firmware/pipeline/route_can.hpp"
@@ -181,7 +179,6 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
     publisher.set(g);
     publisher.set(s);
     ++out.tiles;
-    if (std::getenv("QNAV_FOLLOW_DIAG")) std::fprintf(stderr, "DIAG tile %u est %u status %d xt %.2f he %.4f truth_lat %.2f truth_along %.1f truth_head %.4f nav_head %.4f\n", seq, st.estimate, (int)s.status, g.cross_track_m, g.heading_error_rad, t.truth_lateral_m, t.truth_along_m, t.truth_pose.heading_rad, t.node.meta.pose.heading_rad);
     return true;
   };
 

@@ -44,7 +44,7 @@
 namespace qnav::pipeline {
 
 struct RouteAutopilotConfig {
-  double lookahead_m = 100.0;         // LOS look-ahead distance Delta along the track
+  double lookahead_m = 25.0;          // LOS look-ahead distance Delta along the track (route follow: 25 m best of 25-100)
   double cross_track_gain = 1.0;      // k_e: multiplies the cross-track inside the LOS angle
   double max_intercept_rad = 0.5236;  // 30 deg: steepest approach to the route
   double guidance_age_s = 0.0;        // age of qnav's guidance when it arrives (tile duration / 2)

@@ -26,7 +26,7 @@ using namespace qnav;
 struct FollowOptions {
   std::string seeds = "1:2", csv, plot;
   double length_m = 2000.0, heading_bias_deg = 1.0, dvl_scale_pct = 1.0, current_mps = 0.2, start_offset_pct = 0.0;
-  double dropout_every_s = 600.0, lookahead_m = 100.0;
+  double dropout_every_s = 600.0, lookahead_m = 25.0;
   bool sim = false, reverse = false, json = false;
 };
 FollowOptions g_f;
