@@ -89,6 +89,7 @@ int cmd_follow() {
   if (!g_f.sim) return usage("give --sim (the closed loop runs on the side-scan simulator)");
   long a = 0, b = 0;
   if (!parse_seeds(g_f.seeds, a, b)) return usage(("--seeds: '" + g_f.seeds + "' is not A:B with 0 <= A < B and at most 100 seeds (seeds A to B-1)").c_str());
+  if (!g_f.plot.empty() && g_f.csv.empty()) return usage("--plot needs --csv (the plot is drawn from it)");
   const auto t_start = std::chrono::steady_clock::now();
   FILE* csv = nullptr;
   if (!g_f.csv.empty()) {
@@ -184,7 +185,6 @@ int cmd_follow() {
     std::printf("}\n");
   }
   if (!g_f.plot.empty()) {
-    if (g_f.csv.empty()) return usage("--plot needs --csv (the plot is drawn from it)");
     const char* dir = std::getenv("QNAV_SCRIPTS");
     const std::string script = std::string(dir ? dir : "scripts") + "/route_follow_plot.py";
     const std::string cmd = "/usr/bin/python3 '" + script + "' '" + g_f.csv + "' '" + g_f.plot + "'";
