@@ -78,9 +78,9 @@ void add_run(GuideStats& g, const pipeline::ClosedLoopResult& r, double spacing_
 void print_json_guide(const char* name, const GuideStats& g, bool last) {
   auto mx = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
   std::printf("  \"%s\": {\"cross_track_p50_m\": %.2f, \"cross_track_p95_m\": %.2f, \"cross_track_max_m\": %.2f, "
-              "\"end_offset_m\": %.2f, \"end_offset_p50_m\": %.2f, \"reached_end_pct\": %.1f, \"worst_run_cross_track_p95_m\": %.2f, "
+              "\"end_offset_m\": %.2f, \"end_offset_p50_m\": %.2f, \"end_offset_min_m\": %.2f, \"reached_end_pct\": %.1f, \"worst_run_cross_track_p95_m\": %.2f, "
               "\"join_distance_p50_m\": %.1f, \"join_distance_max_m\": %.1f, \"joined_pct\": %.1f}%s\n",
-              name, percentile(g.all, 50.0), percentile(g.all, 95.0), mx(g.run_max), mx(g.end_offset), percentile(g.end_offset, 50.0),
+              name, percentile(g.all, 50.0), percentile(g.all, 95.0), mx(g.run_max), mx(g.end_offset), percentile(g.end_offset, 50.0), g.end_offset.empty() ? 0.0 : *std::min_element(g.end_offset.begin(), g.end_offset.end()),
               g.runs ? 100.0 * g.reached / g.runs : 0.0, mx(g.run_p95), g.join.empty() ? -1.0 : percentile(g.join, 50.0), g.join.empty() ? -1.0 : mx(g.join),
               g.runs ? 100.0 * g.joined / g.runs : 0.0, last ? "" : ",");
 }
