@@ -185,8 +185,11 @@ int cmd_follow() {
     std::printf("}\n");
   }
   if (!g_f.plot.empty()) {
+    // The script beside this source tree (as `qnav map`'s plot), or under $QNAV_SCRIPTS.
+    std::string root = __FILE__;  // .../firmware/qnav/commands/route_follow.cpp
+    for (int i = 0; i < 4 && root.find('/') != std::string::npos; ++i) root = root.substr(0, root.find_last_of('/'));
     const char* dir = std::getenv("QNAV_SCRIPTS");
-    const std::string script = std::string(dir ? dir : "scripts") + "/route_follow_plot.py";
+    const std::string script = (dir ? std::string(dir) : root + "/scripts") + "/route_follow_plot.py";
     const std::string cmd = "/usr/bin/python3 '" + script + "' '" + g_f.csv + "' '" + g_f.plot + "'";
     if (std::system(cmd.c_str()) != 0) {
       std::fprintf(stderr, "qnav route follow: the plot failed (%s)\n", cmd.c_str());
