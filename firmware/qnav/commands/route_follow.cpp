@@ -208,7 +208,7 @@ void setup_route_follow(CLI::App& route_cmd, qnav::cli::Runner& run) {
   CLI::App* f = route_cmd.add_subcommand("follow", "closed loop on the simulator: an autopilot steering on qnav's CAN guidance against the same\n"
                                                    "autopilot on dead reckoning alone (truth cross-track from the taught track)");
   add_flag(*f, "--sim", g_f.sim, "fly the loop on the side-scan simulator (the only source so far)");
-  add_text(*f, "--seeds", g_f.seeds, "seeds A to B-1 (each: its own seabed, route, drift signs and current direction)")->type_name("A:B");
+  add_text(*f, "--seeds", g_f.seeds, "seeds A to B-1 (each: its own seabed, speckle, drift signs and current direction)")->type_name("A:B");
   add_number(*f, "--length-m", g_f.length_m, "length of the simulated route", "m", 400, 50000);
   add_number(*f, "--heading-bias-deg", g_f.heading_bias_deg, "compass bias (sign alternates with the seed)", "deg", 0, 10);
   add_number(*f, "--dvl-scale-pct", g_f.dvl_scale_pct, "DVL scale error (sign alternates every 2 seeds)", "%", 0, 10);
