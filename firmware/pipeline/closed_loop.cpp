@@ -142,7 +142,17 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   RouteAutopilot ap;
   QNAV_RETURN_IF_ERROR(ap.reset(apc, Span<const Pose2>(route.track.data(), route.track.size()),
                                 Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()), veh.t_ns(), veh.dr_pose()));
-  if (!qnav) ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
+  if (!qnav) {
+    ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
+  } else if (apc.follow_track_on_hold) {
+    // Until qnav's first fix: "I am at the track's start, pointing along it" (its first segment).
+    const std::size_t n = route.track.size();
+    const Vec2d a = route.track[sc.reverse ? n - 1 : 0].translation(), b = route.track[sc.reverse ? n - 2 : 1].translation();
+    const Vec2d d = b - a;
+    const Pose2 start_teach{a.x(), a.y(), std::atan2(d.y(), d.x())};
+    const Pose2 start_dr = veh.dr_pose();
+    ap.set_frame(start_teach.compose(start_dr.inverse()));
+  }
 
   // qnav's side: tiles -> repeater -> CAN publisher on a sim bus; the autopilot is another node.
   std::unique_ptr<RouteTilePipeline> pipe;

@@ -158,6 +158,7 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
     }
     case qc::GuidanceState::kHoldCourse:
     case qc::GuidanceState::kNotRepeating:
+      if (cfg_.follow_track_on_hold && has_line_) return;  // the track on dead reckoning, last frame
       if (following_) chi_hold_ = last_course_;
       following_ = false;
       return;

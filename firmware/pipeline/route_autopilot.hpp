@@ -24,7 +24,7 @@
 //   course = chi_d - T.heading        (own frame),  heading = course - beta,  speed = cruise
 // beta = the DVL's sideslip atan2(v_starboard, v_forward) (0 when crab_compensation is off).
 // HoldCourse / NotRepeating: hold the course steered when it arrived (before any fix: the heading at
-// reset). RouteEnd, or s past the track's end: stop (speed 0, heading held).
+// reset); with follow_track_on_hold and a frame, keep following the track on dead reckoning. RouteEnd, or s past the track's end: stop (speed 0, heading held).
 // The dead-reckoning-only baseline is the same law with T set once (set_frame) and no frames.
 // stbd(h) = (-sin h, cos h) in (north, east); headings are compass (clockwise from north).
 // Memory: the borrowed track (caller storage) and a fixed ring of kHistory poses; no heap.
@@ -51,6 +51,9 @@ struct RouteAutopilotConfig {
   double cruise_speed_mps = 1.5;
   bool reverse = false;               // the route is followed from its end to its start
   bool crab_compensation = true;      // steer course over ground (DVL sideslip), not heading
+  // HoldCourse / NotRepeating with a frame known (a past fix, or set_frame at the start): keep
+  // following the taught track on dead reckoning instead of holding a straight course.
+  bool follow_track_on_hold = false;
 };
 
 enum class AutopilotMode : std::uint8_t { kHoldCourse, kFollowing, kStopped };

@@ -27,7 +27,7 @@ struct FollowOptions {
   std::string seeds = "1:2", csv, plot;
   double length_m = 2000.0, heading_bias_deg = 1.0, dvl_scale_pct = 1.0, current_mps = 0.2, start_offset_pct = 0.0;
   double dropout_every_s = 600.0, lookahead_m = 25.0;
-  bool sim = false, reverse = false, json = false;
+  bool sim = false, reverse = false, json = false, hold_on_track = false;
 };
 FollowOptions g_f;
 
@@ -130,6 +130,7 @@ int cmd_follow() {
     const double current_dir = 2.0 * kPi * std::fmod(static_cast<double>(seed) * 0.6180339887498949 + 0.25, 1.0);
     sc.dynamics.current_ne = g_f.current_mps * Vec2d(std::cos(current_dir), std::sin(current_dir));
     sc.autopilot.lookahead_m = g_f.lookahead_m;
+    sc.autopilot.follow_track_on_hold = g_f.hold_on_track;
     sc.pass_seed = pipeline::repeat_pass_seed(static_cast<std::uint64_t>(seed)) + (g_f.reverse ? 1 : 0);
     for (const pipeline::Guide guide : {pipeline::Guide::kQnav, pipeline::Guide::kDeadReckoning}) {
       pipeline::ClosedLoopResult r;
@@ -170,16 +171,16 @@ int cmd_follow() {
                  g.end_offset.empty() ? 0.0 : *std::max_element(g.end_offset.begin(), g.end_offset.end()), g.reached, g.runs);
   };
   std::fprintf(log, "route follow: %d runs, %.0f m route, swath %.1f m, node spacing %.1f m, %s, heading bias %.2f deg, DVL scale %.2f %%, current %.2f m/s, "
-               "start offset %.0f %% of swath; %.0f s\n",
+               "start offset %.0f %% of swath%s; %.0f s\n",
                runs, g_f.length_m, swath, spacing, g_f.reverse ? "reverse" : "forward", g_f.heading_bias_deg, g_f.dvl_scale_pct, g_f.current_mps,
-               g_f.start_offset_pct, wall_s);
+               g_f.start_offset_pct, g_f.hold_on_track ? ", on HoldCourse the taught track on dead reckoning" : "", wall_s);
   summary("qnav", qs);
   summary("dead_reckoning", ds);
   if (g_f.json) {
     std::printf("{\n  \"swath_m\": %.2f, \"runs\": %d, \"seeds\": \"%s\", \"length_m\": %.0f, \"reverse\": %s, \"node_spacing_m\": %.2f,\n", swath, runs,
                 g_f.seeds.c_str(), g_f.length_m, g_f.reverse ? "true" : "false", spacing);
-    std::printf("  \"heading_bias_deg\": %.3f, \"dvl_scale_pct\": %.3f, \"current_mps\": %.3f, \"start_offset_pct\": %.1f, \"wall_s\": %.1f,\n",
-                g_f.heading_bias_deg, g_f.dvl_scale_pct, g_f.current_mps, g_f.start_offset_pct, wall_s);
+    std::printf("  \"heading_bias_deg\": %.3f, \"dvl_scale_pct\": %.3f, \"current_mps\": %.3f, \"start_offset_pct\": %.1f, \"hold_on_track\": %s, \"wall_s\": %.1f,\n",
+                g_f.heading_bias_deg, g_f.dvl_scale_pct, g_f.current_mps, g_f.start_offset_pct, g_f.hold_on_track ? "true" : "false", wall_s);
     print_json_guide("qnav", qs, false);
     print_json_guide("dead_reckoning", ds, true);
     std::printf("}\n");
@@ -216,6 +217,8 @@ void setup_route_follow(CLI::App& route_cmd, qnav::cli::Runner& run) {
   add_number(*f, "--start-offset-pct", g_f.start_offset_pct, "start this far right of the route (direction of travel)", "% of the swath", -100, 100);
   add_number(*f, "--dvl-dropout-every-s", g_f.dropout_every_s, "mean time between DVL dropouts of 10-40 s (0 = none)", "s", 0, 1e6);
   add_number(*f, "--lookahead-m", g_f.lookahead_m, "the autopilot's line-of-sight look-ahead", "m", 10, 1000);
+  add_flag(*f, "--hold-on-track", g_f.hold_on_track,
+           "on HoldCourse (and from the start) keep following the taught track on dead reckoning instead of holding course");
   add_flag(*f, "--reverse", g_f.reverse, "follow the route backwards (from its end to its start)");
   add_flag(*f, "--json", g_f.json, "one JSON object on stdout (the per-run lines on stderr)");
   add_text(*f, "--csv", g_f.csv, "write the tracks (taught, qnav, dead_reckoning; a row every 5 s) here")->type_name("FILE");

@@ -125,6 +125,21 @@ TEST(RouteAutopilot, HoldsCourseOnHoldCourseAndStopsOnRouteEnd) {
   EXPECT_EQ(ap.command().mode, AutopilotMode::kStopped);
 }
 
+TEST(RouteAutopilot, WithFollowTrackOnHoldKeepsFollowingTheTrackOnDeadReckoning) {
+  Track tr;
+  RouteAutopilot ap;
+  RouteAutopilotConfig c;
+  c.follow_track_on_hold = true;
+  ASSERT_TRUE(ap.reset(c, tr.p(), tr.n(), 0, Pose2{100.0, 10.0, 0.0}).is_ok());
+  ap.set_frame(Pose2{});
+  qc::RouteGuidance g;
+  send(ap, g, status(qc::GuidanceState::kHoldCourse, 7), 1000000000);
+  ap.on_nav(2000000000, Pose2{200.0, -10.0, 0.0}, 0.0);  // 10 m to port: steer back to starboard
+  const AutopilotCommand cmd = ap.command();
+  EXPECT_EQ(cmd.mode, AutopilotMode::kFollowing);
+  EXPECT_NEAR(cmd.course_rad, std::atan(10.0 / 25.0), 1e-9);
+}
+
 TEST(RouteAutopilot, StopsPastTheTaughtTracksEnd) {
   Track tr;
   RouteAutopilot ap;
