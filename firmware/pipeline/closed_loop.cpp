@@ -18,7 +18,8 @@ namespace qc = drivers::qnavcan;
 
 const char* to_string(Guide g) noexcept { return g == Guide::kQnav ? "qnav" : "dead_reckoning"; }
 
-void polyline_offsets(const std::vector<Vec2d>& poly, const Vec2d& p, double& along_m, double& cross_m, double& heading_rad) noexcept {
+void polyline_offsets(const std::vector<Vec2d>& poly, const Vec2d& p, double& along_m, double& cross_m,
+                      double& heading_rad) noexcept {
   along_m = cross_m = heading_rad = 0.0;
   double best = 1e300, cum = 0.0;
   for (std::size_t i = 0; i + 1 < poly.size(); ++i) {
@@ -62,11 +63,13 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
   out.tile_age_s = 0.5 * tc.tiles.scanlines_per_tile / out.survey.route.ping_rate_hz;
   const sidescan::TrajectoryConfig t0 = out.survey.pass(0.0, false, teach_pass_seed(seed));
   out.tiles.clear();
-  QNAV_RETURN_IF_ERROR(pipe->run_sim_pass(out.survey.seabed, out.survey.sonar_for(t0.seed), t0, [&out](const RouteTile& t) {
-    out.tiles.push_back(t);
-    return true;
-  }));
-  if (out.tiles.size() < 2) return Status(StatusCode::kInvalidArgument, "closed loop: the taught route has fewer than 2 nodes");
+  QNAV_RETURN_IF_ERROR(
+      pipe->run_sim_pass(out.survey.seabed, out.survey.sonar_for(t0.seed), t0, [&out](const RouteTile& t) {
+        out.tiles.push_back(t);
+        return true;
+      }));
+  if (out.tiles.size() < 2)
+    return Status(StatusCode::kInvalidArgument, "closed loop: the taught route has fewer than 2 nodes");
   out.meta.clear();
   for (std::size_t i = 0; i < out.tiles.size(); ++i) {
     route::NodeMeta m = out.tiles[i].node.meta;
@@ -111,8 +114,8 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
   return Status::ok();
 }
 
-Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc, Guide guide, double join_band_m, ClosedLoopResult& out,
-                       const std::function<void(const TrackSample&)>& on_sample) {
+Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc, Guide guide, double join_band_m,
+                       ClosedLoopResult& out, const std::function<void(const TrackSample&)>& on_sample) {
   out = ClosedLoopResult{};
   const SimSurvey& w = route.survey;
   const bool qnav = guide == Guide::kQnav;
@@ -136,18 +139,22 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   veh.reset(sc.dynamics, sc.drift, truth0, dr0, speed, 0);
   RouteAutopilotConfig apc = sc.autopilot;
   apc.cruise_speed_mps = speed;
-  if (qnav) apc.guidance_age_s = route.tile_age_s;
-  else apc.guidance_age_s = 0.0;
+  if (qnav)
+    apc.guidance_age_s = route.tile_age_s;
+  else
+    apc.guidance_age_s = 0.0;
   apc.reverse = sc.reverse;
   RouteAutopilot ap;
   QNAV_RETURN_IF_ERROR(ap.reset(apc, Span<const Pose2>(route.track.data(), route.track.size()),
-                                Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()), veh.t_ns(), veh.dr_pose()));
+                                Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()), veh.t_ns(),
+                                veh.dr_pose()));
   if (!qnav) {
     ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
   } else if (apc.follow_track_on_hold) {
     // Until qnav's first fix: "I am at the track's start, pointing along it" (its first segment).
     const std::size_t n = route.track.size();
-    const Vec2d a = route.track[sc.reverse ? n - 1 : 0].translation(), b = route.track[sc.reverse ? n - 2 : 1].translation();
+    const Vec2d a = route.track[sc.reverse ? n - 1 : 0].translation(),
+                b = route.track[sc.reverse ? n - 2 : 1].translation();
     const Vec2d d = b - a;
     const Pose2 start_teach{a.x(), a.y(), std::atan2(d.y(), d.x())};
     const Pose2 start_dr = veh.dr_pose();
@@ -167,9 +174,10 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
     pipe = std::make_unique<RouteTilePipeline>();
     QNAV_RETURN_IF_ERROR(pipe->init(default_route_tile_config()));
     rep = std::make_unique<RouteRepeater>();
-    QNAV_RETURN_IF_ERROR(rep->init(default_localiser_config(sc.reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
-                                                            route.meta.size() + 8)));
-    QNAV_RETURN_IF_ERROR(rep->start(route.params, Span<const route::NodeMeta>(route.meta.data(), route.meta.size()), source));
+    QNAV_RETURN_IF_ERROR(rep->init(default_localiser_config(
+        sc.reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, route.meta.size() + 8)));
+    QNAV_RETURN_IF_ERROR(
+        rep->start(route.params, Span<const route::NodeMeta>(route.meta.data(), route.meta.size()), source));
     sim = std::make_unique<sidescan::SideScanSimulator>();
     QNAV_RETURN_IF_ERROR(sim->init(w.sonar_for(sc.pass_seed), &w.seabed));
     QNAV_RETURN_IF_ERROR(qnav_node.attach(net));
@@ -218,7 +226,8 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
       clock.set_ns(t);
       publisher.poll(t);
       hal::CanRxFrame rx;
-      while (autopilot_node.receive(rx, 0)) ap.on_frame(rx.frame, t).ignore();  // decode errors are counted by the autopilot
+      while (autopilot_node.receive(rx, 0))
+        ap.on_frame(rx.frame, t).ignore();  // decode errors are counted by the autopilot
     }
     out.abs_cross_track_m.push_back(std::fabs(cross));
     travelled.push_back(veh.travelled_m());

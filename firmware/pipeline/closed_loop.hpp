@@ -32,7 +32,7 @@ struct TaughtSimRoute {
   route::RouteParams params{};
   std::vector<route::NodeMeta> meta;
   double spacing_m = 0.0;
-  double tile_age_s = 0.0;   // age of a tile's pose when the tile is finished (half a tile of pings)
+  double tile_age_s = 0.0;       // age of a tile's pose when the tile is finished (half a tile of pings)
   Pose2 nav_start{}, nav_end{};  // the teach pass's dead-reckoned first and last poses
   std::vector<Pose2> track;      // the autopilot's taught track: the teach's dead-reckoned poses every track_step_m,
   std::vector<std::uint32_t> node_at;  // with every node's pose inserted (node i = track[node_at[i]]), teach frame
@@ -43,12 +43,12 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
 
 struct ClosedLoopScenario {
   bool reverse = false;
-  double start_offset_m = 0.0;       // start this far right of the route (direction of travel)
-  VehicleDynamicsConfig dynamics;    // including the current
+  double start_offset_m = 0.0;     // start this far right of the route (direction of travel)
+  VehicleDynamicsConfig dynamics;  // including the current
   DriftConfig drift;
-  RouteAutopilotConfig autopilot;    // guidance_age_s is set from the route's tile age for kQnav
+  RouteAutopilotConfig autopilot;  // guidance_age_s is set from the route's tile age for kQnav
   double max_travel_factor = 1.3;
-  std::uint64_t pass_seed = 1;       // the repeat's sonar speckle
+  std::uint64_t pass_seed = 1;  // the repeat's sonar speckle
 };
 
 enum class Guide : std::uint8_t { kQnav, kDeadReckoning };
@@ -57,8 +57,8 @@ const char* to_string(Guide g) noexcept;
 struct TrackSample {
   double t_s = 0.0;
   Pose2 truth{}, dr{};
-  double cross_track_m = 0.0;   // truth, + right of the direction of travel
-  double along_m = 0.0;         // truth, along the taught track in the direction of travel
+  double cross_track_m = 0.0;  // truth, + right of the direction of travel
+  double along_m = 0.0;        // truth, along the taught track in the direction of travel
   double travelled_m = 0.0;
   AutopilotMode mode = AutopilotMode::kHoldCourse;
   bool dvl_lost = false;
@@ -67,9 +67,9 @@ struct TrackSample {
 struct ClosedLoopResult {
   std::vector<double> abs_cross_track_m;  // one per ping
   double max_cross_track_m = 0.0;
-  double end_offset_m = 0.0;     // true distance from the stop to the taught track's end
-  double end_along_m = 0.0;      // along-track of the stop minus the route length (+ past the end)
-  bool stopped = false;          // the autopilot stopped (RouteEnd) before the travel limit
+  double end_offset_m = 0.0;  // true distance from the stop to the taught track's end
+  double end_along_m = 0.0;   // along-track of the stop minus the route length (+ past the end)
+  bool stopped = false;       // the autopilot stopped (RouteEnd) before the travel limit
   double travelled_m = 0.0;
   double join_distance_m = 0.0;  // travel before |cross-track| stays within join_band_m (-1: never)
   std::uint32_t tiles = 0, steer_fixes = 0, fixes = 0;
@@ -82,6 +82,7 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
 
 // The truth reference: signed cross-track (+ right of the polyline's direction) and along-track of p
 // against a polyline (nearest segment, clamped). Exposed for the tests.
-void polyline_offsets(const std::vector<Vec2d>& poly, const Vec2d& p, double& along_m, double& cross_m, double& heading_rad) noexcept;
+void polyline_offsets(const std::vector<Vec2d>& poly, const Vec2d& p, double& along_m, double& cross_m,
+                      double& heading_rad) noexcept;
 
 }  // namespace qnav::pipeline

@@ -16,8 +16,8 @@ double ClosedLoopVehicle::gauss() noexcept {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
 }
 
-void ClosedLoopVehicle::reset(const VehicleDynamicsConfig& dyn, const DriftConfig& drift, const Pose2& truth, const Pose2& dr_start,
-                              double speed_mps, std::int64_t t_ns) noexcept {
+void ClosedLoopVehicle::reset(const VehicleDynamicsConfig& dyn, const DriftConfig& drift, const Pose2& truth,
+                              const Pose2& dr_start, double speed_mps, std::int64_t t_ns) noexcept {
   dyn_ = dyn;
   drift_ = drift;
   truth_ = truth;
@@ -69,7 +69,8 @@ void ClosedLoopVehicle::sample_sensors(double dt_s, double speed_cmd_mps) noexce
     fwd = speed_cmd_mps;
     stbd = 0.0;
   } else {
-    const Vec2d v(u_ * std::cos(truth_.heading_rad) + dyn_.current_ne.x(), u_ * std::sin(truth_.heading_rad) + dyn_.current_ne.y());
+    const Vec2d v(u_ * std::cos(truth_.heading_rad) + dyn_.current_ne.x(),
+                  u_ * std::sin(truth_.heading_rad) + dyn_.current_ne.y());
     const double c = std::cos(truth_.heading_rad), s = std::sin(truth_.heading_rad);
     const double k = 1.0 + drift_.dvl_scale_error;
     fwd = k * (c * v.x() + s * v.y()) + drift_.dvl_noise_mps * gauss();

@@ -17,19 +17,19 @@
 namespace qnav::pipeline {
 
 struct VehicleDynamicsConfig {
-  double yaw_rate_max_radps = 0.10;     // 5.7 deg/s
-  double yaw_accel_max_radps2 = 0.05;   // 2.9 deg/s^2
-  double heading_gain_per_s = 0.5;      // yaw-rate demand per rad of compass heading error
+  double yaw_rate_max_radps = 0.10;    // 5.7 deg/s
+  double yaw_accel_max_radps2 = 0.05;  // 2.9 deg/s^2
+  double heading_gain_per_s = 0.5;     // yaw-rate demand per rad of compass heading error
   double surge_accel_max_mps2 = 0.2;
-  Vec2d current_ne = Vec2d::Zero();     // water current (north, east), m/s, unknown to the vehicle
+  Vec2d current_ne = Vec2d::Zero();  // water current (north, east), m/s, unknown to the vehicle
 };
 
 struct DriftConfig {
-  double heading_bias_rad = 0.0;     // compass: true + bias + noise
+  double heading_bias_rad = 0.0;  // compass: true + bias + noise
   double heading_noise_rad = 0.002;
-  double dvl_scale_error = 0.0;      // DVL: (1 + e) x true
+  double dvl_scale_error = 0.0;  // DVL: (1 + e) x true
   double dvl_noise_mps = 0.01;
-  double dropout_every_s = 600.0;    // mean time between DVL dropouts (0 = none)
+  double dropout_every_s = 600.0;  // mean time between DVL dropouts (0 = none)
   double dropout_min_s = 10.0, dropout_max_s = 40.0;
   std::uint64_t seed = 1;
 };
@@ -38,8 +38,8 @@ class ClosedLoopVehicle {
  public:
   // truth: the true start pose; dr_start: where dead reckoning starts (its frame), heading from the
   // compass; speed_mps: initial surge speed.
-  void reset(const VehicleDynamicsConfig& dyn, const DriftConfig& drift, const Pose2& truth, const Pose2& dr_start, double speed_mps,
-             std::int64_t t_ns) noexcept;
+  void reset(const VehicleDynamicsConfig& dyn, const DriftConfig& drift, const Pose2& truth, const Pose2& dr_start,
+             double speed_mps, std::int64_t t_ns) noexcept;
   // Flies dt_s towards the commanded compass heading and surge speed, then samples the sensors.
   void step(double dt_s, double heading_cmd_rad, double speed_cmd_mps) noexcept;
 

@@ -21,24 +21,28 @@ Vec2d RouteAutopilot::pt(std::size_t i) const noexcept {
   return track_[cfg_.reverse ? n - 1 - i : i].translation();
 }
 
-Status RouteAutopilot::reset(const RouteAutopilotConfig& config, Span<const Pose2> track, Span<const std::uint32_t> node_at, std::int64_t t_ns,
-                             const Pose2& dr_pose) noexcept {
-  if (track.size() < 2 || node_at.size() < 1) return Status(StatusCode::kInvalidArgument, "route autopilot: the taught track needs >= 2 poses and >= 1 node");
+Status RouteAutopilot::reset(const RouteAutopilotConfig& config, Span<const Pose2> track,
+                             Span<const std::uint32_t> node_at, std::int64_t t_ns, const Pose2& dr_pose) noexcept {
+  if (track.size() < 2 || node_at.size() < 1)
+    return Status(StatusCode::kInvalidArgument, "route autopilot: the taught track needs >= 2 poses and >= 1 node");
   for (std::size_t i = 0; i < node_at.size(); ++i)
     if (node_at[i] >= track.size() || (i > 0 && node_at[i] <= node_at[i - 1]))
-      return Status(StatusCode::kInvalidArgument, "route autopilot: node indices must increase and lie inside the track");
+      return Status(StatusCode::kInvalidArgument,
+                    "route autopilot: node indices must increase and lie inside the track");
   if (!(config.lookahead_m > 0.0) || !(config.max_intercept_rad > 0.0) || !(config.cross_track_gain >= 0.0))
     return Status(StatusCode::kInvalidArgument, "route autopilot: lookahead, intercept limit or gain out of range");
   cfg_ = config;
   track_ = track;
   node_at_ = node_at;
   track_length_m_ = 0.0;
-  for (std::size_t i = 0; i + 1 < track.size(); ++i) track_length_m_ += (track[i + 1].translation() - track[i].translation()).norm();
+  for (std::size_t i = 0; i + 1 < track.size(); ++i)
+    track_length_m_ += (track[i + 1].translation() - track[i].translation()).norm();
   // The mean node spacing: DistToNext is counted from the next node.
   const std::size_t nodes = node_at.size();
   spacing_m_ = 0.0;
   for (std::size_t i = 0; i + 1 < nodes; ++i)
-    spacing_m_ += (track[node_at[i + 1]].translation() - track[node_at[i]].translation()).norm() / static_cast<double>(nodes - 1);
+    spacing_m_ +=
+        (track[node_at[i + 1]].translation() - track[node_at[i]].translation()).norm() / static_cast<double>(nodes - 1);
   seg_hint_ = 0;
   cum_hint_ = 0.0;
   pose_ = dr_pose;
@@ -82,7 +86,8 @@ Pose2 RouteAutopilot::pose_at(std::int64_t t_ns) const noexcept {
   return best;
 }
 
-void RouteAutopilot::locate(const Vec2d& p, double& along_m, double& cross_m, Vec2d& foot, std::size_t& seg) const noexcept {
+void RouteAutopilot::locate(const Vec2d& p, double& along_m, double& cross_m, Vec2d& foot,
+                            std::size_t& seg) const noexcept {
   // Nearest segment within a window around the last foot point (a track that comes back near
   // itself is not confused); the first segment extends backwards and the last one forwards.
   const std::size_t nseg = track_.size() - 1;
@@ -138,7 +143,8 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
     case qc::GuidanceState::kTracking:
     case qc::GuidanceState::kDeadReckoned: {
       const std::size_t nodes = node_at_.size();
-      if (!std::isfinite(fix.cross_track_m) || !std::isfinite(fix.heading_error_rad) || !std::isfinite(fix.dist_to_next_m) || fix.node >= nodes)
+      if (!std::isfinite(fix.cross_track_m) || !std::isfinite(fix.heading_error_rad) ||
+          !std::isfinite(fix.dist_to_next_m) || fix.node >= nodes)
         return;
       counters_.increment(AutopilotCounter::kSteerFixes);
       const std::int64_t age_ns = static_cast<std::int64_t>(std::llround(std::max(0.0, age_s) * 1e9));
@@ -227,7 +233,8 @@ AutopilotCommand RouteAutopilot::command() noexcept {
       const Vec2d d = carrot - foot;
       const double chi_ahead = std::atan2(d.y(), d.x());
       const double lim = cfg_.max_intercept_rad;
-      const double intercept = std::clamp(std::atan(cfg_.cross_track_gain * c.cross_track_m / cfg_.lookahead_m), -lim, lim);
+      const double intercept =
+          std::clamp(std::atan(cfg_.cross_track_gain * c.cross_track_m / cfg_.lookahead_m), -lim, lim);
       c.mode = AutopilotMode::kFollowing;
       c.course_rad = wrap_angle_rad(chi_ahead - intercept - dr_to_teach_.heading_rad);
       c.heading_rad = wrap_angle_rad(c.course_rad - beta);

@@ -23,8 +23,9 @@
 //   chi_d  = bearing(F -> C) - clamp(atan(k_e * e / lookahead_m), +-max_intercept_rad)   (teach frame)
 //   course = chi_d - T.heading        (own frame),  heading = course - beta,  speed = cruise
 // beta = the DVL's sideslip atan2(v_starboard, v_forward) (0 when crab_compensation is off).
-// HoldCourse / NotRepeating: hold the course steered when it arrived (before any fix: the heading at
-// reset); with follow_track_on_hold and a frame, keep following the track on dead reckoning. RouteEnd, or s past the track's end: stop (speed 0, heading held).
+// HoldCourse / NotRepeating: hold the course steered when it arrived (before any fix: the heading
+// at reset); with follow_track_on_hold and a frame, keep following the track on dead reckoning.
+// RouteEnd, or s past the track's end: stop (speed 0, heading held).
 // The dead-reckoning-only baseline is the same law with T set once (set_frame) and no frames.
 // stbd(h) = (-sin h, cos h) in (north, east); headings are compass (clockwise from north).
 // Memory: the borrowed track (caller storage) and a fixed ring of kHistory poses; no heap.
@@ -44,13 +45,13 @@
 namespace qnav::pipeline {
 
 struct RouteAutopilotConfig {
-  double lookahead_m = 25.0;          // LOS look-ahead distance Delta along the track (route follow: 25 m best of 25-100)
-  double cross_track_gain = 1.0;      // k_e: multiplies the cross-track inside the LOS angle
+  double lookahead_m = 25.0;      // LOS look-ahead distance Delta along the track (route follow: 25 m best of 25-100)
+  double cross_track_gain = 1.0;  // k_e: multiplies the cross-track inside the LOS angle
   double max_intercept_rad = 0.5236;  // 30 deg: steepest approach to the route
   double guidance_age_s = 0.0;        // age of qnav's guidance when it arrives (tile duration / 2)
   double cruise_speed_mps = 1.5;
-  bool reverse = false;               // the route is followed from its end to its start
-  bool crab_compensation = true;      // steer course over ground (DVL sideslip), not heading
+  bool reverse = false;           // the route is followed from its end to its start
+  bool crab_compensation = true;  // steer course over ground (DVL sideslip), not heading
   // HoldCourse / NotRepeating with a frame known (a past fix, or set_frame at the start): keep
   // following the taught track on dead reckoning instead of holding a straight course.
   bool follow_track_on_hold = false;
@@ -61,12 +62,12 @@ const char* to_string(AutopilotMode m) noexcept;
 
 struct AutopilotCommand {
   AutopilotMode mode = AutopilotMode::kHoldCourse;
-  double heading_rad = 0.0;       // compass heading to steer
-  double speed_mps = 0.0;         // surge speed to hold
-  double course_rad = 0.0;        // the course over ground wanted (heading + sideslip)
-  double cross_track_m = 0.0;     // the autopilot's own estimate now (0 without a frame)
-  double along_m = 0.0;           // along the taught track in the direction of travel (teach frame)
-  bool has_line = false;          // the frame onto the taught track is known
+  double heading_rad = 0.0;    // compass heading to steer
+  double speed_mps = 0.0;      // surge speed to hold
+  double course_rad = 0.0;     // the course over ground wanted (heading + sideslip)
+  double cross_track_m = 0.0;  // the autopilot's own estimate now (0 without a frame)
+  double along_m = 0.0;        // along the taught track in the direction of travel (teach frame)
+  bool has_line = false;       // the frame onto the taught track is known
 };
 
 // One piece of route guidance as the autopilot uses it (decoded from the bus, or computed by the
@@ -80,7 +81,8 @@ struct RouteFix {
 };
 
 enum class AutopilotCounter : std::uint8_t { kFrames, kDecodeErrors, kFixes, kSteerFixes, kUnpairedStatus, kCount };
-inline constexpr const char* kAutopilotCounterNames[] = {"frames", "decode_errors", "fixes", "steer_fixes", "unpaired_status"};
+inline constexpr const char* kAutopilotCounterNames[] = {"frames", "decode_errors", "fixes", "steer_fixes",
+                                                         "unpaired_status"};
 
 class RouteAutopilot {
  public:
@@ -90,8 +92,8 @@ class RouteAutopilot {
   // Starts afresh: no frame (hold the heading of dr_pose), cruise. track, node_at: the taught track as
   // above (>= 2 poses, >= 1 node, indices increasing and inside the track; borrowed: they must outlive
   // the autopilot's use). kInvalidArgument otherwise.
-  Status reset(const RouteAutopilotConfig& config, Span<const Pose2> track, Span<const std::uint32_t> node_at, std::int64_t t_ns,
-               const Pose2& dr_pose) noexcept;
+  Status reset(const RouteAutopilotConfig& config, Span<const Pose2> track, Span<const std::uint32_t> node_at,
+               std::int64_t t_ns, const Pose2& dr_pose) noexcept;
   // Follows the track now with a known frame (dead reckoning -> teach frame): the baseline, or a
   // vehicle that knows where it starts on the route.
   void set_frame(const Pose2& dr_to_teach) noexcept;

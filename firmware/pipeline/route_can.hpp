@@ -36,7 +36,8 @@ inline drivers::qnavcan::SideOfRoute route_side_to_wire(route::RouteSide s) noex
 }
 
 inline void route_can_messages(const route::LocaliserStep& st, double node_spacing_m, std::uint32_t tile_seq,
-                               drivers::qnavcan::RouteGuidance& guidance, drivers::qnavcan::RouteStatus& status) noexcept {
+                               drivers::qnavcan::RouteGuidance& guidance,
+                               drivers::qnavcan::RouteStatus& status) noexcept {
   auto clampd = [](double v, double lo, double hi) { return std::isfinite(v) ? std::min(hi, std::max(lo, v)) : 0.0; };
   const route::GuidanceOutput& g = st.guidance;
   guidance.cross_track_m = clampd(g.cross_track_m, -327.0, 327.0);
@@ -45,7 +46,8 @@ inline void route_can_messages(const route::LocaliserStep& st, double node_spaci
   guidance.target_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(g.node, 65535));
   status.status = route_status_to_wire(g.status);
   status.side = route_side_to_wire(g.side);
-  status.cross_track_sigma_m = std::isfinite(g.cross_track_sigma_m) ? g.cross_track_sigma_m : drivers::qnavcan::kCrossTrackSigmaMaxM;
+  status.cross_track_sigma_m =
+      std::isfinite(g.cross_track_sigma_m) ? g.cross_track_sigma_m : drivers::qnavcan::kCrossTrackSigmaMaxM;
   status.estimate_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(st.estimate, 65535));
   status.tile_seq = static_cast<std::uint16_t>(tile_seq & 0xFFFF);
 }

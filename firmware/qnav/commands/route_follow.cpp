@@ -77,18 +77,24 @@ void add_run(GuideStats& g, const pipeline::ClosedLoopResult& r, double spacing_
 
 void print_json_guide(const char* name, const GuideStats& g, bool last) {
   auto mx = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
-  std::printf("  \"%s\": {\"cross_track_p50_m\": %.2f, \"cross_track_p95_m\": %.2f, \"cross_track_max_m\": %.2f, "
-              "\"end_offset_m\": %.2f, \"end_offset_p50_m\": %.2f, \"end_offset_min_m\": %.2f, \"reached_end_pct\": %.1f, \"worst_run_cross_track_p95_m\": %.2f, "
-              "\"join_distance_p50_m\": %.1f, \"join_distance_max_m\": %.1f, \"joined_pct\": %.1f}%s\n",
-              name, percentile(g.all, 50.0), percentile(g.all, 95.0), mx(g.run_max), mx(g.end_offset), percentile(g.end_offset, 50.0), g.end_offset.empty() ? 0.0 : *std::min_element(g.end_offset.begin(), g.end_offset.end()),
-              g.runs ? 100.0 * g.reached / g.runs : 0.0, mx(g.run_p95), g.join.empty() ? -1.0 : percentile(g.join, 50.0), g.join.empty() ? -1.0 : mx(g.join),
-              g.runs ? 100.0 * g.joined / g.runs : 0.0, last ? "" : ",");
+  std::printf(
+      "  \"%s\": {\"cross_track_p50_m\": %.2f, \"cross_track_p95_m\": %.2f, \"cross_track_max_m\": %.2f, "
+      "\"end_offset_m\": %.2f, \"end_offset_p50_m\": %.2f, \"end_offset_min_m\": %.2f, \"reached_end_pct\": %.1f, "
+      "\"worst_run_cross_track_p95_m\": %.2f, "
+      "\"join_distance_p50_m\": %.1f, \"join_distance_max_m\": %.1f, \"joined_pct\": %.1f}%s\n",
+      name, percentile(g.all, 50.0), percentile(g.all, 95.0), mx(g.run_max), mx(g.end_offset),
+      percentile(g.end_offset, 50.0),
+      g.end_offset.empty() ? 0.0 : *std::min_element(g.end_offset.begin(), g.end_offset.end()),
+      g.runs ? 100.0 * g.reached / g.runs : 0.0, mx(g.run_p95), g.join.empty() ? -1.0 : percentile(g.join, 50.0),
+      g.join.empty() ? -1.0 : mx(g.join), g.runs ? 100.0 * g.joined / g.runs : 0.0, last ? "" : ",");
 }
 
 int cmd_follow() {
   if (!g_f.sim) return usage("give --sim (the closed loop runs on the side-scan simulator)");
   long a = 0, b = 0;
-  if (!parse_seeds(g_f.seeds, a, b)) return usage(("--seeds: '" + g_f.seeds + "' is not A:B with 0 <= A < B and at most 100 seeds (seeds A to B-1)").c_str());
+  if (!parse_seeds(g_f.seeds, a, b))
+    return usage(
+        ("--seeds: '" + g_f.seeds + "' is not A:B with 0 <= A < B and at most 100 seeds (seeds A to B-1)").c_str());
   if (!g_f.plot.empty() && g_f.csv.empty()) return usage("--plot needs --csv (the plot is drawn from it)");
   const auto t_start = std::chrono::steady_clock::now();
   FILE* csv = nullptr;
@@ -117,7 +123,8 @@ int cmd_follow() {
     spacing = route.spacing_m;
     const double teach_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (csv) {
-      for (const Vec2d& p : route.survey.route.waypoints_ne) std::fprintf(csv, "%ld,taught,0,%.2f,%.2f,0,0,0,,0\n", seed, p.x(), p.y());
+      for (const Vec2d& p : route.survey.route.waypoints_ne)
+        std::fprintf(csv, "%ld,taught,0,%.2f,%.2f,0,0,0,,0\n", seed, p.x(), p.y());
     }
     // The drift of this seed: the signs alternate with the seed, the current's direction is seeded.
     pipeline::ClosedLoopScenario sc;
@@ -139,8 +146,9 @@ int cmd_follow() {
       const char* track = pipeline::to_string(guide);
       s = pipeline::run_closed_loop(route, sc, guide, 0.1 * swath, r, [&](const pipeline::TrackSample& smp) {
         if (csv && (n++ % 25) == 0)  // every 5 s
-          std::fprintf(csv, "%ld,%s,%.1f,%.2f,%.2f,%.2f,%.1f,%.1f,%s,%d\n", seed, track, smp.t_s, smp.truth.x_m, smp.truth.y_m, smp.cross_track_m,
-                       smp.along_m, smp.travelled_m, pipeline::to_string(smp.mode), smp.dvl_lost ? 1 : 0);
+          std::fprintf(csv, "%ld,%s,%.1f,%.2f,%.2f,%.2f,%.1f,%.1f,%s,%d\n", seed, track, smp.t_s, smp.truth.x_m,
+                       smp.truth.y_m, smp.cross_track_m, smp.along_m, smp.travelled_m, pipeline::to_string(smp.mode),
+                       smp.dvl_lost ? 1 : 0);
       });
       if (!s) {
         std::fprintf(stderr, "qnav route follow: seed %ld %s: %s\n", seed, track, s.message());
@@ -150,10 +158,12 @@ int cmd_follow() {
       add_run(guide == pipeline::Guide::kQnav ? qs : ds, r, spacing);
       ++runs;
       std::fprintf(log,
-                   "seed %ld %-14s %s: cross-track p50 %.1f p95 %.1f max %.1f m; end %s, %.1f m off (along %+.1f m); travelled %.0f m; "
+                   "seed %ld %-14s %s: cross-track p50 %.1f p95 %.1f max %.1f m; end %s, %.1f m off (along %+.1f m); "
+                   "travelled %.0f m; "
                    "join %.0f m; fixes %u steered / %u tiles; dvl dropouts %.0f s; %.1f s (teach %.1f s)\n",
-                   seed, track, g_f.reverse ? "reverse" : "forward", percentile(r.abs_cross_track_m, 50.0), percentile(r.abs_cross_track_m, 95.0),
-                   r.max_cross_track_m, r.stopped ? "reached" : "NOT reached (travel limit)", r.end_offset_m, r.end_along_m, r.travelled_m,
+                   seed, track, g_f.reverse ? "reverse" : "forward", percentile(r.abs_cross_track_m, 50.0),
+                   percentile(r.abs_cross_track_m, 95.0), r.max_cross_track_m,
+                   r.stopped ? "reached" : "NOT reached (travel limit)", r.end_offset_m, r.end_along_m, r.travelled_m,
                    r.join_distance_m, r.steer_fixes, r.tiles, r.dropout_s,
                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count(), teach_s);
     }
@@ -164,23 +174,34 @@ int cmd_follow() {
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   auto summary = [&](const char* name, const GuideStats& g) {
-    std::fprintf(log, "%-14s cross-track p50 %.1f m, p95 %.1f m (%.1f %% of swath), max %.1f m (%.1f %%); end offset max %.1f m; reached end %d/%d\n",
+    std::fprintf(log,
+                 "%-14s cross-track p50 %.1f m, p95 %.1f m (%.1f %% of swath), max %.1f m (%.1f %%); end offset max "
+                 "%.1f m; reached end %d/%d\n",
                  name, percentile(g.all, 50.0), percentile(g.all, 95.0), 100.0 * percentile(g.all, 95.0) / swath,
                  g.run_max.empty() ? 0.0 : *std::max_element(g.run_max.begin(), g.run_max.end()),
                  g.run_max.empty() ? 0.0 : 100.0 * *std::max_element(g.run_max.begin(), g.run_max.end()) / swath,
-                 g.end_offset.empty() ? 0.0 : *std::max_element(g.end_offset.begin(), g.end_offset.end()), g.reached, g.runs);
+                 g.end_offset.empty() ? 0.0 : *std::max_element(g.end_offset.begin(), g.end_offset.end()), g.reached,
+                 g.runs);
   };
-  std::fprintf(log, "route follow: %d runs, %.0f m route, swath %.1f m, node spacing %.1f m, %s, heading bias %.2f deg, DVL scale %.2f %%, current %.2f m/s, "
+  std::fprintf(log,
+               "route follow: %d runs, %.0f m route, swath %.1f m, node spacing %.1f m, %s, heading bias %.2f deg, DVL "
+               "scale %.2f %%, current %.2f m/s, "
                "start offset %.0f %% of swath%s; %.0f s\n",
-               runs, g_f.length_m, swath, spacing, g_f.reverse ? "reverse" : "forward", g_f.heading_bias_deg, g_f.dvl_scale_pct, g_f.current_mps,
-               g_f.start_offset_pct, g_f.hold_on_track ? ", on HoldCourse the taught track on dead reckoning" : "", wall_s);
+               runs, g_f.length_m, swath, spacing, g_f.reverse ? "reverse" : "forward", g_f.heading_bias_deg,
+               g_f.dvl_scale_pct, g_f.current_mps, g_f.start_offset_pct,
+               g_f.hold_on_track ? ", on HoldCourse the taught track on dead reckoning" : "", wall_s);
   summary("qnav", qs);
   summary("dead_reckoning", ds);
   if (g_f.json) {
-    std::printf("{\n  \"swath_m\": %.2f, \"runs\": %d, \"seeds\": \"%s\", \"length_m\": %.0f, \"reverse\": %s, \"node_spacing_m\": %.2f,\n", swath, runs,
-                g_f.seeds.c_str(), g_f.length_m, g_f.reverse ? "true" : "false", spacing);
-    std::printf("  \"heading_bias_deg\": %.3f, \"dvl_scale_pct\": %.3f, \"current_mps\": %.3f, \"start_offset_pct\": %.1f, \"hold_on_track\": %s, \"wall_s\": %.1f,\n",
-                g_f.heading_bias_deg, g_f.dvl_scale_pct, g_f.current_mps, g_f.start_offset_pct, g_f.hold_on_track ? "true" : "false", wall_s);
+    std::printf(
+        "{\n  \"swath_m\": %.2f, \"runs\": %d, \"seeds\": \"%s\", \"length_m\": %.0f, \"reverse\": %s, "
+        "\"node_spacing_m\": %.2f,\n",
+        swath, runs, g_f.seeds.c_str(), g_f.length_m, g_f.reverse ? "true" : "false", spacing);
+    std::printf(
+        "  \"heading_bias_deg\": %.3f, \"dvl_scale_pct\": %.3f, \"current_mps\": %.3f, \"start_offset_pct\": %.1f, "
+        "\"hold_on_track\": %s, \"wall_s\": %.1f,\n",
+        g_f.heading_bias_deg, g_f.dvl_scale_pct, g_f.current_mps, g_f.start_offset_pct,
+        g_f.hold_on_track ? "true" : "false", wall_s);
     print_json_guide("qnav", qs, false);
     print_json_guide("dead_reckoning", ds, true);
     std::printf("}\n");
@@ -206,22 +227,32 @@ void setup_route_follow(CLI::App& route_cmd, qnav::cli::Runner& run) {
   using qnav::cli::add_flag;
   using qnav::cli::add_number;
   using qnav::cli::add_text;
-  CLI::App* f = route_cmd.add_subcommand("follow", "closed loop on the simulator: an autopilot steering on qnav's CAN guidance against the same\n"
-                                                   "autopilot on dead reckoning alone (truth cross-track from the taught track)");
+  CLI::App* f = route_cmd.add_subcommand(
+      "follow",
+      "closed loop on the simulator: an autopilot steering on qnav's CAN guidance against the same\n"
+      "autopilot on dead reckoning alone (truth cross-track from the taught track)");
   add_flag(*f, "--sim", g_f.sim, "fly the loop on the side-scan simulator (the only source so far)");
-  add_text(*f, "--seeds", g_f.seeds, "seeds A to B-1 (each: its own seabed, speckle, drift signs and current direction)")->type_name("A:B");
+  add_text(*f, "--seeds", g_f.seeds,
+           "seeds A to B-1 (each: its own seabed, speckle, drift signs and current direction)")
+      ->type_name("A:B");
   add_number(*f, "--length-m", g_f.length_m, "length of the simulated route", "m", 400, 50000);
-  add_number(*f, "--heading-bias-deg", g_f.heading_bias_deg, "compass bias (sign alternates with the seed)", "deg", 0, 10);
+  add_number(*f, "--heading-bias-deg", g_f.heading_bias_deg, "compass bias (sign alternates with the seed)", "deg", 0,
+             10);
   add_number(*f, "--dvl-scale-pct", g_f.dvl_scale_pct, "DVL scale error (sign alternates every 2 seeds)", "%", 0, 10);
   add_number(*f, "--current-mps", g_f.current_mps, "water current, direction seeded", "m/s", 0, 1);
-  add_number(*f, "--start-offset-pct", g_f.start_offset_pct, "start this far right of the route (direction of travel)", "% of the swath", -100, 100);
-  add_number(*f, "--dvl-dropout-every-s", g_f.dropout_every_s, "mean time between DVL dropouts of 10-40 s (0 = none)", "s", 0, 1e6);
+  add_number(*f, "--start-offset-pct", g_f.start_offset_pct, "start this far right of the route (direction of travel)",
+             "% of the swath", -100, 100);
+  add_number(*f, "--dvl-dropout-every-s", g_f.dropout_every_s, "mean time between DVL dropouts of 10-40 s (0 = none)",
+             "s", 0, 1e6);
   add_number(*f, "--lookahead-m", g_f.lookahead_m, "the autopilot's line-of-sight look-ahead", "m", 10, 1000);
-  add_flag(*f, "--hold-on-track", g_f.hold_on_track,
-           "on HoldCourse (and from the start) keep following the taught track on dead reckoning instead of holding course");
+  add_flag(
+      *f, "--hold-on-track", g_f.hold_on_track,
+      "on HoldCourse (and from the start) keep following the taught track on dead reckoning instead of holding course");
   add_flag(*f, "--reverse", g_f.reverse, "follow the route backwards (from its end to its start)");
   add_flag(*f, "--json", g_f.json, "one JSON object on stdout (the per-run lines on stderr)");
-  add_text(*f, "--csv", g_f.csv, "write the tracks (taught, qnav, dead_reckoning; a row every 5 s) here")->type_name("FILE");
-  add_text(*f, "--plot", g_f.plot, "draw the CSV's tracks into this PNG (needs --csv; scripts/route_follow_plot.py)")->type_name("PNG");
+  add_text(*f, "--csv", g_f.csv, "write the tracks (taught, qnav, dead_reckoning; a row every 5 s) here")
+      ->type_name("FILE");
+  add_text(*f, "--plot", g_f.plot, "draw the CSV's tracks into this PNG (needs --csv; scripts/route_follow_plot.py)")
+      ->type_name("PNG");
   run.on(f, cmd_follow);
 }

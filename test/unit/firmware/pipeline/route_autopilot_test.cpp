@@ -55,7 +55,7 @@ TEST(RouteAutopilot, SteersTowardTheTrackWithTheLineOfSightAngle) {
   ap.set_frame(Pose2{});  // dead reckoning is the teach frame (the baseline)
   AutopilotCommand cmd = ap.command();
   EXPECT_EQ(cmd.mode, AutopilotMode::kFollowing);
-  EXPECT_NEAR(cmd.cross_track_m, 10.0, 1e-9);  // east of a northbound track = starboard
+  EXPECT_NEAR(cmd.cross_track_m, 10.0, 1e-9);                  // east of a northbound track = starboard
   EXPECT_NEAR(cmd.course_rad, -std::atan(10.0 / 25.0), 1e-9);  // turns to port, towards the track
   EXPECT_NEAR(cmd.speed_mps, c.cruise_speed_mps, 1e-12);
   // Far off: the intercept angle is limited.
@@ -91,7 +91,8 @@ TEST(RouteAutopilot, AnchorsQnavsFixFromCanFramesAndPropagatesOnDeadReckoning) {
   EXPECT_EQ(ap.counters().get(AutopilotCounter::kSteerFixes), 1u);
   // 50 m along the route and 2 m to port, by its own dead reckoning: cross-track 6 m.
   const double r = 0.9;
-  const Vec2d moved = Vec2d(500.0, 200.0) + 50.0 * Vec2d(std::cos(r), std::sin(r)) - 2.0 * Vec2d(-std::sin(r), std::cos(r));
+  const Vec2d moved =
+      Vec2d(500.0, 200.0) + 50.0 * Vec2d(std::cos(r), std::sin(r)) - 2.0 * Vec2d(-std::sin(r), std::cos(r));
   ap.on_nav(30000000000, Pose2{moved.x(), moved.y(), 1.0}, 0.0);
   EXPECT_NEAR(ap.command().cross_track_m, 6.0, 0.02);
   // The same tile repeated at the DBC period does not re-anchor the track.
@@ -175,10 +176,12 @@ TEST(RouteAutopilot, FollowsInReverseFromAFix) {
 TEST(RouteAutopilot, RefusesBadFramesAndBadTracksByName) {
   Track tr;
   RouteAutopilot ap;
-  EXPECT_EQ(ap.reset(RouteAutopilotConfig{}, Span<const Pose2>(tr.poses.data(), 1), tr.n(), 0, Pose2{}).code(), StatusCode::kInvalidArgument);
-  std::vector<std::uint32_t> bad = {5, 3};
-  EXPECT_EQ(ap.reset(RouteAutopilotConfig{}, tr.p(), Span<const std::uint32_t>(bad.data(), bad.size()), 0, Pose2{}).code(),
+  EXPECT_EQ(ap.reset(RouteAutopilotConfig{}, Span<const Pose2>(tr.poses.data(), 1), tr.n(), 0, Pose2{}).code(),
             StatusCode::kInvalidArgument);
+  std::vector<std::uint32_t> bad = {5, 3};
+  EXPECT_EQ(
+      ap.reset(RouteAutopilotConfig{}, tr.p(), Span<const std::uint32_t>(bad.data(), bad.size()), 0, Pose2{}).code(),
+      StatusCode::kInvalidArgument);
   ASSERT_TRUE(ap.reset(RouteAutopilotConfig{}, tr.p(), tr.n(), 0, Pose2{}).is_ok());
   hal::CanFrame f;
   ASSERT_TRUE(qc::encode(status(qc::GuidanceState::kTracking, 1), f).is_ok());
