@@ -61,6 +61,11 @@ class RouteTilePipeline {
   // Flies a simulated pass over the seabed; calls sink for every tile.
   Status run_sim_pass(const sidescan::Seabed& seabed, const sidescan::SideScanSimConfig& sonar,
                       const sidescan::TrajectoryConfig& trajectory, const RouteTileSink& sink);
+  // One simulated ping: rendered by sim from truth.pose (ping number `index`, at altitude_m) and pushed
+  // at the nav pose. run_sim_pass (prescribed passes) and the closed-loop vehicle (closed_loop.hpp)
+  // both feed the pipeline through this.
+  Status push_sim_ping(sidescan::SideScanSimulator& sim, std::uint32_t index, std::uint64_t stamp_ns, float altitude_m, const Pose2& nav,
+                       const PingTruth& truth, const RouteTileSink& sink, bool* stop);
   // Feeds one raw ping at its nav pose (XTF replay); emits finished tiles to sink.
   Status push_ping(const sonar::SonarPing& ping, const Pose2& nav_pose, const RouteTileSink& sink, bool* stop);
   // The same with the simulator's truth for this ping (ping.ping_number indexes the pass).

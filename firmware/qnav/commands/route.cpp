@@ -10,6 +10,7 @@
 //   qnav route train|repeat --sonar FILE ...                            -> routes from recorded XTF / JSF passes
 //   qnav route camera [--json] [--length-m 12] [--seed 7]               -> the same on a downward camera over
 //                     the synthetic Mars yard: teach, repeat forwards / reverse at 0-40 % of the footprint
+//   qnav route follow --sim ...                                         -> the closed loop (route_follow.cpp)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -27,6 +28,7 @@
 
 #include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
+#include "firmware/qnav/commands/route_follow.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "drivers/route_store/route_open.hpp"
 #include "firmware/tools/route_file.hpp"
@@ -34,6 +36,7 @@
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/pipeline/sim_survey.hpp"
+#include "firmware/pipeline/vector_node_source.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "drivers/sidescan/byte_source.hpp"
 #include "drivers/sidescan/xtf_reader.hpp"
@@ -77,23 +80,7 @@ Status fly(pipeline::RouteTilePipeline& pipe, const pipeline::SimSurvey& w, cons
   });
 }
 
-// An in-memory node source over taught tiles or frames (anything with a .node; eval and the camera
-// route) -- the file path is exercised by train/repeat.
-template <typename Taught>
-class VectorNodeSource final : public route::NodeSource {
- public:
-  explicit VectorNodeSource(const std::vector<Taught>* t) : taught_(t) {}
-  std::uint32_t node_count() const noexcept override { return static_cast<std::uint32_t>(taught_->size()); }
-  Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
-    if (i >= taught_->size()) return Status(StatusCode::kOutOfRange, "no such node");
-    out = (*taught_)[i].node;
-    out.meta.index = i;
-    return Status::ok();
-  }
-
- private:
-  const std::vector<Taught>* taught_;
-};
+using pipeline::VectorNodeSource;
 using TileSource = VectorNodeSource<pipeline::RouteTile>;
 
 // A usage error the parser cannot see (a combination of options): named, exit 2.
@@ -1550,7 +1537,9 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*c, "--length-m", g_opt.camera_length_m, "length of the route", "m", 2, 200);
   add_number(*c, "--seed", g_opt.camera_seed, "seed of the synthetic yard", "", 0, 2147483647);
   run.on(c, cmd_camera);
+
+  setup_route_follow(cmd, run);
 }
 }  // namespace
 
-QNAV_CLI_COMMAND("route", "route teach and repeat: train, info, repeat, eval, xtf, camera (route-following paper)", setup_route);
+QNAV_CLI_COMMAND("route", "route teach and repeat: train, info, repeat, eval, xtf, camera, follow (route-following paper)", setup_route);
