@@ -394,6 +394,13 @@ Status Daemon::init_pipeline() {
   QNAV_RETURN_IF_ERROR(make_ring(mem, "can_rx", can_rx_, cfg_.can_rx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(mem, "can_tx", can_tx_, cfg_.can_tx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(mem, "dvl", dvl_q_, kDvlQueueCapacity));
+  if (cfg_.mavlink_enabled) {
+    QNAV_RETURN_IF_ERROR(make_ring(mem, "mav_rx", mav_rx_, mav_rx_depth(cfg_)));
+    QNAV_RETURN_IF_ERROR(make_ring(mem, "mav_tx", mav_tx_, mav_tx_depth(cfg_)));
+    // Both backends: real UDP (and, on linux, the serial device); the sim's messages carry mission time.
+    mav_io_ = std::make_unique<MavlinkIo>(cfg_, sample_clock(), io_log_ ? io_log_->stream() : nullptr);
+    QNAV_RETURN_IF_ERROR(mav_io_->open());
+  }
   for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
   if (frames_on) {
     const std::size_t slots = frame_pool_slots(cfg_);
@@ -428,6 +435,10 @@ Status Daemon::init_pipeline() {
   nq.ping_pool = pool_;
   nq.ping_pool_stride = stride_;
   nq.io = &io_;
+  if (cfg_.mavlink_enabled) {
+    nq.mav_rx = &mav_rx_;
+    nq.mav_tx = &mav_tx_;
+  }
   if (frames_on) {
     nq.frames = fp.frames;
     nq.free_frames = fp.free;
@@ -447,6 +458,7 @@ void Daemon::io_loop() noexcept {
   }
   while (!io_exit_.load(std::memory_order_relaxed)) {
     bool did = backend_->poll_devices(*this, io_);
+    if (mav_io_) did |= mav_io_->poll(mav_rx_, io_);
     if (did) {
       {
         const std::lock_guard<std::mutex> lock(bell_mu_);
@@ -458,6 +470,13 @@ void Daemon::io_loop() noexcept {
     while (can_tx_.try_pop(f)) {
       backend_->send(f, io_);
       did = true;
+    }
+    if (mav_io_) {
+      MavBytes m;
+      while (mav_tx_.try_pop(m)) {
+        mav_io_->send(m, io_);
+        did = true;
+      }
     }
     if (backend_->done()) mission_done_.store(true);
     if (!did) backend_->wait(5);

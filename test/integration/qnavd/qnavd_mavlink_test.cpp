@@ -1,0 +1,272 @@
+// qnavd as a MAVLink external navigation source, in-process on the sim backend, over real UDP on
+// 127.0.0.1: the test is the autopilot (a UDP server qnavd's mavlink.udp_remote points at).
+//  - a short teach-and-repeat mission: ODOMETRY at mavlink.odometry_hz in mission time, LOCAL_FRD /
+//    BODY_FRD, quality and velocity set; reset_counter changes on route fixes in Repeat;
+//    DISTANCE_SENSOR with the DVL altitude; HEARTBEAT; mode commands from the autopilot acknowledged,
+//    from another system refused and counted; garbage, foreign systems and unknown messages counted;
+//  - a DVL stall: ODOMETRY quality -1 within one period, no VISION_POSITION_DELTA during the loss.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "drivers/mavlink/messages.hpp"
+#include "drivers/mavlink/parser.hpp"
+#include "drivers/qnavcan/messages.hpp"
+#include "firmware/qnavd/daemon.hpp"
+#include "firmware/qnavd/mavlink_endpoint.hpp"
+#include "firmware/qnavd/software_fault.hpp"
+#include "hal/linux/udp_port.hpp"
+
+namespace qnav::daemon {
+namespace {
+
+namespace mav = drivers::mavlink;
+namespace qc = drivers::qnavcan;
+
+std::string temp_dir() {
+  char t[] = "/tmp/qnavd_mav_XXXXXX";
+  const char* d = mkdtemp(t);
+  return d ? std::string(d) : std::string("/tmp");
+}
+
+// The autopilot's side: reads what qnavd sends, sends what the test asks for.
+struct Autopilot {
+  hal::UdpPort port;
+  mav::Parser parser;
+  mav::FrameEncoder enc{1, 1};  // ArduSub: system 1, MAV_COMP_ID_AUTOPILOT1
+  std::mutex mu;
+  std::vector<mav::Odometry> odo;
+  std::vector<mav::VisionPositionDelta> vpd;
+  std::vector<mav::DistanceSensor> ds;
+  std::vector<mav::CommandAck> acks;
+  std::vector<std::string> texts;
+  std::vector<mav::SetPositionTargetLocalNed> targets;
+  int heartbeats = 0, named = 0, from_other = 0;
+  std::atomic<bool> stop{false};
+  std::thread reader;
+
+  void start() {
+    ASSERT_TRUE(port.open_server(0, "127.0.0.1"));
+    reader = std::thread([this] {
+      std::uint8_t buf[2048];
+      while (!stop.load()) {
+        Result<hal::SerialRead> r = port.read(Span<std::uint8_t>(buf, sizeof buf), 20);
+        if (!r || r.value().bytes == 0) continue;
+        std::lock_guard<std::mutex> lock(mu);
+        parser.feed(Span<const std::uint8_t>(buf, r.value().bytes), [&](const mav::Frame& f) {
+          if (f.sysid != 1 || f.compid != 197) {
+            ++from_other;
+            return;
+          }
+          mav::Odometry o;
+          mav::VisionPositionDelta d;
+          mav::DistanceSensor s;
+          mav::CommandAck a;
+          mav::StatusText st;
+          mav::SetPositionTargetLocalNed p;
+          if (mav::decode(f, o)) odo.push_back(o);
+          if (mav::decode(f, d)) vpd.push_back(d);
+          if (mav::decode(f, s)) ds.push_back(s);
+          if (mav::decode(f, a)) acks.push_back(a);
+          if (mav::decode(f, st)) texts.emplace_back(st.text);
+          if (mav::decode(f, p)) targets.push_back(p);
+          heartbeats += f.msgid == mav::Heartbeat::kId;
+          named += f.msgid == mav::NamedValueFloat::kId;
+        });
+      }
+    });
+  }
+  void finish() {
+    stop.store(true);
+    if (reader.joinable()) reader.join();
+  }
+  std::uint16_t port_number() const { return port.local_port(); }
+  template <typename M>
+  void send(const M& m, std::uint8_t sysid = 1, std::uint8_t compid = 1) {
+    mav::FrameEncoder e(sysid, compid);
+    std::uint8_t b[mav::kMaxFrameBytes];
+    Result<std::size_t> n = mav::encode(sysid == 1 && compid == 1 ? enc : e, m, Span<std::uint8_t>(b, sizeof b));
+    ASSERT_TRUE(n);
+    ASSERT_TRUE(port.write(Span<const std::uint8_t>(b, n.value())));
+  }
+  void send_raw(const std::uint8_t* b, std::size_t n) { (void)port.write(Span<const std::uint8_t>(b, n)); }
+  bool peer() const { return port.has_peer(); }
+};
+
+DaemonConfig mav_config(const std::string& dir, std::uint16_t ap_port) {
+  SoftwareFaults::reset_for_tests();
+  DaemonConfig c;
+  c.backend = Backend::kSim;
+  c.route_dir = dir;
+  c.log = LogFormat::kOff;
+  c.realtime = false;
+  c.sim_length_m = 400.0;
+  c.sim_seed = 1;
+  c.sim_speed = SimSpeed::kFast;
+  c.tile_budget_us = 10000000;
+  c.ping_budget_us = 1000000;
+  c.mavlink_enabled = true;
+  // The sim's mission clock moves from one sensor instant to the next (every 200 ms here): the nav
+  // worker, and so its outputs, see no finer time. 5 Hz is the most a sim mission shows (the linux
+  // backend wakes every 2 ms at most: any odometry_hz up to 50).
+  c.mavlink_odometry_hz = 5.0;
+  c.mavlink_udp_remote = "127.0.0.1:" + std::to_string(ap_port);
+  SimPass teach, repeat;
+  teach.mode = qc::Mode::kTeach;
+  repeat.mode = qc::Mode::kRepeat;
+  repeat.offset_pct = 10.0;
+  EXPECT_TRUE(c.sim_mission.push_back(teach));
+  EXPECT_TRUE(c.sim_mission.push_back(repeat));
+  return c;
+}
+
+mav::CommandLong mode_command(qc::Mode m, std::uint16_t route_id) {
+  mav::CommandLong c;
+  c.target_system = 1;
+  c.target_component = 197;
+  c.command = kMavCmdSetMode;
+  c.param1 = static_cast<float>(static_cast<int>(m));
+  c.param2 = route_id;
+  return c;
+}
+
+TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
+  Autopilot ap;
+  ap.start();
+  if (::testing::Test::HasFatalFailure()) return;
+  const DaemonConfig c = mav_config(temp_dir(), ap.port_number());
+  Daemon d(c);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  // The autopilot's traffic while the mission flies: its heartbeat, then (once qnavd was heard) a
+  // mode command from itself and one from another system, garbage, a foreign system, an unknown id.
+  std::thread talker([&] {
+    bool sent = false;
+    for (int i = 0; i < 2000 && !d.mission_done(); ++i) {
+      mav::Heartbeat h;
+      h.type = 12;  // MAV_TYPE_SUBMARINE
+      h.autopilot = 3;
+      ap.send(h);
+      if (!sent && ap.peer()) {
+        ap.send(mode_command(qc::Mode::kTeach, c.route_id));          // the mode it is in: accepted, nothing changes
+        ap.send(mode_command(qc::Mode::kIdle, c.route_id), 7, 1);     // another system: refused, never acted on
+        const std::uint8_t garbage[] = {0x00, 0x11, 0xFD, 0x09, 0x00, 0x00, 0x00, 0x01, 0x01, 0x00, 0x00, 0x00, 0x55, 0x66, 0x77};
+        ap.send_raw(garbage, sizeof garbage);
+        const std::uint8_t unknown_id[] = {0xFD, 0x01, 0x00, 0x00, 0x00, 0x01, 0x01, 0x39, 0x30, 0x00, 0x42, 0x12, 0x34};  // msg 12345
+        ap.send_raw(unknown_id, sizeof unknown_id);
+        ap.send(h, 42, 1);  // a foreign system's heartbeat
+        sent = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  EXPECT_EQ(d.run(), 0);
+  talker.join();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ap.finish();
+  ASSERT_NE(d.nav().mavlink(), nullptr);
+  const MavlinkEndpoint& ep = *d.nav().mavlink();
+  std::lock_guard<std::mutex> lock(ap.mu);
+  ASSERT_GT(ap.odo.size(), 100u);
+  // Rate in mission time (time_usec is the mission clock).
+  const double span_s = static_cast<double>(ap.odo.back().time_usec - ap.odo.front().time_usec) * 1e-6;
+  const double rate_hz = static_cast<double>(ap.odo.size() - 1) / span_s;
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < ap.odo.size(); ++i) gaps.push_back(static_cast<double>(ap.odo[i].time_usec - ap.odo[i - 1].time_usec) * 1e-3);
+  std::sort(gaps.begin(), gaps.end());
+  const double p50 = gaps[gaps.size() / 2], p99 = gaps[gaps.size() * 99 / 100];
+  int good = 0, failed = 0, resets = 0;
+  std::uint8_t last_reset = ap.odo.front().reset_counter;
+  for (const mav::Odometry& o : ap.odo) {
+    EXPECT_EQ(o.frame_id, mav::kMavFrameLocalFrd);
+    EXPECT_EQ(o.child_frame_id, mav::kMavFrameBodyFrd);
+    EXPECT_NEAR(o.q[0] * o.q[0] + o.q[1] * o.q[1] + o.q[2] * o.q[2] + o.q[3] * o.q[3], 1.0f, 1e-3f);
+    if (o.quality > 0) {
+      ++good;
+      EXPECT_TRUE(std::isfinite(o.vx)) << "a usable message carries the DVL velocity";
+    }
+    failed += o.quality < 0;
+    resets += o.reset_counter != last_reset;
+    last_reset = o.reset_counter;
+  }
+  std::printf("mavlink mission: %zu ODOMETRY over %.1f s mission time = %.2f Hz (interval p50 %.0f ms, p99 %.0f ms), %d good, %d quality -1, "
+              "%d reset_counter changes, %zu VISION_POSITION_DELTA, %zu DISTANCE_SENSOR, %d HEARTBEAT, %d NAMED_VALUE_FLOAT, %u route fixes, "
+              "odometry sent %u, tx errors %u\n",
+              ap.odo.size(), span_s, rate_hz, p50, p99, good, failed, resets, ap.vpd.size(), ap.ds.size(), ap.heartbeats, ap.named,
+              d.nav().estimate().fixes(), ep.odometry_sent(), d.io_counters().mav_tx_errors.load());
+  EXPECT_NEAR(rate_hz, c.mavlink_odometry_hz, 0.1 * c.mavlink_odometry_hz);
+  EXPECT_GE(good, static_cast<int>(ap.odo.size()) * 9 / 10) << "every sensor healthy: the estimate is usable";
+  EXPECT_GE(resets, 1) << "route fixes in Repeat move the position: reset_counter changes";
+  EXPECT_GT(d.nav().estimate().fixes(), 0u);
+  EXPECT_GT(ap.vpd.size(), ap.odo.size() / 2);
+  EXPECT_GT(ap.ds.size(), ap.odo.size() / 2);
+  for (const mav::DistanceSensor& s : ap.ds) EXPECT_GT(s.current_distance, 0);
+  EXPECT_GE(ap.heartbeats, static_cast<int>(span_s) - 2);
+  EXPECT_GT(ap.named, 0) << "route guidance in Repeat";
+  EXPECT_EQ(ap.from_other, 0);
+  // Commands: the autopilot's acknowledged, the other system's refused, counted, never acted on.
+  ASSERT_EQ(ap.acks.size(), 1u);
+  EXPECT_EQ(ap.acks[0].command, kMavCmdSetMode);
+  EXPECT_EQ(ap.acks[0].result, 0) << "MAV_RESULT_ACCEPTED";
+  EXPECT_EQ(ap.acks[0].target_system, 1);
+  EXPECT_EQ(ep.commands_accepted(), 1u);
+  EXPECT_EQ(ep.counters().get(MavCounter::kCmdWrongSender), 1u);
+  EXPECT_GE(ep.counters().get(MavCounter::kForeignSystem), 1u);
+  EXPECT_GT(ep.parser_rejects(), 0u) << "garbage and the unknown message are counted by the parser";
+  EXPECT_TRUE(d.mission_done()) << "the refused Idle did not stop the mission";
+  EXPECT_TRUE(ap.targets.empty()) << "mavlink.guided is off";
+  EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
+TEST(QnavdMavlink, DvlLossIsQualityMinusOneAndNeverAZeroDelta) {
+  Autopilot ap;
+  ap.start();
+  if (::testing::Test::HasFatalFailure()) return;
+  DaemonConfig c = mav_config(temp_dir(), ap.port_number());
+  c.sim_stall = "dvl";
+  c.sim_stall_pass = 1;
+  c.sim_stall_start_s = 40.0;
+  c.sim_stall_s = 30.0;
+  Daemon d(c);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  EXPECT_EQ(d.run(), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ap.finish();
+  std::lock_guard<std::mutex> lock(ap.mu);
+  ASSERT_GT(ap.odo.size(), 100u);
+  // The loss: the longest run of quality -1 (the first messages, before the first DVL sample, are -1 too).
+  std::uint64_t lost_from = 0, lost_to = 0, run_from = 0;
+  int lost = 0, run = 0;
+  for (const mav::Odometry& o : ap.odo) {
+    if (o.quality >= 0) {
+      run = 0;
+      continue;
+    }
+    EXPECT_TRUE(std::isnan(o.vx)) << "no velocity while the DVL is lost";
+    if (run++ == 0) run_from = o.time_usec;
+    if (run > lost) lost = run, lost_from = run_from, lost_to = o.time_usec;
+  }
+  const double period_us = 1e6 / c.mavlink_odometry_hz;
+  std::printf("dvl stall %.0f s: %d ODOMETRY with quality -1 over %.1f s (stale after dvl.stale_s %.2f s)\n", c.sim_stall_s, lost,
+              static_cast<double>(lost_to - lost_from) * 1e-6, c.dvl_stale_s);
+  ASSERT_GT(lost, 0);
+  EXPECT_NEAR(static_cast<double>(lost_to - lost_from) * 1e-6, c.sim_stall_s - c.dvl_stale_s, 2.0);
+  int in_loss = 0;
+  for (const mav::VisionPositionDelta& v : ap.vpd)
+    in_loss += v.time_usec >= lost_from && static_cast<double>(v.time_usec) <= static_cast<double>(lost_to) + period_us;
+  EXPECT_EQ(in_loss, 0) << "no VISION_POSITION_DELTA (a zero delta would read as 'stopped') while the DVL is lost";
+  EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
+}  // namespace
+}  // namespace qnav::daemon
