@@ -50,6 +50,7 @@ struct Autopilot {
   std::vector<mav::CommandAck> acks;
   std::vector<std::string> texts;
   std::vector<mav::SetPositionTargetLocalNed> targets;
+  std::vector<double> target_dist_m;  // from the newest ODOMETRY position when the target arrived
   int heartbeats = 0, named = 0, from_other = 0;
   std::atomic<bool> stop{false};
   std::thread reader;
@@ -78,7 +79,10 @@ struct Autopilot {
           if (mav::decode(f, s)) ds.push_back(s);
           if (mav::decode(f, a)) acks.push_back(a);
           if (mav::decode(f, st)) texts.emplace_back(st.text);
-          if (mav::decode(f, p)) targets.push_back(p);
+          if (mav::decode(f, p)) {
+            targets.push_back(p);
+            target_dist_m.push_back(odo.empty() ? 1e9 : std::hypot(static_cast<double>(p.x - odo.back().x), static_cast<double>(p.y - odo.back().y)));
+          }
           heartbeats += f.msgid == mav::Heartbeat::kId;
           named += f.msgid == mav::NamedValueFloat::kId;
         });
@@ -92,6 +96,7 @@ struct Autopilot {
   std::uint16_t port_number() const { return port.local_port(); }
   template <typename M>
   void send(const M& m, std::uint8_t sysid = 1, std::uint8_t compid = 1) {
+    if (!peer()) return;  // qnavd not heard yet: a UDP server has nowhere to send
     mav::FrameEncoder e(sysid, compid);
     std::uint8_t b[mav::kMaxFrameBytes];
     Result<std::size_t> n = mav::encode(sysid == 1 && compid == 1 ? enc : e, m, Span<std::uint8_t>(b, sizeof b));
@@ -266,6 +271,62 @@ TEST(QnavdMavlink, DvlLossIsQualityMinusOneAndNeverAZeroDelta) {
     in_loss += v.time_usec >= lost_from && static_cast<double>(v.time_usec) <= static_cast<double>(lost_to) + period_us;
   EXPECT_EQ(in_loss, 0) << "no VISION_POSITION_DELTA (a zero delta would read as 'stopped') while the DVL is lost";
   EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
+TEST(QnavdMavlink, GuidedTargetsOnlyInRepeatWhileTheAutopilotIsGuidedAndArmed) {
+  Autopilot ap;
+  ap.start();
+  if (::testing::Test::HasFatalFailure()) return;
+  DaemonConfig c = mav_config(temp_dir(), ap.port_number());
+  c.mavlink_guided = true;
+  Daemon d(c);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  std::atomic<bool> guided{false};
+  std::thread talker([&] {
+    for (int i = 0; i < 2000 && !d.mission_done(); ++i) {
+      mav::Heartbeat h;
+      h.type = 12;
+      h.autopilot = 3;
+      h.custom_mode = guided.load() ? kArduSubGuided : 19;  // GUIDED, else MANUAL
+      h.base_mode = guided.load() ? mav::kMavModeFlagSafetyArmed : 0;
+      ap.send(h);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+  // MANUAL and disarmed until the repeat pass is under way, then GUIDED and armed.
+  std::size_t targets_before_guided = 0;
+  for (int i = 0; i < 3000 && !d.mission_done(); ++i) {
+    if (d.nav().mode() == qc::Mode::kRepeat) {
+      {
+        std::lock_guard<std::mutex> lock(ap.mu);
+        targets_before_guided = ap.targets.size();
+      }
+      guided.store(true);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(d.run(), 0);
+  talker.join();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ap.finish();
+  std::lock_guard<std::mutex> lock(ap.mu);
+  EXPECT_EQ(targets_before_guided, 0u) << "nothing commanded while the autopilot is not GUIDED and armed";
+  ASSERT_GT(ap.targets.size(), 0u);
+  std::vector<double> dist = ap.target_dist_m;
+  std::sort(dist.begin(), dist.end());
+  std::printf("guided: %zu SET_POSITION_TARGET_LOCAL_NED, distance from the published position: median %.1f m, max %.1f m\n", ap.targets.size(),
+              dist[dist.size() / 2], dist.back());
+  for (const mav::SetPositionTargetLocalNed& p : ap.targets) {
+    EXPECT_EQ(p.coordinate_frame, mav::kMavFrameLocalNed);
+    EXPECT_EQ(p.target_system, 1);
+    EXPECT_EQ(p.target_component, 1);
+    EXPECT_EQ(p.type_mask & 7, 0) << "position used";
+    EXPECT_EQ(p.type_mask & (8 | 16 | 32), 8 | 16 | 32) << "velocity ignored";
+  }
+  // The waypoint is in the published frame: ahead of the vehicle on the route, not somewhere else.
+  EXPECT_LT(dist[dist.size() / 2], 200.0);
 }
 
 }  // namespace
