@@ -52,6 +52,8 @@ struct Autopilot {
   std::vector<mav::SetPositionTargetLocalNed> targets;
   std::vector<double> target_dist_m;  // from the newest ODOMETRY position when the target arrived
   int heartbeats = 0, named = 0, from_other = 0;
+  std::vector<std::uint8_t> raw;            // every byte qnavd sent (the node-mavlink check reads it)
+  std::vector<std::uint32_t> msgids;        // every frame qnav's parser found, in order
   std::atomic<bool> stop{false};
   std::thread reader;
 
@@ -63,7 +65,9 @@ struct Autopilot {
         Result<hal::SerialRead> r = port.read(Span<std::uint8_t>(buf, sizeof buf), 20);
         if (!r || r.value().bytes == 0) continue;
         std::lock_guard<std::mutex> lock(mu);
+        raw.insert(raw.end(), buf, buf + r.value().bytes);
         parser.feed(Span<const std::uint8_t>(buf, r.value().bytes), [&](const mav::Frame& f) {
+          msgids.push_back(f.msgid);
           if (f.sysid != 1 || f.compid != 197) {
             ++from_other;
             return;
@@ -132,6 +136,40 @@ DaemonConfig mav_config(const std::string& dir, std::uint16_t ap_port) {
   EXPECT_TRUE(c.sim_mission.push_back(teach));
   EXPECT_TRUE(c.sim_mission.push_back(repeat));
   return c;
+}
+
+// With QNAVD_MAVLINK_CAPTURE=PATH: PATH.bin, every byte qnavd sent, and PATH.json, what qnav's own
+// parser found in them (message ids in order, every ODOMETRY's fields), for test/peer/mavlink's
+// node-mavlink check of the daemon's output (ctest -L mavlink_peer).
+void write_capture(const Autopilot& ap) {
+  const char* path = std::getenv("QNAVD_MAVLINK_CAPTURE");
+  if (path == nullptr) return;
+  const std::string base(path);
+  FILE* f = std::fopen((base + ".bin").c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(ap.raw.data(), 1, ap.raw.size(), f);
+  std::fclose(f);
+  f = std::fopen((base + ".json").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  const auto num = [](float v) {
+    char b[32];
+    if (std::isnan(v)) return std::string("\"NaN\"");
+    std::snprintf(b, sizeof b, "\"%.9g\"", static_cast<double>(v));
+    return std::string(b);
+  };
+  std::fprintf(f, "{\"msgids\":[");
+  for (std::size_t i = 0; i < ap.msgids.size(); ++i) std::fprintf(f, "%s%u", i ? "," : "", ap.msgids[i]);
+  std::fprintf(f, "],\n\"odometry\":[");
+  for (std::size_t i = 0; i < ap.odo.size(); ++i) {
+    const mav::Odometry& o = ap.odo[i];
+    std::fprintf(f, "%s{\"time_usec\":\"%llu\",\"frame_id\":%u,\"child_frame_id\":%u,\"x\":%s,\"y\":%s,\"z\":%s,\"q\":[%s,%s,%s,%s],"
+                 "\"vx\":%s,\"vy\":%s,\"vz\":%s,\"reset_counter\":%u,\"estimator_type\":%u,\"quality\":%d}\n",
+                 i ? "," : "", static_cast<unsigned long long>(o.time_usec), o.frame_id, o.child_frame_id, num(o.x).c_str(), num(o.y).c_str(),
+                 num(o.z).c_str(), num(o.q[0]).c_str(), num(o.q[1]).c_str(), num(o.q[2]).c_str(), num(o.q[3]).c_str(), num(o.vx).c_str(),
+                 num(o.vy).c_str(), num(o.vz).c_str(), o.reset_counter, o.estimator_type, o.quality);
+  }
+  std::fprintf(f, "]}\n");
+  std::fclose(f);
 }
 
 mav::CommandLong mode_command(qc::Mode m, std::uint16_t route_id) {
@@ -230,6 +268,7 @@ TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
   EXPECT_TRUE(d.mission_done()) << "the refused Idle did not stop the mission";
   EXPECT_TRUE(ap.targets.empty()) << "mavlink.guided is off";
   EXPECT_EQ(SoftwareFaults::count(), 0u);
+  write_capture(ap);
 }
 
 TEST(QnavdMavlink, DvlLossIsQualityMinusOneAndNeverAZeroDelta) {
