@@ -159,9 +159,9 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
     }
     in.attitude = true;
     in.attitude_ns = arrival_ns;
-    in.roll_rad = a.roll;
-    in.pitch_rad = a.pitch;
-    in.yaw_rad = a.yaw;
+    in.roll_rad = static_cast<double>(a.roll);
+    in.pitch_rad = static_cast<double>(a.pitch);
+    in.yaw_rad = static_cast<double>(a.yaw);
   } else if (f.msgid == mav::SystemTime::kId && from_ap) {
     mav::SystemTime st;
     mav::decode(f, st);

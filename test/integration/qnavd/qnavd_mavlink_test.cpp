@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -366,6 +367,101 @@ TEST(QnavdMavlink, GuidedTargetsOnlyInRepeatWhileTheAutopilotIsGuidedAndArmed) {
   }
   // The waypoint is in the published frame: ahead of the vehicle on the route, not somewhere else.
   EXPECT_LT(dist[dist.size() / 2], 200.0);
+}
+
+// The endpoint alone (no daemon): what it answers and counts for each kind of command and input.
+struct EndpointRig {
+  DaemonConfig c;
+  std::vector<MavBytes> rx_items = std::vector<MavBytes>(16), tx_items = std::vector<MavBytes>(64);
+  SpscRing<MavBytes> rx, tx;
+  std::unique_ptr<MavlinkEndpoint> ep;
+  EndpointRig() {
+    c.mavlink_enabled = true;
+    EXPECT_TRUE(rx.init(Span<MavBytes>(rx_items.data(), rx_items.size())));
+    EXPECT_TRUE(tx.init(Span<MavBytes>(tx_items.data(), tx_items.size())));
+    ep = std::make_unique<MavlinkEndpoint>(c, nullptr);
+  }
+  template <typename M>
+  void push(const M& m, std::uint8_t sysid = 1, std::uint8_t compid = 1) {
+    mav::FrameEncoder e(sysid, compid);
+    MavBytes b;
+    Result<std::size_t> n = mav::encode(e, m, Span<std::uint8_t>(b.data, kMavBytes));
+    ASSERT_TRUE(n);
+    b.len = static_cast<std::uint16_t>(n.value());
+    ASSERT_TRUE(rx.try_push(b));
+  }
+  // The COMMAND_ACKs the endpoint queued (after a publish at t_ns).
+  std::vector<mav::CommandAck> acks(std::int64_t t_ns = 0) {
+    MavSnapshot s;
+    s.now_ns = t_ns;
+    ep->publish(s, tx);
+    std::vector<mav::CommandAck> out;
+    mav::Parser p;
+    MavBytes b;
+    while (tx.try_pop(b))
+      p.feed(Span<const std::uint8_t>(b.data, b.len), [&](const mav::Frame& f) {
+        mav::CommandAck a;
+        if (mav::decode(f, a)) out.push_back(a);
+      });
+    return out;
+  }
+};
+
+TEST(QnavdMavlinkEndpoint, RefusesAndCountsEveryCommandThatIsNotTheAutopilotsModeCommand) {
+  EndpointRig r;
+  // From the autopilot: a good mode command is handed to the worker, answered through ack().
+  mav::CommandLong good = mode_command(qc::Mode::kRepeat, 3);
+  good.param3 = 1.0f;
+  r.push(good);
+  MavInputs in = r.ep->drain(r.rx);
+  ASSERT_TRUE(in.mode_cmd);
+  EXPECT_EQ(in.cmd.mode, qc::Mode::kRepeat);
+  EXPECT_EQ(in.cmd.route_id, 3);
+  EXPECT_TRUE(in.cmd.reverse);
+  r.ep->ack(false, "route_missing", r.tx);
+  std::vector<mav::CommandAck> a = r.acks();
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].result, 4) << "MAV_RESULT_FAILED: qnav refused the mode";
+  // Bad parameters: DENIED, not handed on.
+  mav::CommandLong bad = mode_command(qc::Mode::kIdle, 0);
+  bad.param1 = 9.0f;
+  r.push(bad);
+  EXPECT_FALSE(r.ep->drain(r.rx).mode_cmd);
+  a = r.acks(1);
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].result, 2) << "MAV_RESULT_DENIED";
+  // Another command from the autopilot: UNSUPPORTED.
+  mav::CommandLong other = mode_command(qc::Mode::kIdle, 0);
+  other.command = 400;  // MAV_CMD_COMPONENT_ARM_DISARM
+  r.push(other);
+  EXPECT_FALSE(r.ep->drain(r.rx).mode_cmd);
+  a = r.acks(2);
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].result, 3) << "MAV_RESULT_UNSUPPORTED";
+  // From another component of the autopilot's system, or addressed to someone else: no answer.
+  r.push(mode_command(qc::Mode::kIdle, 0), 1, 190);
+  mav::CommandLong elsewhere = mode_command(qc::Mode::kIdle, 0);
+  elsewhere.target_system = 2;
+  r.push(elsewhere);
+  EXPECT_FALSE(r.ep->drain(r.rx).mode_cmd);
+  EXPECT_TRUE(r.acks(3).empty());
+  // A non-finite attitude is refused; a good one is handed on.
+  mav::Attitude att;
+  att.yaw = std::nanf("");
+  r.push(att);
+  mav::Attitude att2;
+  att2.yaw = 1.25f;
+  r.push(att2);
+  in = r.ep->drain(r.rx);
+  EXPECT_TRUE(in.attitude);
+  EXPECT_NEAR(in.yaw_rad, 1.25, 1e-6);
+  const auto& k = r.ep->counters();
+  EXPECT_EQ(k.get(MavCounter::kCmdBadParam), 1u);
+  EXPECT_EQ(k.get(MavCounter::kCmdUnsupported), 1u);
+  EXPECT_EQ(k.get(MavCounter::kCmdWrongSender), 1u);
+  EXPECT_EQ(k.get(MavCounter::kCmdNotForUs), 1u);
+  EXPECT_EQ(k.get(MavCounter::kBadAttitude), 1u);
+  EXPECT_EQ(r.ep->rejected(), 3u) << "wrong sender, bad parameters, bad attitude";
 }
 
 }  // namespace
