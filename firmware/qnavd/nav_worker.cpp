@@ -907,6 +907,9 @@ void NavWorker::mavlink_publish() noexcept {
   } else {
     est_.track(dr_.pose_at(nav_now_ns_));
   }
+  qc::Stamped<qc::DepthIn> depth;  // z: the vehicle's depth sensor (QNAV_DEPTH_IN), absolute
+  if (receiver_.latest_depth(nav_now_ns_, static_cast<std::int64_t>(cfg_.depth_stale_s * 1e9), depth) && depth.value.depth_valid)
+    est_.set_down(depth.value.depth_m);
   MavSnapshot s;
   s.now_ns = nav_now_ns_;
   s.mode = mode_;

@@ -228,7 +228,7 @@ TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
   for (std::size_t i = 1; i < ap.odo.size(); ++i) gaps.push_back(static_cast<double>(ap.odo[i].time_usec - ap.odo[i - 1].time_usec) * 1e-3);
   std::sort(gaps.begin(), gaps.end());
   const double p50 = gaps[gaps.size() / 2], p99 = gaps[gaps.size() * 99 / 100];
-  int good = 0, failed = 0, resets = 0;
+  int good = 0, failed = 0, resets = 0, with_depth = 0;
   std::uint8_t last_reset = ap.odo.front().reset_counter;
   for (const mav::Odometry& o : ap.odo) {
     EXPECT_EQ(o.frame_id, mav::kMavFrameLocalFrd);
@@ -239,6 +239,7 @@ TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
       EXPECT_TRUE(std::isfinite(o.vx)) << "a usable message carries the DVL velocity";
     }
     failed += o.quality < 0;
+    with_depth += o.z != 0.0f;
     resets += o.reset_counter != last_reset;
     last_reset = o.reset_counter;
   }
@@ -249,6 +250,7 @@ TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
               d.nav().estimate().fixes(), ep.odometry_sent(), d.io_counters().mav_tx_errors.load());
   EXPECT_NEAR(rate_hz, c.mavlink_odometry_hz, 0.1 * c.mavlink_odometry_hz);
   EXPECT_GE(good, static_cast<int>(ap.odo.size()) * 9 / 10) << "every sensor healthy: the estimate is usable";
+  EXPECT_EQ(with_depth, 0) << "the simulated vehicle sends no QNAV_DEPTH_IN: z stays 0";
   EXPECT_GE(resets, 1) << "route fixes in Repeat move the position: reset_counter changes";
   EXPECT_GT(d.nav().estimate().fixes(), 0u);
   EXPECT_GT(ap.vpd.size(), ap.odo.size() / 2);
