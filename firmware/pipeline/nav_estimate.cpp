@@ -1,5 +1,6 @@
 #include "firmware/pipeline/nav_estimate.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace qnav::pipeline {
@@ -33,7 +34,9 @@ bool NavEstimate::apply_fix(double north_m, double east_m) noexcept {
     return false;
   }
   ++fixes_;
-  const bool moved = std::hypot(north_m - n_m_, east_m - e_m_) > jump_threshold_m_;
+  last_jump_m_ = std::hypot(north_m - n_m_, east_m - e_m_);
+  max_jump_m_ = std::max(max_jump_m_, last_jump_m_);
+  const bool moved = last_jump_m_ > jump_threshold_m_;
   n_m_ = north_m;
   e_m_ = east_m;
   if (moved) {

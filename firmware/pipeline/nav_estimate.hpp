@@ -57,6 +57,9 @@ class NavEstimate {
   std::uint32_t fixes() const noexcept { return fixes_; }
   std::uint32_t jumps() const noexcept { return jumps_; }
   std::uint32_t rejected_fixes() const noexcept { return rejected_fixes_; }
+  // How far the last fix moved the position (m), and the largest such move.
+  double last_jump_m() const noexcept { return last_jump_m_; }
+  double max_jump_m() const noexcept { return max_jump_m_; }
 
  private:
   double jump_threshold_m_;
@@ -65,6 +68,7 @@ class NavEstimate {
   bool have_base_ = false;
   std::uint8_t reset_counter_ = 0;
   std::uint32_t fixes_ = 0, jumps_ = 0, rejected_fixes_ = 0;
+  double last_jump_m_ = 0.0, max_jump_m_ = 0.0;
 };
 
 }  // namespace qnav::pipeline

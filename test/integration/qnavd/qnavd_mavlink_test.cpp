@@ -230,6 +230,11 @@ TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
   const double p50 = gaps[gaps.size() / 2], p99 = gaps[gaps.size() * 99 / 100];
   int good = 0, failed = 0, resets = 0, with_depth = 0;
   std::uint8_t last_reset = ap.odo.front().reset_counter;
+  // The jumps at reset_counter changes: the first is the change of frame (the repeat pass's dead
+  // reckoning runs on from the end of the teach pass: the simulator puts the vehicle back at the
+  // route's start between passes); every later one is a route fix correcting the dead reckoning.
+  std::vector<double> later_jumps_m;
+  double first_jump_m = -1.0;
   for (const mav::Odometry& o : ap.odo) {
     EXPECT_EQ(o.frame_id, mav::kMavFrameLocalFrd);
     EXPECT_EQ(o.child_frame_id, mav::kMavFrameBodyFrd);
@@ -240,19 +245,29 @@ TEST(QnavdMavlink, ShortMissionPublishesOdometryAndAnswersOnlyTheAutopilot) {
     }
     failed += o.quality < 0;
     with_depth += o.z != 0.0f;
-    resets += o.reset_counter != last_reset;
+    if (o.reset_counter != last_reset) {
+      ++resets;
+      const mav::Odometry& prev = (&o)[-1];
+      const double jump = std::hypot(static_cast<double>(o.x - prev.x), static_cast<double>(o.y - prev.y));
+      if (first_jump_m < 0.0) first_jump_m = jump; else later_jumps_m.push_back(jump);
+    }
     last_reset = o.reset_counter;
   }
   std::printf("mavlink mission: %zu ODOMETRY over %.1f s mission time = %.2f Hz (interval p50 %.0f ms, p99 %.0f ms), %d good, %d quality -1, "
               "%d reset_counter changes, %zu VISION_POSITION_DELTA, %zu DISTANCE_SENSOR, %d HEARTBEAT, %d NAMED_VALUE_FLOAT, %u route fixes, "
-              "odometry sent %u, tx errors %u\n",
+              "first jump %.1f m, later jumps max %.2f m, odometry sent %u, tx errors %u\n",
               ap.odo.size(), span_s, rate_hz, p50, p99, good, failed, resets, ap.vpd.size(), ap.ds.size(), ap.heartbeats, ap.named,
-              d.nav().estimate().fixes(), ep.odometry_sent(), d.io_counters().mav_tx_errors.load());
+              d.nav().estimate().fixes(), first_jump_m,
+              later_jumps_m.empty() ? 0.0 : *std::max_element(later_jumps_m.begin(), later_jumps_m.end()), ep.odometry_sent(), d.io_counters().mav_tx_errors.load());
   EXPECT_NEAR(rate_hz, c.mavlink_odometry_hz, 0.1 * c.mavlink_odometry_hz);
   EXPECT_GE(good, static_cast<int>(ap.odo.size()) * 9 / 10) << "every sensor healthy: the estimate is usable";
   EXPECT_EQ(with_depth, 0) << "the simulated vehicle sends no QNAV_DEPTH_IN: z stays 0";
   EXPECT_GE(resets, 1) << "route fixes in Repeat move the position: reset_counter changes";
   EXPECT_GT(d.nav().estimate().fixes(), 0u);
+  ASSERT_FALSE(later_jumps_m.empty());
+  // A fix that got the geometry wrong (a cross-track sign, the tile's centre for the vehicle) would
+  // jump by the 10 % offset twice over (~20 m) or half a tile (~44 m): the corrections stay small.
+  for (double j : later_jumps_m) EXPECT_LT(j, 10.0);
   EXPECT_GT(ap.vpd.size(), ap.odo.size() / 2);
   EXPECT_GT(ap.ds.size(), ap.odo.size() / 2);
   for (const mav::DistanceSensor& s : ap.ds) EXPECT_GT(s.current_distance, 0);
