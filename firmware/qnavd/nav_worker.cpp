@@ -7,6 +7,7 @@
 
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/map_store/map_file.hpp"
+#include "drivers/route_store/route_open.hpp"
 #include "nav/core/geometry.hpp"
 
 namespace qnav::daemon {
@@ -299,48 +300,55 @@ ModeReject NavWorker::enter_teach(std::uint16_t id) noexcept {
 ModeReject NavWorker::enter_repeat(std::uint16_t id, bool reverse) noexcept {
   char path[1024];
   route_path(id, "", path, sizeof path);
-  reader_.close();
-  Status s = reader_.open(path);
-  if (!s) {
-    if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, s.message());
-    if (s.code() == StatusCode::kNotFound) return ModeReject::kRouteMissing;
-    if (s.code() == StatusCode::kIoError) return ModeReject::kStorage;
-    faults_ |= qc::fault::kRouteDamaged;
-    return ModeReject::kRouteDamaged;
+  // The one route-open policy (drivers/route_store/route_open.hpp), as `qnav route repeat` applies it.
+  using drivers::route_store::RepeatOpen;
+  const drivers::route_store::RepeatOpenReport r = drivers::route_store::open_route_for_repeat(reader_, path, meta_, cfg_.max_nodes);
+  switch (r.outcome) {
+    case RepeatOpen::kMissing:
+    case RepeatOpen::kStorage:
+    case RepeatOpen::kUnreadable:
+    case RepeatOpen::kTooLong:
+    case RepeatOpen::kTooShort:
+      if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, r.why.message());
+      if (r.outcome == RepeatOpen::kMissing) return ModeReject::kRouteMissing;
+      if (r.outcome == RepeatOpen::kStorage) return ModeReject::kStorage;
+      if (r.outcome == RepeatOpen::kTooLong) return ModeReject::kRouteTooLong;
+      if (r.outcome == RepeatOpen::kTooShort) return ModeReject::kRouteTooShort;
+      faults_ |= qc::fault::kRouteDamaged;
+      return ModeReject::kRouteDamaged;
+    case RepeatOpen::kDamaged:
+      if (log_) std::fprintf(log_, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, r.first_bad_node, r.why.message());
+      faults_ |= qc::fault::kRouteDamaged;
+      return ModeReject::kRouteDamaged;
+    case RepeatOpen::kOk:
+    case RepeatOpen::kGoodPrefix:
+      break;
   }
-  if (!reader_.closed_cleanly() || reader_.torn_bytes() > 0) {
-    // Still usable (every complete node is checked below), but the autopilot's operator should know.
+  if (r.cut_off || r.torn_bytes > 0) {
+    // Still usable (every complete node was checked), but the autopilot's operator should know.
     if (log_)
       std::fprintf(log_, "{\"event\":\"route_cut_off\",\"file\":\"%s\",\"nodes\":%u,\"torn_bytes\":%llu,\"partial_node_dropped\":%s,\"end\":\"%s\"}\n", path,
-                   reader_.node_count(), static_cast<unsigned long long>(reader_.torn_bytes()), reader_.torn_bytes() > 0 ? "true" : "false",
+                   r.file_nodes, static_cast<unsigned long long>(r.torn_bytes), r.torn_bytes > 0 ? "true" : "false",
                    drivers::route_store::to_string(reader_.end()));
   }
-  if (reader_.node_count() > cfg_.max_nodes) {
-    if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%u nodes > route.max_nodes %zu\"}\n", path, reader_.node_count(), cfg_.max_nodes);
-    reader_.close();
-    return ModeReject::kRouteTooLong;
-  }
-  std::uint32_t bad = 0;
-  s = reader_.read_all_meta(meta_, &bad);
-  if (!s) {
-    if (log_) std::fprintf(log_, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, bad, s.message());
-    faults_ |= qc::fault::kRouteDamaged;
-    reader_.close();
-    return ModeReject::kRouteDamaged;
-  }
-  if (meta_.size() < 2) {
-    reader_.close();
-    return ModeReject::kRouteTooShort;
-  }
+  // A damaged node with a good prefix before it: the repeat runs on the prefix, and the fault stays
+  // raised while it does (the route file needs attention).
+  const bool prefix_only = r.outcome == RepeatOpen::kGoodPrefix;
+  if (prefix_only && log_)
+    std::fprintf(log_, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\",\"repeating_nodes\":%u,\"nodes_unused\":%u}\n",
+                 path, r.first_bad_node, r.why.message(), r.nodes_used, r.file_nodes - r.nodes_used);
   repeater_.set_motion(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, route::MotionModel::kOdometry);
-  s = repeater_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_);
+  const Status s = repeater_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_);
   if (!s) {
     // e.g. a route taught with another sensor or tile geometry than this configuration's
     if (log_) std::fprintf(log_, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, s.message());
     reader_.close();
     return ModeReject::kRouteMismatch;
   }
-  faults_ &= static_cast<std::uint16_t>(~qc::fault::kRouteDamaged);  // this route is good
+  if (prefix_only)
+    faults_ |= qc::fault::kRouteDamaged;
+  else
+    faults_ &= static_cast<std::uint16_t>(~qc::fault::kRouteDamaged);  // this route is good
   eq5_ = false;
   return ModeReject::kNone;
 }

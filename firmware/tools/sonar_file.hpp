@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/tools/stats.hpp"
 #include "drivers/sidescan/jsf_framer.hpp"
 #include "drivers/sidescan/xtf_reader.hpp"
 #include "firmware/tools/file_source.hpp"
@@ -178,9 +179,9 @@ inline sonar::SonarPing as_ping(const PingRec& r, bool use_altimeter) {
 // Median slant range over the pings with a positive finite one (appended to `ranges`, the caller's
 // scratch: several files may be pooled); false when none has one. Sets the tile geometry of a file.
 inline bool median_slant_range(std::vector<float>& ranges, double& range_m) {
-  if (ranges.empty()) return false;
-  std::nth_element(ranges.begin(), ranges.begin() + static_cast<long>(ranges.size() / 2), ranges.end());
-  range_m = static_cast<double>(ranges[ranges.size() / 2]);
+  float m = 0.0f;
+  if (!median_of(ranges, m)) return false;
+  range_m = static_cast<double>(m);
   return true;
 }
 inline void collect_slant_ranges(const FileData& fd, std::vector<float>& ranges) {

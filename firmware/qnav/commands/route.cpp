@@ -28,6 +28,7 @@
 #include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
+#include "drivers/route_store/route_open.hpp"
 #include "firmware/tools/route_file.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
@@ -184,35 +185,37 @@ bool report_route_end(FILE* f, const char* prefix, const tools::RouteFileReader&
   return clean;
 }
 
-// Opens a route to repeat: how it ends is reported (a warning when cut off or torn: still usable)
-// and every node is checked in full. A damaged node is named with why (CRC, magic, index, field);
-// with at least 2 good nodes before it the repeat goes on over that good prefix (warning with the
+// Opens a route to repeat by the one policy qnavd uses (drivers/route_store/route_open.hpp): how it
+// ends is reported (a warning when cut off or torn: still usable), a damaged node is named with why,
+// and with at least 2 good nodes before it the repeat goes on over that good prefix (warning with the
 // counters), otherwise it is refused. Reports and returns false when the route cannot be used.
 bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std::vector<route::NodeMeta>& meta) {
-  Status s = reader.open(path);
-  if (!s) {
-    std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, s.message());
-    return false;
-  }
+  using drivers::route_store::RepeatOpen;
+  const drivers::route_store::RepeatOpenReport r = drivers::route_store::open_route_for_repeat(reader, path, meta, static_cast<std::size_t>(-1));
   char prefix[600];
   std::snprintf(prefix, sizeof prefix, "qnav route repeat: WARNING: %s: ", path);
-  if (!reader.closed_cleanly() || reader.torn_bytes() > 0) report_route_end(stderr, prefix, reader);  // still usable: a warning
-  std::uint32_t bad = 0;
-  s = reader.read_all_meta(meta, &bad);
-  if (s) return true;
-  if (bad < 2) {
-    std::fprintf(stderr, "qnav route repeat: %s: node %u is damaged: %s; fewer than 2 good nodes before it: refused (counters: %s)\n", path, bad,
-                 s.message(), counter_text(reader.counters()).c_str());
-    return false;
+  switch (r.outcome) {
+    case RepeatOpen::kMissing:
+    case RepeatOpen::kStorage:
+    case RepeatOpen::kUnreadable:
+    case RepeatOpen::kTooLong:
+    case RepeatOpen::kTooShort:
+      std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, r.why.message());
+      return false;
+    case RepeatOpen::kDamaged:
+      std::fprintf(stderr, "qnav route repeat: %s: node %u is damaged: %s; fewer than 2 good nodes before it: refused (counters: %s)\n", path,
+                   r.first_bad_node, r.why.message(), counter_text(reader.counters()).c_str());
+      return false;
+    case RepeatOpen::kOk:
+    case RepeatOpen::kGoodPrefix:
+      break;
   }
-  std::fprintf(stderr,
-               "%snode %u is damaged: %s; repeating on the good prefix, nodes 0..%u (%u later nodes not used; counters: %s nodes_unused=%u)\n",
-               prefix, bad, s.message(), bad - 1, reader.file_nodes() - bad, counter_text(reader.counters()).c_str(), reader.file_nodes() - bad);
-  s = reader.limit_nodes(bad);
-  if (!s) {
-    std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, s.message());
-    return false;
-  }
+  if (r.cut_off || r.torn_bytes > 0) report_route_end(stderr, prefix, reader);  // still usable: a warning
+  if (r.outcome == RepeatOpen::kGoodPrefix)
+    std::fprintf(stderr,
+                 "%snode %u is damaged: %s; repeating on the good prefix, nodes 0..%u (%u later nodes not used; counters: %s nodes_unused=%u)\n",
+                 prefix, r.first_bad_node, r.why.message(), r.first_bad_node - 1, r.file_nodes - r.first_bad_node,
+                 counter_text(reader.counters()).c_str(), r.file_nodes - r.first_bad_node);
   return true;
 }
 

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/tools/stats.hpp"
 #include "drivers/dvl/wl_parser.hpp"
 #include "drivers/qnavcan/messages.hpp"
 #include "drivers/sidescan/jsf_framer.hpp"
@@ -71,10 +72,9 @@ SonarOptions g_opt;
 
 // Percentile of the finite values (copy; tool side).
 float percentile(std::vector<float> v, double q) {
-  if (v.empty()) return 1.0f;
-  const std::size_t k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
+  float p = 1.0f;
+  qnav::tools::percentile_of(v, q, p);
+  return p;
 }
 
 // Creates the folder the output file goes in; false (reported) when it cannot.

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/tools/stats.hpp"
 #include "firmware/cli/cli_app.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/image_reader.hpp"
@@ -69,9 +70,9 @@ struct Detector {
 };
 
 double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
+  double m = std::nan("");
+  qnav::tools::median_of(v, m);
+  return m;
 }
 
 void print_counters(const VisionCounters& c) {

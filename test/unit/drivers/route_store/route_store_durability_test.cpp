@@ -7,7 +7,8 @@
 //  - create_replacement() never touches the old route before commit(), keeps a previous run's leftover;
 //  - a node with non-finite or absurd fields is never written; a medium failing in the middle of a
 //    record leaves the route valid up to the last durable node;
-//  - a damaged node is named and the good prefix before it stays usable (limit_nodes).
+//  - a damaged node is named and the good prefix before it stays usable (limit_nodes);
+//  - the one route-open policy for repeating (open_route_for_repeat, qnavd and the tool).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "drivers/route_store/route_file.hpp"
+#include "drivers/route_store/route_open.hpp"
 #include "hal/sim/memory_file_store.hpp"
 #include "nav/core/byte_order.hpp"
 #include "nav/core/crc.hpp"
@@ -412,6 +414,68 @@ TEST(RouteStoreDurability, ADamagedMiddleNodeIsNamedAndTheGoodPrefixStaysUsable)
   EXPECT_EQ(r.load(5, out), StatusCode::kOutOfRange);
   expect_all_nodes_decode(r);
   EXPECT_EQ(r.limit_nodes(9), StatusCode::kOutOfRange);
+}
+
+// Damages node k's record (a byte flipped: the CRC no longer matches).
+void damage(Store& s, const char* path, std::uint32_t k) {
+  std::uint8_t b = 0;
+  s.read(path, &b, 1, route::kHeaderBytes + k * kRec + 40);
+  b ^= 0x5A;
+  s.write(path, &b, 1, route::kHeaderBytes + k * kRec + 40);
+}
+
+TEST(RouteOpenForRepeat, ACleanRouteIsUsedWhole) {
+  auto s = std::make_unique<Store>();
+  teach(*s, "c.qroute", 6, true);
+  RouteFileReader r(s->fs);
+  std::vector<route::NodeMeta> meta;
+  const RepeatOpenReport rep = open_route_for_repeat(r, "c.qroute", meta, 100);
+  EXPECT_EQ(rep.outcome, RepeatOpen::kOk);
+  EXPECT_TRUE(usable(rep.outcome));
+  EXPECT_FALSE(rep.cut_off);
+  EXPECT_EQ(rep.nodes_used, 6u);
+  EXPECT_EQ(meta.size(), 6u);
+}
+
+TEST(RouteOpenForRepeat, ADamagedNodeAfterTwoGoodOnesLeavesTheGoodPrefix) {
+  auto s = std::make_unique<Store>();
+  teach(*s, "d.qroute", 8, false);  // cut off too: still used, and said
+  damage(*s, "d.qroute", 5);
+  RouteFileReader r(s->fs);
+  std::vector<route::NodeMeta> meta;
+  const RepeatOpenReport rep = open_route_for_repeat(r, "d.qroute", meta, 100);
+  EXPECT_EQ(rep.outcome, RepeatOpen::kGoodPrefix);
+  EXPECT_TRUE(rep.cut_off);
+  EXPECT_EQ(rep.first_bad_node, 5u);
+  EXPECT_EQ(rep.nodes_used, 5u);
+  EXPECT_EQ(rep.file_nodes, 8u);
+  EXPECT_EQ(rep.why, StatusCode::kCorrupt);
+  EXPECT_EQ(meta.size(), 5u);
+  EXPECT_EQ(r.node_count(), 5u) << "the reader serves the prefix only";
+  expect_all_nodes_decode(r);
+}
+
+TEST(RouteOpenForRepeat, RefusesWhatCannotBeRepeatedAndSaysWhy) {
+  auto s = std::make_unique<Store>();
+  std::vector<route::NodeMeta> meta;
+  RouteFileReader r(s->fs);
+  EXPECT_EQ(open_route_for_repeat(r, "none.qroute", meta, 100).outcome, RepeatOpen::kMissing);
+  teach(*s, "early.qroute", 6, true);
+  damage(*s, "early.qroute", 1);
+  RepeatOpenReport rep = open_route_for_repeat(r, "early.qroute", meta, 100);
+  EXPECT_EQ(rep.outcome, RepeatOpen::kDamaged) << "fewer than 2 good nodes before the damage";
+  EXPECT_EQ(rep.first_bad_node, 1u);
+  EXPECT_TRUE(meta.empty());
+  teach(*s, "long.qroute", 6, true);
+  EXPECT_EQ(open_route_for_repeat(r, "long.qroute", meta, 5).outcome, RepeatOpen::kTooLong);
+  teach(*s, "one.qroute", 1, true);
+  EXPECT_EQ(open_route_for_repeat(r, "one.qroute", meta, 100).outcome, RepeatOpen::kTooShort);
+  teach(*s, "junk.qroute", 3, true);
+  const std::uint8_t junk[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  s->write("junk.qroute", junk, sizeof junk, 0);  // the header's magic
+  rep = open_route_for_repeat(r, "junk.qroute", meta, 100);
+  EXPECT_FALSE(usable(rep.outcome));
+  EXPECT_FALSE(rep.why.is_ok());
 }
 
 }  // namespace
