@@ -8,11 +8,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -26,6 +28,7 @@
 #include "firmware/qnavd/mavlink_endpoint.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "hal/linux/udp_port.hpp"
+#include "test/support/alloc_guard.hpp"
 
 namespace qnav::daemon {
 namespace {
@@ -49,7 +52,7 @@ struct Autopilot {
   std::vector<mav::VisionPositionDelta> vpd;
   std::vector<mav::DistanceSensor> ds;
   std::vector<mav::CommandAck> acks;
-  std::vector<std::string> texts;
+  std::vector<std::array<char, 51>> texts;
   std::vector<mav::SetPositionTargetLocalNed> targets;
   std::vector<double> target_dist_m;  // from the newest ODOMETRY position when the target arrived
   int heartbeats = 0, named = 0, from_other = 0;
@@ -59,6 +62,10 @@ struct Autopilot {
   std::thread reader;
 
   void start() {
+    // Room for a whole short mission, so the reader allocates nothing while qnavd runs (the
+    // allocation guard counts every thread).
+    odo.reserve(20000), vpd.reserve(20000), ds.reserve(20000), acks.reserve(64), texts.reserve(256), targets.reserve(4096);
+    target_dist_m.reserve(4096), raw.reserve(8u << 20), msgids.reserve(100000);
     ASSERT_TRUE(port.open_server(0, "127.0.0.1"));
     reader = std::thread([this] {
       std::uint8_t buf[2048];
@@ -83,7 +90,11 @@ struct Autopilot {
           if (mav::decode(f, d)) vpd.push_back(d);
           if (mav::decode(f, s)) ds.push_back(s);
           if (mav::decode(f, a)) acks.push_back(a);
-          if (mav::decode(f, st)) texts.emplace_back(st.text);
+          if (mav::decode(f, st)) {
+            std::array<char, 51> t{};
+            std::memcpy(t.data(), st.text, sizeof st.text);
+            texts.push_back(t);
+          }
           if (mav::decode(f, p)) {
             targets.push_back(p);
             target_dist_m.push_back(odo.empty() ? 1e9 : std::hypot(static_cast<double>(p.x - odo.back().x), static_cast<double>(p.y - odo.back().y)));
@@ -301,7 +312,17 @@ TEST(QnavdMavlink, DvlLossIsQualityMinusOneAndNeverAZeroDelta) {
   Daemon d(c);
   ASSERT_TRUE(d.init(nullptr));
   ASSERT_TRUE(d.start());
-  EXPECT_EQ(d.run(), 0);
+  std::uint64_t allocs = 0;
+  {
+    test::AllocationGuard guard;  // the MAVLink path allocates nothing after start either
+    EXPECT_EQ(d.run(), 0);
+    allocs = guard.allocations();
+    if (test::malloc_counted()) {
+      EXPECT_EQ(allocs, 0u) << guard.report();
+    }
+  }
+  std::printf("mavlink: %llu heap allocations after start (malloc counted: %s)\n", static_cast<unsigned long long>(allocs),
+              test::malloc_counted() ? "yes" : "no");
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   ap.finish();
   std::lock_guard<std::mutex> lock(ap.mu);
