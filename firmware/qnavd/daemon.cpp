@@ -59,6 +59,8 @@ class LinuxBackend final : public IoBackend {
     // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
     return open_can(true);
   }
+  // The MAVLink links, so that their traffic wakes the io thread too (mavlink.enabled).
+  void set_mavlink(const MavlinkIo* m) noexcept { mav_ = m; }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
     const std::int64_t now = clock_.now_ns();
     if (now >= next_retry_ns_) {
@@ -122,9 +124,11 @@ class LinuxBackend final : public IoBackend {
 #ifdef QNAV_HAVE_GPIOD
     if (leak_open_) leak_fd = leak_line_.fd();
 #endif
-    const int fds[7] = {can_.fd(),  dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1,
-                        leak_fd, downward_ ? downward_->fd() : -1};
-    hal::wait_readable(fds, 7, timeout_ms);
+    int mav[3] = {-1, -1, -1};
+    if (mav_ != nullptr) mav_->fds(mav);
+    const int fds[10] = {can_.fd(),  dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1,
+                         leak_fd, downward_ ? downward_->fd() : -1, mav[0], mav[1], mav[2]};
+    hal::wait_readable(fds, 10, timeout_ms);
   }
 
  private:
@@ -248,6 +252,7 @@ class LinuxBackend final : public IoBackend {
   IoCounters* io_ = nullptr;
   std::int64_t next_retry_ns_ = 0;
   std::uint32_t dvl_rejects_ = 0, sonar_rejects_ = 0;
+  const MavlinkIo* mav_ = nullptr;
   std::uint32_t can_dropped_seen_ = 0;
   bool dvl_warned_ = false, sonar_warned_ = false;
   bool connect_started_ = false;  // the sonar's connect was in progress at the last retry
@@ -420,6 +425,7 @@ Status Daemon::init_pipeline() {
   } else {
     auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, io_log_ ? io_log_->stream() : nullptr);
     QNAV_RETURN_IF_ERROR(lb->init());
+    lb->set_mavlink(mav_io_.get());
     backend_ = std::move(lb);
   }
   QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));

@@ -34,6 +34,8 @@ class MavlinkIo {
   // The UDP server's bound port and the client's local port (0 when not open).
   std::uint16_t server_port() const noexcept { return server_.is_open() ? server_.local_port() : 0; }
   std::uint16_t client_local_port() const noexcept { return client_.is_open() ? client_.local_port() : 0; }
+  // The open links' descriptors (-1 when closed), for the io thread's wait.
+  void fds(int (&out)[3]) const noexcept { out[0] = client_.fd(), out[1] = server_.fd(), out[2] = serial_.fd(); }
 
  private:
   Status open_links(bool first) noexcept;
