@@ -28,6 +28,7 @@
 #include "firmware/qnavd/daemon.hpp"
 #include "firmware/qnavd/mavlink_endpoint.hpp"
 #include "firmware/qnavd/software_fault.hpp"
+#include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/udp_port.hpp"
 #include "test/support/alloc_guard.hpp"
 
@@ -517,6 +518,56 @@ TEST(QnavdMavlinkEndpoint, RefusesAndCountsEveryCommandThatIsNotTheAutopilotsMod
   EXPECT_EQ(k.get(MavCounter::kCmdNotForUs), 1u);
   EXPECT_EQ(k.get(MavCounter::kBadAttitude), 1u);
   EXPECT_EQ(r.ep->rejected(), 3u) << "wrong sender, bad parameters, bad attitude";
+}
+
+// The io thread's links alone: a UDP server on mavlink.udp_listen_port hears a ground station and
+// answers it; a full rx queue drops and counts.
+TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
+  hal::UdpPort probe;  // find a free port: bind 0, read it, close
+  ASSERT_TRUE(probe.open_server(0, "127.0.0.1"));
+  const std::uint16_t port = probe.local_port();
+  probe.close();
+  DaemonConfig c;
+  c.mavlink_enabled = true;
+  c.mavlink_udp_listen_port = port;
+  hal::MonotonicClock clock;
+  MavlinkIo io_links(c, clock, nullptr);
+  ASSERT_TRUE(io_links.open());
+  EXPECT_EQ(io_links.server_port(), port);
+  std::vector<MavBytes> items(2);
+  SpscRing<MavBytes> rx;
+  ASSERT_TRUE(rx.init(Span<MavBytes>(items.data(), items.size())));
+  IoCounters counters;
+  hal::UdpPort gcs;
+  ASSERT_TRUE(gcs.open_client("127.0.0.1", port));
+  const std::uint8_t hello[] = {0xFD, 0x09, 0x00, 0x00, 0x00, 0xFF, 0xBE, 0x00, 0x00, 0x00};
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(gcs.write(Span<const std::uint8_t>(hello, sizeof hello)));
+  bool got = false;
+  for (int i = 0; i < 200 && !got; ++i) {
+    got = io_links.poll(rx, counters);
+    if (!got) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(got);
+  for (int i = 0; i < 20 && rx.size() + counters.mav_rx_overflow.load() < 3; ++i) {
+    (void)io_links.poll(rx, counters);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  MavBytes m;
+  ASSERT_TRUE(rx.try_pop(m));
+  EXPECT_EQ(m.link, 1) << "the server link";
+  EXPECT_EQ(m.len, sizeof hello);
+  EXPECT_EQ(std::memcmp(m.data, hello, sizeof hello), 0);
+  EXPECT_EQ(counters.mav_rx_overflow.load(), 1u) << "a queue of 2 held two of the three datagrams";
+  // The answer goes to the ground station (the server's last sender).
+  MavBytes out;
+  out.len = 4;
+  out.data[0] = 0xFD;
+  io_links.send(out, counters);
+  EXPECT_EQ(counters.mav_tx_errors.load(), 0u);
+  std::uint8_t back[16];
+  Result<hal::SerialRead> r = gcs.read(Span<std::uint8_t>(back, sizeof back), 1000);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r.value().bytes, 4u);
 }
 
 }  // namespace
