@@ -520,6 +520,71 @@ TEST(QnavdMavlinkEndpoint, RefusesAndCountsEveryCommandThatIsNotTheAutopilotsMod
   EXPECT_EQ(r.ep->rejected(), 3u) << "wrong sender, bad parameters, bad attitude";
 }
 
+// Mode = Vo: the published estimate follows the visual odometry (a rover's 4 m stereo pass).
+struct LastPair {
+  std::mutex mu;
+  Pose3 first, last;
+  bool have = false;
+};
+void on_pair(void* ctx, const FrameReport& r) {
+  auto* lp = static_cast<LastPair*>(ctx);
+  if (!r.processed) return;
+  std::lock_guard<std::mutex> lock(lp->mu);
+  if (!lp->have) lp->first = r.world_T_body;
+  lp->last = r.world_T_body;
+  lp->have = true;
+}
+
+TEST(QnavdMavlink, InModeVoTheEstimateFollowsTheVisualOdometry) {
+  Autopilot ap;
+  ap.start();
+  if (::testing::Test::HasFatalFailure()) return;
+  SoftwareFaults::reset_for_tests();
+  DaemonConfig c;
+  c.backend = Backend::kSim;
+  c.route_dir = temp_dir();
+  c.log = LogFormat::kOff;
+  c.realtime = false;
+  c.sim_speed = SimSpeed::kFast;
+  c.sim_length_m = 200.0;
+  c.vo_budget_us = 10000000;
+  c.mavlink_enabled = true;
+  c.mavlink_udp_remote = "127.0.0.1:" + std::to_string(ap.port_number());
+  SimPass p;
+  p.mode = qc::Mode::kVo;
+  p.length_m = 4.0;
+  ASSERT_TRUE(c.sim_mission.push_back(p));
+  LastPair lp;
+  Daemon d(c);
+  d.set_frame_observer(on_pair, &lp);
+  ASSERT_TRUE(d.init(nullptr));
+  ASSERT_TRUE(d.start());
+  EXPECT_EQ(d.run(), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ap.finish();
+  std::lock_guard<std::mutex> lock(ap.mu);
+  std::lock_guard<std::mutex> lock2(lp.mu);
+  ASSERT_TRUE(lp.have);
+  const mav::Odometry* first = nullptr;
+  const mav::Odometry* last = nullptr;
+  int vio = 0;
+  for (const mav::Odometry& o : ap.odo) {
+    if (o.estimator_type != mav::kMavEstimatorTypeVio) continue;
+    ++vio;
+    if (first == nullptr) first = &o;
+    last = &o;
+  }
+  ASSERT_NE(first, nullptr);
+  const double odo_m = std::hypot(static_cast<double>(last->x - first->x), static_cast<double>(last->y - first->y));
+  const Vec3d vo = lp.last.t - lp.first.t;
+  const double vo_m = std::hypot(vo.x(), vo.y());
+  std::printf("mavlink vo: %d ODOMETRY in Mode = Vo, published displacement %.3f m, VO body displacement %.3f m\n", vio, odo_m, vo_m);
+  EXPECT_GT(vo_m, 1.5);
+  // The ODOMETRY window starts and ends up to one period (0.2 s, ~0.2 m of rover motion) off the pairs: up to 0.4 m.
+  EXPECT_NEAR(odo_m, vo_m, 0.12 * vo_m);
+  EXPECT_EQ(SoftwareFaults::count(), 0u);
+}
+
 // The io thread's links alone: a UDP server on mavlink.udp_listen_port hears a ground station and
 // answers it; a full rx queue drops and counts.
 TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
