@@ -71,6 +71,9 @@ class DeadReckoner {
     return true;
   }
   bool has_velocity() const noexcept { return have_velocity_; }
+  // The newest body velocity (forward, starboard; m/s).
+  double forward_mps() const noexcept { return fwd_mps_; }
+  double starboard_mps() const noexcept { return stbd_mps_; }
   bool has_heading() const noexcept { return have_heading_; }
   double velocity_age_s(std::int64_t now_ns) const noexcept { return have_velocity_ ? static_cast<double>(now_ns - last_v_ns_) * 1e-9 : 1e9; }
   double heading_age_s(std::int64_t now_ns) const noexcept { return have_heading_ ? static_cast<double>(now_ns - heading_ns_) * 1e-9 : 1e9; }

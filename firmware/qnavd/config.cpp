@@ -434,6 +434,44 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(bool_key(
       "leak.active_low", [](auto& c) -> auto& { return c.leak_active_low; },
       "The detector pulls the line low when wet (false: high when wet)"));
+  // [mavlink]
+  t.push_back(bool_key(
+      "mavlink.enabled", [](auto& c) -> auto& { return c.mavlink_enabled; },
+      "Be the autopilot's external navigation source over MAVLink 2 (ODOMETRY, VISION_POSITION_DELTA, DISTANCE_SENSOR; docs/interfaces.md)"));
+  t.push_back(string_key(
+      "mavlink.udp_remote", [](auto& c) -> auto& { return c.mavlink_udp_remote; }, "HOST:PORT (IPv4) or \"\"",
+      [](const std::string& s) { return s.empty() ? std::string() : check_host_port(s); },
+      "Send to this UDP endpoint (the autopilot, mavlink-router, a ground station) and read its replies; \"\" = none"));
+  t.push_back(int_key(
+      "mavlink.udp_listen_port", [](auto& c) -> auto& { return c.mavlink_udp_listen_port; }, 0, 65535, "",
+      "Also serve MAVLink on this UDP port (replies go to the last sender); 0 = none"));
+  t.push_back(string_key(
+      "mavlink.serial_device", [](auto& c) -> auto& { return c.mavlink_serial_device; }, "device path or \"\"", nullptr,
+      "The autopilot's serial port (linux backend, e.g. /dev/ttyAMA0); \"\" = none"));
+  {
+    KeySpec baud = int_key(
+        "mavlink.baud", [](auto& c) -> auto& { return c.mavlink_baud; }, 0, 0, "bit/s", "mavlink.serial_device speed");
+    baud.int_choices = {57600, 115200, 230400, 460800, 921600};
+    t.push_back(baud);
+  }
+  t.push_back(int_key(
+      "mavlink.system_id", [](auto& c) -> auto& { return c.mavlink_system_id; }, 1, 255, "",
+      "qnavd's MAVLink system id (the vehicle's: the autopilot's own SYSID_THISMAV / MAV_SYS_ID)"));
+  t.push_back(int_key(
+      "mavlink.component_id", [](auto& c) -> auto& { return c.mavlink_component_id; }, 1, 255, "",
+      "qnavd's MAVLink component id (197 = MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY)"));
+  t.push_back(float_key(
+      "mavlink.odometry_hz", [](auto& c) -> auto& { return c.mavlink_odometry_hz; }, 1.0, 50.0, "Hz",
+      "ODOMETRY and VISION_POSITION_DELTA rate (ArduPilot needs >= 4 Hz)"));
+  t.push_back(bool_key(
+      "mavlink.guided", [](auto& c) -> auto& { return c.mavlink_guided; },
+      "In Repeat, while the autopilot reports GUIDED and armed, send the look-ahead waypoint as SET_POSITION_TARGET_LOCAL_NED"));
+  t.push_back(int_key(
+      "mavlink.autopilot_system_id", [](auto& c) -> auto& { return c.mavlink_autopilot_system_id; }, 1, 255, "",
+      "The only system whose COMMAND_LONG mode commands qnavd accepts (others are refused and counted)"));
+  t.push_back(int_key(
+      "mavlink.autopilot_component_id", [](auto& c) -> auto& { return c.mavlink_autopilot_component_id; }, 1, 255, "",
+      "The only component (of autopilot_system_id) whose mode commands qnavd accepts"));
   // [vo]
   t.push_back(bool_key(
       "vo.enabled", [](auto& c) -> auto& { return c.vo_enabled; },
@@ -757,7 +795,7 @@ const std::vector<KeySpec>& key_table() {
 }
 
 const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "leak", "vo", "map", "route", "budget", "sim"};
+  static const std::vector<std::string> names = {"daemon", "can", "sonar", "dvl", "leak", "mavlink", "vo", "map", "route", "budget", "sim"};
   return names;
 }
 
@@ -1042,6 +1080,10 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
     return r.error("route.searching_registrations", at("route.searching_registrations", "route.belief_registrations"),
                    "must be >= route.belief_registrations (" + std::to_string(c.localiser.filter.belief_registrations) +
                        "), got " + std::to_string(c.localiser.filter.searching_registrations));
+  }
+  if (c.mavlink_enabled && c.mavlink_udp_remote.empty() && c.mavlink_udp_listen_port == 0 && c.mavlink_serial_device.empty()) {
+    return r.error("mavlink.enabled", at("mavlink.enabled", "mavlink.udp_remote"),
+                   "needs a link: mavlink.udp_remote, mavlink.udp_listen_port or mavlink.serial_device");
   }
   if (c.backend == Backend::kSim && c.sim_mission.empty()) {
     return r.error("sim.pass", at("daemon.backend", "sim.pass"),

@@ -159,6 +159,20 @@ struct DaemonConfig {
   int leak_line = 0;                          // leak.line [0, 511]
   bool leak_active_low = false;               // leak.active_low: the detector pulls the line low when wet
 
+  // [mavlink] qnavd as the external navigation source of an ArduSub or PX4 autopilot (docs/interfaces.md,
+  // MAVLink): UDP to udp_remote and/or a server on udp_listen_port, and/or the serial device.
+  bool mavlink_enabled = false;               // mavlink.enabled
+  std::string mavlink_udp_remote;             // mavlink.udp_remote: "HOST:PORT" (IPv4) or "" = none
+  int mavlink_udp_listen_port = 0;            // mavlink.udp_listen_port [0, 65535]: 0 = none
+  std::string mavlink_serial_device;          // mavlink.serial_device: "" = none (linux backend)
+  int mavlink_baud = 115200;                  // mavlink.baud: 57600 | 115200 | 230400 | 460800 | 921600
+  int mavlink_system_id = 1;                  // mavlink.system_id [1, 255]: the vehicle's system
+  int mavlink_component_id = 197;             // mavlink.component_id [1, 255]: MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
+  double mavlink_odometry_hz = 10.0;          // mavlink.odometry_hz [1, 50]
+  bool mavlink_guided = false;                // mavlink.guided: send SET_POSITION_TARGET_LOCAL_NED in GUIDED (Repeat)
+  int mavlink_autopilot_system_id = 1;        // mavlink.autopilot_system_id [1, 255]: who may command qnav
+  int mavlink_autopilot_component_id = 1;     // mavlink.autopilot_component_id [1, 255]: MAV_COMP_ID_AUTOPILOT1
+
   // [budget] per-stage time budgets on the host, microseconds (docs/budgets.md)
   std::uint32_t ping_budget_us = 2000;       // budget.ping_us [10, 1000000]
   std::uint32_t tile_budget_us = 50000;      // budget.tile_us [100, 10000000]: features + localiser update

@@ -59,6 +59,8 @@ class LinuxBackend final : public IoBackend {
     // The CAN interface must exist at start: without it the daemon cannot talk to the autopilot.
     return open_can(true);
   }
+  // The MAVLink links, so that their traffic wakes the io thread too (mavlink.enabled).
+  void set_mavlink(const MavlinkIo* m) noexcept { mav_ = m; }
   bool poll_devices(Daemon&, IoCounters& io) noexcept override {
     const std::int64_t now = clock_.now_ns();
     if (now >= next_retry_ns_) {
@@ -122,9 +124,11 @@ class LinuxBackend final : public IoBackend {
 #ifdef QNAV_HAVE_GPIOD
     if (leak_open_) leak_fd = leak_line_.fd();
 #endif
-    const int fds[7] = {can_.fd(),  dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1,
-                        leak_fd, downward_ ? downward_->fd() : -1};
-    hal::wait_readable(fds, 7, timeout_ms);
+    int mav[3] = {-1, -1, -1};
+    if (mav_ != nullptr) mav_->fds(mav);
+    const int fds[10] = {can_.fd(),  dvl_port_.fd(), sonar_.fd(), stereo_ ? stereo_->left_fd() : -1, stereo_ ? stereo_->right_fd() : -1,
+                         leak_fd, downward_ ? downward_->fd() : -1, mav[0], mav[1], mav[2]};
+    hal::wait_readable(fds, 10, timeout_ms);
   }
 
  private:
@@ -248,6 +252,7 @@ class LinuxBackend final : public IoBackend {
   IoCounters* io_ = nullptr;
   std::int64_t next_retry_ns_ = 0;
   std::uint32_t dvl_rejects_ = 0, sonar_rejects_ = 0;
+  const MavlinkIo* mav_ = nullptr;
   std::uint32_t can_dropped_seen_ = 0;
   bool dvl_warned_ = false, sonar_warned_ = false;
   bool connect_started_ = false;  // the sonar's connect was in progress at the last retry
@@ -394,6 +399,13 @@ Status Daemon::init_pipeline() {
   QNAV_RETURN_IF_ERROR(make_ring(mem, "can_rx", can_rx_, cfg_.can_rx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(mem, "can_tx", can_tx_, cfg_.can_tx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(mem, "dvl", dvl_q_, kDvlQueueCapacity));
+  if (cfg_.mavlink_enabled) {
+    QNAV_RETURN_IF_ERROR(make_ring(mem, "mav_rx", mav_rx_, mav_rx_depth(cfg_)));
+    QNAV_RETURN_IF_ERROR(make_ring(mem, "mav_tx", mav_tx_, mav_tx_depth(cfg_)));
+    // Both backends: real UDP (and, on linux, the serial device); the sim's messages carry mission time.
+    mav_io_ = std::make_unique<MavlinkIo>(cfg_, sample_clock(), io_log_ ? io_log_->stream() : nullptr);
+    QNAV_RETURN_IF_ERROR(mav_io_->open());
+  }
   for (std::uint32_t s = 0; s < cfg_.ping_queue; ++s) QNAV_RETURN_IF_ERROR(free_slots_.try_push(s));
   if (frames_on) {
     const std::size_t slots = frame_pool_slots(cfg_);
@@ -416,6 +428,7 @@ Status Daemon::init_pipeline() {
   } else {
     auto lb = std::make_unique<LinuxBackend>(cfg_, *wall_, refs, io_log_ ? io_log_->stream() : nullptr);
     QNAV_RETURN_IF_ERROR(lb->init());
+    lb->set_mavlink(mav_io_.get());
     backend_ = std::move(lb);
   }
   QNAV_RETURN_IF_ERROR(hal::ensure_dir(cfg_.route_dir.c_str()));
@@ -431,6 +444,10 @@ Status Daemon::init_pipeline() {
   nq.ping_pool = pool_;
   nq.ping_pool_stride = stride_;
   nq.io = &io_;
+  if (cfg_.mavlink_enabled) {
+    nq.mav_rx = &mav_rx_;
+    nq.mav_tx = &mav_tx_;
+  }
   if (frames_on) {
     nq.frames = fp.frames;
     nq.free_frames = fp.free;
@@ -450,6 +467,7 @@ void Daemon::io_loop() noexcept {
   }
   while (!io_exit_.load(std::memory_order_relaxed)) {
     bool did = backend_->poll_devices(*this, io_);
+    if (mav_io_) did |= mav_io_->poll(mav_rx_, io_);
     if (did) {
       {
         const std::lock_guard<std::mutex> lock(bell_mu_);
@@ -461,6 +479,13 @@ void Daemon::io_loop() noexcept {
     while (can_tx_.try_pop(f)) {
       backend_->send(f, io_);
       did = true;
+    }
+    if (mav_io_) {
+      MavBytes m;
+      while (mav_tx_.try_pop(m)) {
+        mav_io_->send(m, io_);
+        did = true;
+      }
     }
     if (backend_->done()) mission_done_.store(true);
     if (!did) backend_->wait(5);

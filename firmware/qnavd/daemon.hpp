@@ -23,6 +23,7 @@
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/nav_worker.hpp"
 #include "firmware/qnavd/io_backend.hpp"
+#include "firmware/qnavd/mavlink_io.hpp"
 #include "firmware/qnavd/static_memory.hpp"
 #include "hal/linux/log_ring.hpp"
 
@@ -55,6 +56,8 @@ class Daemon {
   const DaemonConfig& config() const noexcept { return cfg_; }
   // The static block and the table it was built from (after init()).
   const StaticMemory& static_memory() const noexcept { return *static_; }
+  // The MAVLink links (mavlink.enabled), else nullptr.
+  const MavlinkIo* mavlink_io() const noexcept { return mav_io_.get(); }
 
  private:
   void io_loop() noexcept;
@@ -80,6 +83,8 @@ class Daemon {
   SpscRing<hal::CanRxFrame> can_rx_;
   SpscRing<hal::CanFrame> can_tx_;
   SpscRing<drivers::dvl::DvlVelocity> dvl_q_;
+  SpscRing<MavBytes> mav_rx_, mav_tx_;       // mavlink.enabled
+  std::unique_ptr<MavlinkIo> mav_io_;        // the io thread's MAVLink links (either backend)
   std::size_t stride_ = 0;
   IoCounters io_;
   std::unique_ptr<IoBackend> backend_;

@@ -41,7 +41,8 @@ const char* to_string(BufferKind k) noexcept {
 
 const char* queue_buffer_name(const char* queue) noexcept {
   static const char* const kNames[][2] = {{"can_rx", "queue.can_rx"}, {"can_tx", "queue.can_tx"}, {"dvl", "queue.dvl"}, {"pings", "queue.pings"},
-                                          {"free_slots", "queue.free_slots"}, {"frames", "queue.frames"}, {"free_frames", "queue.free_frames"}};
+                                          {"free_slots", "queue.free_slots"}, {"frames", "queue.frames"}, {"free_frames", "queue.free_frames"},
+                                          {"mav_rx", "queue.mav_rx"}, {"mav_tx", "queue.mav_tx"}};
   for (const auto& n : kNames)
     if (std::strcmp(n[0], queue) == 0) return n[1];
   return "queue.?";
@@ -78,7 +79,9 @@ Deployment make_deployment(const DaemonConfig& c) {
        {"pings", "io", "nav", c.ping_queue, sizeof(PingMsg), "drop the ping, count ping_overflow (replay waits instead)"},
        {"free_slots", "nav", "io", c.ping_queue, sizeof(std::uint32_t), "cannot overflow (one entry per slot)"},
        {"frames", "io", "nav", frame_pool_slots(c), sizeof(FrameMsg), "drop the pair / frame, count frame_overflow (the sim waits instead)"},
-       {"free_frames", "nav", "io", frame_pool_slots(c), sizeof(std::uint32_t), "cannot overflow (one entry per slot)"}},
+       {"free_frames", "nav", "io", frame_pool_slots(c), sizeof(std::uint32_t), "cannot overflow (one entry per slot)"},
+       {"mav_rx", "io", "nav", mav_rx_depth(c), sizeof(MavBytes), "drop the bytes, count mav_rx_overflow (0 when mavlink is off)"},
+       {"mav_tx", "nav", "io", mav_tx_depth(c), sizeof(MavBytes), "not sent, counted (mavlink tx_queue_full); the next period sends anew"}},
       {{"can_rx", "io", "per frame (AHRS 50 Hz, mode commands)", 0},
        {"dvl_rx", "io", "per DVL line (8 Hz)", 0},
        {"sonar_rx", "io", "per ping (5-10 Hz)", 0},

@@ -9,6 +9,7 @@
 //     sonar  -> [pings]   -> nav  (slots of the ping pool; [free_slots] returns them)
 //     camera -> [frames]  -> nav  (stereo pairs or downward frames in the frame pool; [free_frames] returns them)
 //     nav    -> [can_tx]  -> CAN tx
+//     MAVLink UDP / serial -> [mav_rx] -> nav    nav -> [mav_tx] -> MAVLink UDP / serial   (mavlink.enabled)
 //   nav thread (SCHED_FIFO daemon.nav_priority, CPU daemon.nav_cpu)
 //     mode commands, dead reckoning, ping -> tile -> teach append | repeat update,
 //     stereo pair -> visual odometry (Mode = Vo), downward frame -> mapper (Mode = Map) -> outputs, health
@@ -68,7 +69,7 @@ struct BufferSpec {
 };
 
 struct Deployment {
-  static constexpr std::size_t kThreads = 3, kQueues = 7, kStages = 10, kMaxBuffers = 32;
+  static constexpr std::size_t kThreads = 3, kQueues = 9, kStages = 10, kMaxBuffers = 32;
   // Static buffer sizes are rounded up to kStaticAlign bytes, and the block is carved in that order at
   // alignof(std::max_align_t): no padding between buffers, so the block is exactly their sum.
   static constexpr std::size_t kStaticAlign = 64;
@@ -98,6 +99,12 @@ Deployment make_deployment(const DaemonConfig& c);
 // The repeat localiser's configuration (route.max_nodes applied): what the table sizes and the nav
 // worker initialises, from one place.
 route::LocaliserConfig repeat_localiser_config(const DaemonConfig& c) noexcept;
+
+// The MAVLink queues' depths (mavlink.enabled; 0 otherwise): at 10 Hz ODOMETRY the nav worker queues
+// at most ~6 frames per period; the autopilot's traffic arrives in datagrams of a few frames.
+constexpr std::size_t kMavRxQueue = 64, kMavTxQueue = 64;
+inline std::size_t mav_rx_depth(const DaemonConfig& c) noexcept { return c.mavlink_enabled ? kMavRxQueue : 0; }
+inline std::size_t mav_tx_depth(const DaemonConfig& c) noexcept { return c.mavlink_enabled ? kMavTxQueue : 0; }
 
 // The threads' log rings (hal::LogRing): ring bytes and the stdio line buffer.
 constexpr std::size_t kNavLogBytes = 256 * 1024, kIoLogBytes = 64 * 1024, kLogLineBytes = 4096;

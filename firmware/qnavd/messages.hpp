@@ -52,6 +52,18 @@ struct FramePool {
   std::uint8_t* slot(std::uint32_t s) const noexcept { return pool + static_cast<std::size_t>(s) * slot_bytes; }
 };
 
+// MAVLink bytes between the io thread and the nav worker ([mav_rx], [mav_tx]): rx, what one read of
+// link `link` delivered (a UDP datagram or serial bytes, split into items of at most kMavBytes; the
+// nav worker's MavlinkEndpoint parses them, one parser per link); tx, one encoded frame, written by
+// the io thread to every open link.
+constexpr std::size_t kMavBytes = 280;  // drivers/mavlink kMaxFrameBytes
+struct MavBytes {
+  std::uint16_t len = 0;
+  std::uint8_t link = 0;             // 0 UDP client (udp_remote), 1 UDP server (udp_listen_port), 2 serial
+  std::int64_t arrival_ns = 0;       // sample clock at reception (mission time on the sim backend)
+  std::uint8_t data[kMavBytes] = {};
+};
+
 // Counters the I/O thread owns and the nav worker reads for health (relaxed atomics, monotonic).
 constexpr std::size_t kDvlQueueCapacity = 64;  // DVL velocities between the I/O and nav threads
 
@@ -83,6 +95,9 @@ struct IoCounters {
   std::atomic<bool> sonar_device_down{false};
   std::atomic<bool> can_device_down{false};
   std::atomic<bool> dvl_device_down{false};
+  std::atomic<std::uint32_t> mav_rx_overflow{0};   // MAVLink bytes dropped: the mav_rx queue was full
+  std::atomic<std::uint32_t> mav_tx_errors{0};     // MAVLink frames not written (no peer yet, socket full, port error)
+  std::atomic<std::uint32_t> mav_device_errors{0}; // MAVLink link open / read failures (reopened once a second)
 };
 
 }  // namespace qnav::daemon

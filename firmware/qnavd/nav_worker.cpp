@@ -90,6 +90,10 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   if (!q.pings || !q.free_slots || !q.can_rx || !q.can_tx || !q.dvl || !q.ping_pool || !q.io)
     return Status(StatusCode::kInvalidArgument, "nav worker: queues missing");
   tx_bus_ = std::make_unique<QueueCanBus>(q.can_tx);
+  if (cfg_.mavlink_enabled) {
+    if (!q.mav_rx || !q.mav_tx) return Status(StatusCode::kInvalidArgument, "nav worker: mavlink queues missing");
+    mav_ = std::make_unique<MavlinkEndpoint>(cfg_, log);
+  }
   publisher_ = std::make_unique<qc::QnavCanPublisher>(*tx_bus_);
   Result<Arena*> a = stage_arena(mem, "tile_pipeline", pipeline::RouteTilePipeline::arena_bytes(cfg_.tiles), own_arenas_[0], arena_views_[0]);
   if (!a) return a.status();
@@ -159,6 +163,10 @@ bool NavWorker::run_once() noexcept {
   hal::CanRxFrame rx;
   std::int64_t t0 = cpu_clock_.now_ns();
   mode_ns_ = 0;
+  if (mav_ && q_.mav_rx->front() != nullptr) {
+    mavlink_inputs();
+    did = true;
+  }
   drivers::dvl::DvlVelocity v;
   // In sample-time order across the two queues (a heading before a velocity of the same instant), so
   // a DVL sample is turned by the newest heading at or before its own time.
@@ -187,6 +195,7 @@ bool NavWorker::run_once() noexcept {
       if (!q_.dvl->try_pop(v)) break;
       ++dvl_samples_;
       if (!dr_.on_velocity(v.stamp.sample_ns, v.vx_mps, v.vy_mps, 10.0, cfg_.dvl_stale_s)) ++dr_rejected_;
+      dvl_altitude_m_ = std::isfinite(v.altitude_m) ? v.altitude_m : -1.0;
       nav_now_ns_ = std::max(nav_now_ns_, v.stamp.sample_ns);
     }
     did = true;
@@ -392,6 +401,8 @@ void NavWorker::forget_guidance() noexcept {
   route_status_.tile_seq = static_cast<std::uint16_t>(tile_seq_ & 0xFFFF);
   publisher_->set(guidance_);
   publisher_->set(route_status_);
+  route_fix_ = false;
+  guidance_valid_ = false;
 }
 
 void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
@@ -400,6 +411,7 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
   ModeReject why = ModeReject::kNone;
   if (cmd.reset_nav) {
     dr_.reset();  // the autopilot sets the navigation origin anew (distance and position restart)
+    est_.reset();
     ++nav_resets_;
   }
   const bool uses_route = cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kRepeat || cmd.mode == qc::Mode::kMap;
@@ -742,6 +754,7 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
     route_status_.tile_seq = static_cast<std::uint16_t>(r.seq & 0xFFFF);
     publisher_->set(guidance_);
     publisher_->set(route_status_);
+    if (mav_) route_fix(t, g, r.step.confident);
   }
   r.latency_ms = static_cast<double>(cpu_clock_.now_ns() - ping_rx_cpu_ns_) * 1e-6;
   if (log_ && cfg_.log == LogFormat::kJson) {
@@ -835,6 +848,7 @@ void NavWorker::publish() noexcept {
   rejected += q_.io->can_rx_dropped.load(std::memory_order_relaxed);
   rejected += pings_rejected() + pings_out_of_order_;
   rejected += q_.io->frame_overflow.load(std::memory_order_relaxed) + q_.io->camera_rejected.load(std::memory_order_relaxed) + frames_out_of_order_;
+  if (mav_) rejected += mav_->rejected() + q_.io->mav_rx_overflow.load(std::memory_order_relaxed);
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
   h.deadline_misses = static_cast<std::uint16_t>(std::min<std::uint32_t>(deadline_misses_, 65535));
   h.cpu_load_pct = clampd(cpu_load_pct_, 0.0, 100.0);
@@ -848,6 +862,86 @@ void NavWorker::publish() noexcept {
   hb.sw_minor = 1;
   publisher_->set(hb);
   publisher_->poll(nav_now_ns_);
+  if (mav_) mavlink_publish();
+}
+
+// ---- MAVLink (mavlink_endpoint.hpp) ----
+
+void NavWorker::mavlink_inputs() noexcept {
+  // At most a few commands per loop (each may open a route file); the rest waits for the next loop.
+  for (int i = 0; i < 4; ++i) {
+    const MavInputs in = mav_->drain(*q_.mav_rx);
+    if (in.attitude) {  // the autopilot's ATTITUDE: an attitude source like the CAN AHRS
+      double yaw = in.yaw_rad;
+      if (yaw < 0.0) yaw += 2.0 * 3.14159265358979323846;
+      if (!dr_.on_heading(in.attitude_ns, yaw)) ++dr_rejected_;
+      att_R_ = rotation_from_rpy(in.roll_rad, in.pitch_rad, yaw);
+      att_ns_ = in.attitude_ns;
+      have_att_ = true;
+      nav_now_ns_ = std::max(nav_now_ns_, in.attitude_ns);
+    }
+    if (!in.mode_cmd) break;
+    handle_mode(in.cmd);
+    mav_->ack(last_reject_ == ModeReject::kNone, to_string(last_reject_), *q_.mav_tx);
+  }
+}
+
+// A route fix: the taught node's position (route frame) plus the registered along- and cross-track
+// offsets is where the tile's centre was; the vehicle has dead-reckoned on from there since.
+void NavWorker::route_fix(const pipeline::RouteTile& t, const route::GuidanceOutput& g, bool confident) noexcept {
+  guidance_valid_ = g.status != route::GuidanceStatus::kHoldCourse && g.offsets != route::OffsetSource::kNone;
+  waypoint_ne_ = g.waypoint_ne;
+  if (!confident || g.offsets != route::OffsetSource::kRegistration || g.node >= meta_.size()) return;
+  const Vec2d at_tile = pipeline::NavEstimate::route_fix_position(meta_[g.node], reverse_, g.along_track_m, g.cross_track_m);
+  const Pose2 dr_now = dr_.pose_at(nav_now_ns_);
+  const Pose2& dr_tile = t.node.meta.pose;
+  est_.apply_fix(at_tile.x() + (dr_now.x_m - dr_tile.x_m), at_tile.y() + (dr_now.y_m - dr_tile.y_m));
+  est_.rebase();  // tracked from this instant on
+  est_.track(dr_now);
+  route_fix_ = true;
+}
+
+void NavWorker::mavlink_publish() noexcept {
+  const bool on_vo = mode_ == qc::Mode::kVo;
+  if (on_vo != est_on_vo_) {
+    est_.rebase();
+    est_on_vo_ = on_vo;
+  }
+  if (on_vo) {
+    if (vo_chain_started_) {
+      const Vec3d p = vo_.body_pose().t;
+      est_.track(Pose2{p.x(), p.y(), 0.0});
+    }
+  } else {
+    est_.track(dr_.pose_at(nav_now_ns_));
+  }
+  qc::Stamped<qc::DepthIn> depth;  // z: the vehicle's depth sensor (QNAV_DEPTH_IN), absolute
+  if (receiver_.latest_depth(nav_now_ns_, static_cast<std::int64_t>(cfg_.depth_stale_s * 1e9), depth) && depth.value.depth_valid)
+    est_.set_down(depth.value.depth_m);
+  MavSnapshot s;
+  s.now_ns = nav_now_ns_;
+  s.mode = mode_;
+  s.faults = faults_;
+  s.loss = (faults_ & (qc::fault::kDvlLost | qc::fault::kAttitudeLost)) != 0 || (on_vo && (faults_ & qc::fault::kCameraLost) != 0);
+  s.have_attitude = have_att_ && !(faults_ & qc::fault::kAttitudeLost);
+  s.world_R_body = att_R_;
+  s.have_velocity = dr_.has_velocity() && !(faults_ & qc::fault::kDvlLost);
+  s.vx_mps = dr_.forward_mps();
+  s.vy_mps = dr_.starboard_mps();
+  s.altitude_m = (faults_ & qc::fault::kDvlLost) ? -1.0 : dvl_altitude_m_;
+  const bool fix_possible = mode_ == qc::Mode::kRepeat && !(faults_ & (qc::fault::kSonarLost | qc::fault::kAttitudeLost));
+  s.localised = fix_possible && report_.step.confident;
+  s.confidence_pct = fix_possible ? 100.0 * static_cast<double>(report_.step.probability) : 0.0;
+  s.estimate = &est_;
+  s.in_repeat = mode_ == qc::Mode::kRepeat;
+  s.route_fix = route_fix_;
+  s.guidance_valid = guidance_valid_ && fix_possible;
+  s.cross_track_m = report_.step.guidance.cross_track_m;
+  s.cross_track_sigma_m = report_.step.guidance.cross_track_sigma_m;
+  s.side = static_cast<int>(report_.step.guidance.side);
+  s.node = report_.step.guidance.node;
+  s.waypoint_ne = waypoint_ne_;
+  mav_->publish(s, *q_.mav_tx);
 }
 
 void NavWorker::log_health() noexcept {
@@ -879,6 +973,19 @@ void NavWorker::log_health() noexcept {
                stage_misses_[static_cast<int>(Stage::kModes)], stage_misses_[static_cast<int>(Stage::kPing)],
                stage_misses_[static_cast<int>(Stage::kTile)], stage_misses_[static_cast<int>(Stage::kVo)],
                stage_misses_[static_cast<int>(Stage::kMap)], stage_misses_[static_cast<int>(Stage::kOutputs)]);
+  if (mav_) {
+    const auto& mc = mav_->counters();
+    std::fprintf(log_,
+                 "{\"event\":\"mavlink\",\"t_s\":%.1f,\"frames_rx\":%u,\"odometry_sent\":%u,\"commands_accepted\":%u,\"targets_sent\":%u,"
+                 "\"reset_counter\":%u,\"fixes\":%u,\"parser_rejects\":%u,\"rx_overflow\":%u,\"tx_errors\":%u,\"device_errors\":%u,"
+                 "\"foreign_system\":%u,\"unused_message\":%u,\"cmd_wrong_sender\":%u,\"cmd_not_for_us\":%u,\"cmd_unsupported\":%u,"
+                 "\"cmd_bad_param\":%u,\"bad_attitude\":%u,\"tx_queue_full\":%u}\n",
+                 static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mav_->frames_rx(), mav_->odometry_sent(), mav_->commands_accepted(),
+                 mav_->targets_sent(), est_.reset_counter(), est_.fixes(), mav_->parser_rejects(), io.mav_rx_overflow.load(), io.mav_tx_errors.load(),
+                 io.mav_device_errors.load(), mc.get(MavCounter::kForeignSystem), mc.get(MavCounter::kUnusedMessage),
+                 mc.get(MavCounter::kCmdWrongSender), mc.get(MavCounter::kCmdNotForUs), mc.get(MavCounter::kCmdUnsupported),
+                 mc.get(MavCounter::kCmdBadParam), mc.get(MavCounter::kBadAttitude), mc.get(MavCounter::kTxQueueFull));
+  }
   const std::uint32_t sw = SoftwareFaults::count();
   if (sw != software_faults_logged_) {
     const SoftwareFaultRecord r = SoftwareFaults::last();

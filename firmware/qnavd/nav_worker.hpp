@@ -17,6 +17,10 @@
 //             per frame QNAV_MAP_POSE + QNAV_MAP_STATUS (pose, node, node count, the frame's flags)
 //   stereo pair (Mode = Vo) -> pipeline::VoOdometry with the attitude at the pair's time -> the
 //             body's motion since the last QNAV_VO_STEP sent (an increment, never repeated)
+//   mavlink   (mavlink.enabled) MavlinkEndpoint: the autopilot's ATTITUDE as an attitude source, its
+//             mode commands (handled as QNAV_MODE_CMD, answered with COMMAND_ACK), and every loop the
+//             outputs from a MavSnapshot of this worker and the NavEstimate (dead reckoning, VO in
+//             Mode = Vo, route fixes in Repeat); mavlink_endpoint.hpp says what and when.
 //   outputs   NAV_STATUS, ROUTE_GUIDANCE, ROUTE_STATUS, VO_STEP, MAP_POSE, MAP_STATUS, HEALTH, HEARTBEAT through QnavCanPublisher
 //             into the can_tx queue; one log line per tile and per event; health every period.
 // Leaving or changing a repeat clears what was said about the old route (guidance, status, localised).
@@ -42,12 +46,14 @@
 #include "drivers/qnavcan/publisher.hpp"
 #include "drivers/qnavcan/receiver.hpp"
 #include "firmware/pipeline/dead_reckoner.hpp"
+#include "firmware/pipeline/nav_estimate.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/pipeline/topo_mapper.hpp"
 #include "firmware/pipeline/vo_odometry.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/deployment.hpp"
+#include "firmware/qnavd/mavlink_endpoint.hpp"
 #include "firmware/qnavd/messages.hpp"
 #include "firmware/qnavd/static_memory.hpp"
 #include "drivers/route_store/route_file.hpp"
@@ -109,6 +115,8 @@ struct NavQueues {
   const std::uint8_t* frame_pool = nullptr;  // slot s: at s * frame_slot_bytes: left, right W * H after it; or a downward frame
   std::size_t frame_slot_bytes = 0;       // 0 = 2 * vo.width * vo.height (stereo pairs only)
   IoCounters* io = nullptr;
+  SpscRing<MavBytes>* mav_rx = nullptr;   // null when mavlink.enabled = false
+  SpscRing<MavBytes>* mav_tx = nullptr;
 };
 
 // The can_tx queue as a CanBus for the publisher (send = push; a full queue is "busy").
@@ -181,6 +189,9 @@ class NavWorker {
   bool commit_failed() const noexcept { return commit_failed_; }
   // The bytes its "route_meta" buffer holds (the deployment test compares them with the table).
   std::size_t route_meta_bytes() const noexcept { return meta_.capacity() * sizeof(route::NodeMeta); }
+  // MAVLink (mavlink.enabled): the endpoint (nullptr when off) and the estimate it publishes.
+  const MavlinkEndpoint* mavlink() const noexcept { return mav_.get(); }
+  const pipeline::NavEstimate& estimate() const noexcept { return est_; }
 
  private:
   static Result<Arena*> stage_arena(StaticMemory* mem, const char* name, std::size_t bytes, std::unique_ptr<ArenaStorage>& own,
@@ -206,6 +217,9 @@ class NavWorker {
   void route_path(std::uint16_t id, const char* suffix, char* out, std::size_t n) const noexcept;
   void forget_guidance() noexcept;
   void stage_time(Stage s, std::int64_t t0_ns) noexcept;
+  void mavlink_inputs() noexcept;
+  void mavlink_publish() noexcept;
+  void route_fix(const pipeline::RouteTile& t, const route::GuidanceOutput& g, bool confident) noexcept;
 
   const DaemonConfig& cfg_;
   const hal::Clock& sample_clock_;
@@ -288,6 +302,13 @@ class NavWorker {
   TileReport report_{};
   drivers::qnavcan::RouteStatus route_status_{};
   drivers::qnavcan::RouteGuidance guidance_{};
+  std::unique_ptr<MavlinkEndpoint> mav_;
+  pipeline::NavEstimate est_;
+  bool est_on_vo_ = false;         // the estimate follows the VO body pose (Mode = Vo), else the dead reckoning
+  bool route_fix_ = false;         // a route fix placed the estimate in this repeat's route frame
+  Vec2d waypoint_ne_ = Vec2d::Zero();
+  bool guidance_valid_ = false;
+  double dvl_altitude_m_ = -1.0;   // the newest DVL altitude (< 0: none)
   std::atomic<std::uint64_t> progress_{0};
   bool shut_ = false;
 };

@@ -92,6 +92,19 @@ TEST(DeploymentTable, BuildsTheDaemonWithVoAndMapFromOneStaticBlock) {
   EXPECT_NE(t.buffer("frame_pool"), nullptr);
 }
 
+TEST(DeploymentTable, BuildsTheDaemonWithMavlinkFromOneStaticBlock) {
+  DaemonConfig c = sim_config(false, false);
+  c.mavlink_enabled = true;
+  c.mavlink_udp_listen_port = 0;
+  c.mavlink_udp_remote = "127.0.0.1:9";  // the discard port: nothing is read from it here
+  expect_table_builds_daemon(c, "mavlink");
+  const Deployment t = make_deployment(c);
+  ASSERT_NE(t.buffer("queue.mav_rx"), nullptr);
+  ASSERT_NE(t.buffer("queue.mav_tx"), nullptr);
+  EXPECT_GE(t.buffer("queue.mav_tx")->bytes, kMavTxQueue * sizeof(MavBytes));
+  EXPECT_EQ(make_deployment(sim_config(false, false)).buffer("queue.mav_rx"), nullptr) << "mavlink off: no MAVLink queues";
+}
+
 TEST(DeploymentTable, TheDvlQueueDepthComesFromOneConstant) {
   const Deployment t = make_deployment(sim_config(false, false));
   const QueueSpec* dvl = nullptr;

@@ -107,6 +107,17 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(leak_chip),
       QNAV_FIELD(leak_line),
       QNAV_FIELD(leak_active_low),
+      QNAV_FIELD(mavlink_enabled),
+      QNAV_FIELD(mavlink_udp_remote),
+      QNAV_FIELD(mavlink_udp_listen_port),
+      QNAV_FIELD(mavlink_serial_device),
+      QNAV_FIELD(mavlink_baud),
+      QNAV_FIELD(mavlink_system_id),
+      QNAV_FIELD(mavlink_component_id),
+      QNAV_FIELD(mavlink_odometry_hz),
+      QNAV_FIELD(mavlink_guided),
+      QNAV_FIELD(mavlink_autopilot_system_id),
+      QNAV_FIELD(mavlink_autopilot_component_id),
       QNAV_FIELD(vo_enabled),
       QNAV_FIELD(vo_camera),
       QNAV_FIELD(vo_left_device),
@@ -418,6 +429,19 @@ stale_s = 0.5
 chip = "gpiochip3"
 line = 5
 active_low = true
+
+[mavlink]
+enabled = true
+udp_remote = "192.168.2.1:14550"
+udp_listen_port = 14560
+serial_device = "/dev/ttyAMA0"
+baud = 921600
+system_id = 2
+component_id = 191
+odometry_hz = 20.0
+guided = true
+autopilot_system_id = 2
+autopilot_component_id = 2
 
 [vo]
 enabled = false

@@ -1,0 +1,91 @@
+#include "firmware/qnavd/mavlink_io.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+namespace qnav::daemon {
+
+Status MavlinkIo::open() noexcept { return open_links(true); }
+
+Status MavlinkIo::open_links(bool first) noexcept {
+  if (!cfg_.mavlink_udp_remote.empty() && !client_.is_open()) {
+    char host[16];
+    std::uint16_t port = 0;
+    QNAV_RETURN_IF_ERROR(hal::parse_ipv4_endpoint(cfg_.mavlink_udp_remote.c_str(), host, port));
+    const Status s = client_.open_client(host, port);
+    if (!s) {
+      if (first) return s;
+      if (log_) std::fprintf(log_, "{\"event\":\"warning\",\"what\":\"mavlink.udp_remote: %s\"}\n", s.message());
+    }
+  }
+  if (cfg_.mavlink_udp_listen_port != 0 && !server_.is_open()) {
+    const Status s = server_.open_server(static_cast<std::uint16_t>(cfg_.mavlink_udp_listen_port));
+    if (!s) {
+      if (first) return s;
+      if (log_) std::fprintf(log_, "{\"event\":\"warning\",\"what\":\"mavlink.udp_listen_port: %s\"}\n", s.message());
+    }
+  }
+  if (!cfg_.mavlink_serial_device.empty() && cfg_.backend == Backend::kLinux && !serial_.is_open()) {
+    hal::SerialConfig sc;
+    sc.baud = static_cast<std::uint32_t>(cfg_.mavlink_baud);
+    const Status s = serial_.open(cfg_.mavlink_serial_device.c_str(), sc);
+    if (!s && log_) std::fprintf(log_, "{\"event\":\"warning\",\"what\":\"mavlink.serial_device %s: %s\"}\n", cfg_.mavlink_serial_device.c_str(), s.message());
+  }
+  return Status::ok();
+}
+
+bool MavlinkIo::read_link(hal::SerialPort& port, std::uint8_t link, SpscRing<MavBytes>& rx, IoCounters& io, bool& failed) noexcept {
+  bool did = false;
+  for (int i = 0; i < kMaxReadsPerPoll; ++i) {
+    Result<hal::SerialRead> r = port.read(Span<std::uint8_t>(buf_, sizeof buf_), 0);
+    if (!r) {
+      failed = true;
+      io.mav_device_errors.fetch_add(1, std::memory_order_relaxed);
+      return did;
+    }
+    const std::size_t n = r.value().bytes;
+    if (n == 0) break;
+    did = true;
+    const std::int64_t t = clock_.now_ns();
+    for (std::size_t off = 0; off < n; off += kMavBytes) {
+      MavBytes m;
+      m.len = static_cast<std::uint16_t>(std::min(kMavBytes, n - off));
+      m.link = link;
+      m.arrival_ns = t;
+      std::memcpy(m.data, buf_ + off, m.len);
+      if (!rx.try_push(m)) io.mav_rx_overflow.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  return did;
+}
+
+bool MavlinkIo::poll(SpscRing<MavBytes>& rx, IoCounters& io) noexcept {
+  const std::int64_t now = clock_.now_ns();
+  if (now >= next_retry_ns_) {
+    (void)open_links(false);  // failures are logged; retried in a second
+    next_retry_ns_ = now + 1000000000;
+  }
+  bool did = false, failed = false;
+  if (client_.is_open()) did |= read_link(client_, 0, rx, io, failed);  // a "refused" read error leaves the socket usable
+  failed = false;
+  if (server_.is_open()) did |= read_link(server_, 1, rx, io, failed);
+  failed = false;
+  if (serial_.is_open()) {
+    did |= read_link(serial_, 2, rx, io, failed);
+    if (failed) serial_.close();  // reopened within a second
+  }
+  return did;
+}
+
+void MavlinkIo::send(const MavBytes& m, IoCounters& io) noexcept {
+  const Span<const std::uint8_t> bytes(m.data, m.len);
+  const auto write = [&](hal::SerialPort& p) {
+    Result<std::size_t> w = p.write(bytes);
+    if (!w || w.value() != m.len) io.mav_tx_errors.fetch_add(1, std::memory_order_relaxed);
+  };
+  if (client_.is_open()) write(client_);
+  if (server_.is_open() && server_.has_peer()) write(server_);
+  if (serial_.is_open()) write(serial_);
+}
+
+}  // namespace qnav::daemon
