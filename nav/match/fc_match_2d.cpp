@@ -25,16 +25,38 @@ float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcep
   return static_cast<float>(cov / std::sqrt(va * vb));
 }
 
+namespace {
+
+// Integer dot product of two widened descriptors: int16 x int16 summed in int32 (exact: |product| <=
+// 2^14, at most a few hundred terms). The fixed-length form lets the compiler unroll and vectorise it
+// (pmaddwd on x86, smlal on ARM); without SIMD it is the plain loop.
+template <std::size_t D>
+inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b) noexcept {
+  std::int32_t s = 0;
+  for (std::size_t q = 0; q < D; ++q) s += static_cast<std::int32_t>(a[q]) * b[q];
+  return s;
+}
+
+inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::size_t d) noexcept {
+  std::int32_t s = 0;
+  for (std::size_t q = 0; q < d; ++q) s += static_cast<std::int32_t>(a[q]) * b[q];
+  return s;
+}
+
+}  // namespace
+
 std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + nc * sizeof(std::uint32_t) +
-         2 * c.max_points + 4 * c.max_points * sizeof(float) + 64;
+         2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
+         128;
 }
 
 Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   if (c.max_points == 0 || c.max_points > 65535 || c.max_candidates_per_point == 0 || c.max_candidates_per_point > 32 ||
       !(c.sigma_dist_m > 0.0) || !(c.sigma_dir_rad > 0.0) || !(c.appearance_weight >= 0.0f && c.appearance_weight <= 1.0f) ||
-      !std::isfinite(c.min_appearance) || !std::isfinite(c.min_support))
+      !std::isfinite(c.min_appearance) || !std::isfinite(c.min_support) || c.max_descriptor_bytes == 0 ||
+      c.max_descriptor_bytes > 4096)
     return Status(StatusCode::kInvalidArgument, "fc_match_2d: bad configuration");
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   cand_ = arena.allocate<Candidate>(nc);
@@ -44,7 +66,10 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   used_b_ = arena.allocate<std::uint8_t>(c.max_points);
   stats_a_ = arena.allocate<float>(2 * c.max_points);
   stats_b_ = arena.allocate<float>(2 * c.max_points);
-  if (cand_.empty() || first_.empty() || order_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty())
+  wide_a_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
+  wide_b_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
+  if (cand_.empty() || first_.empty() || order_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
+      wide_a_.empty() || wide_b_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -55,7 +80,7 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
                           BoundedVector<Match2d>& out) noexcept {
   out.clear();
   if (!ready_) return Status(StatusCode::kNotReady, "fc_match_2d: not initialised");
-  if (!std::isfinite(dtheta_rad) || a.desc_bytes == 0 || a.desc_bytes != b.desc_bytes ||
+  if (!std::isfinite(dtheta_rad) || a.desc_bytes == 0 || a.desc_bytes != b.desc_bytes || a.desc_bytes > config_.max_descriptor_bytes ||
       a.descriptors.size() < a.position_m.size() * a.desc_bytes || b.descriptors.size() < b.position_m.size() * b.desc_bytes) {
     counters_.increment(FcMatchCounter::kBadInput);
     return Status(StatusCode::kInvalidArgument, "fc_match_2d: inconsistent keypoint sets");
@@ -87,20 +112,22 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   };
   for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
   for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
+  for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
+  for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
   const float inv_d = 1.0f / static_cast<float>(d);
   std::size_t nc = 0;
   for (std::size_t i = 0; i < na; ++i) {
     first_[i] = static_cast<std::uint32_t>(nc);
+    const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
+    if (ia == 0.0f) continue;  // a flat descriptor has no candidates
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
-    const std::int8_t* da = a.descriptors.data() + i * d;
-    const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
+    const std::int16_t* da = wide_a_.data() + i * d;
     for (std::size_t j = 0; j < nb; ++j) {
       const float ib = stats_b_[2 * j + 1];
-      if (ia == 0.0f || ib == 0.0f) continue;
-      const std::int8_t* db = b.descriptors.data() + j * d;
-      std::int32_t dot = 0;
-      for (std::size_t q = 0; q < d; ++q) dot += static_cast<std::int32_t>(da[q]) * db[q];
+      if (ib == 0.0f) continue;
+      const std::int16_t* db = wide_b_.data() + j * d;
+      const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
       const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
       if (!(z >= config_.min_appearance)) continue;
       if (have == k && z <= list[k - 1].appearance) continue;

@@ -133,5 +133,43 @@ TEST(FcMatch2d, InconsistentInputIsAnErrorAndCounted) {
   EXPECT_EQ(f.m.counters().get(FcMatchCounter::kBadInput), 2u);
 }
 
+// The appearance of each match is the ZNCC of its two descriptors: the matcher's dot products (on
+// int16 copies, a fixed-length loop for 64 bytes, a generic one otherwise) are the same integer sums.
+TEST(FcMatch2d, AppearanceIsTheDescriptorZnccFor64AndShorterDescriptors) {
+  Sets s = make(40, Pose2{8.0, -3.0, 0.4}, 0.5, 30, false, 5);
+  Fixture f;
+  BoundedVector<Match2d> out = f.run(s, 0.4);
+  ASSERT_GT(out.size(), 30u);
+  for (const Match2d& m : out)
+    EXPECT_NEAR(m.appearance, zncc_i8(s.da.data() + m.a * kD, s.db.data() + m.b * kD, kD), 1e-5f);
+  // The first 24 bytes of every descriptor (not a multiple of the vector width).
+  constexpr std::size_t kShort = 24;
+  std::vector<std::int8_t> sa, sb;
+  for (std::size_t i = 0; i < s.pa.size(); ++i) sa.insert(sa.end(), s.da.begin() + static_cast<long>(i * kD), s.da.begin() + static_cast<long>(i * kD + kShort));
+  for (std::size_t j = 0; j < s.pb.size(); ++j) sb.insert(sb.end(), s.db.begin() + static_cast<long>(j * kD), s.db.begin() + static_cast<long>(j * kD + kShort));
+  KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(sa.data(), sa.size()), kShort};
+  KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(sb.data(), sb.size()), kShort};
+  BoundedVector<Match2d> short_out(Span<Match2d>(f.store.data(), f.store.size()));
+  ASSERT_TRUE(f.m.match(a, b, 0.4, short_out).is_ok());
+  ASSERT_GT(short_out.size(), 20u);
+  for (const Match2d& m : short_out)
+    EXPECT_NEAR(m.appearance, zncc_i8(sa.data() + m.a * kShort, sb.data() + m.b * kShort, kShort), 1e-5f);
+}
+
+TEST(FcMatch2d, DescriptorsLongerThanConfiguredAreRefusedAndCounted) {
+  Sets s = make(10, Pose2{}, 0.1, 0, false, 1);
+  Fixture f;
+  BoundedVector<Match2d> out(Span<Match2d>(f.store.data(), f.store.size()));
+  // The same bytes read as 5 descriptors of 128 bytes: longer than max_descriptor_bytes (64).
+  KeypointSet2d a{Span<const Vec2d>(s.pa.data(), 5), Span<const std::int8_t>(s.da.data(), s.da.size()), 2 * kD};
+  EXPECT_EQ(f.m.match(a, a, 0.0, out), StatusCode::kInvalidArgument);
+  EXPECT_EQ(f.m.counters().get(FcMatchCounter::kBadInput), 1u);
+  FcMatch2dConfig c;
+  c.max_descriptor_bytes = 0;
+  ArenaStorage arena(FcMatcher2d::arena_bytes(FcMatch2dConfig{}));
+  FcMatcher2d m;
+  EXPECT_EQ(m.init(c, arena), StatusCode::kInvalidArgument);
+}
+
 }  // namespace
 }  // namespace qnav::match
