@@ -14,7 +14,8 @@
 //   3. greedy one-to-one selection by decreasing S while S >= min_support.
 // The output are putative matches for RANSAC / LMedS (nav/match/ransac.hpp).
 // Bounds: points beyond max_points are ignored (counted); candidates <= max_points *
-// max_candidates_per_point; descriptors of at most max_descriptor_bytes (longer: kBadInput); cost
+// max_candidates_per_point; the scoring visits only candidate pairs whose implied translations lie
+// within the gate's largest radius (same scores as visiting every pair); descriptors of at most max_descriptor_bytes (longer: kBadInput); cost
 // O(nA nB D) appearance + O(C^2) scoring, C candidates. The appearance dot products run on int16
 // copies of the descriptors (widened once per call; a 16-bit multiply-add the compiler vectorises on
 // x86 and ARM, the same integer sums as int8), with a fixed-length loop for 64-byte descriptors.
@@ -89,7 +90,10 @@ class FcMatcher2d {
   bool ready_ = false;
   Span<Candidate> cand_;
   Span<std::uint32_t> first_;   // per a: first candidate index (cand_ is grouped by a)
-  Span<std::uint32_t> order_;   // candidate order for the greedy pass
+  Span<std::uint32_t> order_;   // candidate order: by implied translation x (scoring), then for the greedy pass
+  Span<std::uint32_t> rank_;    // per candidate: its place in the translation order
+  Span<std::uint32_t> near_;    // one candidate's neighbours in translation (scoring)
+  Span<Vec2d> translation_;     // per candidate (a, b): b - R(dtheta) a
   Span<std::uint8_t> used_a_;
   Span<std::uint8_t> used_b_;
   Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
