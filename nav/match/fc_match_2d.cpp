@@ -188,22 +188,35 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   });
   for (std::size_t o = 0; o < nc; ++o) rank_[order_[o]] = static_cast<std::uint32_t>(o);
   const double gr2 = gate_radius_m * gate_radius_m;
+  // Per pair, with la^2 = |a' - a|^2 (no square root): gate2 <= 27.6 (3 sd^2 + 2 sigma_dir^2 la^2),
+  // as (sigma_dir la + sd)^2 <= 2 sigma_dir^2 la^2 + 2 sd^2; with a relative and an absolute margin
+  // over the rounding of t and of gate2 (positions are at most abs_max_m from the origin).
+  const double sd2 = config_.sigma_dist_m * config_.sigma_dist_m;
+  const double pair_c0 = 2.0 * 13.8 * 3.0 * sd2 * (1.0 + 1e-9);
+  const double pair_c1 = 2.0 * 13.8 * 2.0 * config_.sigma_dir_rad * config_.sigma_dir_rad * (1.0 + 1e-9);
+  const double pair_margin = 1e-9 * (1.0 + abs_max_m) * (1.0 + abs_max_m);
   for (std::size_t c = 0; c < nc; ++c) {
     Candidate& cc = cand_[c];
     const std::size_t i = cc.a;
     const Vec2d tc = translation_[c];
+    const Vec2d pai = a.position_m[i];
+    const auto near_enough = [&](std::uint32_t c2) {
+      const double dt2 = (translation_[c2] - tc).squaredNorm();
+      if (!(dt2 <= gr2) || cand_[c2].a == i) return false;
+      return dt2 <= pair_c0 + pair_c1 * (a.position_m[cand_[c2].a] - pai).squaredNorm() + pair_margin;
+    };
     // The candidates within the radius in t, in candidate order (= grouped by a', increasing).
     std::size_t nn = 0;
     const std::size_t rc = rank_[c];
     for (std::size_t o = rc; o-- > 0;) {
       const std::uint32_t c2 = order_[o];
       if (!(tc.x() - translation_[c2].x() <= gate_radius_m)) break;
-      if ((translation_[c2] - tc).squaredNorm() <= gr2 && cand_[c2].a != i) near_[nn++] = c2;
+      if (near_enough(c2)) near_[nn++] = c2;
     }
     for (std::size_t o = rc + 1; o < nc; ++o) {
       const std::uint32_t c2 = order_[o];
       if (!(translation_[c2].x() - tc.x() <= gate_radius_m)) break;
-      if ((translation_[c2] - tc).squaredNorm() <= gr2 && cand_[c2].a != i) near_[nn++] = c2;
+      if (near_enough(c2)) near_[nn++] = c2;
     }
     std::sort(near_.begin(), near_.begin() + nn);
     double acc = 0.0;
