@@ -181,13 +181,13 @@ std::vector<Match2d> reference_match(const Sets& s, double dtheta, const FcMatch
     float appearance, score;
   };
   const std::size_t na = s.pa.size(), nb = s.pb.size(), d = kD, k = c.max_candidates_per_point;
-  auto stats = [d](const std::int8_t* p, float* st) {
+  auto stats = [](const std::int8_t* p, float* st) {
     std::int32_t s1 = 0, s2 = 0;
-    for (std::size_t q = 0; q < d; ++q) {
+    for (std::size_t q = 0; q < kD; ++q) {
       s1 += p[q];
       s2 += static_cast<std::int32_t>(p[q]) * p[q];
     }
-    const double var = static_cast<double>(s2) - static_cast<double>(s1) * s1 / static_cast<double>(d);
+    const double var = static_cast<double>(s2) - static_cast<double>(s1) * s1 / static_cast<double>(kD);
     st[0] = static_cast<float>(s1);
     st[1] = var > 1e-9 ? static_cast<float>(1.0 / std::sqrt(var)) : 0.0f;
   };
