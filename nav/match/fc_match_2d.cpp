@@ -25,26 +25,54 @@ float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcep
   return static_cast<float>(cov / std::sqrt(va * vb));
 }
 
+namespace {
+
+// Integer dot product of two widened descriptors: int16 x int16 summed in int32 (exact: |product| <=
+// 2^14, at most a few hundred terms). The fixed-length form lets the compiler unroll and vectorise it
+// (pmaddwd on x86, smlal on ARM); without SIMD it is the plain loop.
+template <std::size_t D>
+inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b) noexcept {
+  std::int32_t s = 0;
+  for (std::size_t q = 0; q < D; ++q) s += static_cast<std::int32_t>(a[q]) * b[q];
+  return s;
+}
+
+inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::size_t d) noexcept {
+  std::int32_t s = 0;
+  for (std::size_t q = 0; q < d; ++q) s += static_cast<std::int32_t>(a[q]) * b[q];
+  return s;
+}
+
+}  // namespace
+
 std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
-  return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + nc * sizeof(std::uint32_t) +
-         2 * c.max_points + 4 * c.max_points * sizeof(float) + 64;
+  return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) +
+         2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
+         128;
 }
 
 Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   if (c.max_points == 0 || c.max_points > 65535 || c.max_candidates_per_point == 0 || c.max_candidates_per_point > 32 ||
       !(c.sigma_dist_m > 0.0) || !(c.sigma_dir_rad > 0.0) || !(c.appearance_weight >= 0.0f && c.appearance_weight <= 1.0f) ||
-      !std::isfinite(c.min_appearance) || !std::isfinite(c.min_support))
+      !std::isfinite(c.min_appearance) || !std::isfinite(c.min_support) || c.max_descriptor_bytes == 0 ||
+      c.max_descriptor_bytes > 4096)
     return Status(StatusCode::kInvalidArgument, "fc_match_2d: bad configuration");
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   cand_ = arena.allocate<Candidate>(nc);
   first_ = arena.allocate<std::uint32_t>(c.max_points + 1);
   order_ = arena.allocate<std::uint32_t>(nc);
+  rank_ = arena.allocate<std::uint32_t>(nc);
+  near_ = arena.allocate<std::uint32_t>(nc);
+  translation_ = arena.allocate<Vec2d>(nc);
   used_a_ = arena.allocate<std::uint8_t>(c.max_points);
   used_b_ = arena.allocate<std::uint8_t>(c.max_points);
   stats_a_ = arena.allocate<float>(2 * c.max_points);
   stats_b_ = arena.allocate<float>(2 * c.max_points);
-  if (cand_.empty() || first_.empty() || order_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty())
+  wide_a_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
+  wide_b_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
+  if (cand_.empty() || first_.empty() || order_.empty() || rank_.empty() || near_.empty() || translation_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
+      wide_a_.empty() || wide_b_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -55,7 +83,7 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
                           BoundedVector<Match2d>& out) noexcept {
   out.clear();
   if (!ready_) return Status(StatusCode::kNotReady, "fc_match_2d: not initialised");
-  if (!std::isfinite(dtheta_rad) || a.desc_bytes == 0 || a.desc_bytes != b.desc_bytes ||
+  if (!std::isfinite(dtheta_rad) || a.desc_bytes == 0 || a.desc_bytes != b.desc_bytes || a.desc_bytes > config_.max_descriptor_bytes ||
       a.descriptors.size() < a.position_m.size() * a.desc_bytes || b.descriptors.size() < b.position_m.size() * b.desc_bytes) {
     counters_.increment(FcMatchCounter::kBadInput);
     return Status(StatusCode::kInvalidArgument, "fc_match_2d: inconsistent keypoint sets");
@@ -87,20 +115,22 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   };
   for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
   for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
+  for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
+  for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
   const float inv_d = 1.0f / static_cast<float>(d);
   std::size_t nc = 0;
   for (std::size_t i = 0; i < na; ++i) {
     first_[i] = static_cast<std::uint32_t>(nc);
+    const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
+    if (ia == 0.0f) continue;  // a flat descriptor has no candidates
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
-    const std::int8_t* da = a.descriptors.data() + i * d;
-    const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
+    const std::int16_t* da = wide_a_.data() + i * d;
     for (std::size_t j = 0; j < nb; ++j) {
       const float ib = stats_b_[2 * j + 1];
-      if (ia == 0.0f || ib == 0.0f) continue;
-      const std::int8_t* db = b.descriptors.data() + j * d;
-      std::int32_t dot = 0;
-      for (std::size_t q = 0; q < d; ++q) dot += static_cast<std::int32_t>(da[q]) * db[q];
+      if (ib == 0.0f) continue;
+      const std::int16_t* db = wide_b_.data() + j * d;
+      const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
       const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
       if (!(z >= config_.min_appearance)) continue;
       if (have == k && z <= list[k - 1].appearance) continue;
@@ -116,56 +146,118 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   first_[na] = static_cast<std::uint32_t>(nc);
   if (nc == 0) return Status::ok();
 
-  // 2. Continuous geometric score. Work per keypoint a (its <= k candidates share the vectors to the
-  //    other keypoints a'), so each (a', candidate of a') pair costs one norm, one dot and one exp.
+  // 2. Continuous geometric score. A pair of candidates c = (a, b), c2 = (a', b') passes the gate below
+  //    only when |(b' - b) - R(a' - a)| is small, i.e. when their implied translations t = b - R a
+  //    are close: |t(c2) - t(c)| <= the gate's largest radius (at the longest baseline in A). So
+  //    candidates are sorted by t.x, and each c visits only the c2 within that radius in t (a
+  //    conservative prefilter with a margin over rounding: every pair the gate would pass is
+  //    visited), grouped by a' in increasing order, with the original per-pair arithmetic. A pair the
+  //    prefilter drops contributes 0 to the sum, so the scores are the same as visiting every a'.
   const Mat2d r = Pose2{0.0, 0.0, dtheta_rad}.rotation();
   const double inv2sd = 1.0 / (2.0 * config_.sigma_dist_m * config_.sigma_dist_m);
   const float w = config_.appearance_weight;
-  constexpr std::size_t kMaxK = 32;
-  double acc[kMaxK];
-  for (std::size_t i = 0; i < na; ++i) {
-    const std::uint32_t c0 = first_[i], c1 = first_[i + 1];
-    if (c0 == c1) continue;
-    const std::size_t nci = c1 - c0;
-    for (std::size_t q = 0; q < nci; ++q) acc[q] = 0.0;
+  double gate_radius_m = 0.0, abs_max_m = 0.0;
+  {
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (std::size_t i = 0; i < na; ++i) {
+      const Vec2d p = a.position_m[i];
+      if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;  // its pairs score 0 (NaN arithmetic)
+      xmin = std::min(xmin, p.x());
+      xmax = std::max(xmax, p.x());
+      ymin = std::min(ymin, p.y());
+      ymax = std::max(ymax, p.y());
+      abs_max_m = std::max(abs_max_m, std::max(std::abs(p.x()), std::abs(p.y())));
+    }
+    for (std::size_t j = 0; j < nb; ++j) {
+      const Vec2d p = b.position_m[j];
+      if (std::isfinite(p.x()) && std::isfinite(p.y())) abs_max_m = std::max(abs_max_m, std::max(std::abs(p.x()), std::abs(p.y())));
+    }
+    const double la_max = xmax >= xmin ? std::sqrt((xmax - xmin) * (xmax - xmin) + (ymax - ymin) * (ymax - ymin)) : 0.0;
+    // gate2 = 27.6 (sd^2 + la^2 sphi^2) and la sphi = sigma_dir la + sd grows with la.
+    const double ls = config_.sigma_dir_rad * la_max + config_.sigma_dist_m;
+    const double gate2_max = 2.0 * 13.8 * (config_.sigma_dist_m * config_.sigma_dist_m + ls * ls);
+    gate_radius_m = std::sqrt(gate2_max) * (1.0 + 1e-9) + 1e-9 * (1.0 + 4.0 * abs_max_m);
+  }
+  for (std::size_t c = 0; c < nc; ++c) {
+    translation_[c] = b.position_m[cand_[c].b] - r * a.position_m[cand_[c].a];
+    order_[c] = static_cast<std::uint32_t>(c);
+  }
+  std::sort(order_.begin(), order_.begin() + nc, [this](std::uint32_t x, std::uint32_t y) {
+    if (translation_[x].x() != translation_[y].x()) return translation_[x].x() < translation_[y].x();
+    return x < y;
+  });
+  for (std::size_t o = 0; o < nc; ++o) rank_[order_[o]] = static_cast<std::uint32_t>(o);
+  const double gr2 = gate_radius_m * gate_radius_m;
+  // Per pair, with la^2 = |a' - a|^2 (no square root): gate2 <= 27.6 (3 sd^2 + 2 sigma_dir^2 la^2),
+  // as (sigma_dir la + sd)^2 <= 2 sigma_dir^2 la^2 + 2 sd^2; with a relative and an absolute margin
+  // over the rounding of t and of gate2 (positions are at most abs_max_m from the origin).
+  const double sd2 = config_.sigma_dist_m * config_.sigma_dist_m;
+  const double pair_c0 = 2.0 * 13.8 * 3.0 * sd2 * (1.0 + 1e-9);
+  const double pair_c1 = 2.0 * 13.8 * 2.0 * config_.sigma_dir_rad * config_.sigma_dir_rad * (1.0 + 1e-9);
+  const double pair_margin = 1e-9 * (1.0 + abs_max_m) * (1.0 + abs_max_m);
+  for (std::size_t c = 0; c < nc; ++c) {
+    Candidate& cc = cand_[c];
+    const std::size_t i = cc.a;
+    const Vec2d tc = translation_[c];
+    const Vec2d pai = a.position_m[i];
+    const auto near_enough = [&](std::uint32_t c2) {
+      const double dt2 = (translation_[c2] - tc).squaredNorm();
+      if (!(dt2 <= gr2) || cand_[c2].a == i) return false;
+      return dt2 <= pair_c0 + pair_c1 * (a.position_m[cand_[c2].a] - pai).squaredNorm() + pair_margin;
+    };
+    // The candidates within the radius in t, in candidate order (= grouped by a', increasing).
+    std::size_t nn = 0;
+    const std::size_t rc = rank_[c];
+    for (std::size_t o = rc; o-- > 0;) {
+      const std::uint32_t c2 = order_[o];
+      if (!(tc.x() - translation_[c2].x() <= gate_radius_m)) break;
+      if (near_enough(c2)) near_[nn++] = c2;
+    }
+    for (std::size_t o = rc + 1; o < nc; ++o) {
+      const std::uint32_t c2 = order_[o];
+      if (!(translation_[c2].x() - tc.x() <= gate_radius_m)) break;
+      if (near_enough(c2)) near_[nn++] = c2;
+    }
+    std::sort(near_.begin(), near_.begin() + nn);
+    double acc = 0.0;
     const Vec2d pa = a.position_m[i];
-    for (std::size_t i2 = 0; i2 < na; ++i2) {
-      if (i2 == i || first_[i2] == first_[i2 + 1]) continue;
+    const Vec2d pb = b.position_m[cc.b];
+    for (std::size_t g = 0; g < nn;) {
+      const std::size_t i2 = cand_[near_[g]].a;
+      std::size_t g1 = g + 1;
+      while (g1 < nn && cand_[near_[g1]].a == i2) ++g1;
       const Vec2d va = r * (a.position_m[i2] - pa);
       const double la = va.norm();
-      if (la < 1e-9) continue;
+      if (la < 1e-9) {
+        g = g1;
+        continue;
+      }
       const double sphi = config_.sigma_dir_rad + config_.sigma_dist_m / la;
       const double inv2sp = 1.0 / (2.0 * sphi * sphi);
       // Gate: f >= 1e-3 needs dd^2 < 13.8 sd^2 and phi^2 < 13.8 sphi^2, so |vb - va|^2 (~ dd^2 +
       // (la phi)^2) stays below 13.8 (sd^2 + la^2 sphi^2); x2 margin for the small-angle form.
       const double gate2 = 2.0 * 13.8 * (config_.sigma_dist_m * config_.sigma_dist_m + la * la * sphi * sphi);
-      for (std::size_t q = 0; q < nci; ++q) {
-        const Candidate& cc = cand_[c0 + q];
-        const Vec2d pb = b.position_m[cc.b];
-        double best = 0.0;
-        for (std::uint32_t c2 = first_[i2]; c2 < first_[i2 + 1]; ++c2) {
-          if (cand_[c2].b == cc.b) continue;
-          const Vec2d vb = b.position_m[cand_[c2].b] - pb;
-          if ((vb - va).squaredNorm() > gate2) continue;
-          const double lb = vb.norm();
-          const double dd = la - lb;
-          const double ed = dd * dd * inv2sd;
-          if (ed > 4.5 || lb < 1e-9) continue;  // beyond 3 sigma
-          const double cosphi = va.dot(vb) / (la * lb);
-          if (cosphi <= 0.0) continue;  // directions disagree by more than 90 degrees
-          const double phi2 = 2.0 * (1.0 - cosphi);  // ~ phi^2 for small phi
-          const double e = ed + phi2 * inv2sp;
-          if (e > 6.9) continue;  // f < 1e-3
-          const double f = std::exp(-e);
-          if (f > best) best = f;
-        }
-        acc[q] += best;
+      double best = 0.0;
+      for (; g < g1; ++g) {
+        const std::uint32_t c2 = near_[g];
+        if (cand_[c2].b == cc.b) continue;
+        const Vec2d vb = b.position_m[cand_[c2].b] - pb;
+        if ((vb - va).squaredNorm() > gate2) continue;
+        const double lb = vb.norm();
+        const double dd = la - lb;
+        const double ed = dd * dd * inv2sd;
+        if (ed > 4.5 || lb < 1e-9) continue;  // beyond 3 sigma
+        const double cosphi = va.dot(vb) / (la * lb);
+        if (cosphi <= 0.0) continue;  // directions disagree by more than 90 degrees
+        const double phi2 = 2.0 * (1.0 - cosphi);  // ~ phi^2 for small phi
+        const double e = ed + phi2 * inv2sp;
+        if (e > 6.9) continue;  // f < 1e-3
+        const double f = std::exp(-e);
+        if (f > best) best = f;
       }
+      acc += best;
     }
-    for (std::size_t q = 0; q < nci; ++q) {
-      Candidate& cc = cand_[c0 + q];
-      cc.score = static_cast<float>(acc[q]) * ((1.0f - w) + w * std::max(0.0f, cc.appearance));
-    }
+    cc.score = static_cast<float>(acc) * ((1.0f - w) + w * std::max(0.0f, cc.appearance));
   }
 
   // 3. Greedy one-to-one selection.

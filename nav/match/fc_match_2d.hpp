@@ -14,8 +14,13 @@
 //   3. greedy one-to-one selection by decreasing S while S >= min_support.
 // The output are putative matches for RANSAC / LMedS (nav/match/ransac.hpp).
 // Bounds: points beyond max_points are ignored (counted); candidates <= max_points *
-// max_candidates_per_point; cost O(nA nB D) appearance + O(C^2) scoring, C candidates.
-// Memory: init() takes all buffers from an Arena; match() never allocates.
+// max_candidates_per_point; the scoring visits only candidate pairs whose implied translations lie
+// within the gate's largest radius (same scores as visiting every pair); descriptors of at most max_descriptor_bytes (longer: kBadInput); cost
+// O(nA nB D) appearance + O(C^2) scoring, C candidates. The appearance dot products run on int16
+// copies of the descriptors (widened once per call; a 16-bit multiply-add the compiler vectorises on
+// x86 and ARM, the same integer sums as int8), with a fixed-length loop for 64-byte descriptors.
+// Memory: init() takes all buffers from an Arena (2 * max_points * max_descriptor_bytes int16 of
+// them for the widened descriptors); match() never allocates.
 #pragma once
 
 #include <cstddef>
@@ -56,6 +61,7 @@ struct FcMatch2dConfig {
   double sigma_dir_rad = 0.05;            // heading noise between the two sets
   float appearance_weight = 0.5f;         // w in [0, 1]
   float min_support = 1.5f;               // score floor for a match
+  std::size_t max_descriptor_bytes = 64;  // longest descriptor match() accepts (the route's 8 x 8)
 };
 
 enum class FcMatchCounter : std::uint8_t { kPointsIgnored, kBadInput, kCount };
@@ -84,10 +90,14 @@ class FcMatcher2d {
   bool ready_ = false;
   Span<Candidate> cand_;
   Span<std::uint32_t> first_;   // per a: first candidate index (cand_ is grouped by a)
-  Span<std::uint32_t> order_;   // candidate order for the greedy pass
+  Span<std::uint32_t> order_;   // candidate order: by implied translation x (scoring), then for the greedy pass
+  Span<std::uint32_t> rank_;    // per candidate: its place in the translation order
+  Span<std::uint32_t> near_;    // one candidate's neighbours in translation (scoring)
+  Span<Vec2d> translation_;     // per candidate (a, b): b - R(dtheta) a
   Span<std::uint8_t> used_a_;
   Span<std::uint8_t> used_b_;
   Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
+  Span<std::int16_t> wide_a_, wide_b_;  // descriptors widened to int16 (max_points x max_descriptor_bytes)
   CounterSet<FcMatchCounter> counters_;
 };
 

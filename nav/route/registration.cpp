@@ -12,7 +12,7 @@ std::size_t Registrar::arena_bytes(const RegistrationConfig& c) noexcept {
 }
 
 Status Registrar::init(const RegistrationConfig& c, Arena& arena) noexcept {
-  if (c.fc.max_points < 2 || c.fc.max_points > kMaxKeypointsPerNode || c.min_matches < 2)
+  if (c.fc.max_points < 2 || c.fc.max_points > kMaxKeypointsPerNode || c.fc.max_descriptor_bytes < kDescriptorBytes || c.min_matches < 2)
     return Status(StatusCode::kInvalidArgument, "registration: bad configuration");
   QNAV_RETURN_IF_ERROR(matcher_.init(c.fc, arena));
   const std::size_t n = c.fc.max_points;

@@ -1,6 +1,7 @@
 #include "nav/sonar/scanline_corrector.hpp"
 
 #include <cmath>
+#include <cstring>
 
 namespace qnav::sonar {
 
@@ -8,13 +9,14 @@ namespace {
 constexpr std::size_t kAlign = 16;
 std::size_t padded(std::size_t bytes) noexcept { return bytes + kAlign; }
 bool finite_positive(float v) noexcept { return std::isfinite(v) && v > 0.0f; }
+constexpr std::uint8_t kOutside = 0, kAverage = 1, kInterpolate = 2;  // BinGeometry::kind
 }  // namespace
 
 std::size_t ScanlineCorrector::arena_bytes(const ScanlineCorrectorConfig& c) noexcept {
   const std::size_t n = c.max_samples_per_side > 0 ? static_cast<std::size_t>(c.max_samples_per_side) : 0;
   const std::size_t b = c.ground_bins_per_side > 0 ? static_cast<std::size_t>(c.ground_bins_per_side) : 0;
   return padded(n * sizeof(float)) + padded((n + 1) * sizeof(double)) + padded(n * sizeof(float)) +
-         4 * padded(b * sizeof(float)) + 2 * padded(b) + 2 * padded(b * sizeof(std::uint16_t));
+         4 * padded(b * sizeof(float)) + 2 * padded(b) + 2 * padded(b * sizeof(std::uint16_t)) + padded(b * sizeof(BinGeometry));
 }
 
 Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) noexcept {
@@ -41,6 +43,7 @@ Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) n
   tvg_ = arena.allocate<float>(n);
   prefix_ = arena.allocate<double>(n + 1);
   smooth_ = arena.allocate<float>(n);
+  geometry_ = arena.allocate<BinGeometry>(b);
   egn_port_ = arena.allocate<float>(b);
   egn_stbd_ = arena.allocate<float>(b);
   egn_n_port_ = arena.allocate<std::uint16_t>(b);
@@ -49,7 +52,7 @@ Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) n
   out_stbd_ = arena.allocate<float>(b);
   valid_port_ = arena.allocate<std::uint8_t>(b);
   valid_stbd_ = arena.allocate<std::uint8_t>(b);
-  if (tvg_.empty() || prefix_.empty() || smooth_.empty() || egn_port_.empty() || egn_stbd_.empty() || egn_n_port_.empty() || egn_n_stbd_.empty() || out_port_.empty() ||
+  if (tvg_.empty() || prefix_.empty() || smooth_.empty() || geometry_.empty() || egn_port_.empty() || egn_stbd_.empty() || egn_n_port_.empty() || egn_n_stbd_.empty() || out_port_.empty() ||
       out_stbd_.empty() || valid_port_.empty() || valid_stbd_.empty())
     return Status(StatusCode::kCapacityExceeded, "arena too small for ScanlineCorrector");
   cfg_ = c;
@@ -81,12 +84,21 @@ Status ScanlineCorrector::check_ping(const SonarPing& ping) noexcept {
     counters_.increment(CorrectorCounter::kBadRange);
     return Status(StatusCode::kInvalidArgument, "ping slant range not finite, not above min_altitude_m or above 100 km");
   }
+  // Finite and >= 0 (-0 included), on the bits: u < 0x7f800000 (sign clear, exponent not all ones) or
+  // u == 0x80000000 (-0). One branch-free integer pass the compiler vectorises; no float compares.
+  const float* pp = ping.port.data();
+  const float* ps = ping.stbd.data();
+  std::uint32_t bad = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const float a = ping.port[i], b = ping.stbd[i];
-    if (!(std::isfinite(a) && std::isfinite(b) && a >= 0.0f && b >= 0.0f)) {
-      counters_.increment(CorrectorCounter::kNonFiniteSample);
-      return Status(StatusCode::kInvalidArgument, "ping sample NaN, infinite or negative");
-    }
+    std::uint32_t a, b;
+    std::memcpy(&a, pp + i, sizeof a);
+    std::memcpy(&b, ps + i, sizeof b);
+    bad |= (static_cast<std::uint32_t>(a >= 0x7f800000u) & static_cast<std::uint32_t>(a != 0x80000000u)) |
+           (static_cast<std::uint32_t>(b >= 0x7f800000u) & static_cast<std::uint32_t>(b != 0x80000000u));
+  }
+  if (bad != 0) {
+    counters_.increment(CorrectorCounter::kNonFiniteSample);
+    return Status(StatusCode::kInvalidArgument, "ping sample NaN, infinite or negative");
   }
   return Status::ok();
 }
@@ -99,16 +111,16 @@ Result<float> ScanlineCorrector::detect_bottom_m(const SonarPing& ping) noexcept
 Result<float> ScanlineCorrector::detect_bottom_checked(const SonarPing& ping) noexcept {
   const int n = static_cast<int>(ping.port.size());
   const int w = cfg_.bottom_smooth_samples;
-  // Box-smoothed sum of both sides (running window, O(n)).
+  int search = static_cast<int>(static_cast<float>(n) * cfg_.bottom_search_fraction);
+  if (search > n) search = n;
+  // Box-smoothed sum of both sides (running window, O(n)); only the search window is ever read.
   double acc = 0.0;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < search; ++i) {
     acc += static_cast<double>(ping.port[i]) + static_cast<double>(ping.stbd[i]);
     if (i >= w) acc -= static_cast<double>(ping.port[i - w]) + static_cast<double>(ping.stbd[i - w]);
     const int cnt = i + 1 < w ? i + 1 : w;
     smooth_[static_cast<std::size_t>(i)] = static_cast<float>(acc / cnt);
   }
-  int search = static_cast<int>(static_cast<float>(n) * cfg_.bottom_search_fraction);
-  if (search > n) search = n;
   // Blanking: samples nearer than min_altitude_m (transmit pulse, ringing) are not looked at.
   const float dr = ping.slant_range_m / static_cast<float>(n);
   // Computed in double and clamped before the conversion: no float-to-int overflow whatever the range.
@@ -155,39 +167,30 @@ void ScanlineCorrector::update_tvg(float slant_range_m, int n) noexcept {
   tvg_n_ = n;
 }
 
-void ScanlineCorrector::correct_side(Span<const float> s, float dr_m, float altitude_m, float* egn, std::uint16_t* egn_n,
-                                     float* out, std::uint8_t* valid) noexcept {
-  const int n = static_cast<int>(s.size());
-  prefix_[0] = 0.0;
-  for (int i = 0; i < n; ++i)
-    prefix_[static_cast<std::size_t>(i) + 1] =
-        prefix_[static_cast<std::size_t>(i)] + static_cast<double>(s[static_cast<std::size_t>(i)] * tvg_[static_cast<std::size_t>(i)]);
+void ScanlineCorrector::bin_geometry(int n, float dr_m, float altitude_m) noexcept {
   const double h2 = static_cast<double>(altitude_m) * static_cast<double>(altitude_m);
   const double g_bin = static_cast<double>(cfg_.ground_bin_m);
   const double inv_dr = 1.0 / static_cast<double>(dr_m);
   const double r_max = static_cast<double>(dr_m) * n;
-  const float alpha = cfg_.egn_alpha;
   const int bins = cfg_.ground_bins_per_side;
   for (int b = 0; b < bins; ++b) {
+    BinGeometry& q = geometry_[static_cast<std::size_t>(b)];
     const double g0 = b * g_bin, g1 = (b + 1) * g_bin;
     const double r1 = std::sqrt(g1 * g1 + h2);
     if (g0 < static_cast<double>(cfg_.nadir_gap_m) || r1 > r_max) {
-      out[b] = 0.0f;
-      valid[b] = 0;
+      q.kind = kOutside;
       continue;
     }
     const double r0 = std::sqrt(g0 * g0 + h2);
     const double s0 = r0 * inv_dr, s1 = r1 * inv_dr;  // sample coordinates (sample i spans [i, i+1))
-    double level;
     if (s1 - s0 >= 1.0) {
       // Average of the samples covered (fractional ends by linear prefix interpolation).
-      const auto prefix_at = [&](double x) {
-        int i = static_cast<int>(x);
-        if (i >= n) return prefix_[static_cast<std::size_t>(n)];
-        const double f = x - i;
-        return prefix_[static_cast<std::size_t>(i)] + f * (prefix_[static_cast<std::size_t>(i) + 1] - prefix_[static_cast<std::size_t>(i)]);
-      };
-      level = (prefix_at(s1) - prefix_at(s0)) / (s1 - s0);
+      q.kind = kAverage;
+      q.i0 = static_cast<std::int32_t>(static_cast<int>(s0));
+      q.f0 = s0 - q.i0;
+      q.i1 = static_cast<std::int32_t>(static_cast<int>(s1));
+      q.f1 = s1 - q.i1;
+      q.span = s1 - s0;
     } else {
       // Linear interpolation between sample centres at the bin centre.
       const double gc = 0.5 * (g0 + g1);
@@ -198,16 +201,46 @@ void ScanlineCorrector::correct_side(Span<const float> s, float dr_m, float alti
       double f = x - i;
       if (f < 0.0) f = 0.0;
       if (f > 1.0) f = 1.0;
-      const double v0 = prefix_[static_cast<std::size_t>(i) + 1] - prefix_[static_cast<std::size_t>(i)];
-      const double v1 = prefix_[static_cast<std::size_t>(i) + 2] - prefix_[static_cast<std::size_t>(i) + 1];
-      level = v0 + f * (v1 - v0);
+      q.kind = kInterpolate;
+      q.i0 = i;
+      q.f0 = f;
+    }
+  }
+}
+
+void ScanlineCorrector::correct_side(Span<const float> s, float* egn, std::uint16_t* egn_n, float* out, std::uint8_t* valid) noexcept {
+  const int n = static_cast<int>(s.size());
+  prefix_[0] = 0.0;
+  for (int i = 0; i < n; ++i)
+    prefix_[static_cast<std::size_t>(i) + 1] =
+        prefix_[static_cast<std::size_t>(i)] + static_cast<double>(s[static_cast<std::size_t>(i)] * tvg_[static_cast<std::size_t>(i)]);
+  const float alpha = cfg_.egn_alpha;
+  const int bins = cfg_.ground_bins_per_side;
+  const double* p = prefix_.data();
+  const auto prefix_at = [p, n](std::int32_t i, double f) { return i >= n ? p[n] : p[i] + f * (p[i + 1] - p[i]); };
+  for (int b = 0; b < bins; ++b) {
+    const BinGeometry& q = geometry_[static_cast<std::size_t>(b)];
+    if (q.kind == kOutside) {
+      out[b] = 0.0f;
+      valid[b] = 0;
+      continue;
+    }
+    double level;
+    if (q.kind == kAverage) {
+      level = (prefix_at(q.i1, q.f1) - prefix_at(q.i0, q.f0)) / q.span;
+    } else {
+      const double v0 = p[q.i0 + 1] - p[q.i0];
+      const double v1 = p[q.i0 + 2] - p[q.i0 + 1];
+      level = v0 + q.f0 * (v1 - v0);
     }
     float v = static_cast<float>(level);
     if (cfg_.egn_enabled) {
       // Plain mean of the first 1/alpha values seen by the bin, then the exponential running mean.
+      // Once (k + 1) alpha > 2, 1 / (k + 1) < alpha for certain: the division is skipped (same a).
       float& m = egn[b];
       std::uint16_t& k = egn_n[b];
-      const float a = 1.0f / static_cast<float>(k + 1) > alpha ? 1.0f / static_cast<float>(k + 1) : alpha;
+      const float kf = static_cast<float>(k + 1);
+      const float a = kf * alpha > 2.0f ? alpha : (1.0f / kf > alpha ? 1.0f / kf : alpha);
       m += a * (v - m);
       if (k < 65535) ++k;
       v = m > 1e-20f ? v / m : 0.0f;
@@ -233,8 +266,9 @@ Status ScanlineCorrector::correct(const SonarPing& ping, CorrectedScanline& out)
   const int n = static_cast<int>(ping.port.size());
   update_tvg(ping.slant_range_m, n);
   const float dr = ping.slant_range_m / static_cast<float>(n);
-  correct_side(ping.port, dr, h, egn_port_.data(), egn_n_port_.data(), out_port_.data(), valid_port_.data());
-  correct_side(ping.stbd, dr, h, egn_stbd_.data(), egn_n_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
+  bin_geometry(n, dr, h);
+  correct_side(ping.port, egn_port_.data(), egn_n_port_.data(), out_port_.data(), valid_port_.data());
+  correct_side(ping.stbd, egn_stbd_.data(), egn_n_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
   out.stamp_ns = ping.stamp_ns;
   out.ping_number = ping.ping_number;
   out.bin_m = cfg_.ground_bin_m;

@@ -93,14 +93,23 @@ class ScanlineCorrector {
   Status check_ping(const SonarPing& ping) noexcept;
   Result<float> detect_bottom_checked(const SonarPing& ping) noexcept;
   void update_tvg(float slant_range_m, int n) noexcept;
-  void correct_side(Span<const float> samples, float dr_m, float altitude_m, float* egn_mean, std::uint16_t* egn_count,
-                    float* out, std::uint8_t* valid) noexcept;
+  void bin_geometry(int n, float dr_m, float altitude_m) noexcept;
+  void correct_side(Span<const float> samples, float* egn_mean, std::uint16_t* egn_count, float* out, std::uint8_t* valid) noexcept;
+
+  // One ground bin's slant-range footprint, the same for both sides of a ping (bin_geometry()).
+  struct BinGeometry {
+    double f0 = 0.0, f1 = 0.0;  // kAverage: fractional sample ends; kInterpolate: f0 = weight of the next sample
+    double span = 0.0;          // kAverage: s1 - s0 (samples covered)
+    std::int32_t i0 = 0, i1 = 0;  // kAverage: sample indices of the ends; kInterpolate: i0 = first sample
+    std::uint8_t kind = 0;        // kOutside, kAverage, kInterpolate
+  };
 
   ScanlineCorrectorConfig cfg_{};
   bool ready_ = false;
   Span<float> tvg_;        // per slant sample gain
   Span<double> prefix_;    // prefix sums of TVG-corrected samples (n + 1)
   Span<float> smooth_;     // bottom detection work buffer
+  Span<BinGeometry> geometry_;  // per ground bin, this ping's (both sides)
   Span<float> egn_port_, egn_stbd_;
   Span<std::uint16_t> egn_n_port_, egn_n_stbd_;  // values seen per bin (saturating)
   Span<float> out_port_, out_stbd_;

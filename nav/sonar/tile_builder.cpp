@@ -1,5 +1,6 @@
 #include "nav/sonar/tile_builder.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace qnav::sonar {
@@ -179,12 +180,10 @@ Status TileBuilder::build(int first, int count) noexcept {
     const Vec2d sb = starboard_unit(s.pose.heading_rad);
     for (int side = 0; side < 2; ++side) {
       const std::uint8_t* k = valid(i, side);
-      int lo = -1, hi = -1;
-      for (int b = 0; b < s.bins; ++b)
-        if (k[b]) {
-          if (lo < 0) lo = b;
-          hi = b;
-        }
+      int lo = 0, hi = s.bins - 1;  // first and last valid bin (-1, -1: none)
+      while (lo < s.bins && !k[lo]) ++lo;
+      while (hi > lo && !k[hi]) --hi;
+      if (lo == s.bins) lo = hi = -1;
       const int ends[2] = {lo, hi};
       for (int e = 0; e < 2; ++e) {
         const double g = ends[e] < 0 ? 0.0 : (ends[e] + 0.5) * static_cast<double>(s.bin_m);
@@ -203,13 +202,14 @@ Status TileBuilder::build(int first, int count) noexcept {
   const std::size_t px = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   // Every buffer is zero outside the previous tile's touched box (init zeroes them all), so only
   // that box needs clearing.
-  for (int y = prev_y0_; y <= prev_y1_; ++y) {
-    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    for (int x = prev_x0_; x <= prev_x1_; ++x) {
-      const std::size_t k = row + static_cast<std::size_t>(x);
-      acc_[k] = Acc{0.0f, 0.0f};
-      intensity_[k] = 0.0f;
-      coverage_[k] = u8_[k] = 0;
+  if (prev_x1_ >= prev_x0_) {
+    const std::size_t len = static_cast<std::size_t>(prev_x1_ - prev_x0_ + 1);
+    for (int y = prev_y0_; y <= prev_y1_; ++y) {
+      const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(prev_x0_);
+      std::fill(acc_.data() + k, acc_.data() + k + len, Acc{0.0f, 0.0f});
+      std::fill(intensity_.data() + k, intensity_.data() + k + len, 0.0f);
+      std::fill(coverage_.data() + k, coverage_.data() + k + len, std::uint8_t{0});
+      std::fill(u8_.data() + k, u8_.data() + k + len, std::uint8_t{0});
     }
   }
   bb_x0_ = W;
@@ -341,29 +341,32 @@ Status TileBuilder::build(int first, int count) noexcept {
   // Normalise and mark coverage.
   const float eps = 1e-3f;
   std::size_t covered = 0;
+  // Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
   for (int y = bb_y0_; y <= bb_y1_; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+    const Acc* acc = acc_.data() + row;
+    float* out = intensity_.data() + row;
+    std::uint8_t* cov = coverage_.data() + row;
     for (int x = bb_x0_; x <= bb_x1_; ++x) {
-      const std::size_t k = row + static_cast<std::size_t>(x);
-      if (acc_[k].weight > eps) {
-        intensity_[k] = acc_[k].sum / acc_[k].weight;
-        coverage_[k] = 1;
-      } else {
-        intensity_[k] = 0.0f;
-        coverage_[k] = 0;
-      }
+      const bool c = acc[x].weight > eps;
+      out[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
+      cov[x] = c ? 1 : 0;
     }
   }
   if (cfg_.hole_fill_radius_px > 0) fill_holes();
   const float scale = 255.0f / cfg_.display_max;
   for (int y = bb_y0_; y <= bb_y1_; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+    const float* in = intensity_.data() + row;
+    const std::uint8_t* cov = coverage_.data() + row;
+    std::uint8_t* out = u8_.data() + row;
+    std::uint32_t row_covered = 0;
+    for (int x = bb_x0_; x <= bb_x1_; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
+    covered += row_covered;
     for (int x = bb_x0_; x <= bb_x1_; ++x) {
-      const std::size_t k = row + static_cast<std::size_t>(x);
-      if (coverage_[k] != 0) ++covered;
-      float u = intensity_[k] * scale + 0.5f;
+      float u = in[x] * scale + 0.5f;
       u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
-      u8_[k] = static_cast<std::uint8_t>(u);
+      out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
     }
   }
   prev_x0_ = bb_x0_;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -131,6 +132,178 @@ TEST(FcMatch2d, InconsistentInputIsAnErrorAndCounted) {
   EXPECT_EQ(f.m.match(a, b, 0.0, out), StatusCode::kInvalidArgument);
   EXPECT_EQ(f.m.match(b, b, std::nan(""), out), StatusCode::kInvalidArgument);
   EXPECT_EQ(f.m.counters().get(FcMatchCounter::kBadInput), 2u);
+}
+
+// The appearance of each match is the ZNCC of its two descriptors: the matcher's dot products (on
+// int16 copies, a fixed-length loop for 64 bytes, a generic one otherwise) are the same integer sums.
+TEST(FcMatch2d, AppearanceIsTheDescriptorZnccFor64AndShorterDescriptors) {
+  Sets s = make(40, Pose2{8.0, -3.0, 0.4}, 0.5, 30, false, 5);
+  Fixture f;
+  BoundedVector<Match2d> out = f.run(s, 0.4);
+  ASSERT_GT(out.size(), 30u);
+  for (const Match2d& m : out)
+    EXPECT_NEAR(m.appearance, zncc_i8(s.da.data() + m.a * kD, s.db.data() + m.b * kD, kD), 1e-5f);
+  // The first 24 bytes of every descriptor (not a multiple of the vector width).
+  constexpr std::size_t kShort = 24;
+  std::vector<std::int8_t> sa, sb;
+  for (std::size_t i = 0; i < s.pa.size(); ++i) sa.insert(sa.end(), s.da.begin() + static_cast<long>(i * kD), s.da.begin() + static_cast<long>(i * kD + kShort));
+  for (std::size_t j = 0; j < s.pb.size(); ++j) sb.insert(sb.end(), s.db.begin() + static_cast<long>(j * kD), s.db.begin() + static_cast<long>(j * kD + kShort));
+  KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(sa.data(), sa.size()), kShort};
+  KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(sb.data(), sb.size()), kShort};
+  BoundedVector<Match2d> short_out(Span<Match2d>(f.store.data(), f.store.size()));
+  ASSERT_TRUE(f.m.match(a, b, 0.4, short_out).is_ok());
+  ASSERT_GT(short_out.size(), 20u);
+  for (const Match2d& m : short_out)
+    EXPECT_NEAR(m.appearance, zncc_i8(sa.data() + m.a * kShort, sb.data() + m.b * kShort, kShort), 1e-5f);
+}
+
+TEST(FcMatch2d, DescriptorsLongerThanConfiguredAreRefusedAndCounted) {
+  Sets s = make(10, Pose2{}, 0.1, 0, false, 1);
+  Fixture f;
+  BoundedVector<Match2d> out(Span<Match2d>(f.store.data(), f.store.size()));
+  // The same bytes read as 5 descriptors of 128 bytes: longer than max_descriptor_bytes (64).
+  KeypointSet2d a{Span<const Vec2d>(s.pa.data(), 5), Span<const std::int8_t>(s.da.data(), s.da.size()), 2 * kD};
+  EXPECT_EQ(f.m.match(a, a, 0.0, out), StatusCode::kInvalidArgument);
+  EXPECT_EQ(f.m.counters().get(FcMatchCounter::kBadInput), 1u);
+  FcMatch2dConfig c;
+  c.max_descriptor_bytes = 0;
+  ArenaStorage arena(FcMatcher2d::arena_bytes(FcMatch2dConfig{}));
+  FcMatcher2d m;
+  EXPECT_EQ(m.init(c, arena), StatusCode::kInvalidArgument);
+}
+
+// The matcher as first written (every candidate pair scored, int8 dot products), kept here as the
+// reference: the matcher's prefiltered scoring and int16 dot products must give the same matches
+// with the same scores, bit for bit.
+std::vector<Match2d> reference_match(const Sets& s, double dtheta, const FcMatch2dConfig& c) {
+  struct Cand {
+    std::uint16_t a, b;
+    float appearance, score;
+  };
+  const std::size_t na = s.pa.size(), nb = s.pb.size(), d = kD, k = c.max_candidates_per_point;
+  auto stats = [](const std::int8_t* p, float* st) {
+    std::int32_t s1 = 0, s2 = 0;
+    for (std::size_t q = 0; q < kD; ++q) {
+      s1 += p[q];
+      s2 += static_cast<std::int32_t>(p[q]) * p[q];
+    }
+    const double var = static_cast<double>(s2) - static_cast<double>(s1) * s1 / static_cast<double>(kD);
+    st[0] = static_cast<float>(s1);
+    st[1] = var > 1e-9 ? static_cast<float>(1.0 / std::sqrt(var)) : 0.0f;
+  };
+  std::vector<float> sta(2 * na), stb(2 * nb);
+  for (std::size_t i = 0; i < na; ++i) stats(s.da.data() + i * d, sta.data() + 2 * i);
+  for (std::size_t j = 0; j < nb; ++j) stats(s.db.data() + j * d, stb.data() + 2 * j);
+  const float inv_d = 1.0f / static_cast<float>(d);
+  std::vector<Cand> cand;
+  std::vector<std::uint32_t> first(na + 1);
+  for (std::size_t i = 0; i < na; ++i) {
+    first[i] = static_cast<std::uint32_t>(cand.size());
+    std::vector<Cand> list;
+    for (std::size_t j = 0; j < nb; ++j) {
+      if (sta[2 * i + 1] == 0.0f || stb[2 * j + 1] == 0.0f) continue;
+      std::int32_t dot = 0;
+      for (std::size_t q = 0; q < d; ++q) dot += static_cast<std::int32_t>(s.da[i * d + q]) * s.db[j * d + q];
+      const float z = (static_cast<float>(dot) - sta[2 * i] * stb[2 * j] * inv_d) * sta[2 * i + 1] * stb[2 * j + 1];
+      if (!(z >= c.min_appearance)) continue;
+      if (list.size() == k && z <= list.back().appearance) continue;
+      if (list.size() < k) list.push_back(Cand{});
+      std::size_t pos = list.size() - 1;
+      while (pos > 0 && list[pos - 1].appearance < z) {
+        list[pos] = list[pos - 1];
+        --pos;
+      }
+      list[pos] = Cand{static_cast<std::uint16_t>(i), static_cast<std::uint16_t>(j), z, 0.0f};
+    }
+    cand.insert(cand.end(), list.begin(), list.end());
+  }
+  first[na] = static_cast<std::uint32_t>(cand.size());
+  const Mat2d r = Pose2{0.0, 0.0, dtheta}.rotation();
+  const double inv2sd = 1.0 / (2.0 * c.sigma_dist_m * c.sigma_dist_m);
+  for (std::size_t i = 0; i < na; ++i) {
+    for (std::uint32_t q = first[i]; q < first[i + 1]; ++q) {
+      double acc = 0.0;
+      for (std::size_t i2 = 0; i2 < na; ++i2) {
+        if (i2 == i || first[i2] == first[i2 + 1]) continue;
+        const Vec2d va = r * (s.pa[i2] - s.pa[i]);
+        const double la = va.norm();
+        if (la < 1e-9) continue;
+        const double sphi = c.sigma_dir_rad + c.sigma_dist_m / la;
+        const double inv2sp = 1.0 / (2.0 * sphi * sphi);
+        const double gate2 = 2.0 * 13.8 * (c.sigma_dist_m * c.sigma_dist_m + la * la * sphi * sphi);
+        const Vec2d pb = s.pb[cand[q].b];
+        double best = 0.0;
+        for (std::uint32_t c2 = first[i2]; c2 < first[i2 + 1]; ++c2) {
+          if (cand[c2].b == cand[q].b) continue;
+          const Vec2d vb = s.pb[cand[c2].b] - pb;
+          if ((vb - va).squaredNorm() > gate2) continue;
+          const double lb = vb.norm();
+          const double dd = la - lb;
+          const double ed = dd * dd * inv2sd;
+          if (ed > 4.5 || lb < 1e-9) continue;
+          const double cosphi = va.dot(vb) / (la * lb);
+          if (cosphi <= 0.0) continue;
+          const double e = ed + 2.0 * (1.0 - cosphi) * inv2sp;
+          if (e > 6.9) continue;
+          const double f = std::exp(-e);
+          if (f > best) best = f;
+        }
+        acc += best;
+      }
+      cand[q].score = static_cast<float>(acc) * ((1.0f - c.appearance_weight) + c.appearance_weight * std::max(0.0f, cand[q].appearance));
+    }
+  }
+  std::vector<std::uint32_t> order(cand.size());
+  for (std::size_t o = 0; o < order.size(); ++o) order[o] = static_cast<std::uint32_t>(o);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
+    if (cand[x].score != cand[y].score) return cand[x].score > cand[y].score;
+    return x < y;
+  });
+  std::vector<std::uint8_t> ua(na), ub(nb);
+  std::vector<Match2d> out;
+  for (std::uint32_t o : order) {
+    const Cand& cc = cand[o];
+    if (cc.score < c.min_support) break;
+    if (ua[cc.a] || ub[cc.b]) continue;
+    out.push_back(Match2d{cc.a, cc.b, cc.score, cc.appearance});
+    ua[cc.a] = ub[cc.b] = 1;
+  }
+  return out;
+}
+
+// 128 x 160 keypoints spread over a 100 m tile, 3 candidates each (the route's configuration), at
+// several rotations, noise levels and one unrelated pair: the same matches and scores as the reference.
+TEST(FcMatch2d, SameMatchesAndScoresAsTheAllPairsReference) {
+  FcMatch2dConfig c;
+  c.max_points = 160;
+  c.max_candidates_per_point = 3;
+  c.min_appearance = 0.35f;
+  c.sigma_dir_rad = 0.02;
+  ArenaStorage arena(FcMatcher2d::arena_bytes(c));
+  FcMatcher2d m;
+  ASSERT_TRUE(m.init(c, arena).is_ok());
+  std::vector<Match2d> store(160);
+  int compared = 0;
+  for (int run = 0; run < 6; ++run) {
+    const Pose2 rel{10.0 * run - 20.0, 4.0 - 3.0 * run, 0.5 * run - 1.2};
+    Sets s = make(128, rel, 0.3 + 0.4 * run, 32, run == 5, 100 + static_cast<std::uint64_t>(run));
+    for (auto& p : s.pa) p *= 1.6;  // 96 x 64 m (the same rotation between the sets, 1.6 x the shift)
+    for (auto& p : s.pb) p *= 1.6;
+    const std::vector<Match2d> want = reference_match(s, rel.heading_rad, c);
+    BoundedVector<Match2d> got(Span<Match2d>(store.data(), store.size()));
+    KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(s.da.data(), s.da.size()), kD};
+    KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
+    ASSERT_TRUE(m.match(a, b, rel.heading_rad, got).is_ok());
+    ASSERT_EQ(got.size(), want.size()) << "run " << run;
+    for (std::size_t q = 0; q < want.size(); ++q) {
+      EXPECT_EQ(got[q].a, want[q].a);
+      EXPECT_EQ(got[q].b, want[q].b);
+      EXPECT_EQ(got[q].score, want[q].score);  // bit for bit
+      EXPECT_EQ(got[q].appearance, want[q].appearance);
+    }
+    compared += static_cast<int>(want.size());
+  }
+  EXPECT_GT(compared, 300);  // the related runs match most of their 128 keypoints
 }
 
 }  // namespace

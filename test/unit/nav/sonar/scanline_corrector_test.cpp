@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "test/support/alloc_guard.hpp"
@@ -258,6 +259,40 @@ TEST(ScanlineCorrector, CorrectMakesNoHeapAllocation) {
   QNAV_EXPECT_NO_ALLOC(for (int k = 0; k < 20; ++k) s = f.corr.correct(p, out));
   EXPECT_TRUE(s.is_ok());
   EXPECT_TRUE(out.altitude_detected);
+}
+
+// The sample check works on the float bits: every value that is not finite and >= 0 is refused,
+// on either side and at any index; -0, the largest float and the smallest subnormal pass.
+TEST(ScanlineCorrector, SampleCheckRefusesEveryNonFiniteOrNegativeValueAndOnlyThose) {
+  ScanlineCorrectorConfig cfg;
+  Fixture f(cfg);
+  std::vector<float> port, stbd;
+  flat_ping(port, stbd, 256, 50.0f, 8.0f, 1.0f);
+  SonarPing p;
+  p.port = Span<const float>(port.data(), port.size());
+  p.stbd = Span<const float>(stbd.data(), stbd.size());
+  p.slant_range_m = 50.0f;
+  p.altitude_m = 8.0f;
+  CorrectedScanline out;
+  const float bad[] = {std::nanf(""), -std::nanf(""), INFINITY, -INFINITY, -1e-30f, -1.0f, -std::numeric_limits<float>::denorm_min()};
+  const float good[] = {-0.0f, 0.0f, std::numeric_limits<float>::max(), std::numeric_limits<float>::denorm_min(), 1.0f};
+  std::uint32_t refused = 0;
+  for (std::size_t at : {std::size_t{0}, std::size_t{77}, std::size_t{255}}) {
+    for (std::vector<float>* side : {&port, &stbd}) {
+      const float keep = (*side)[at];
+      for (float v : bad) {
+        (*side)[at] = v;
+        EXPECT_EQ(f.corr.correct(p, out), StatusCode::kInvalidArgument) << v << " at " << at;
+        ++refused;
+      }
+      for (float v : good) {
+        (*side)[at] = v;
+        EXPECT_TRUE(f.corr.correct(p, out).is_ok()) << v << " at " << at;
+      }
+      (*side)[at] = keep;
+    }
+  }
+  EXPECT_EQ(f.corr.counters().get(CorrectorCounter::kNonFiniteSample), refused);
 }
 
 }  // namespace
