@@ -1,7 +1,10 @@
 #include "drivers/qnavcan/messages.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+
+#include "nav/core/assert.hpp"
 
 namespace qnav::drivers::qnavcan {
 
@@ -219,6 +222,15 @@ const MessageDef* find_message(std::uint32_t id) noexcept {
   for (const MessageDef& m : kMessages)
     if (m.id == id) return &m;
   return nullptr;
+}
+
+double clamp_to_signal(std::uint32_t id, const char* signal, double v) noexcept {
+  const MessageDef* m = find_message(id);
+  if (!QNAV_ASSERT(m != nullptr, "clamp_to_signal: no such qnav message id")) return 0.0;
+  for (const SignalDef& sd : m->signals)
+    if (std::strcmp(sd.name, signal) == 0) return std::isfinite(v) ? std::min(sd.max, std::max(sd.min, v)) : 0.0;
+  QNAV_ASSERT(false, "clamp_to_signal: no such signal in the message");
+  return 0.0;
 }
 
 Status decode_generic(const hal::CanFrame& f, const MessageDef*& def, double* values, std::size_t capacity) noexcept {

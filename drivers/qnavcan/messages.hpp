@@ -151,6 +151,10 @@ constexpr std::size_t kMaxSignalsPerMessage = 16;
 // Every message of docs/qnav.dbc, in file order.
 Span<const MessageDef> all_messages() noexcept;
 const MessageDef* find_message(std::uint32_t id) noexcept;
+// v clamped to signal `signal` of message `id` as docs/qnav.dbc gives its range (the table above is
+// the one place the ranges live); a non-finite v gives 0. A name the table lacks is a software fault
+// (QNAV_ASSERT) and gives 0. O(signals of the message).
+double clamp_to_signal(std::uint32_t id, const char* signal, double v) noexcept;
 
 Status decode(const hal::CanFrame& f, AttitudeIn& out) noexcept;
 Status decode(const hal::CanFrame& f, RatesIn& out) noexcept;

@@ -2,7 +2,7 @@
 // (docs/qnav.dbc), values clamped to the DBC ranges, non-finite values sent as 0 (the sigma as
 // "unknown"). DistToNext: the next node in the direction of travel is one node spacing ahead of the
 // node the offsets refer to. Header-only, O(1), no heap. Used by `qnav route follow`; qnavd's nav
-// worker fills the same two messages the same way (firmware/qnavd/nav_worker.cpp) and can call this.
+// worker calls it too. The ranges come from the DBC table (drivers/qnavcan clamp_to_signal).
 #pragma once
 
 #include <algorithm>
@@ -38,11 +38,11 @@ inline drivers::qnavcan::SideOfRoute route_side_to_wire(route::RouteSide s) noex
 inline void route_can_messages(const route::LocaliserStep& st, double node_spacing_m, std::uint32_t tile_seq,
                                drivers::qnavcan::RouteGuidance& guidance,
                                drivers::qnavcan::RouteStatus& status) noexcept {
-  auto clampd = [](double v, double lo, double hi) { return std::isfinite(v) ? std::min(hi, std::max(lo, v)) : 0.0; };
+  namespace qc = drivers::qnavcan;
   const route::GuidanceOutput& g = st.guidance;
-  guidance.cross_track_m = clampd(g.cross_track_m, -327.0, 327.0);
-  guidance.heading_error_rad = clampd(g.heading_error_rad, -3.1416, 3.1416);
-  guidance.dist_to_next_m = clampd(node_spacing_m - g.along_track_m, 0.0, 6553.5);
+  guidance.cross_track_m = qc::clamp_to_signal(qc::kIdRouteGuidance, "CrossTrack", g.cross_track_m);
+  guidance.heading_error_rad = qc::clamp_to_signal(qc::kIdRouteGuidance, "HeadingError", g.heading_error_rad);
+  guidance.dist_to_next_m = qc::clamp_to_signal(qc::kIdRouteGuidance, "DistToNext", node_spacing_m - g.along_track_m);
   guidance.target_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(g.node, 65535));
   status.status = route_status_to_wire(g.status);
   status.side = route_side_to_wire(g.side);

@@ -8,6 +8,7 @@
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/map_store/map_file.hpp"
 #include "drivers/route_store/route_open.hpp"
+#include "firmware/pipeline/route_can.hpp"
 #include "nav/core/geometry.hpp"
 
 namespace qnav::daemon {
@@ -41,25 +42,6 @@ const char* mode_name(qc::Mode m) noexcept {
   }
   return "?";
 }
-qc::GuidanceState to_wire(route::GuidanceStatus s) noexcept {
-  switch (s) {
-    case route::GuidanceStatus::kTracking: return qc::GuidanceState::kTracking;
-    case route::GuidanceStatus::kHoldCourse: return qc::GuidanceState::kHoldCourse;
-    case route::GuidanceStatus::kDeadReckoned: return qc::GuidanceState::kDeadReckoned;
-    case route::GuidanceStatus::kRouteEnd: return qc::GuidanceState::kRouteEnd;
-  }
-  return qc::GuidanceState::kHoldCourse;
-}
-qc::SideOfRoute to_wire(route::RouteSide s) noexcept {
-  switch (s) {
-    case route::RouteSide::kPort: return qc::SideOfRoute::kPort;
-    case route::RouteSide::kOnRoute: return qc::SideOfRoute::kOnRoute;
-    case route::RouteSide::kStarboard: return qc::SideOfRoute::kStarboard;
-    case route::RouteSide::kUnknown: return qc::SideOfRoute::kUnknown;
-  }
-  return qc::SideOfRoute::kUnknown;
-}
-double clampd(double v, double lo, double hi) noexcept { return std::isfinite(v) ? std::min(hi, std::max(lo, v)) : 0.0; }
 constexpr std::int64_t kNsPerS = 1000000000;
 }  // namespace
 
@@ -639,9 +621,9 @@ void NavWorker::publish_map_frame(const FrameMsg& f, const pipeline::MapperStep&
   if (st.observed && st.place.node != topo::kNoNode) map_node_ = st.place.node;
   qc::MapPose p;
   const Vec2d& pos = c.pose.metric ? c.pose.position_m : c.pose.position_px;
-  p.x = clampd(pos.x(), -qc::kMapPositionMax, qc::kMapPositionMax);
-  p.y = clampd(pos.y(), -qc::kMapPositionMax, qc::kMapPositionMax);
-  p.heading_rad = clampd(std::remainder(c.pose.heading_rad, 2.0 * kPi), -3.1416, 3.1416);
+  p.x = qc::clamp_to_signal(qc::kIdMapPose, "X", pos.x());
+  p.y = qc::clamp_to_signal(qc::kIdMapPose, "Y", pos.y());
+  p.heading_rad = qc::clamp_to_signal(qc::kIdMapPose, "Heading", std::remainder(c.pose.heading_rad, 2.0 * kPi));
   qc::MapStatus m;
   static_assert(topo::kNoNode == qc::kMapNoNode, "no node: the same value in the map and on the wire");
   m.node_id = map_node_;  // map.max_nodes <= 65534: a node id is below 65535
@@ -692,9 +674,9 @@ void NavWorker::publish_vo_increment(std::uint32_t inliers) noexcept {
   vo_last_set_ = vo_.body_pose();
   const pipeline::PlanarIncrement inc = pipeline::planar_increment(vo_anchor_, vo_last_set_);
   qc::VoStep m;
-  m.dx_m = clampd(inc.forward_m, -32.0, 32.0);
-  m.dy_m = clampd(inc.right_m, -32.0, 32.0);
-  m.dyaw_rad = clampd(inc.yaw_rad, -3.1416, 3.1416);
+  m.dx_m = qc::clamp_to_signal(qc::kIdVoStep, "Dx", inc.forward_m);
+  m.dy_m = qc::clamp_to_signal(qc::kIdVoStep, "Dy", inc.right_m);
+  m.dyaw_rad = qc::clamp_to_signal(qc::kIdVoStep, "Dyaw", inc.yaw_rad);
   m.inliers = static_cast<std::uint8_t>(std::min<std::uint32_t>(vo_interval_inliers_, 255));
   publisher_->set(m);
 }
@@ -741,17 +723,9 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
       r.step.guidance.side = route::RouteSide::kUnknown;
     }
     const route::GuidanceOutput& g = r.step.guidance;
-    guidance_.cross_track_m = clampd(g.cross_track_m, -327.0, 327.0);
-    guidance_.heading_error_rad = clampd(g.heading_error_rad, -3.1416, 3.1416);
     // The next node in the direction of travel is one spacing ahead of the node the offsets refer to
-    // (the taught nodes' own spacing, as the localiser's motion model uses it).
-    guidance_.dist_to_next_m = clampd(repeater_.localiser().node_spacing_m() - g.along_track_m, 0.0, 6553.5);
-    guidance_.target_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(g.node, 65535));
-    route_status_.status = to_wire(g.status);
-    route_status_.side = to_wire(g.side);
-    route_status_.cross_track_sigma_m = std::isfinite(g.cross_track_sigma_m) ? g.cross_track_sigma_m : qc::kCrossTrackSigmaMaxM;
-    route_status_.estimate_node = static_cast<std::uint16_t>(std::min<std::uint32_t>(r.step.estimate, 65535));
-    route_status_.tile_seq = static_cast<std::uint16_t>(r.seq & 0xFFFF);
+    // (the taught nodes' own spacing, as the localiser's motion model uses it); values in the DBC ranges.
+    pipeline::route_can_messages(r.step, repeater_.localiser().node_spacing_m(), r.seq, guidance_, route_status_);
     publisher_->set(guidance_);
     publisher_->set(route_status_);
     if (mav_) route_fix(t, g, r.step.confident);
@@ -830,7 +804,7 @@ void NavWorker::publish() noexcept {
   ns.state = mode_;
   const bool fix_possible = mode_ == qc::Mode::kRepeat && !(faults_ & (qc::fault::kSonarLost | qc::fault::kAttitudeLost));
   ns.localised = fix_possible && report_.step.confident;
-  ns.confidence_pct = fix_possible ? clampd(100.0 * static_cast<double>(report_.step.probability), 0.0, 100.0) : 0.0;
+  ns.confidence_pct = fix_possible ? qc::clamp_to_signal(qc::kIdNavStatus, "Confidence", 100.0 * static_cast<double>(report_.step.probability)) : 0.0;
   ns.node_index = static_cast<std::uint16_t>(std::min<std::uint32_t>(mode_ == qc::Mode::kTeach ? writer_.node_count() : report_.step.estimate, 65535));
   ns.fault_flags = faults_;
   ns.mode_reject = static_cast<std::uint8_t>(last_reject_);
@@ -851,7 +825,7 @@ void NavWorker::publish() noexcept {
   if (mav_) rejected += mav_->rejected() + q_.io->mav_rx_overflow.load(std::memory_order_relaxed);
   h.rejected_inputs = static_cast<std::uint16_t>(std::min<std::uint64_t>(rejected, 65535));
   h.deadline_misses = static_cast<std::uint16_t>(std::min<std::uint32_t>(deadline_misses_, 65535));
-  h.cpu_load_pct = clampd(cpu_load_pct_, 0.0, 100.0);
+  h.cpu_load_pct = qc::clamp_to_signal(qc::kIdHealth, "CpuLoad", cpu_load_pct_);
   h.bus_off = bus_off_ || q_.io->can_device_down.load(std::memory_order_relaxed);
   h.leak = (faults_ & qc::fault::kLeak) != 0;
   publisher_->set(h);

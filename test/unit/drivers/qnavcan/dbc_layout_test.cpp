@@ -17,6 +17,7 @@
 
 #include "drivers/qnavcan/dbc.hpp"
 #include "drivers/qnavcan/messages.hpp"
+#include "nav/core/assert.hpp"
 
 using namespace qnav;
 using namespace qnav::drivers::qnavcan;
@@ -266,4 +267,29 @@ TEST(QnavDbc, FaultBitsAreCommentedOneBitSignalsAtTheWordsPositions) {
     }
     EXPECT_EQ(found, fault::kBitCount);
   }
+}
+
+namespace {
+int g_clamp_faults = 0;
+void count_clamp_fault(const char*, const char*, int) noexcept { ++g_clamp_faults; }
+}  // namespace
+
+// The outputs' clamps take their ranges from the DBC table (clamp_to_signal), not from literals.
+TEST(QnavDbc, OutputsAreClampedToTheDbcRangesFromTheOneTable) {
+  using namespace qnav::drivers::qnavcan;
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdRouteGuidance, "CrossTrack", 1000.0), 327.0);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdRouteGuidance, "CrossTrack", -1000.0), -327.0);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdRouteGuidance, "CrossTrack", 12.5), 12.5);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdRouteGuidance, "DistToNext", -3.0), 0.0);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdNavStatus, "Confidence", 150.0), 100.0);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdVoStep, "Dx", std::nan("")), 0.0);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdMapPose, "X", 1e9), kMapPositionMax);
+  // A name the table lacks is a software fault, not a silent literal.
+  const qnav::AssertHandler saved = qnav::assert_handler();
+  qnav::set_assert_handler(&count_clamp_fault);
+  g_clamp_faults = 0;
+  EXPECT_DOUBLE_EQ(clamp_to_signal(kIdRouteGuidance, "NoSuchSignal", 5.0), 0.0);
+  EXPECT_DOUBLE_EQ(clamp_to_signal(0x7FF, "CrossTrack", 5.0), 0.0);
+  EXPECT_EQ(g_clamp_faults, 2);
+  qnav::set_assert_handler(saved);
 }
