@@ -1,0 +1,539 @@
+// qnav route: eval, the route-following paper's evaluation on the simulator (split from route.cpp; what the files share: route_cmd.hpp).
+#include "firmware/qnav/commands/route/route_cmd.hpp"
+
+namespace route_cmd {
+
+// ---------------------------------------------------------------------------------------------------
+// qnav route eval
+namespace {
+
+struct TileRecord {
+  int seabed = 1;
+  int pct = 0;
+  bool reverse = false;
+  int tile = 0;
+  int truth = -1;
+  route::LocaliserStep st;
+  route::RouteSide want = route::RouteSide::kOnRoute;
+  double true_cross_track_m = 0.0;  // the pass's offset, signed like GuidanceOutput::cross_track_m (exact on straight legs)
+};
+
+struct PassStats {
+  int seabed = 1;
+  int pct = 0;
+  bool reverse = false;
+  double lateral_m = 0.0;
+  int tiles = 0, scored = 0, within1 = 0, side_n = 0, side_ok = 0, tracking = 0;
+  int off_route = 0;  // scored tiles whose true side is port or starboard
+  int dead_reckoned = 0;  // scored tiles steered on dead reckoning from the last fix
+  double mean_entropy = 0.0;
+  int reg_true_ok = 0;               // tiles that register (S > chance) on their true node
+  double reg_true_mean_inliers = 0.0;
+  int reg_false_ok = 0;              // tiles that register on a node 3+ away (chance consensus)
+  int reg_true_right = 0;            // ... of reg_true_ok, with the transform right (simulator truth)
+  double repeated_keypoints = 0.0;   // mean per tile: sensed keypoints with a node keypoint on the same spot
+};
+
+
+Status run_localiser(pipeline::RouteRepeater& loc, const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along,
+                     int pct, bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps,
+                     std::vector<double>* step_ms, std::vector<double>* step_cpu_ms = nullptr) {
+  ps.pct = pct;
+  ps.reverse = reverse;
+  ps.lateral_m = lateral;
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    TileRecord r;
+    r.pct = pct;
+    r.reverse = reverse;
+    r.tile = static_cast<int>(k);
+    const auto t0 = Clock::now();
+    const double c0 = cpu_ms();
+    QNAV_RETURN_IF_ERROR(loc.step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, r.st));
+    if (step_cpu_ms) step_cpu_ms->push_back(cpu_ms() - c0);
+    if (step_ms) step_ms->push_back(ms_since(t0));
+    r.truth = true_node(node_along, tiles[k].truth_along_m);
+    r.want = expected_side(lateral, reverse, deadband);
+    r.true_cross_track_m = reverse ? -lateral : lateral;
+    ++ps.tiles;
+    ps.mean_entropy += r.st.entropy;
+    if (static_cast<int>(k) >= kWarmupTiles) {
+      ++ps.scored;
+      ps.within1 += std::abs(static_cast<int>(r.st.estimate) - r.truth) <= 1;
+      ps.off_route += r.want != route::RouteSide::kOnRoute;
+      ps.tracking += r.st.guidance.status == route::GuidanceStatus::kTracking;
+      ps.dead_reckoned += r.st.guidance.status == route::GuidanceStatus::kDeadReckoned;
+      if (r.want != route::RouteSide::kOnRoute && r.st.guidance.side != route::RouteSide::kUnknown) {  // a side was given
+        ++ps.side_n;
+        ps.side_ok += r.st.guidance.side == r.want;
+      }
+    }
+    if (records) records->push_back(r);
+  }
+  if (ps.tiles) ps.mean_entropy /= ps.tiles;
+  return Status::ok();
+}
+
+// Registration alone, without the filter: each tile against its true node and against a node three
+// away (a chance consensus there is what the measurement floor must absorb). With the simulator's
+// true poses also: keypoints that repeat (a node keypoint within 1.5 m of the same seabed spot) and
+// whether the registered transform is right (tile origin within 5 m of where the truth puts it).
+void registration_at_truth(const route::RegistrationConfig& rc, const std::vector<pipeline::RouteTile>& train, const std::vector<pipeline::RouteTile>& tiles,
+                           const std::vector<double>& node_along, PassStats& ps) {
+  ArenaStorage arena(route::Registrar::arena_bytes(rc));
+  auto reg = std::make_unique<route::Registrar>();
+  if (!reg->init(rc, arena)) return;
+  const int n = static_cast<int>(train.size());
+  const double chance = static_cast<double>(rc.robust.min_inliers);
+  double sum = 0.0, rep = 0.0;
+  for (const pipeline::RouteTile& t : tiles) {
+    const int tn = true_node(node_along, t.truth_along_m);
+    if (tn < 0 || tn >= n) continue;
+    const pipeline::RouteTile& node = train[static_cast<std::size_t>(tn)];
+    route::RegistrationResult r;
+    if (reg->register_tile(t.node, node.node, r)) {
+      sum += r.inliers;
+      ps.reg_true_ok += r.ok && r.inliers > chance;
+      if (r.ok && r.inliers > chance && t.has_truth_pose && node.has_truth_pose) {
+        const Vec2d truth = node.truth_pose.inverse().apply(t.truth_pose.translation());
+        ps.reg_true_right += (r.sensed_to_node.translation() - truth).norm() < 5.0;
+      }
+    }
+    if (t.has_truth_pose && node.has_truth_pose)
+      for (const route::RouteKeypoint& a : t.node.keypoints) {
+        const Vec2d wa = t.truth_pose.apply(Vec2d(a.x_m, a.y_m));
+        for (const route::RouteKeypoint& b : node.node.keypoints)
+          if ((node.truth_pose.apply(Vec2d(b.x_m, b.y_m)) - wa).norm() < 1.5) {
+            rep += 1.0;
+            break;
+          }
+      }
+    const int far = tn + 3 < n ? tn + 3 : tn - 3;
+    if (far >= 0 && reg->register_tile(t.node, train[static_cast<std::size_t>(far)].node, r)) ps.reg_false_ok += r.ok && r.inliers > chance;
+  }
+  ps.reg_true_mean_inliers = tiles.empty() ? 0.0 : sum / static_cast<double>(tiles.size());
+  ps.repeated_keypoints = tiles.empty() ? 0.0 : rep / static_cast<double>(tiles.size());
+}
+
+struct SweepInputs {
+  pipeline::RouteTilePipeline* pipe;
+  const pipeline::SimSurvey* world;
+  const std::vector<pipeline::RouteTile>* train;
+  route::NodeSource* source;
+  const route::RouteParams* params;
+  Span<const route::NodeMeta> meta;
+  const std::vector<double>* node_along;
+  const std::vector<int>* pcts;
+  int seabed;
+  FILE* log;
+};
+
+// Repeat passes at every offset, forwards and in reverse, over one taught route. kidnap_src (if
+// given) receives the 20% forward pass's tiles; eq5_within the paper's motion model on that pass.
+Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecord>& records, std::vector<PassStats>& stats,
+                    std::vector<pipeline::RouteTile>* kidnap_src, double* eq5_within) {
+  std::vector<pipeline::RouteTile> tiles;
+  const std::size_t nodes = in.meta.size();
+  for (int pct : *in.pcts) {
+    for (bool rev : {false, true}) {
+      const double lateral = pct / 100.0 * in.world->swath_m;
+      const auto t0 = Clock::now();
+      QNAV_RETURN_IF_ERROR(fly(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), tiles));
+      route::LocaliserConfig lc = pipeline::default_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
+      auto loc = std::make_unique<pipeline::RouteRepeater>();
+      QNAV_RETURN_IF_ERROR(loc->init(lc));
+      QNAV_RETURN_IF_ERROR(loc->start(*in.params, in.meta, *in.source));
+      PassStats ps;
+      ps.seabed = in.seabed;
+      std::vector<TileRecord> rec;
+      QNAV_RETURN_IF_ERROR(run_localiser(*loc, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, &rec, ps, nullptr));
+      for (TileRecord& r : rec) {
+        r.seabed = in.seabed;
+        records.push_back(r);
+      }
+      registration_at_truth(lc.registration, *in.train, tiles, *in.node_along, ps);
+      stats.push_back(ps);
+      std::fprintf(in.log, "  seabed %d offset %2d%% (%5.1f m) %-7s: %3d tiles, node +/-1 %5.1f%%, side correct %d/%d, tracking %d/%d; registration alone: on the true node %d/%d (transform right %d, mean S %.1f, repeated keypoints %.1f), on a node 3 away %d (%.1f s)\n",
+                   in.seabed, pct, lateral, rev ? "reverse" : "forward", ps.tiles, ps.scored ? 100.0 * ps.within1 / ps.scored : 0.0, ps.side_ok, ps.side_n,
+                   ps.tracking, ps.scored, ps.reg_true_ok, ps.tiles, ps.reg_true_right, ps.reg_true_mean_inliers, ps.repeated_keypoints, ps.reg_false_ok,
+                   ms_since(t0) / 1000.0);
+      if (pct == 20 && !rev && kidnap_src != nullptr) *kidnap_src = tiles;
+      if (pct == 20 && !rev && eq5_within != nullptr) {
+        // The paper's motion model (eq. 5) on the same tiles, for comparison.
+        route::LocaliserConfig lc5 = lc;
+        lc5.filter.motion = route::MotionModel::kPaperEq5;
+        auto l5 = std::make_unique<pipeline::RouteRepeater>();
+        PassStats p5;
+        if (l5->init(lc5) && l5->start(*in.params, in.meta, *in.source) &&
+            run_localiser(*l5, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, nullptr, p5, nullptr))
+          *eq5_within = p5.scored ? 100.0 * p5.within1 / p5.scored : 0.0;
+      }
+    }
+  }
+  if (kidnap_src != nullptr && kidnap_src->empty()) *kidnap_src = tiles;
+  return Status::ok();
+}
+
+bool ensure_dir(const std::string& d) {
+  struct stat st {};
+  if (::stat(d.c_str(), &st) == 0) return S_ISDIR(st.st_mode);
+  return ::mkdir(d.c_str(), 0755) == 0;
+}
+
+}  // namespace
+
+int cmd_eval() {
+  const double length_m = g_opt.length_m;
+  if (!(length_m >= 400.0 && length_m <= 20000.0)) return usage("eval", "--length-m: eval needs 400..20000 m");
+  const bool json = g_opt.json;
+  const bool quick = g_opt.quick;
+  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : quick ? 1 : 3;
+  const std::string out_dir = g_opt.eval_out;
+  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty() || !ensure_dir(out_dir)) {
+    std::fprintf(stderr, "qnav route eval: %s\n", e.empty() ? ("cannot create " + out_dir).c_str() : e.c_str());
+    return 1;
+  }
+  FILE* log = json ? stderr : stdout;
+  const auto t_all = Clock::now();
+  pipeline::SimSurvey w;
+  pipeline::RouteTilePipeline pipe;
+  Status s = w.init(length_m, 1);
+  if (s) s = pipe.init(pipeline::default_route_tile_config());
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval: %s\n", s.message());
+    return 1;
+  }
+  // 1. Teach: a forward pass on the route, written durably node by node.
+  std::vector<pipeline::RouteTile> train;
+  auto t0 = Clock::now();
+  s = fly(pipe, w, w.pass(0.0, false, 11), train);
+  if (!s || train.size() < 2) {
+    std::fprintf(stderr, "qnav route eval: training pass failed: %s\n", s ? "fewer than 2 tiles" : s.message());
+    return 1;
+  }
+  const double fly_ms = ms_since(t0);
+  const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+  const std::string route_path = out_dir + "/route_eval.qroute";
+  tools::RouteFileWriter writer;
+  if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
+  t0 = Clock::now();
+  for (const pipeline::RouteTile& t : train)
+    if (s) s = writer.append(t.node);
+  const double append_ms = ms_since(t0) / static_cast<double>(train.size());
+  if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
+  tools::RouteFileReader reader;
+  s = reader.open(route_path.c_str());
+  std::vector<route::NodeMeta> meta;
+  std::uint32_t bad = 0;
+  if (s) s = reader.read_all_meta(meta, &bad);
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval: route file: %s\n", s.message());
+    return 1;
+  }
+  std::vector<double> node_along;
+  double kp_mean = 0.0;
+  for (const pipeline::RouteTile& t : train) {
+    node_along.push_back(t.truth_along_m);
+    kp_mean += static_cast<double>(t.node.keypoints.size());
+  }
+  kp_mean /= static_cast<double>(train.size());
+  std::fprintf(log, "taught: %zu nodes over %.0f m (spacing %.1f m, swath %.1f m, %.1f keypoints/node), pass %.1f s, append+fdatasync %.2f ms/node\n",
+               train.size(), length_m, spacing, w.swath_m, kp_mean, fly_ms / 1000.0, append_ms);
+
+  // 2. Repeat passes at lateral offsets, forwards and reverse: on this seabed (nodes read from the
+  //    route file), then on further seabeds (each taught afresh, nodes in memory).
+  std::vector<int> pcts = quick ? std::vector<int>{0, 20, 40} : std::vector<int>{0, 10, 20, 30, 40, 50};
+  std::vector<TileRecord> records;
+  std::vector<PassStats> stats;
+  std::vector<pipeline::RouteTile> kidnap_src;
+  const std::size_t nodes = meta.size();
+  double eq5_within = -1.0;
+  int pass_seed = 100;
+  SweepInputs in{&pipe, &w, &train, &reader, &reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), &node_along, &pcts, 1, log};
+  s = offset_sweep(in, pass_seed, records, stats, &kidnap_src, &eq5_within);
+  std::vector<double> seed_within;
+  for (long sb = 2; s && sb <= seabeds; ++sb) {
+    pipeline::SimSurvey w2;
+    std::vector<pipeline::RouteTile> train2;
+    s = w2.init(length_m, static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, w2, w2.pass(0.0, false, 11 + 1000 * static_cast<std::uint64_t>(sb)), train2);
+    if (!s || train2.size() < 2) break;
+    const double sp2 = (train2.back().node.meta.along_m - train2.front().node.meta.along_m) / static_cast<double>(train2.size() - 1);
+    const route::RouteParams p2 = pipeline::side_scan_route_params(pipe.config(), sp2, w2.swath_m);
+    std::vector<route::NodeMeta> meta2;
+    std::vector<double> along2;
+    for (std::size_t i = 0; i < train2.size(); ++i) {
+      meta2.push_back(train2[i].node.meta);
+      meta2.back().index = static_cast<std::uint32_t>(i);
+      along2.push_back(train2[i].truth_along_m);
+    }
+    TileSource src2(&train2);
+    std::fprintf(log, "seabed %ld: taught %zu nodes (spacing %.1f m)\n", sb, train2.size(), sp2);
+    SweepInputs in2{&pipe, &w2, &train2, &src2, &p2, Span<const route::NodeMeta>(meta2.data(), meta2.size()), &along2, &pcts, static_cast<int>(sb), log};
+    s = offset_sweep(in2, pass_seed, records, stats, nullptr, nullptr);
+  }
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval: repeat pass failed: %s\n", s.message());
+    return 1;
+  }
+  for (long sb = 1; sb <= seabeds; ++sb) {
+    int sc = 0, wi = 0;
+    for (const PassStats& p : stats)
+      if (p.seabed == sb) {
+        sc += p.scored;
+        wi += p.within1;
+      }
+    seed_within.push_back(sc ? 100.0 * wi / sc : 0.0);
+  }
+  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0, off_route = 0, dead_reckoned = 0;
+  for (const PassStats& p : stats) {
+    scored += p.scored;
+    within += p.within1;
+    tracking += p.tracking;
+    dead_reckoned += p.dead_reckoned;
+    if (p.pct > 5) {
+      side_n += p.side_n;
+      side_ok += p.side_ok;
+      off_route += p.off_route;
+    }
+  }
+
+  // 3. Kidnapped vehicle: after 8 tiles the vehicle is moved a third of the route ahead; odometry
+  //    does not know. Tiles until the estimate is within +/-1 and stays there for 3 tiles.
+  int relocalised = -1;
+  {
+    const std::size_t jump_from = 8, jump_to = 8 + kidnap_src.size() / 3;
+    std::vector<pipeline::RouteTile> seq(kidnap_src.begin(), kidnap_src.begin() + static_cast<long>(std::min(jump_from, kidnap_src.size())));
+    for (std::size_t i = jump_to; i < kidnap_src.size(); ++i) seq.push_back(kidnap_src[i]);
+    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, nodes);
+    auto loc = std::make_unique<pipeline::RouteRepeater>();
+    PassStats ps;
+    std::vector<TileRecord> rec;
+    if (loc->init(lc) && loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader) &&
+        run_localiser(*loc, seq, node_along, 20, false, 0.2 * w.swath_m, lc.guidance.side_deadband_m, &rec, ps, nullptr)) {
+      if (std::getenv("QNAV_ROUTE_DIAG"))
+        for (const TileRecord& r : rec)
+          std::fprintf(stderr, "kidnap tile %d truth %d est %u p %.2f inliers %u conf %d\n", r.tile, r.truth, r.st.estimate,
+                       static_cast<double>(r.st.probability), r.st.best_inliers, r.st.confident ? 1 : 0);
+      for (std::size_t k = jump_from; k + 2 < rec.size(); ++k) {
+        bool ok = true;
+        for (std::size_t j = k; j < k + 3; ++j) ok = ok && std::abs(static_cast<int>(rec[j].st.estimate) - rec[j].truth) <= 1;
+        if (ok) {
+          relocalised = static_cast<int>(k - jump_from) + 1;
+          break;
+        }
+      }
+    }
+    std::fprintf(log, "kidnapped after tile %zu (moved %zu tiles ahead): re-localised after %d tiles\n", jump_from, jump_to - jump_from, relocalised);
+  }
+
+  // 4. Speed on a 10,000-node route read from a file through the node window.
+  double upd_mean = -1, upd_p95 = -1, upd_max = -1, upd_cpu_mean = -1, upd_cpu_max = -1, window_mb = 0.0;
+  {
+    const std::string big = out_dir + "/route_10000.qroute";
+    tools::RouteFileWriter bw;
+    tools::RouteWriterOptions o;
+    o.sync_each_node = false;
+    Status bs = begin_route(bw, "eval", big.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true, o)
+                    ? Status::ok()
+                    : Status(StatusCode::kIoError, "cannot create the 10,000-node route");
+    const double block_m = node_along.back() + spacing;
+    for (std::uint32_t i = 0; i < 10000 && bs; ++i) {
+      route::RouteNode n = train[i % train.size()].node;
+      const double shift = block_m * static_cast<double>(i / train.size());
+      n.meta.pose.x_m += shift;
+      n.meta.along_m += shift;
+      bs = bw.append(n);
+    }
+    if (!finish_route(bw, "eval", big.c_str(), bs) && bs) bs = Status(StatusCode::kIoError, "10,000-node route not committed");
+    tools::RouteFileReader br;
+    std::vector<route::NodeMeta> bmeta;
+    if (bs) bs = br.open(big.c_str());
+    if (bs) bs = br.read_all_meta(bmeta, nullptr);
+    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
+    auto loc = std::make_unique<pipeline::RouteRepeater>();
+    window_mb = static_cast<double>(route::RouteLocaliser::arena_bytes(lc)) / 1e6;
+    if (bs) bs = loc->init(lc);
+    if (bs) bs = loc->start(br.params(), Span<const route::NodeMeta>(bmeta.data(), bmeta.size()), br);
+    std::vector<double> ms, cms;
+    PassStats ps;
+    std::vector<double> along_big;  // truth unknown on the replicated route: scoring not used
+    along_big.push_back(0.0);
+    if (bs) bs = run_localiser(*loc, kidnap_src, along_big, 20, false, 0.0, 1.0, nullptr, ps, &ms, &cms);
+    if (bs && !ms.empty()) {
+      std::sort(ms.begin(), ms.end());
+      double sum = 0;
+      for (double v : ms) sum += v;
+      upd_mean = sum / static_cast<double>(ms.size());
+      upd_p95 = ms[static_cast<std::size_t>(0.95 * static_cast<double>(ms.size() - 1))];
+      upd_max = ms.back();
+      double cs = 0;
+      for (double v : cms) cs += v;
+      upd_cpu_mean = cs / static_cast<double>(cms.size());
+      upd_cpu_max = *std::max_element(cms.begin(), cms.end());
+    }
+    std::remove(big.c_str());
+    std::fprintf(log, "10,000-node route (file, %zu-node window): update wall mean %.2f ms, p95 %.2f ms, max %.2f ms; thread CPU mean %.2f ms, max %.2f ms over %zu tiles; localiser memory %.1f MB\n",
+                 lc.window_slots, upd_mean, upd_p95, upd_max, upd_cpu_mean, upd_cpu_max, ms.size(), window_mb);
+  }
+  // 5. Prediction alone on 100,000 nodes.
+  double pred_ms = -1, pred_cpu_ms = -1;
+  {
+    route::RouteFilterConfig fc;
+    fc.max_nodes = 100000;
+    ArenaStorage arena(route::RouteFilter::arena_bytes(fc));
+    route::RouteFilter f;
+    if (f.init(fc, arena) && f.reset(100000, spacing)) {
+      const int reps = 200;
+      t0 = Clock::now();
+      const double c0 = cpu_ms();
+      for (int i = 0; i < reps; ++i) f.predict(spacing).ignore();
+      pred_cpu_ms = (cpu_ms() - c0) / reps;
+      pred_ms = ms_since(t0) / reps;
+    }
+    std::fprintf(log, "prediction alone, 100,000 nodes: wall %.3f ms, thread CPU %.3f ms\n", pred_ms, pred_cpu_ms);
+  }
+
+  // 6. The paper's experiment shape: 15 training nodes, 8 sensed tiles (offset 25% of swath), every
+  //    node registered each step (the paper's eq. 8 over the whole database). Table I, Fig. 5, 7, 9, 10.
+  int paper_localised = 0, paper_side = 0;
+  {
+    const std::size_t a = train.size() / 3;
+    const std::size_t n15 = std::min<std::size_t>(15, train.size() - a);
+    std::vector<pipeline::RouteTile> sub(train.begin() + static_cast<long>(a), train.begin() + static_cast<long>(a + n15));
+    std::vector<route::NodeMeta> sub_meta;
+    std::vector<double> sub_along;
+    for (std::size_t i = 0; i < sub.size(); ++i) {
+      route::NodeMeta m = sub[i].node.meta;
+      m.index = static_cast<std::uint32_t>(i);
+      sub_meta.push_back(m);
+      sub_along.push_back(sub[i].truth_along_m);
+    }
+    const double lateral = 0.25 * w.swath_m;
+    std::vector<pipeline::RouteTile> pass;
+    s = fly(pipe, w, w.pass(lateral, false, 999), pass);
+    std::vector<pipeline::RouteTile> sensed;
+    for (const pipeline::RouteTile& t : pass)
+      if (t.truth_along_m >= sub_along[std::min<std::size_t>(5, sub_along.size() - 1)] - 0.5 * spacing && sensed.size() < 8) sensed.push_back(t);
+    TileSource src(&sub);
+    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 64);
+    lc.filter.belief_registrations = static_cast<std::uint32_t>(sub.size());
+    lc.filter.wide_search_registrations = 0;
+    auto loc = std::make_unique<pipeline::RouteRepeater>();
+    FILE* t1 = std::fopen((out_dir + "/route_table1.csv").c_str(), "w");
+    FILE* f5 = std::fopen((out_dir + "/route_fig5.csv").c_str(), "w");
+    FILE* f7 = std::fopen((out_dir + "/route_fig7.csv").c_str(), "w");
+    FILE* f9 = std::fopen((out_dir + "/route_fig9.csv").c_str(), "w");
+    if (s && t1 && f5 && f7 && f9 && loc->init(lc) &&
+        loc->start(reader.params(), Span<const route::NodeMeta>(sub_meta.data(), sub_meta.size()), src)) {
+      std::fprintf(t1, "sensed,estimate,truth,entropy,side,true_side,inliers\n");
+      std::fprintf(f9, "sensed,true_north,true_east,node_north,node_east,cross_track_m,side,true_side,entropy,status\n");
+      std::fprintf(log, "paper-shaped run (15 nodes, 8 sensed tiles, offset 25%% = %.1f m):\n  sensed  estimate  truth  entropy  side       true side\n", lateral);
+      std::vector<float> mp(sub.size());
+      sidescan::Trajectory tr;
+      s = tr.init(w.route);
+      for (std::size_t k = 0; k < sensed.size() && s; ++k) {
+        route::LocaliserStep st;
+        s = loc->step(sensed[k].node, k == 0 ? 0.0 : sensed[k].nav_step_m, st);
+        if (!s) break;
+        const int truth = true_node(sub_along, sensed[k].truth_along_m);
+        const route::RouteSide want = expected_side(lateral, false, lc.guidance.side_deadband_m);
+        paper_localised += std::abs(static_cast<int>(st.estimate) - truth) <= 0 ? 1 : 0;
+        paper_side += st.guidance.side == want;
+        std::fprintf(t1, "%zu,%u,%d,%.3f,%s,%s,%u\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
+                     route::to_string(want), st.best_inliers);
+        std::fprintf(log, "  %6zu  %8u  %5d  %7.2f  %-9s  %s\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
+                     route::to_string(want));
+        loc->localiser().filter().measurement_probability(Span<float>(mp.data(), mp.size())).ignore();
+        for (std::size_t i = 0; i < sub.size(); ++i) {
+          std::fprintf(f5, "%s%.5f", i ? "," : "", static_cast<double>(mp[i]));
+          std::fprintf(f7, "%s%.5f", i ? "," : "", static_cast<double>(loc->localiser().filter().belief()[i]));
+        }
+        std::fprintf(f5, "\n");
+        std::fprintf(f7, "\n");
+        Vec2d tp, np;
+        double th, nh;
+        tr.route_at(sensed[k].truth_along_m, tp, th);
+        tr.route_at(sub_along[st.estimate], np, nh);
+        tp += lateral * sonar::starboard_unit(th);
+        std::fprintf(f9, "%zu,%.2f,%.2f,%.2f,%.2f,%.2f,%s,%s,%.3f,%s\n", k + 1, tp.x(), tp.y(), np.x(), np.y(), st.guidance.cross_track_m,
+                     route::to_string(st.guidance.side), route::to_string(want), st.entropy, route::to_string(st.guidance.status));
+      }
+      std::fprintf(log, "  localised (exact node) %d/8, side correct %d/8 (paper: 7/8 and 6/8)\n", paper_localised, paper_side);
+    }
+    for (FILE* f : {t1, f5, f7, f9})
+      if (f) std::fclose(f);
+  }
+
+  // CSV outputs for the plots.
+  if (FILE* f = std::fopen((out_dir + "/route_eval_offsets.csv").c_str(), "w")) {
+    // One row per offset and direction, summed over the seabeds.
+    std::fprintf(f, "offset_pct,lateral_m,direction,tiles,scored,within1_pct,side_correct,side_n,tracking_pct,mean_entropy,seabeds,registered_on_true_node_pct\n");
+    for (int pct : pcts)
+      for (bool rev : {false, true}) {
+        PassStats a;
+        int n = 0, reg = 0;
+        for (const PassStats& p : stats)
+          if (p.pct == pct && p.reverse == rev) {
+            a.lateral_m = p.lateral_m;
+            a.tiles += p.tiles;
+            a.scored += p.scored;
+            a.within1 += p.within1;
+            a.side_ok += p.side_ok;
+            a.side_n += p.side_n;
+            a.tracking += p.tracking;
+            a.mean_entropy += p.mean_entropy;
+            reg += p.reg_true_ok;
+            ++n;
+          }
+        if (n == 0) continue;
+        std::fprintf(f, "%d,%.2f,%s,%d,%d,%.2f,%d,%d,%.2f,%.4f,%d,%.2f\n", pct, a.lateral_m, rev ? "reverse" : "forward", a.tiles, a.scored,
+                     a.scored ? 100.0 * a.within1 / a.scored : 0.0, a.side_ok, a.side_n, a.scored ? 100.0 * a.tracking / a.scored : 0.0,
+                     a.mean_entropy / n, n, a.tiles ? 100.0 * reg / a.tiles : 0.0);
+      }
+    std::fclose(f);
+  }
+  if (FILE* f = std::fopen((out_dir + "/route_eval_tiles.csv").c_str(), "w")) {
+    std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,seabed,"
+                    "cross_track_sigma_m,offsets,true_cross_track_m\n");
+    for (const TileRecord& r : records)
+      std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%d,%.2f,%s,%.2f\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth,
+                   r.st.estimate, static_cast<double>(r.st.probability), r.st.entropy, r.st.confident ? 1 : 0, r.st.best_inliers,
+                   route::to_string(r.st.guidance.status), route::to_string(r.st.guidance.side), route::to_string(r.want), r.st.guidance.cross_track_m,
+                   r.seabed, r.st.guidance.cross_track_sigma_m, route::to_string(r.st.guidance.offsets), r.true_cross_track_m);
+    std::fclose(f);
+  }
+  // Is the dead-reckoned cross-track sigma honest? Off-route scored tiles whose offsets came from
+  // dead reckoning: the share within 2 sigma of the pass's offset (~95% if sigma is right).
+  int dr_n = 0, dr_in = 0;
+  for (const TileRecord& r : records)
+    if (r.tile >= kWarmupTiles && r.pct > 5 && r.st.guidance.offsets == route::OffsetSource::kDeadReckoning) {
+      ++dr_n;
+      dr_in += std::abs(r.st.guidance.cross_track_m - r.true_cross_track_m) <= 2.0 * r.st.guidance.cross_track_sigma_m;
+    }
+  const double within_pct = scored ? 100.0 * within / scored : 0.0;
+  const double side_pct = side_n ? 100.0 * side_ok / side_n : 0.0;
+  const double tracking_pct = scored ? 100.0 * tracking / scored : 0.0;
+  if (json) {
+    std::printf("{\"node_within_1_pct\": %.2f, \"side_correct_pct\": %.2f, \"side_decided_tiles\": %d, \"tracking_pct\": %.2f, "
+                "\"relocalised_within_tiles\": %d, \"update_ms_10000_nodes\": %.3f, \"update_ms_10000_nodes_p95\": %.3f, "
+                "\"update_ms_10000_nodes_max\": %.3f, \"update_cpu_ms_10000_nodes\": %.3f, \"update_cpu_ms_10000_nodes_max\": %.3f, "
+                "\"predict_ms_100000_nodes\": %.4f, \"predict_cpu_ms_100000_nodes\": %.4f, \"eq5_node_within_1_pct_at_20pct\": %.2f, "
+                "\"paper_table_localised\": %d, \"paper_table_side_correct\": %d, \"scored_tiles\": %d, \"route_nodes\": %zu, "
+                "\"route_length_m\": %.0f, \"node_spacing_m\": %.2f, \"swath_m\": %.2f, \"offsets_pct\": [",
+                within_pct, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_p95, upd_max, upd_cpu_mean, upd_cpu_max, pred_ms, pred_cpu_ms, eq5_within, paper_localised,
+                paper_side, scored, nodes, length_m, spacing, w.swath_m);
+    for (std::size_t i = 0; i < pcts.size(); ++i) std::printf("%s%d", i ? ", " : "", pcts[i]);
+    std::printf("], \"side_correct_pct_of_offset_tiles\": %.2f, \"offset_tiles\": %d, \"dead_reckoned_pct\": %.2f, \"seabeds\": %ld, "
+                "\"node_within_1_pct_per_seabed\": [",
+                off_route ? 100.0 * side_ok / off_route : 0.0, off_route, scored ? 100.0 * dead_reckoned / scored : 0.0, seabeds);
+    for (std::size_t i = 0; i < seed_within.size(); ++i) std::printf("%s%.2f", i ? ", " : "", seed_within[i]);
+    std::printf("], \"dead_reckoned_offset_tiles\": %d, \"dead_reckoned_cross_track_within_2sigma_pct\": %.2f, \"warmup_tiles\": %d, \"seconds\": %.1f}\n",
+                dr_n, dr_n ? 100.0 * dr_in / dr_n : 0.0, kWarmupTiles, ms_since(t_all) / 1000.0);
+  } else {
+    std::printf("node within +/-1: %.1f%% of %d tiles; side correct %.1f%% of %d decided tiles (tracking %.1f%%); re-localised after %d tiles; "
+                "update %.2f ms wall / %.2f ms CPU (10,000 nodes); predict %.3f ms wall / %.3f ms CPU (100,000 nodes); eq. 5 model at 20%%: %.1f%%; %.1f s\n",
+                within_pct, scored, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_cpu_mean, pred_ms, pred_cpu_ms, eq5_within, ms_since(t_all) / 1000.0);
+  }
+  return 0;
+}
+}  // namespace route_cmd

@@ -1,0 +1,84 @@
+// qnav route: what the subcommands' files share (firmware/qnav/commands/route.cpp: train, info,
+// repeat and the command's options; route/eval.cpp: eval; route/recorded.cpp: xtf and the recorded
+// passes of train / repeat; route/camera.cpp: camera; route_follow.cpp: follow). Tool side only.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <random>
+#include <string>
+#include <sys/stat.h>
+#include <time.h>
+#include <vector>
+#include "firmware/cli/cli_app.hpp"
+#include "firmware/qnav/command.hpp"
+#include "firmware/qnav/commands/route_follow.hpp"
+#include "firmware/tools/png_writer.hpp"
+#include "drivers/route_store/route_open.hpp"
+#include "firmware/tools/route_file.hpp"
+#include "firmware/pipeline/route_defaults.hpp"
+#include "firmware/pipeline/route_repeater.hpp"
+#include "firmware/pipeline/route_tile_pipeline.hpp"
+#include "firmware/pipeline/sim_survey.hpp"
+#include "firmware/pipeline/vector_node_source.hpp"
+#include "firmware/tools/sonar_file.hpp"
+#include "drivers/sidescan/byte_source.hpp"
+#include "drivers/sidescan/xtf_reader.hpp"
+#include "drivers/stereo_sim/mars_yard.hpp"
+#include "nav/route/camera_tile.hpp"
+#include "nav/route/route_localiser.hpp"
+
+namespace route_cmd {
+
+using namespace qnav;
+using Clock = std::chrono::steady_clock;
+
+// The options of every route subcommand (one invocation per process), filled by the strict parser
+// (setup_route at the end of this file declares them with their units, defaults and ranges).
+struct RouteOptions {
+  std::string out, route, sonar, csv, xtf, pings, train, repeat, nav = "fix", info_file;
+  std::string eval_out = "route_eval";
+  double length_m = 2000.0, offset_pct = 0.0, heading_offset_deg = 0.0;
+  double camera_length_m = 12.0;
+  long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
+  bool sim = false, force = false, reverse = false, json = false, quick = false;
+};
+extern RouteOptions g_opt;
+constexpr int kWarmupTiles = 2;  // tiles before scoring (uniform start; the paper's first tile copies eq. 9)
+
+const char* opt_or_null(const std::string& s);
+double ms_since(Clock::time_point t0);
+// CPU time of this thread (the machine is shared: wall time includes other people's work).
+double cpu_ms();
+// Collects the tiles of one simulated pass.
+Status fly(pipeline::RouteTilePipeline& pipe, const pipeline::SimSurvey& w, const sidescan::TrajectoryConfig& t, std::vector<pipeline::RouteTile>& out);
+using pipeline::VectorNodeSource;
+using TileSource = VectorNodeSource<pipeline::RouteTile>;
+// A usage error the parser cannot see (a combination of options): named, exit 2.
+int usage(const char* cmd, const char* what);
+// Route files: teaching never destroys a route before its replacement is complete (route.cpp).
+bool begin_route(tools::RouteFileWriter& w, const char* cmd, const char* out, const route::RouteParams& p, bool force,
+                 tools::RouteWriterOptions o = tools::RouteWriterOptions{});
+bool finish_route(tools::RouteFileWriter& w, const char* cmd, const char* out, Status taught);
+bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std::vector<route::NodeMeta>& meta);
+// The repeat CSV (--csv): header, one row per tile, close with a check.
+FILE* open_repeat_csv();
+void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side);
+bool close_csv(FILE* f);
+int true_node(const std::vector<double>& node_truth_along, double along);
+route::RouteSide expected_side(double lateral_m, bool reverse, double deadband);
+
+int cmd_eval();                       // route/eval.cpp
+int cmd_xtf();                        // route/recorded.cpp
+int cmd_train_file(const char* path);
+int cmd_repeat_file(const char* path);
+int cmd_camera();                     // route/camera.cpp
+
+}  // namespace route_cmd
