@@ -216,6 +216,18 @@ const char* to_string(SideOfRoute s) noexcept {
   return "?";
 }
 
+const char* mode_name(Mode m) noexcept {
+  switch (m) {
+    case Mode::kIdle: return "idle";
+    case Mode::kTeach: return "teach";
+    case Mode::kRepeat: return "repeat";
+    case Mode::kMap: return "map";
+    case Mode::kHold: return "hold";
+    case Mode::kVo: return "vo";
+  }
+  return "?";
+}
+
 Span<const MessageDef> all_messages() noexcept { return Span<const MessageDef>(kMessages, sizeof kMessages / sizeof kMessages[0]); }
 
 const MessageDef* find_message(std::uint32_t id) noexcept {

@@ -80,6 +80,7 @@ struct RouteStatus {
 };
 const char* to_string(GuidanceState s) noexcept;  // the DBC value names: "Tracking", ..., "NotRepeating"
 const char* to_string(SideOfRoute s) noexcept;    // "OnRoute", "Port", "Starboard", "Unknown"
+const char* mode_name(Mode m) noexcept;           // the log's names: "idle", "teach", "repeat", "map", "hold", "vo"
 
 struct VoStep {
   double dx_m = 0, dy_m = 0, dyaw_rad = 0;

@@ -18,17 +18,6 @@ constexpr std::uint8_t kDistanceSensorUltrasound = 1, kRotationPitch270 = 25;  /
 // SET_POSITION_TARGET_LOCAL_NED type_mask: position only (velocity, acceleration, yaw, yaw rate ignored).
 constexpr std::uint16_t kTypeMaskPositionOnly = 8 | 16 | 32 | 64 | 128 | 256 | 1024 | 2048;
 constexpr std::int64_t kNsPerS = 1000000000;
-const char* mode_text(qc::Mode m) noexcept {
-  switch (m) {
-    case qc::Mode::kIdle: return "idle";
-    case qc::Mode::kTeach: return "teach";
-    case qc::Mode::kRepeat: return "repeat";
-    case qc::Mode::kMap: return "map";
-    case qc::Mode::kHold: return "hold";
-    case qc::Mode::kVo: return "vo";
-  }
-  return "?";
-}
 float nanf_() noexcept { return std::numeric_limits<float>::quiet_NaN(); }
 }  // namespace
 
@@ -201,7 +190,7 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
   const std::int64_t t = s.now_ns;
   if (s.mode != last_mode_) {
     char text[51];
-    std::snprintf(text, sizeof text, "qnav: mode %s", mode_text(s.mode));
+    std::snprintf(text, sizeof text, "qnav: mode %s", qc::mode_name(s.mode));
     status_text(kSeverityInfo, text, tx);
     last_mode_ = s.mode;
   }

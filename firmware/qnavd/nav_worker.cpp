@@ -31,17 +31,6 @@ const char* to_string(ModeReject r) noexcept {
 }
 
 namespace {
-const char* mode_name(qc::Mode m) noexcept {
-  switch (m) {
-    case qc::Mode::kIdle: return "idle";
-    case qc::Mode::kTeach: return "teach";
-    case qc::Mode::kRepeat: return "repeat";
-    case qc::Mode::kMap: return "map";
-    case qc::Mode::kHold: return "hold";
-    case qc::Mode::kVo: return "vo";
-  }
-  return "?";
-}
 constexpr std::int64_t kNsPerS = 1000000000;
 }  // namespace
 
@@ -442,7 +431,7 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
   if (why != ModeReject::kNone) ++mode_refused_;
   if (log_ && cfg_.log != LogFormat::kOff)
     std::fprintf(log_, "{\"event\":\"mode\",\"t_s\":%.3f,\"cmd\":\"%s\",\"reverse\":%s,\"route_id\":%u,\"state\":\"%s\",\"refused\":%s%s%s}\n",
-                 static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(cmd.mode), cmd.reverse ? "true" : "false", id, mode_name(mode_),
+                 static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, qc::mode_name(cmd.mode), cmd.reverse ? "true" : "false", id, qc::mode_name(mode_),
                  why == ModeReject::kNone ? "false" : "\"", why == ModeReject::kNone ? "" : to_string(why), why == ModeReject::kNone ? "" : "\"");
   stage_time(Stage::kModes, t0);
   mode_ns_ += cpu_clock_.now_ns() - t0;
@@ -737,13 +726,13 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
                  "{\"event\":\"tile\",\"seq\":%u,\"t_s\":%.1f,\"mode\":\"%s\",\"route_id\":%u,\"node_written\":%d,\"estimate\":%u,\"p\":%.3f,"
                  "\"entropy\":%.3f,\"inliers\":%u,\"status\":\"%s\",\"side\":\"%s\",\"cross_track_m\":%.2f,\"sigma_m\":%.2f,\"eq5\":%s,"
                  "\"reverse\":%s,\"truth_along_m\":%.1f,\"truth_lateral_m\":%.2f,\"latency_ms\":%.2f}\n",
-                 r.seq, static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(r.mode), r.route_id,
+                 r.seq, static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, qc::mode_name(r.mode), r.route_id,
                  r.mode == qc::Mode::kTeach ? static_cast<int>(r.node_written) : -1, st.estimate, static_cast<double>(st.probability), st.entropy,
                  st.best_inliers, r.mode == qc::Mode::kRepeat ? route::to_string(st.guidance.status) : "-",
                  r.mode == qc::Mode::kRepeat ? route::to_string(st.guidance.side) : "-", st.guidance.cross_track_m, st.guidance.cross_track_sigma_m,
                  r.eq5_motion ? "true" : "false", r.reverse ? "true" : "false", r.truth_along_m, r.truth_lateral_m, r.latency_ms);
   } else if (log_ && cfg_.log == LogFormat::kKeyValue) {
-    std::fprintf(log_, "tile seq=%u mode=%s estimate=%u status=%s side=%s cross_track_m=%.2f sigma_m=%.2f\n", r.seq, mode_name(r.mode),
+    std::fprintf(log_, "tile seq=%u mode=%s estimate=%u status=%s side=%s cross_track_m=%.2f sigma_m=%.2f\n", r.seq, qc::mode_name(r.mode),
                  r.step.estimate, route::to_string(r.step.guidance.status), route::to_string(r.step.guidance.side), r.step.guidance.cross_track_m,
                  r.step.guidance.cross_track_sigma_m);
   }
@@ -936,7 +925,7 @@ void NavWorker::log_health() noexcept {
                "\"camera_rejected\":%u,\"vo_max_us\":%" PRId64 ",\"map_frames\":%u,\"map_bad_frames\":%u,\"map_saves\":%u,"
                "\"map_save_errors\":%u,\"map_max_us\":%" PRId64 ","
                "\"misses\":{\"inputs\":%u,\"modes\":%u,\"ping\":%u,\"tile\":%u,\"vo\":%u,\"map\":%u,\"outputs\":%u}}\n",
-               static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
+               static_cast<double>(nav_now_ns_ - start_ns_) * 1e-9, qc::mode_name(mode_), faults_, pings_, tile_seq_, deadline_misses_,
                stage_max_ns_[static_cast<int>(Stage::kPing)] / 1000, stage_max_ns_[static_cast<int>(Stage::kTile)] / 1000, cpu_load_pct_,
                io.can_rx_overflow.load(), io.can_rx_dropped.load(), publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(receiver_.counters().total()), dr_rejected_, mode_refused_, step_errors_, writer_errors_,
