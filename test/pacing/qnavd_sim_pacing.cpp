@@ -6,8 +6,11 @@
 //   - drift: the wall time between the first and the last NAV_STATUS minus their mission time / speed;
 //   - the steps the pacer took late (> 10 ms after their deadline) and the latest one;
 //   - the CPU the process used (getrusage) as a share of one core over the run.
+// --realtime runs the daemon as a vehicle does (daemon.realtime = true: mlockall, io and nav threads
+// SCHED_FIFO); whether that took is read back from the threads (/proc/self/task, sched_getscheduler)
+// near the end of the run and printed as realtime_threads (2 = io and nav both SCHED_FIFO).
 // A measurement, not a test: `scripts/sim-pacing --minutes 10` runs it; docs/fly-along.md has the numbers.
-//   qnavd_sim_pacing [--minutes M] [--speed S] [--json]
+//   qnavd_sim_pacing [--minutes M] [--speed S] [--realtime] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -17,6 +20,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+#include <dirent.h>
+#include <sched.h>
 #include <unistd.h>
 
 #include "drivers/qnavcan/messages.hpp"
@@ -52,16 +57,34 @@ double percentile(std::vector<double> v, double p) {
   return v[k];
 }
 
+// The threads of this process running SCHED_FIFO (the daemon's io and nav threads when
+// daemon.realtime took; 0 when it was off or not permitted).
+int fifo_threads() {
+  DIR* d = opendir("/proc/self/task");
+  if (d == nullptr) return -1;
+  int n = 0;
+  while (const dirent* e = readdir(d)) {
+    char* end = nullptr;
+    const long tid = std::strtol(e->d_name, &end, 10);
+    if (end == e->d_name || *end != '\0') continue;
+    if (sched_getscheduler(static_cast<pid_t>(tid)) == SCHED_FIFO) ++n;
+  }
+  closedir(d);
+  return n;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   double minutes = 10.0, speed = 1.0;
-  bool json = false;
+  bool json = false, realtime = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     char* end = nullptr;
     if (a == "--json") {
       json = true;
+    } else if (a == "--realtime") {
+      realtime = true;
     } else if ((a == "--minutes" || a == "--speed") && i + 1 < argc) {
       const double v = std::strtod(argv[++i], &end);
       if (*end != '\0' || !std::isfinite(v) || v <= 0.0 || v > (a == "--speed" ? SimSpeed::kMax : 1440.0)) {
@@ -70,7 +93,7 @@ int main(int argc, char** argv) {
       }
       (a == "--speed" ? speed : minutes) = v;
     } else {
-      std::fprintf(stderr, "usage: qnavd_sim_pacing [--minutes M] [--speed S] [--json]\n");
+      std::fprintf(stderr, "usage: qnavd_sim_pacing [--minutes M] [--speed S] [--realtime] [--json]\n");
       return 2;
     }
   }
@@ -80,7 +103,7 @@ int main(int argc, char** argv) {
   c.backend = Backend::kSim;
   c.route_dir = dir;
   c.log = LogFormat::kOff;
-  c.realtime = false;
+  c.realtime = realtime;  // a vehicle runs true (mlockall, SCHED_FIFO io and nav threads)
   c.sim_speed = speed;
   // A teach pass and a repeat of a line long enough to outlast the run (~0.69 s of mission per metre
   // of pass at the survey's 1.5 m/s, handshakes included); the run stops after --minutes of wall time.
@@ -106,9 +129,11 @@ int main(int argc, char** argv) {
   }
   const hal::ProcessUsage u0 = hal::process_usage();
   const std::int64_t t0 = hal::monotonic_now_ns();
-  std::thread stopper([&d, minutes] {
+  std::atomic<int> rt_threads{-1};
+  std::thread stopper([&d, &rt_threads, minutes] {
     const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<long long>(minutes * 60000.0));
     while (std::chrono::steady_clock::now() < until && !d.mission_done()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    rt_threads.store(fifo_threads());  // the io and nav threads are still running here
     d.stop();
   });
   const int rc = d.run();
@@ -131,15 +156,21 @@ int main(int argc, char** argv) {
   const double cpu_pct = wall_s > 0 ? 100.0 * (u1.cpu_s - u0.cpu_s) / wall_s : 0.0;
   const IoCounters& io = d.io_counters();
   const unsigned late = io.sim_late_steps.load(), max_late_us = io.sim_max_late_us.load();
+  const int rt = rt_threads.load();
+  const bool rt_in_force = realtime && rt >= 2;
+  if (realtime && !rt_in_force)
+    std::fprintf(stderr, "qnavd_sim_pacing: --realtime asked but only %d thread(s) ran SCHED_FIFO (needs CAP_SYS_NICE)\n", rt);
   if (json) {
     std::printf(
-        "{\"speed\":%g,\"wall_s\":%.1f,\"nav_status_frames\":%zu,\"nominal_ms\":%.3f,\"p50_ms\":%.3f,\"p99_ms\":%.3f,\"max_ms\":%.3f,"
+        "{\"speed\":%g,\"realtime_requested\":%s,\"realtime_in_force\":%s,\"realtime_threads\":%d,\"wall_s\":%.1f,\"nav_status_frames\":%zu,\"nominal_ms\":%.3f,\"p50_ms\":%.3f,\"p99_ms\":%.3f,\"max_ms\":%.3f,"
         "\"min_ms\":%.3f,\"p99_error_pct\":%.2f,\"drift_ms\":%.3f,\"sim_late_steps\":%u,\"max_late_ms\":%.3f,\"cpu_pct_of_one_core\":%.2f,"
         "\"tiles\":%u,\"exit\":%d}\n",
-        speed, wall_s, n, nominal_ms, p50, p99, mx, mn, 100.0 * (p99 - nominal_ms) / nominal_ms, drift_ms, late, max_late_us * 1e-3, cpu_pct,
+        speed, realtime ? "true" : "false", rt_in_force ? "true" : "false", rt, wall_s, n, nominal_ms, p50, p99, mx, mn, 100.0 * (p99 - nominal_ms) / nominal_ms, drift_ms, late, max_late_us * 1e-3, cpu_pct,
         d.nav().tiles(), rc);
   } else {
     std::printf("speed                %g x real time\n", speed);
+    std::printf("realtime             %s (requested %s; %d thread(s) SCHED_FIFO near the end)\n", rt_in_force ? "in force" : "off",
+                realtime ? "yes" : "no", rt);
     std::printf("wall_s               %.1f\n", wall_s);
     std::printf("nav_status_frames    %zu\n", n);
     std::printf("interval_ms          nominal %.3f  p50 %.3f  p99 %.3f (%+.2f %%)  max %.3f  min %.3f\n", nominal_ms, p50, p99,
