@@ -98,13 +98,7 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
     cmd_comp_ = f.compid;
     if (c.command != kMavCmdSetMode) {
       counters_.increment(MavCounter::kCmdUnsupported);
-      mav::CommandAck a;
-      a.command = c.command;
-      a.result = kMavResultUnsupported;
-      a.target_system = f.sysid;
-      a.target_component = f.compid;
-      pending_ack_ = a;
-      has_pending_ack_ = true;
+      defer_ack(c.command, kMavResultUnsupported, f);
       return;
     }
     const float p1 = c.param1, p2 = c.param2;
@@ -112,13 +106,7 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
                     p2 <= 65535.0f && p2 == std::floor(p2);
     if (!ok) {
       counters_.increment(MavCounter::kCmdBadParam);
-      mav::CommandAck a;
-      a.command = c.command;
-      a.result = kMavResultDenied;
-      a.target_system = f.sysid;
-      a.target_component = f.compid;
-      pending_ack_ = a;
-      has_pending_ack_ = true;
+      defer_ack(c.command, kMavResultDenied, f);
       return;
     }
     in.mode_cmd = true;
@@ -160,13 +148,22 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
   }
 }
 
-void MavlinkEndpoint::ack(bool accepted, const char* why, SpscRing<MavBytes>& tx) noexcept {
+mav::CommandAck MavlinkEndpoint::make_ack(std::uint16_t command, std::uint8_t result, std::uint8_t sys, std::uint8_t comp) noexcept {
   mav::CommandAck a;
-  a.command = kMavCmdSetMode;
-  a.result = accepted ? kMavResultAccepted : kMavResultFailed;
-  a.target_system = cmd_sys_;
-  a.target_component = cmd_comp_;
-  send(a, tx);
+  a.command = command;
+  a.result = result;
+  a.target_system = sys;
+  a.target_component = comp;
+  return a;
+}
+
+void MavlinkEndpoint::defer_ack(std::uint16_t command, std::uint8_t result, const mav::Frame& f) noexcept {
+  pending_ack_ = make_ack(command, result, f.sysid, f.compid);
+  has_pending_ack_ = true;
+}
+
+void MavlinkEndpoint::ack(bool accepted, const char* why, SpscRing<MavBytes>& tx) noexcept {
+  send(make_ack(kMavCmdSetMode, accepted ? kMavResultAccepted : kMavResultFailed, cmd_sys_, cmd_comp_), tx);
   if (accepted) ++commands_accepted_;
   if (!accepted) {
     char text[51];

@@ -120,6 +120,10 @@ class MavlinkEndpoint {
   template <typename M>
   void send(const M& m, SpscRing<MavBytes>& tx) noexcept;
   void status_text(std::uint8_t severity, const char* text, SpscRing<MavBytes>& tx) noexcept;
+  // The COMMAND_ACK of `command` with `result` to the frame's sender.
+  static drivers::mavlink::CommandAck make_ack(std::uint16_t command, std::uint8_t result, std::uint8_t sys, std::uint8_t comp) noexcept;
+  // An answer decided in drain(), sent by publish().
+  void defer_ack(std::uint16_t command, std::uint8_t result, const drivers::mavlink::Frame& f) noexcept;
   std::uint32_t boot_ms(std::int64_t now_ns) const noexcept;
 
   const DaemonConfig& cfg_;
