@@ -1,0 +1,132 @@
+#include "firmware/qnavd/components/route_repeat.hpp"
+
+#include "drivers/route_store/route_open.hpp"
+#include "firmware/pipeline/route_can.hpp"
+#include "firmware/qnavd/deployment.hpp"
+
+namespace qnav::daemon {
+
+namespace qc = drivers::qnavcan;
+
+Status RouteRepeat::init(StaticMemory* mem, qc::QnavCanPublisher& publisher) {
+  publisher_ = &publisher;
+  const route::LocaliserConfig lc = repeat_localiser_config(*ctx_.cfg);
+  Result<Arena*> a = arena_.take(mem, "localiser", route::RouteLocaliser::arena_bytes(lc));
+  if (!a) return a.status();
+  QNAV_RETURN_IF_ERROR(repeater_.init(lc, *a.value()));
+  meta_.reserve(ctx_.cfg->max_nodes);
+  reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
+  return Status::ok();
+}
+
+ModeReject RouteRepeat::probe(std::uint16_t route_id) noexcept {
+  char path[1024];
+  route_file_path(*ctx_.cfg, route_id, "", path, sizeof path);
+  Result<int> probe = store_.open(path, hal::FileMode::kRead);
+  if (probe) {
+    store_.close(*probe);
+    return ModeReject::kNone;
+  }
+  if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, probe.status().message());
+  return probe.status().code() == StatusCode::kNotFound ? ModeReject::kRouteMissing : ModeReject::kStorage;
+}
+
+ModeReject RouteRepeat::enter(std::uint16_t route_id, bool reverse) noexcept {
+  char path[1024];
+  route_file_path(*ctx_.cfg, route_id, "", path, sizeof path);
+  FILE* log = ctx_.log;
+  using drivers::route_store::RepeatOpen;
+  const drivers::route_store::RepeatOpenReport r = drivers::route_store::open_route_for_repeat(reader_, path, meta_, ctx_.cfg->max_nodes);
+  switch (r.outcome) {
+    case RepeatOpen::kMissing:
+    case RepeatOpen::kStorage:
+    case RepeatOpen::kUnreadable:
+    case RepeatOpen::kTooLong:
+    case RepeatOpen::kTooShort:
+      if (log) std::fprintf(log, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, r.why.message());
+      if (r.outcome == RepeatOpen::kMissing) return ModeReject::kRouteMissing;
+      if (r.outcome == RepeatOpen::kStorage) return ModeReject::kStorage;
+      if (r.outcome == RepeatOpen::kTooLong) return ModeReject::kRouteTooLong;
+      if (r.outcome == RepeatOpen::kTooShort) return ModeReject::kRouteTooShort;
+      route_damaged_ = true;
+      return ModeReject::kRouteDamaged;
+    case RepeatOpen::kDamaged:
+      if (log) std::fprintf(log, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, r.first_bad_node, r.why.message());
+      route_damaged_ = true;
+      return ModeReject::kRouteDamaged;
+    case RepeatOpen::kOk:
+    case RepeatOpen::kGoodPrefix:
+      break;
+  }
+  if ((r.cut_off || r.torn_bytes > 0) && log) {
+    // Still usable (every complete node was checked), but the autopilot's operator should know.
+    std::fprintf(log, "{\"event\":\"route_cut_off\",\"file\":\"%s\",\"nodes\":%u,\"torn_bytes\":%llu,\"partial_node_dropped\":%s,\"end\":\"%s\"}\n", path,
+                 r.file_nodes, static_cast<unsigned long long>(r.torn_bytes), r.torn_bytes > 0 ? "true" : "false",
+                 drivers::route_store::to_string(reader_.end()));
+  }
+  // A damaged node with a good prefix before it: the repeat runs on the prefix, and the fault stays
+  // raised while it does (the route file needs attention).
+  const bool prefix_only = r.outcome == RepeatOpen::kGoodPrefix;
+  if (prefix_only && log)
+    std::fprintf(log, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\",\"repeating_nodes\":%u,\"nodes_unused\":%u}\n",
+                 path, r.first_bad_node, r.why.message(), r.nodes_used, r.file_nodes - r.nodes_used);
+  repeater_.set_motion(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, route::MotionModel::kOdometry);
+  const Status s = repeater_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_);
+  if (!s) {
+    // e.g. a route taught with another sensor or tile geometry than this configuration's
+    if (log) std::fprintf(log, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, s.message());
+    reader_.close();
+    return ModeReject::kRouteMismatch;
+  }
+  route_damaged_ = prefix_only;  // a good route clears the fault
+  reverse_ = reverse;
+  eq5_ = false;
+  return ModeReject::kNone;
+}
+
+bool RouteRepeat::step(const pipeline::RouteTile& t, std::uint32_t tile_seq, bool dvl_lost, route::LocaliserStep& out) noexcept {
+  if (dvl_lost != eq5_) {
+    eq5_ = dvl_lost;
+    repeater_.set_motion(reverse_ ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
+                         eq5_ ? route::MotionModel::kPaperEq5 : route::MotionModel::kOdometry);
+  }
+  const bool first = t.tile_index == 0;
+  const Status s = repeater_.step(t.node, first ? 0.0 : t.nav_step_m, out);
+  if (!s) {
+    ++step_errors_;
+    out = route::LocaliserStep{};
+    out.guidance.status = route::GuidanceStatus::kHoldCourse;
+    out.guidance.side = route::RouteSide::kUnknown;
+  }
+  // The next node in the direction of travel is one spacing ahead of the node the offsets refer to
+  // (the taught nodes' own spacing, as the localiser's motion model uses it); values in the DBC ranges.
+  pipeline::route_can_messages(out, repeater_.localiser().node_spacing_m(), tile_seq, guidance_, route_status_);
+  publisher_->set(guidance_);
+  publisher_->set(route_status_);
+  return eq5_;
+}
+
+void RouteRepeat::hold(bool in_repeat, bool no_fix_possible, std::uint32_t tile_seq) noexcept {
+  if (in_repeat && no_fix_possible) {
+    route_status_.status = qc::GuidanceState::kHoldCourse;
+    route_status_.side = qc::SideOfRoute::kUnknown;
+    route_status_.cross_track_sigma_m = qc::kCrossTrackSigmaMaxM;
+    publisher_->set(route_status_);
+  }
+  if (!in_repeat) {
+    route_status_ = qc::RouteStatus{};
+    route_status_.tile_seq = static_cast<std::uint16_t>(tile_seq & 0xFFFF);
+    publisher_->set(route_status_);
+  }
+}
+
+void RouteRepeat::forget(std::uint32_t tile_seq) noexcept {
+  guidance_ = qc::RouteGuidance{};
+  route_status_ = qc::RouteStatus{};
+  route_status_.status = qc::GuidanceState::kHoldCourse;
+  route_status_.tile_seq = static_cast<std::uint16_t>(tile_seq & 0xFFFF);
+  publisher_->set(guidance_);
+  publisher_->set(route_status_);
+}
+
+}  // namespace qnav::daemon
