@@ -45,17 +45,7 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   tile_sink_ = [this](const pipeline::RouteTile& t) { return on_tile(t); };
   QNAV_RETURN_IF_ERROR(map_.init(mem, *publisher_));
   QNAV_RETURN_IF_ERROR(vo_.init(mem, *publisher_));
-  NavParts parts;
-  parts.inputs = &inputs_;
-  parts.teach = &teach_;
-  parts.repeat = &repeat_;
-  parts.vo = &vo_;
-  parts.map = &map_;
-  parts.source = &source_;
-  parts.tiles = &tiles_;
-  parts.io = q.io;
-  parts.counters = &counters_;
-  parts.state = &state_;
+  const NavParts parts{&inputs_, &teach_, &repeat_, &vo_, &map_, &source_, &tiles_, q.io, &counters_, &state_};
   health_.init(parts, *publisher_, cpu_clock_.now_ns());
   initialised_ = true;
   return Status::ok();
@@ -259,7 +249,7 @@ void NavWorker::handle_ping(const PingMsg& p) noexcept {
   ++counters_.pings;
   // A ping stamped at or before the previous one (a clock stepped back, a duplicate, a reordered
   // delivery) cannot be placed on the dead-reckoned track: counted and dropped.
-  if (state_.last_ping_ns >= 0 && p.stamp.sample_ns <= state_.last_ping_ns) {
+  if (!ping_order_.advance(p.stamp.sample_ns)) {
     ++counters_.pings_out_of_order;
     return;
   }

@@ -198,6 +198,7 @@ class NavWorker {
 
   bool reverse_ = false;
   std::uint16_t route_id_ = 0;
+  SampleOrder ping_order_;
   std::int64_t ping_rx_cpu_ns_ = 0;
   std::uint32_t pass_ping_ = 0;
   std::int64_t mode_ns_ = 0;  // time spent in handle_mode during this loop's input drain

@@ -140,21 +140,14 @@ bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std
   const drivers::route_store::RepeatOpenReport r = drivers::route_store::open_route_for_repeat(reader, path, meta, static_cast<std::size_t>(-1));
   char prefix[600];
   std::snprintf(prefix, sizeof prefix, "qnav route repeat: WARNING: %s: ", path);
-  switch (r.outcome) {
-    case RepeatOpen::kMissing:
-    case RepeatOpen::kStorage:
-    case RepeatOpen::kUnreadable:
-    case RepeatOpen::kTooLong:
-    case RepeatOpen::kTooShort:
-      std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, r.why.message());
-      return false;
-    case RepeatOpen::kDamaged:
-      std::fprintf(stderr, "qnav route repeat: %s: node %u is damaged: %s; fewer than 2 good nodes before it: refused (counters: %s)\n", path,
-                   r.first_bad_node, r.why.message(), counter_text(reader.counters()).c_str());
-      return false;
-    case RepeatOpen::kOk:
-    case RepeatOpen::kGoodPrefix:
-      break;
+  if (r.outcome == RepeatOpen::kDamaged) {
+    std::fprintf(stderr, "qnav route repeat: %s: node %u is damaged: %s; fewer than 2 good nodes before it: refused (counters: %s)\n", path,
+                 r.first_bad_node, r.why.message(), counter_text(reader.counters()).c_str());
+    return false;
+  }
+  if (!drivers::route_store::usable(r.outcome)) {
+    std::fprintf(stderr, "qnav route repeat: %s: %s\n", path, r.why.message());
+    return false;
   }
   if (r.cut_off || r.torn_bytes > 0) report_route_end(stderr, prefix, reader);  // still usable: a warning
   if (r.outcome == RepeatOpen::kGoodPrefix)

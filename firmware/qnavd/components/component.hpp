@@ -63,6 +63,17 @@ struct StageArena {
   Result<Arena*> take(StaticMemory* mem, const char* name, std::size_t bytes);
 };
 
+// One sensor's samples in time order: a sample stamped at or before the previous one (a clock stepped
+// back, a duplicate, a reordered delivery) cannot be a step forward; the caller counts and drops it.
+struct SampleOrder {
+  std::int64_t last_ns = -1;
+  bool advance(std::int64_t sample_ns) noexcept {
+    if (last_ns >= 0 && sample_ns <= last_ns) return false;
+    last_ns = sample_ns;
+    return true;
+  }
+};
+
 // daemon.route_dir/route_<id>.qroute<suffix>
 void route_file_path(const DaemonConfig& cfg, std::uint16_t id, const char* suffix, char* out, std::size_t n) noexcept;
 

@@ -54,14 +54,8 @@ void MapComponent::save() noexcept {
   }
 }
 
-bool MapComponent::in_order(std::int64_t sample_ns) noexcept {
-  if (last_frame_ns_ >= 0 && sample_ns <= last_frame_ns_) return false;
-  last_frame_ns_ = sample_ns;
-  return true;
-}
-
 bool MapComponent::camera_lost(std::int64_t now_ns) const noexcept {
-  return now_ns - std::max(last_frame_ns_, mode_start_ns_) > static_cast<std::int64_t>(ctx_.cfg->map_stale_s * 1e9);
+  return now_ns - std::max(order_.last_ns, mode_start_ns_) > static_cast<std::int64_t>(ctx_.cfg->map_stale_s * 1e9);
 }
 
 void MapComponent::on_frame(const FrameMsg& f, const std::uint8_t* image) noexcept {

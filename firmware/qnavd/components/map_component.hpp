@@ -32,7 +32,7 @@ class MapComponent {
   // Saves the map as it ends (adapted since its last new node) and logs map_closed.
   void leave(std::uint16_t map_id) noexcept;
   // False when the frame is older than the previous downward frame (counted out of order by the worker).
-  bool in_order(std::int64_t sample_ns) noexcept;
+  bool in_order(std::int64_t sample_ns) noexcept { return order_.advance(sample_ns); }
   // One downward frame (map.width x map.height); a step error is counted (step_errors).
   void on_frame(const FrameMsg& f, const std::uint8_t* image) noexcept;
   void log_frame(const FrameMsg& f, double latency_ms) const noexcept;
@@ -59,7 +59,7 @@ class MapComponent {
   pipeline::MapperStep step_{};
   bool ready_ = false, open_ = false;
   char path_[1024] = {};
-  std::int64_t last_frame_ns_ = -1;   // the last downward frame's sample time
+  SampleOrder order_;                // the last downward frame's sample time
   std::int64_t mode_start_ns_ = 0;    // when Mode = Map was entered (map.stale_s counts from it)
   std::uint16_t node_ = topo::kNoNode;  // the node the last observed frame was placed at
   std::uint32_t frames_ = 0, bad_frames_ = 0, saves_ = 0, save_errors_ = 0, step_errors_ = 0;

@@ -37,26 +37,18 @@ ModeReject RouteRepeat::enter(std::uint16_t route_id, bool reverse) noexcept {
   FILE* log = ctx_.log;
   using drivers::route_store::RepeatOpen;
   const drivers::route_store::RepeatOpenReport r = drivers::route_store::open_route_for_repeat(reader_, path, meta_, ctx_.cfg->max_nodes);
-  switch (r.outcome) {
-    case RepeatOpen::kMissing:
-    case RepeatOpen::kStorage:
-    case RepeatOpen::kUnreadable:
-    case RepeatOpen::kTooLong:
-    case RepeatOpen::kTooShort:
-      if (log) std::fprintf(log, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, r.why.message());
-      if (r.outcome == RepeatOpen::kMissing) return ModeReject::kRouteMissing;
-      if (r.outcome == RepeatOpen::kStorage) return ModeReject::kStorage;
-      if (r.outcome == RepeatOpen::kTooLong) return ModeReject::kRouteTooLong;
-      if (r.outcome == RepeatOpen::kTooShort) return ModeReject::kRouteTooShort;
-      route_damaged_ = true;
-      return ModeReject::kRouteDamaged;
-    case RepeatOpen::kDamaged:
-      if (log) std::fprintf(log, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, r.first_bad_node, r.why.message());
-      route_damaged_ = true;
-      return ModeReject::kRouteDamaged;
-    case RepeatOpen::kOk:
-    case RepeatOpen::kGoodPrefix:
-      break;
+  if (!drivers::route_store::usable(r.outcome)) {
+    if (log && r.outcome == RepeatOpen::kDamaged)
+      std::fprintf(log, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\"}\n", path, r.first_bad_node, r.why.message());
+    else if (log)
+      std::fprintf(log, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, r.why.message());
+    switch (r.outcome) {
+      case RepeatOpen::kMissing: return ModeReject::kRouteMissing;
+      case RepeatOpen::kStorage: return ModeReject::kStorage;
+      case RepeatOpen::kTooLong: return ModeReject::kRouteTooLong;
+      case RepeatOpen::kTooShort: return ModeReject::kRouteTooShort;
+      default: route_damaged_ = true; return ModeReject::kRouteDamaged;  // unreadable or damaged: the file needs attention
+    }
   }
   if ((r.cut_off || r.torn_bytes > 0) && log) {
     // Still usable (every complete node was checked), but the autopilot's operator should know.

@@ -28,14 +28,8 @@ void VoComponent::reset(std::int64_t now_ns) noexcept {
   chain_started_ = false;
 }
 
-bool VoComponent::in_order(std::int64_t sample_ns) noexcept {
-  if (last_frame_ns_ >= 0 && sample_ns <= last_frame_ns_) return false;
-  last_frame_ns_ = sample_ns;
-  return true;
-}
-
 bool VoComponent::camera_lost(std::int64_t now_ns) const noexcept {
-  return now_ns - std::max(last_frame_ns_, mode_start_ns_) > static_cast<std::int64_t>(ctx_.cfg->vo_stale_s * 1e9);
+  return now_ns - std::max(order_.last_ns, mode_start_ns_) > static_cast<std::int64_t>(ctx_.cfg->vo_stale_s * 1e9);
 }
 
 FrameReport& VoComponent::on_pair(const FrameMsg& f, const std::uint8_t* left, const std::uint8_t* right, bool has_attitude,

@@ -45,7 +45,7 @@ class VoComponent {
   // Mode = Vo entered: a new chain, the body at the origin of this run in the attitude of its first pair.
   void reset(std::int64_t now_ns) noexcept;
   // False when the pair is older than the previous one (counted out of order by the worker).
-  bool in_order(std::int64_t sample_ns) noexcept;
+  bool in_order(std::int64_t sample_ns) noexcept { return order_.advance(sample_ns); }
   // One pair (left, right: vo.max_width x vo.max_height). has_attitude: world_R_body at the pair's time.
   FrameReport& on_pair(const FrameMsg& f, const std::uint8_t* left, const std::uint8_t* right, bool has_attitude,
                              const Mat3d& world_R_body, const pipeline::DeadReckoner& dr) noexcept;
@@ -68,7 +68,7 @@ class VoComponent {
   StageArena arena_;
   drivers::qnavcan::QnavCanPublisher* publisher_ = nullptr;
   bool ready_ = false;
-  std::int64_t last_frame_ns_ = -1;   // the last stereo pair's sample time
+  SampleOrder order_;                // the last stereo pair's sample time
   std::int64_t mode_start_ns_ = 0;
   Pose3 anchor_, last_set_;           // body poses: at the start of the pending increment, at its last update
   std::uint32_t interval_inliers_ = 0;  // smallest inlier count of the increment's steps (0 = one was not visual)
