@@ -663,7 +663,27 @@ int run_eval() {
   return worst_rc;
 }
 
-int run_map() {
+// What run_map's parts share: the inputs the options name, the mapper's configuration, the frames.
+struct MapRun {
+  std::vector<std::string> files;
+  vision::PinholeRadTan cam;
+  bool have_camera = false;
+  bool undistort = true;
+  double altitude = 0.0;
+  std::vector<std::pair<std::string, NavPose>> poses;
+  int W = 0, H = 0;
+  const char* map_out = nullptr;
+  bool metric = false, mapping = false;
+  pipeline::TopoMapperConfig config;
+  std::vector<FrameRecord> rec;
+};
+
+// Image rotation (content, clockwise on screen positive) = -heading of the chain.
+double image_rot_deg(const FrameRecord& r) { return 0.0 - rad_to_deg(r.step.pose.heading_rad) + 0.0; }
+
+// The options checked, the frame list, the camera, the poses and the first frame (which fixes the
+// size) read, the mapper configured. 0 when the run can go on, else the exit code.
+int load_map_run(MapRun& run, Result<ImageU8>& first) {
   if (g_opt.images.empty()) {
     std::fprintf(stderr, "qnav map: give --images DIR, or `route` / `eval` (qnav help map)\n");
     return 2;
@@ -671,88 +691,65 @@ int run_map() {
   const char* images = g_opt.images.c_str();
   const char* poses_path = opt_or_null(g_opt.poses);
   const char* camera_path = opt_or_null(g_opt.camera);
-  const char* out_dir = opt_or_null(g_opt.out);
-  const bool json = g_opt.json;
-  const bool undistort = !g_opt.no_undistort;
-  const double altitude = g_opt.altitude;
-  const long max_frames = g_opt.frames;
+  run.undistort = !g_opt.no_undistort;
+  run.altitude = g_opt.altitude;
   if (const std::string e = qnav::cli::input_dir_problem(images); !e.empty()) {
     std::fprintf(stderr, "map: --images %s\n", e.c_str());
     return 1;
   }
-
-  std::vector<std::string> files;
   std::string err;
-  if (!tools::list_image_files(images, files, err)) {
+  if (!tools::list_image_files(images, run.files, err)) {
     std::fprintf(stderr, "map: %s\n", err.c_str());
     return 1;
   }
-  if (static_cast<long>(files.size()) > max_frames) files.resize(static_cast<std::size_t>(max_frames));
-
-  vision::PinholeRadTan cam;
-  const bool have_camera = camera_path != nullptr;
-  if (have_camera) {
+  if (static_cast<long>(run.files.size()) > g_opt.frames) run.files.resize(static_cast<std::size_t>(g_opt.frames));
+  run.have_camera = camera_path != nullptr;
+  if (run.have_camera) {
     Result<vision::PinholeRadTan> c = tools::read_opencv_camera(camera_path);
     if (!c) {
       std::fprintf(stderr, "map: %s: %s\n", camera_path, c.status().message());
       return 1;
     }
-    cam = c.value();
+    run.cam = c.value();
   }
-  if (altitude > 0.0 && !have_camera) {
+  if (run.altitude > 0.0 && !run.have_camera) {
     std::fprintf(stderr, "map: --altitude needs --camera (fx for metres per pixel)\n");
     return 2;
   }
-  std::vector<std::pair<std::string, NavPose>> poses;
-  if (poses_path != nullptr && !read_poses(poses_path, poses, err)) {
+  if (poses_path != nullptr && !read_poses(poses_path, run.poses, err)) {
     std::fprintf(stderr, "map: %s\n", err.c_str());
     return 1;
   }
-
-  // The first frame fixes the size.
-  Result<ImageU8> first = tools::read_image_gray8(files[0].c_str());
+  first = tools::read_image_gray8(run.files[0].c_str());
   if (!first) {
-    std::fprintf(stderr, "map: %s: %s\n", files[0].c_str(), first.status().message());
+    std::fprintf(stderr, "map: %s: %s\n", run.files[0].c_str(), first.status().message());
     return 1;
   }
-  const int W = first->width(), H = first->height();
-  if (have_camera && (cam.width != W || cam.height != H)) {
-    std::fprintf(stderr, "map: camera is %dx%d, frames are %dx%d\n", cam.width, cam.height, W, H);
+  run.W = first->width(), run.H = first->height();
+  if (run.have_camera && (run.cam.width != run.W || run.cam.height != run.H)) {
+    std::fprintf(stderr, "map: camera is %dx%d, frames are %dx%d\n", run.cam.width, run.cam.height, run.W, run.H);
     return 1;
   }
   // The topological map (when --map-out or --node-spacing is given).
-  const char* map_out = opt_or_null(g_opt.map_out);
-  const bool metric = altitude > 0.0 && have_camera;
-  const bool mapping = map_out != nullptr || !std::isnan(g_opt.node_spacing);
-  pipeline::TopoMapperConfig config = pipeline::topo_mapper_config(W, H, have_camera, cam, undistort, mapping, metric, g_opt.node_spacing,
-                                                                   static_cast<std::size_t>(g_opt.max_nodes));
-  config.chain.fundamental_filter = g_opt.fundamental;
-  const long gap = g_opt.keyframe_gap > 0 ? g_opt.keyframe_gap : static_cast<long>(config.chain.max_keyframe_gap);
-  config.chain.max_keyframe_gap = static_cast<std::uint32_t>(gap);
-  const double spacing = config.map.node_spacing;
-  if (out_dir != nullptr) {  // the map file may live there and is written from the first node
-    if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
-      std::fprintf(stderr, "map: %s\n", e.c_str());
-      return 1;
-    }
-  }
-  ArenaStorage arena(pipeline::TopoMapper::arena_bytes(config));
-  pipeline::TopoMapper mapper;
-  Status s = mapper.init(config, arena);
-  if (!s) {
-    std::fprintf(stderr, "map: mapper init (chain, undistortion table, topological map): %s\n", s.message());
-    return 1;
-  }
-  const topo::HomographyChain& chain = mapper.chain();
-  MapBuilder builder;
-  builder.mapper = &mapper;
-  builder.path = map_out;
+  run.map_out = opt_or_null(g_opt.map_out);
+  run.metric = run.altitude > 0.0 && run.have_camera;
+  run.mapping = run.map_out != nullptr || !std::isnan(g_opt.node_spacing);
+  run.config = pipeline::topo_mapper_config(run.W, run.H, run.have_camera, run.cam, run.undistort, run.mapping, run.metric, g_opt.node_spacing,
+                                            static_cast<std::size_t>(g_opt.max_nodes));
+  run.config.chain.fundamental_filter = g_opt.fundamental;
+  const long gap = g_opt.keyframe_gap > 0 ? g_opt.keyframe_gap : static_cast<long>(run.config.chain.max_keyframe_gap);
+  run.config.chain.max_keyframe_gap = static_cast<std::uint32_t>(gap);
+  return 0;
+}
 
-  std::vector<FrameRecord> rec;
+// Every frame through the mapper, timed, into run.rec; the map file rewritten after each new node.
+int map_frames(MapRun& run, pipeline::TopoMapper& mapper, MapBuilder& builder, Result<ImageU8>& first) {
+  const std::vector<std::string>& files = run.files;
+  Status s;
   for (std::size_t i = 0; i < files.size(); ++i) {
     FrameRecord r;
     r.file = basename_of(files[i]);
-    for (const auto& p : poses)
+    for (const auto& p : run.poses)
       if (p.first == r.file) r.nav = p.second;
     Result<ImageU8> img = i == 0 ? std::move(first) : tools::read_image_gray8(files[i].c_str());
     const auto t0 = Clock::now();
@@ -765,7 +762,7 @@ int run_map() {
       s = mapper.undistort(img->view(), input);  // a frame of another size passes through, refused as kBadInput (size)
       const auto t1 = Clock::now();
       const double c1 = cpu_ms();
-      if (s) s = mapper.register_frame(input, altitude, m);
+      if (s) s = mapper.register_frame(input, run.altitude, m);
       r.chain_cpu_ms = cpu_ms() - c1;
       if (mapper.undistorts()) r.chain_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
     }
@@ -781,66 +778,78 @@ int run_map() {
       std::fprintf(stderr, "map: %s: %s\n", files[i].c_str(), s.message());
       return 1;
     }
-    if (mapping && builder.path != nullptr && r.place.kind == topo::ObserveKind::kCreated) builder.save();  // not timed in ms
-    rec.push_back(r);
+    if (run.mapping && builder.path != nullptr && r.place.kind == topo::ObserveKind::kCreated) builder.save();  // not timed in ms
+    run.rec.push_back(r);
   }
+  return 0;
+}
 
-  // Summary.
-  const std::size_t n = rec.size();
+// The run's figures: registrations, rotation against the navigation, paths, the chain aligned to the
+// navigation (each record's aligned position set).
+struct MapSummary {
   int registered = 0;
   std::vector<double> inliers, keypoints, ms, chain_ms, chain_cpu;
+  double rot_chain = 0.0, rot_nav = 0.0;
+  bool have_nav = false;
+  std::size_t span_a = 0, span_b = 0;
+  double span_chain = std::nan(""), span_nav = std::nan(""), span_rms = std::nan(""), span_max = std::nan("");
+  double path_px = 0.0, nav_path = 0.0, net_px = 0.0, nav_net = 0.0, mpp = 0.0, implied_alt = std::nan("");
+  Alignment al;
+};
+
+MapSummary summarise_map(MapRun& run, const topo::HomographyChain& chain) {
+  std::vector<FrameRecord>& rec = run.rec;
+  MapSummary m;
+  const std::size_t n = rec.size();
   for (std::size_t i = 0; i < n; ++i) {
-    keypoints.push_back(rec[i].step.keypoints);
-    ms.push_back(rec[i].ms);
-    chain_ms.push_back(rec[i].chain_ms);
-    chain_cpu.push_back(rec[i].chain_cpu_ms);
+    m.keypoints.push_back(rec[i].step.keypoints);
+    m.ms.push_back(rec[i].ms);
+    m.chain_ms.push_back(rec[i].chain_ms);
+    m.chain_cpu.push_back(rec[i].chain_cpu_ms);
     if (i > 0 && rec[i].step.status == topo::StepStatus::kOk && !rec[i].step.reference) {
-      ++registered;
-      inliers.push_back(rec[i].step.inliers);
+      ++m.registered;
+      m.inliers.push_back(rec[i].step.inliers);
     }
   }
-  // Image rotation (content, clockwise on screen positive) = -heading of the chain.
-  auto image_rot_deg = [&](std::size_t i) { return 0.0 - rad_to_deg(rec[i].step.pose.heading_rad) + 0.0; };
-  const double rot_chain = image_rot_deg(n - 1) - image_rot_deg(0);
-  const bool have_nav = rec[0].nav.valid && rec[n - 1].nav.valid;
-  const double rot_nav = have_nav ? wrap_deg(rec[n - 1].nav.yaw_deg - rec[0].nav.yaw_deg) : std::nan("");
+  m.rot_chain = image_rot_deg(rec[n - 1]) - image_rot_deg(rec[0]);
+  m.have_nav = rec[0].nav.valid && rec[n - 1].nav.valid;
+  m.rot_nav = m.have_nav ? wrap_deg(rec[n - 1].nav.yaw_deg - rec[0].nav.yaw_deg) : std::nan("");
   // Inside the navigation's own span (pose_note == interpolated): first and last such frame.
-  std::size_t span_a = n, span_b = n;
+  m.span_a = n, m.span_b = n;
   for (std::size_t i = 0; i < n; ++i)
     if (rec[i].nav.valid && rec[i].nav.interpolated) {
-      if (span_a == n) span_a = i;
-      span_b = i;
+      if (m.span_a == n) m.span_a = i;
+      m.span_b = i;
     }
-  double span_chain = std::nan(""), span_nav = std::nan(""), span_rms = std::nan(""), span_max = std::nan("");
+  const std::size_t span_a = m.span_a, span_b = m.span_b;
   if (span_a < n && span_b > span_a) {
-    span_chain = image_rot_deg(span_b) - image_rot_deg(span_a);
-    span_nav = wrap_deg(rec[span_b].nav.yaw_deg - rec[span_a].nav.yaw_deg);
+    m.span_chain = image_rot_deg(rec[span_b]) - image_rot_deg(rec[span_a]);
+    m.span_nav = wrap_deg(rec[span_b].nav.yaw_deg - rec[span_a].nav.yaw_deg);
     double ss = 0.0, mx = 0.0;
     int cnt = 0;
     for (std::size_t i = span_a; i <= span_b; ++i) {
       if (!rec[i].nav.valid) continue;
-      const double d = (image_rot_deg(i) - image_rot_deg(span_a)) - wrap_deg(rec[i].nav.yaw_deg - rec[span_a].nav.yaw_deg);
+      const double d = (image_rot_deg(rec[i]) - image_rot_deg(rec[span_a])) - wrap_deg(rec[i].nav.yaw_deg - rec[span_a].nav.yaw_deg);
       ss += d * d;
       mx = std::max(mx, std::abs(d));
       ++cnt;
     }
-    span_rms = std::sqrt(ss / std::max(cnt, 1));
-    span_max = mx;
+    m.span_rms = std::sqrt(ss / std::max(cnt, 1));
+    m.span_max = mx;
   }
   // Paths.
   const topo::ChainPose& p0 = rec[0].step.pose;
-  double path_px = 0.0, nav_path = 0.0;
   Vec2d last_px = p0.position_px;
   for (std::size_t i = 1; i < n; ++i) {
     if (rec[i].step.status == topo::StepStatus::kOk) {
-      path_px += (rec[i].step.pose.position_px - last_px).norm();
+      m.path_px += (rec[i].step.pose.position_px - last_px).norm();
       last_px = rec[i].step.pose.position_px;
     }
-    if (rec[i].nav.valid && rec[i - 1].nav.valid) nav_path += std::hypot(rec[i].nav.x - rec[i - 1].nav.x, rec[i].nav.y - rec[i - 1].nav.y);
+    if (rec[i].nav.valid && rec[i - 1].nav.valid) m.nav_path += std::hypot(rec[i].nav.x - rec[i - 1].nav.x, rec[i].nav.y - rec[i - 1].nav.y);
   }
-  const double net_px = (last_px - p0.position_px).norm();
-  const double nav_net = have_nav ? std::hypot(rec[n - 1].nav.x - rec[0].nav.x, rec[n - 1].nav.y - rec[0].nav.y) : std::nan("");
-  const double mpp = chain.metres_per_px();
+  m.net_px = (last_px - p0.position_px).norm();
+  m.nav_net = m.have_nav ? std::hypot(rec[n - 1].nav.x - rec[0].nav.x, rec[n - 1].nav.y - rec[0].nav.y) : std::nan("");
+  m.mpp = chain.metres_per_px();
   // Alignment of the chain to the navigation (rotation [+ scale when no altitude], mirror chosen by fit).
   std::vector<Vec2d> a, b;
   for (std::size_t i = 0; i < n; ++i)
@@ -848,56 +857,66 @@ int run_map() {
       a.push_back(rec[i].step.pose.position_px - p0.position_px);
       b.push_back(Vec2d(rec[i].nav.x - rec[0].nav.x, rec[i].nav.y - rec[0].nav.y));
     }
-  const Alignment al = have_nav ? align(a, b, mpp > 0.0 ? mpp : 0.0) : Alignment{};
+  m.al = m.have_nav ? align(a, b, m.mpp > 0.0 ? m.mpp : 0.0) : Alignment{};
   for (std::size_t i = 0; i < n; ++i)
-    if (al.valid) rec[i].aligned = al.apply(rec[i].step.pose.position_px - p0.position_px) + Vec2d(rec[0].nav.x, rec[0].nav.y);
+    if (m.al.valid) rec[i].aligned = m.al.apply(rec[i].step.pose.position_px - p0.position_px) + Vec2d(rec[0].nav.x, rec[0].nav.y);
   // Only when the scale was fitted (no --altitude): the altitude that scale stands for.
-  const double implied_alt = (al.valid && have_camera && !(mpp > 0.0)) ? al.scale * cam.fx : std::nan("");
+  m.implied_alt = (m.al.valid && run.have_camera && !(m.mpp > 0.0)) ? m.al.scale * run.cam.fx : std::nan("");
+  return m;
+}
 
-  // Outputs.
-  std::string csv_path, png_path, mosaic_path;
-  if (out_dir != nullptr) {
-    mkdir(out_dir, 0755);
-    csv_path = std::string(out_dir) + "/map_trajectory.csv";
-    png_path = std::string(out_dir) + "/map_trajectory.png";
-    FILE* f = std::fopen(csv_path.c_str(), "w");
-    if (f == nullptr) {
-      std::fprintf(stderr, "map: cannot write %s: %s\n", csv_path.c_str(), std::strerror(errno));
-      return 1;
+// map_trajectory.csv, one row per frame.
+bool write_map_trajectory_csv(const std::string& csv_path, const MapRun& run, const MapSummary& m) {
+  const std::vector<FrameRecord>& rec = run.rec;
+  FILE* f = std::fopen(csv_path.c_str(), "w");
+  if (f == nullptr) {
+    std::fprintf(stderr, "map: cannot write %s: %s\n", csv_path.c_str(), std::strerror(errno));
+    return false;
+  }
+  std::fprintf(f, "frame,file,status,new_keyframe,keyframe,keypoints,matches,f_inliers,inliers,rms_px,overlap,x_px,y_px,"
+                  "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms,chain_ms,"
+                  "map_node,map_kind,map_revisit,map_similarity\n");
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    const topo::ChainStep& st = rec[i].step;
+    const bool ok = st.status == topo::StepStatus::kOk;
+    std::fprintf(f, "%zu,%s,%s,%d,%u,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,", i, rec[i].file.c_str(), topo::to_string(st.status),
+                 st.new_keyframe ? 1 : 0, st.keyframe_index, st.keypoints, st.matches, st.fundamental_inliers, st.inliers, st.rms_px,
+                 st.overlap, st.pose.position_px.x(), st.pose.position_px.y(), rad_to_deg(st.pose.heading_rad), image_rot_deg(rec[i]));
+    if (st.pose.metric) std::fprintf(f, "%.4f,%.4f,", st.pose.position_m.x(), st.pose.position_m.y());
+    else std::fprintf(f, ",,");
+    if (m.al.valid && ok) std::fprintf(f, "%.4f,%.4f,", rec[i].aligned.x(), rec[i].aligned.y());
+    else std::fprintf(f, ",,");
+    if (rec[i].nav.valid) std::fprintf(f, "%.4f,%.4f,%.4f,%d,", rec[i].nav.x, rec[i].nav.y, rec[i].nav.yaw_deg, rec[i].nav.interpolated ? 1 : 0);
+    else std::fprintf(f, ",,,,");
+    std::fprintf(f, "%.3f,%.3f,", rec[i].ms, rec[i].chain_ms);
+    if (rec[i].observed) {
+      std::fprintf(f, "%d,%s,%d,%.4f\n", rec[i].place.node == topo::kNoNode ? -1 : static_cast<int>(rec[i].place.node),
+                   topo::to_string(rec[i].place.kind), rec[i].place.revisit ? 1 : 0, rec[i].place.similarity);
+    } else {
+      std::fprintf(f, ",,,\n");
     }
-    std::fprintf(f, "frame,file,status,new_keyframe,keyframe,keypoints,matches,f_inliers,inliers,rms_px,overlap,x_px,y_px,"
-                    "heading_deg,image_rot_deg,x_m,y_m,aligned_x_m,aligned_y_m,nav_x_m,nav_y_m,nav_yaw_deg,nav_interpolated,ms,chain_ms,"
-                    "map_node,map_kind,map_revisit,map_similarity\n");
-    for (std::size_t i = 0; i < n; ++i) {
-      const topo::ChainStep& st = rec[i].step;
-      const bool ok = st.status == topo::StepStatus::kOk;
-      std::fprintf(f, "%zu,%s,%s,%d,%u,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,", i, rec[i].file.c_str(), topo::to_string(st.status),
-                   st.new_keyframe ? 1 : 0, st.keyframe_index, st.keypoints, st.matches, st.fundamental_inliers, st.inliers, st.rms_px,
-                   st.overlap, st.pose.position_px.x(), st.pose.position_px.y(), rad_to_deg(st.pose.heading_rad), image_rot_deg(i));
-      if (st.pose.metric) std::fprintf(f, "%.4f,%.4f,", st.pose.position_m.x(), st.pose.position_m.y());
-      else std::fprintf(f, ",,");
-      if (al.valid && ok) std::fprintf(f, "%.4f,%.4f,", rec[i].aligned.x(), rec[i].aligned.y());
-      else std::fprintf(f, ",,");
-      if (rec[i].nav.valid) std::fprintf(f, "%.4f,%.4f,%.4f,%d,", rec[i].nav.x, rec[i].nav.y, rec[i].nav.yaw_deg, rec[i].nav.interpolated ? 1 : 0);
-      else std::fprintf(f, ",,,,");
-      std::fprintf(f, "%.3f,%.3f,", rec[i].ms, rec[i].chain_ms);
-      if (rec[i].observed) {
-        std::fprintf(f, "%d,%s,%d,%.4f\n", rec[i].place.node == topo::kNoNode ? -1 : static_cast<int>(rec[i].place.node),
-                     topo::to_string(rec[i].place.kind), rec[i].place.revisit ? 1 : 0, rec[i].place.similarity);
-      } else {
-        std::fprintf(f, ",,,\n");
-      }
-    }
-    const bool write_ok = std::fflush(f) == 0;
-    std::fclose(f);
-    if (!write_ok) {
-      std::fprintf(stderr, "map: writing %s failed\n", csv_path.c_str());
-      return 1;
-    }
-    if (mapping && !builder.write_csv(out_dir, mpp)) {
-      std::fprintf(stderr, "map: writing %s/map_nodes.csv or map_edges.csv failed\n", out_dir);
-      return 1;
-    }
+  }
+  const bool write_ok = std::fflush(f) == 0;
+  std::fclose(f);
+  if (!write_ok) {
+    std::fprintf(stderr, "map: writing %s failed\n", csv_path.c_str());
+    return false;
+  }
+  return true;
+}
+
+// The outputs in --out: the trajectory CSV, the map's CSVs, the plot and the mosaic. False: a write failed.
+bool write_map_outputs(const char* out_dir, const MapRun& run, const MapSummary& m, pipeline::TopoMapper& mapper, MapBuilder& builder,
+                       std::string& csv_path, std::string& png_path, std::string& mosaic_path) {
+  const std::vector<std::string>& files = run.files;
+  mkdir(out_dir, 0755);
+  csv_path = std::string(out_dir) + "/map_trajectory.csv";
+  png_path = std::string(out_dir) + "/map_trajectory.png";
+  if (!write_map_trajectory_csv(csv_path, run, m)) return false;
+  if (run.mapping && !builder.write_csv(out_dir, m.mpp)) {
+    std::fprintf(stderr, "map: writing %s/map_nodes.csv or map_edges.csv failed\n", out_dir);
+    return false;
+  }
     const std::string script = source_root() + "/scripts/map_plot.py";
     struct stat st {};
     if (g_opt.no_plot) {
@@ -921,22 +940,33 @@ int run_map() {
                                     for (int r = 0; r < v.height(); ++r) std::memcpy(buf.view().row(r), v.row(r), static_cast<std::size_t>(v.width()));
                                     return true;
                                   },
-                                  W, H};
+                                  run.W, run.H};
       mosaic_path = std::string(out_dir) + "/map_mosaic.png";
-      if (!write_map_mosaic(mosaic_path, src, rec, mapping ? &builder.map() : nullptr, metric, mpp, "qnav map")) mosaic_path.clear();
+      if (!write_map_mosaic(mosaic_path, src, run.rec, run.mapping ? &builder.map() : nullptr, run.metric, m.mpp, "qnav map")) mosaic_path.clear();
     }
-  }
+  return true;
+}
 
+// The report on stdout: one JSON object (--json) or text.
+void print_map_report(const MapRun& run, const MapSummary& m, const MapBuilder& builder, const topo::HomographyChain& chain,
+                      const std::string& csv_path, const std::string& png_path, const std::string& mosaic_path) {
+  const std::size_t n = run.rec.size();
+  const int W = run.W, H = run.H;
+  const bool have_camera = run.have_camera, undistort = run.undistort, metric = run.metric, mapping = run.mapping;
+  const char* map_out = run.map_out;
+  const double spacing = run.config.map.node_spacing;
+  const int registered = m.registered;
+  const std::vector<double>&inliers = m.inliers, &keypoints = m.keypoints, &ms = m.ms, &chain_ms = m.chain_ms, &chain_cpu = m.chain_cpu;
+  const double rot_chain = m.rot_chain, rot_nav = m.rot_nav, span_chain = m.span_chain, span_nav = m.span_nav, span_rms = m.span_rms,
+               span_max = m.span_max, path_px = m.path_px, net_px = m.net_px, nav_path = m.nav_path, nav_net = m.nav_net, mpp = m.mpp,
+               implied_alt = m.implied_alt;
+  const bool have_nav = m.have_nav;
+  const std::size_t span_a = m.span_a, span_b = m.span_b;
+  const Alignment& al = m.al;
   const int pairs = static_cast<int>(n) - 1;
   auto num = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("null"); };
-  // The map as it ends (adapted since the last new node), and its figures.
-  if (mapping && builder.path != nullptr) builder.save();
-  if (mapping && !builder.status) {
-    std::fprintf(stderr, "map: writing the map file %s: %s\n", map_out, builder.status.message());
-    return 1;
-  }
   std::vector<double> map_ms;
-  for (const FrameRecord& r : rec)
+  for (const FrameRecord& r : run.rec)
     if (r.observed) map_ms.push_back(r.map_ms);
   std::string map_json = "\"map\": null, ";
   if (mapping) {
@@ -947,12 +977,12 @@ int run_map() {
                   "\"revisit_frames\": %d, \"mismatch\": %u, \"full\": %u, \"pruned\": %u, \"edges_aged\": %u, \"edge_too_long\": %u, "
                   "\"map_ms_median\": %s, \"file\": \"%s\", \"saves\": %d, \"save_ms_median\": %s}, ",
                   builder.map().node_count(), builder.map().edge_count(), metric ? "m" : "px", spacing, builder.map().revisits(),
-                  builder.revisit_frames(rec), c.get(topo::TopoCounter::kMismatch), c.get(topo::TopoCounter::kNodeCapacity),
+                  builder.revisit_frames(run.rec), c.get(topo::TopoCounter::kMismatch), c.get(topo::TopoCounter::kNodeCapacity),
                   c.get(topo::TopoCounter::kNodesPruned), c.get(topo::TopoCounter::kEdgesAged), c.get(topo::TopoCounter::kEdgeTooLong),
                   num(median(map_ms)).c_str(), map_out ? map_out : "", builder.saves, num(median(builder.save_ms)).c_str());
     map_json = buf;
   }
-  if (json) {
+  if (g_opt.json) {
     std::printf("{%s\"frames\": %zu, \"pairs_registered\": %d, \"pairs_total\": %d, \"keyframes\": %u, "
                 "\"keypoints_median\": %s, \"inliers_median\": %s, \"inliers_min\": %s, "
                 "\"yaw_chain_deg\": %s, \"yaw_nav_deg\": %s, \"yaw_error_deg\": %s, "
@@ -973,10 +1003,10 @@ int run_map() {
                 num(al.valid ? rad_to_deg(al.rotation_rad) : std::nan("")).c_str(), al.valid ? (al.mirrored ? "true" : "false") : "null",
                 num(al.valid ? al.rms_m : std::nan("")).c_str(), num(implied_alt).c_str(), num(median(ms)).c_str(),
                 num(*std::max_element(ms.begin(), ms.end())).c_str(), num(median(chain_ms)).c_str(), num(median(chain_cpu)).c_str(), (have_camera && undistort) ? "true" : "false",
-                config.chain.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str(), mosaic_path.c_str());
+                run.config.chain.fundamental_filter ? "true" : "false", csv_path.c_str(), png_path.c_str(), mosaic_path.c_str());
   } else {
     std::printf("frames %zu (%dx%d)%s%s\n", n, W, H, (have_camera && undistort) ? ", undistorted" : "",
-                config.chain.fundamental_filter ? ", F both-accept filter" : "");
+                run.config.chain.fundamental_filter ? ", F both-accept filter" : "");
     std::printf("pairs registered      %d / %d (keyframes %u)\n", registered, pairs, chain.keyframes());
     std::printf("keypoints per frame   median %.0f\n", median(keypoints));
     if (!inliers.empty())
@@ -1013,7 +1043,41 @@ int run_map() {
       std::printf("wrote %s%s%s%s%s\n", csv_path.c_str(), png_path.empty() ? "" : ", ", png_path.c_str(), mosaic_path.empty() ? "" : ", ",
                   mosaic_path.c_str());
   }
-  return registered == pairs ? 0 : 1;
+}
+
+int run_map() {
+  MapRun run;
+  Result<ImageU8> first = Status(StatusCode::kNotReady, "not read");
+  if (const int rc = load_map_run(run, first); rc != 0) return rc;
+  const char* out_dir = opt_or_null(g_opt.out);
+  if (out_dir != nullptr) {  // the map file may live there and is written from the first node
+    if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+      std::fprintf(stderr, "map: %s\n", e.c_str());
+      return 1;
+    }
+  }
+  ArenaStorage arena(pipeline::TopoMapper::arena_bytes(run.config));
+  pipeline::TopoMapper mapper;
+  const Status s = mapper.init(run.config, arena);
+  if (!s) {
+    std::fprintf(stderr, "map: mapper init (chain, undistortion table, topological map): %s\n", s.message());
+    return 1;
+  }
+  MapBuilder builder;
+  builder.mapper = &mapper;
+  builder.path = run.map_out;
+  if (const int rc = map_frames(run, mapper, builder, first); rc != 0) return rc;
+  const MapSummary m = summarise_map(run, mapper.chain());
+  std::string csv_path, png_path, mosaic_path;
+  if (out_dir != nullptr && !write_map_outputs(out_dir, run, m, mapper, builder, csv_path, png_path, mosaic_path)) return 1;
+  // The map as it ends (adapted since the last new node), and its figures.
+  if (run.mapping && builder.path != nullptr) builder.save();
+  if (run.mapping && !builder.status) {
+    std::fprintf(stderr, "map: writing the map file %s: %s\n", run.map_out, builder.status.message());
+    return 1;
+  }
+  print_map_report(run, m, builder, mapper.chain(), csv_path, png_path, mosaic_path);
+  return m.registered == static_cast<int>(run.rec.size()) - 1 ? 0 : 1;
 }
 
 }  // namespace
