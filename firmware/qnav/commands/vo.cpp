@@ -272,6 +272,129 @@ struct VoOptions {
 };
 VoOptions g_opt;
 
+// --seeds: a comma list ("3,4,5") or an inclusive range ("3-7"), at most 100; empty: none.
+bool parse_seeds(const std::string& text, std::vector<long>& seeds) {
+  if (text.empty()) return true;
+  const char* ss = text.c_str();
+  long a = 0, b = 0;
+  char dash = 0;
+  if (std::sscanf(ss, "%ld%c%ld", &a, &dash, &b) == 3 && dash == '-' && a >= 0 && b >= a && b - a < 100) {
+    for (long v = a; v <= b; ++v) seeds.push_back(v);
+    return true;
+  }
+  const char* p = ss;
+  while (*p != 0) {
+    char* e = nullptr;
+    const long v = std::strtol(p, &e, 10);
+    if (e == p || v < 0 || seeds.size() >= 100) return false;
+    seeds.push_back(v);
+    p = (*e == ',') ? e + 1 : e;
+    if (*e != ',' && *e != 0) return false;
+  }
+  return true;
+}
+
+// res[s][i][k]: seed s, scenario i (27 m, 100 m), configuration k.
+using EvalResults = std::vector<std::array<std::vector<RunResult>, 2>>;
+
+double end_pct(const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.end_error_m / r.path_m : 0.0; }
+double max_pct(const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.max_error_m / r.path_m : 0.0; }
+
+// One configuration's figure over the seeds.
+struct SeedStats {
+  std::vector<double> v;
+  double max() const { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+  double mean() const {
+    double s = 0.0;
+    for (double x : v) s += x;
+    return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+  }
+  void print() const {
+    std::printf("[");
+    for (std::size_t j = 0; j < v.size(); ++j) std::printf("%s%.3f", j ? "," : "", v[j]);
+    std::printf("]");
+  }
+};
+SeedStats end_pct_over_seeds(const EvalResults& res, std::size_t k, int i) {
+  SeedStats st;
+  for (const auto& r : res) st.v.push_back(end_pct(r[i][k]));
+  return st;
+}
+std::vector<double> step_ms_over_seeds(const EvalResults& res, std::size_t k) {
+  std::vector<double> ms;
+  for (const auto& r : res)
+    for (int i = 0; i < 2; ++i) ms.insert(ms.end(), r[i][k].step_ms.begin(), r[i][k].step_ms.end());
+  return ms;
+}
+std::size_t lost_over_seeds(const EvalResults& res, std::size_t k, int i) {
+  std::size_t n = 0;
+  for (const auto& r : res) n += r[i][k].lost;
+  return n;
+}
+
+void print_eval_json(const EvalResults& res, const std::vector<EvalConfig>& cfgs, const std::vector<long>& seeds, const char* noise_name) {
+  const SeedStats s27 = end_pct_over_seeds(res, 0, 0), s100 = end_pct_over_seeds(res, 0, 1);
+  std::printf("{\"noise\":\"%s\",\"seed\":%ld,\"seeds\":[", noise_name, seeds[0]);
+  for (std::size_t si = 0; si < seeds.size(); ++si) std::printf("%s%ld", si ? "," : "", seeds[si]);
+  std::printf("],\"main\":\"%s\",\"rel_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
+              cfgs[0].name, end_pct(res[0][0][0]), end_pct(res[0][1][0]));
+  s27.print();
+  std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", s27.max(),
+              s27.mean());
+  s100.print();
+  std::printf(",\"rel_error_pct_100m_max\":%.3f,\"rel_error_pct_100m_mean\":%.3f,\"step_ms_median\":%.3f,"
+              "\"image\":\"320x256\",\"length_27m_m\":%.2f,\"length_100m_m\":%.2f,\"configs\":[",
+              s100.max(), s100.mean(), median(step_ms_over_seeds(res, 0)), res[0][0][0].path_m, res[0][1][0].path_m);
+  for (std::size_t k = 0; k < cfgs.size(); ++k) {
+    const SeedStats a = end_pct_over_seeds(res, k, 0), b = end_pct_over_seeds(res, k, 1);
+    // Step rotation error over every seed's 27 m run.
+    Vec3d rs = Vec3d::Zero(), rs2 = Vec3d::Zero();
+    std::size_t rn = 0;
+    for (std::size_t si = 0; si < seeds.size(); ++si) {
+      rs += res[si][0][k].rot_sum_deg;
+      rs2 += res[si][0][k].rot_sum2_deg;
+      rn += res[si][0][k].rot_n;
+    }
+    const double nn = rn > 0 ? static_cast<double>(rn) : 1.0;
+    std::printf("%s{\"name\":\"%s\",\"step_rot_steps\":%zu,\"step_rot_rms_deg\":[%.4f,%.4f,%.4f],"
+                "\"step_rot_mean_deg\":[%.4f,%.4f,%.4f],",
+                k ? "," : "", cfgs[k].name, rn, std::sqrt(rs2.x() / nn), std::sqrt(rs2.y() / nn), std::sqrt(rs2.z() / nn),
+                rs.x() / nn, rs.y() / nn, rs.z() / nn);
+    std::printf("\"rel_error_pct_27m\":%.3f,\"max_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
+                "\"max_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
+                end_pct(res[0][0][k]), max_pct(res[0][0][k]), end_pct(res[0][1][k]),
+                max_pct(res[0][1][k]));
+    a.print();
+    std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", a.max(),
+                a.mean());
+    b.print();
+    std::printf(",\"rel_error_pct_100m_max\":%.3f,\"step_ms_median\":%.3f,\"lost_27m\":%zu,\"lost_100m\":%zu}", b.max(),
+                median(step_ms_over_seeds(res, k)), lost_over_seeds(res, k, 0), lost_over_seeds(res, k, 1));
+  }
+  std::printf("]}\n");
+}
+
+void print_eval_text(const EvalResults& res, const std::vector<EvalConfig>& cfgs, const std::vector<long>& seeds, const char* noise_name) {
+  std::printf("synthetic Mars yard, noise %s, 320x256, 300 corners\n", noise_name);
+  std::printf("%-15s %5s %10s %10s %10s %10s %8s %6s\n", "config", "seed", "end%27m", "end%100m", "max%27m", "max%100m",
+              "ms/step", "lost");
+  for (std::size_t k = 0; k < cfgs.size(); ++k) {
+    for (std::size_t si = 0; si < seeds.size(); ++si) {
+      const RunResult& a = res[si][0][k];
+      const RunResult& b = res[si][1][k];
+      std::vector<double> ms = a.step_ms;
+      ms.insert(ms.end(), b.step_ms.begin(), b.step_ms.end());
+      std::printf("%-15s %5ld %10.3f %10.3f %10.3f %10.3f %8.2f %6zu\n", cfgs[k].name, seeds[si], end_pct(a), end_pct(b),
+                  max_pct(a), max_pct(b), median(ms), a.lost + b.lost);
+    }
+    if (seeds.size() > 1) {
+      const SeedStats a = end_pct_over_seeds(res, k, 0), b = end_pct_over_seeds(res, k, 1);
+      std::printf("%-15s %5s %10.3f %10.3f   (mean %.3f / %.3f)\n", cfgs[k].name, "max", a.max(), b.max(), a.mean(),
+                  b.mean());
+    }
+  }
+}
+
 int run_eval() {
   const bool json = g_opt.json;
   const bool quick = g_opt.quick;
@@ -319,35 +442,14 @@ int run_eval() {
   }
   const double calib27 = g_opt.calib27;  // the 27 m run lets the attitude drift unless told otherwise
   const Scenario scen[2] = {{"27m", len27, calib27}, {"100m", len100, 2.0}};
-  // --seeds: comma list ("3,4,5") or inclusive range ("3-7"); the first is the primary seed.
   std::vector<long> seeds;
-  if (const char* ss = g_opt.seeds.empty() ? nullptr : g_opt.seeds.c_str()) {
-    long a = 0, b = 0;
-    char dash = 0;
-    if (std::sscanf(ss, "%ld%c%ld", &a, &dash, &b) == 3 && dash == '-' && a >= 0 && b >= a && b - a < 100) {
-      for (long v = a; v <= b; ++v) seeds.push_back(v);
-    } else {
-      const char* p = ss;
-      while (*p != 0) {
-        char* e = nullptr;
-        const long v = std::strtol(p, &e, 10);
-        if (e == p || v < 0 || seeds.size() >= 100) {
-          std::fprintf(stderr, "vo eval: --seeds wants N,M,... or A-B (non-negative)\n");
-          return 2;
-        }
-        seeds.push_back(v);
-        p = (*e == ',') ? e + 1 : e;
-        if (*e != ',' && *e != 0) {
-          std::fprintf(stderr, "vo eval: --seeds wants N,M,... or A-B (non-negative)\n");
-          return 2;
-        }
-      }
-    }
+  if (!parse_seeds(g_opt.seeds, seeds)) {
+    std::fprintf(stderr, "vo eval: --seeds wants N,M,... or A-B (non-negative)\n");
+    return 2;
   }
   if (seeds.empty()) seeds.push_back(seed);
-  seed = seeds[0];
   // res[s][i][k]: seed s, scenario i, configuration k.
-  std::vector<std::array<std::vector<RunResult>, 2>> res(seeds.size());
+  EvalResults res(seeds.size());
   for (std::size_t si = 0; si < seeds.size(); ++si) {
     for (int i = 0; i < 2; ++i) {
       if (!run_scenario(scen[i], cfgs, noise, knobs, static_cast<std::uint64_t>(seeds[si]) + 10 * static_cast<std::uint64_t>(i),
@@ -372,99 +474,10 @@ int run_eval() {
         std::fclose(f);
       }
   }
-  auto pct = [](const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.end_error_m / r.path_m : 0.0; };
-  auto max_pct = [](const RunResult& r) { return r.path_m > 0.0 ? 100.0 * r.max_error_m / r.path_m : 0.0; };
-  // Per-configuration lists over the seeds.
-  struct Stats {
-    std::vector<double> v;
-    double max() const { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
-    double mean() const {
-      double s = 0.0;
-      for (double x : v) s += x;
-      return v.empty() ? 0.0 : s / static_cast<double>(v.size());
-    }
-  };
-  auto collect = [&](std::size_t k, int i) {
-    Stats st;
-    for (std::size_t si = 0; si < seeds.size(); ++si) st.v.push_back(pct(res[si][i][k]));
-    return st;
-  };
-  auto ms_of = [&](std::size_t k) {
-    std::vector<double> ms;
-    for (std::size_t si = 0; si < seeds.size(); ++si)
-      for (int i = 0; i < 2; ++i) ms.insert(ms.end(), res[si][i][k].step_ms.begin(), res[si][i][k].step_ms.end());
-    return ms;
-  };
-  auto lost_of = [&](std::size_t k, int i) {
-    std::size_t n = 0;
-    for (std::size_t si = 0; si < seeds.size(); ++si) n += res[si][i][k].lost;
-    return n;
-  };
-  auto print_list = [](const Stats& st) {
-    std::printf("[");
-    for (std::size_t j = 0; j < st.v.size(); ++j) std::printf("%s%.3f", j ? "," : "", st.v[j]);
-    std::printf("]");
-  };
-  if (json) {
-    const Stats s27 = collect(0, 0), s100 = collect(0, 1);
-    std::printf("{\"noise\":\"%s\",\"seed\":%ld,\"seeds\":[", noise_name, seed);
-    for (std::size_t si = 0; si < seeds.size(); ++si) std::printf("%s%ld", si ? "," : "", seeds[si]);
-    std::printf("],\"main\":\"%s\",\"rel_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
-                cfgs[0].name, pct(res[0][0][0]), pct(res[0][1][0]));
-    print_list(s27);
-    std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", s27.max(),
-                s27.mean());
-    print_list(s100);
-    std::printf(",\"rel_error_pct_100m_max\":%.3f,\"rel_error_pct_100m_mean\":%.3f,\"step_ms_median\":%.3f,"
-                "\"image\":\"320x256\",\"length_27m_m\":%.2f,\"length_100m_m\":%.2f,\"configs\":[",
-                s100.max(), s100.mean(), median(ms_of(0)), res[0][0][0].path_m, res[0][1][0].path_m);
-    for (std::size_t k = 0; k < cfgs.size(); ++k) {
-      const Stats a = collect(k, 0), b = collect(k, 1);
-      // Step rotation error over every seed's 27 m run.
-      Vec3d rs = Vec3d::Zero(), rs2 = Vec3d::Zero();
-      std::size_t rn = 0;
-      for (std::size_t si = 0; si < seeds.size(); ++si) {
-        rs += res[si][0][k].rot_sum_deg;
-        rs2 += res[si][0][k].rot_sum2_deg;
-        rn += res[si][0][k].rot_n;
-      }
-      const double nn = rn > 0 ? static_cast<double>(rn) : 1.0;
-      std::printf("%s{\"name\":\"%s\",\"step_rot_steps\":%zu,\"step_rot_rms_deg\":[%.4f,%.4f,%.4f],"
-                  "\"step_rot_mean_deg\":[%.4f,%.4f,%.4f],",
-                  k ? "," : "", cfgs[k].name, rn, std::sqrt(rs2.x() / nn), std::sqrt(rs2.y() / nn), std::sqrt(rs2.z() / nn),
-                  rs.x() / nn, rs.y() / nn, rs.z() / nn);
-      std::printf("\"rel_error_pct_27m\":%.3f,\"max_error_pct_27m\":%.3f,\"rel_error_pct_100m\":%.3f,"
-                  "\"max_error_pct_100m\":%.3f,\"rel_error_pct_27m_seeds\":",
-                  pct(res[0][0][k]), max_pct(res[0][0][k]), pct(res[0][1][k]),
-                  max_pct(res[0][1][k]));
-      print_list(a);
-      std::printf(",\"rel_error_pct_27m_max\":%.3f,\"rel_error_pct_27m_mean\":%.3f,\"rel_error_pct_100m_seeds\":", a.max(),
-                  a.mean());
-      print_list(b);
-      std::printf(",\"rel_error_pct_100m_max\":%.3f,\"step_ms_median\":%.3f,\"lost_27m\":%zu,\"lost_100m\":%zu}", b.max(),
-                  median(ms_of(k)), lost_of(k, 0), lost_of(k, 1));
-    }
-    std::printf("]}\n");
-  } else {
-    std::printf("synthetic Mars yard, noise %s, 320x256, 300 corners\n", noise_name);
-    std::printf("%-15s %5s %10s %10s %10s %10s %8s %6s\n", "config", "seed", "end%27m", "end%100m", "max%27m", "max%100m",
-                "ms/step", "lost");
-    for (std::size_t k = 0; k < cfgs.size(); ++k) {
-      for (std::size_t si = 0; si < seeds.size(); ++si) {
-        const RunResult& a = res[si][0][k];
-        const RunResult& b = res[si][1][k];
-        std::vector<double> ms = a.step_ms;
-        ms.insert(ms.end(), b.step_ms.begin(), b.step_ms.end());
-        std::printf("%-15s %5ld %10.3f %10.3f %10.3f %10.3f %8.2f %6zu\n", cfgs[k].name, seeds[si], pct(a), pct(b),
-                    max_pct(a), max_pct(b), median(ms), a.lost + b.lost);
-      }
-      if (seeds.size() > 1) {
-        const Stats a = collect(k, 0), b = collect(k, 1);
-        std::printf("%-15s %5s %10.3f %10.3f   (mean %.3f / %.3f)\n", cfgs[k].name, "max", a.max(), b.max(), a.mean(),
-                    b.mean());
-      }
-    }
-  }
+  if (json)
+    print_eval_json(res, cfgs, seeds, noise_name);
+  else
+    print_eval_text(res, cfgs, seeds, noise_name);
   return 0;
 }
 
