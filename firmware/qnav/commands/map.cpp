@@ -450,6 +450,16 @@ std::string json_pct(double v) {
 }
 struct Fig3 {
   std::vector<std::vector<double>> keypoints, matches, true_matches, inliers;  // [run][frame]; NaN: none
+  // Frame k of run: its keypoints; unless the chain refused it before matching (0 matches), its
+  // matches, inliers and true matches (counted only then: true_matches() reprojects every match).
+  template <typename TrueMatches>
+  void record(std::size_t run, std::size_t k, const topo::ChainStep& st, TrueMatches true_matches_of) {
+    keypoints[run][k] = st.keypoints;
+    if (st.reference) return;
+    matches[run][k] = st.matches;
+    true_matches[run][k] = true_matches_of();
+    inliers[run][k] = st.inliers;
+  }
 };
 
 // Pixel (u, v) of the camera at pose a, seen by the camera at pose b (same intrinsics, flat seabed).
@@ -501,6 +511,19 @@ bool write_fig3_csv(const char* path, const Fig3& f, int runs) {
 // % of path), pairs registered, keypoints / inliers, map nodes, revisits recognised (second-pass
 // frames matched to a first-lap node within the gate of the true position), frame time (chain +
 // signature + map; rendering and degradation not counted).
+// Frame k of the synthetic loop: rendered at pose, then (filter > 0) degraded by Table 1's filter with a
+// seed of its own; input views the frame the mapper gets.
+Status render_eval_frame(const sim::downward::Seabed& seabed, const sim::downward::Camera& cam, const sim::downward::CameraPose& pose,
+                         int filter, int k, ImageU8& clean, ImageU8& frame, ConstImageViewU8& input) {
+  sim::downward::render(seabed, cam, pose, clean.view());
+  input = ConstImageViewU8(clean.view());
+  if (filter == 0) return Status::ok();
+  vision::UnderwaterDegradation d = vision::table1_filter(filter);
+  d.seed = static_cast<std::uint64_t>(filter) * 100003u + static_cast<std::uint64_t>(k);
+  input = ConstImageViewU8(frame.view());
+  return vision::degrade_underwater(clean.view(), d, frame.view());
+}
+
 int run_eval() {
   const bool json = g_opt.json;
   const double laps = g_opt.laps;
@@ -559,13 +582,8 @@ int run_eval() {
     double max_err = 0.0, final_err = std::nan("");
     int ok = 0, second = 0, recognised = 0;
     for (int k = 0; k < frames; ++k) {
-      sim::downward::render(seabed, cam, sim::downward::loop_pose(k, lap, radius, altitude), clean->view());
-      if (filter > 0) {
-        vision::UnderwaterDegradation d = vision::table1_filter(filter);
-        d.seed = static_cast<std::uint64_t>(filter) * 100003u + static_cast<std::uint64_t>(k);
-        s = vision::degrade_underwater(clean->view(), d, frame->view());
-      }
-      const ConstImageViewU8 input = filter > 0 ? ConstImageViewU8(frame->view()) : ConstImageViewU8(clean->view());
+      ConstImageViewU8 input;
+      s = render_eval_frame(seabed, cam, sim::downward::loop_pose(k, lap, radius, altitude), filter, k, *clean, *frame, input);
       if (!s) {
         std::fprintf(stderr, "map eval: degrade: %s\n", s.message());
         return 1;
@@ -585,14 +603,10 @@ int run_eval() {
       ms.push_back(r.ms);
       all_ms.push_back(r.ms);
       kps.push_back(r.step.keypoints);
-      const auto run = static_cast<std::size_t>(filter), fk = static_cast<std::size_t>(k);
-      fig3.keypoints[run][fk] = r.step.keypoints;
-      if (!r.step.reference) {  // a frame the chain refused before matching counts 0 matches
-        fig3.matches[run][fk] = r.step.matches;
-        fig3.true_matches[run][fk] = count_true_matches(mapper.chain(), cam, sim::downward::loop_pose(k, lap, radius, altitude),
-                                                        sim::downward::loop_pose(static_cast<int>(r.step.keyframe_index), lap, radius, altitude));
-        fig3.inliers[run][fk] = r.step.inliers;
-      }
+      fig3.record(static_cast<std::size_t>(filter), static_cast<std::size_t>(k), r.step, [&] {
+        return count_true_matches(mapper.chain(), cam, sim::downward::loop_pose(k, lap, radius, altitude),
+                                  sim::downward::loop_pose(static_cast<int>(r.step.keyframe_index), lap, radius, altitude));
+      });
       if (r.step.status == topo::StepStatus::kOk) {
         ++ok;
         if (k > 0) inl.push_back(r.step.inliers);
