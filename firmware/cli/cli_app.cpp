@@ -209,4 +209,14 @@ std::string make_parent_dirs(const std::string& path) {
   return make_dirs(path.substr(0, slash));
 }
 
+std::FILE* open_output(const char* who, const std::string& path) {
+  if (const std::string e = make_parent_dirs(path); !e.empty()) {
+    std::fprintf(stderr, "%s: %s\n", who, e.c_str());
+    return nullptr;
+  }
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) std::fprintf(stderr, "%s: cannot write %s: %s\n", who, path.c_str(), std::strerror(errno));
+  return f;
+}
+
 }  // namespace qnav::cli

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -81,5 +82,8 @@ std::string input_dir_problem(const std::string& path);
 std::string make_dirs(const std::string& dir);
 // Creates the folder that will hold the file `path` (nothing when path has no folder part).
 std::string make_parent_dirs(const std::string& path);
+// Opens `path` for writing (text), its folder created first. On failure says why on stderr, prefixed
+// by who ("qnav can"), and returns nullptr.
+std::FILE* open_output(const char* who, const std::string& path);
 
 }  // namespace qnav::cli

@@ -237,15 +237,8 @@ int simulate() {
   const char* out = g_opt.path.c_str();
   const double seconds = g_opt.simulate_s;
   const bool faults = g_opt.faults;
-  if (const std::string e = qnav::cli::make_parent_dirs(out); !e.empty()) {
-    std::fprintf(stderr, "qnav can: %s\n", e.c_str());
-    return 1;
-  }
-  FILE* f = std::fopen(out, "w");
-  if (!f) {
-    std::fprintf(stderr, "qnav can: cannot write %s: %s\n", out, std::strerror(errno));
-    return 1;
-  }
+  FILE* f = qnav::cli::open_output("qnav can", out);
+  if (f == nullptr) return 1;
   const std::int64_t t0_us = 1700000000000000LL;
   const int steps = static_cast<int>(seconds * 20);
   char line[hal::kMaxCanLogLine];
