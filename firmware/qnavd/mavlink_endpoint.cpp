@@ -82,6 +82,12 @@ std::uint32_t MavlinkEndpoint::rejected() const noexcept {
          counters_.get(MavCounter::kBadAttitude) + counters_.get(MavCounter::kCmdUnsigned);
 }
 
+std::int64_t MavlinkEndpoint::odometry_grid_after(std::int64_t t) const noexcept {
+  const std::int64_t period = static_cast<std::int64_t>(1e9 / cfg_.mavlink_odometry_hz);
+  const std::int64_t k = t >= 0 ? t / period : -((-t + period - 1) / period);  // floor(t / period)
+  return (k + 1) * period;
+}
+
 std::uint32_t MavlinkEndpoint::boot_ms(std::int64_t now_ns) const noexcept {
   return static_cast<std::uint32_t>(std::max<std::int64_t>(0, now_ns - start_ns_) / 1000000);
 }
@@ -270,7 +276,8 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
   if (!started_) {
     started_ = true;
     start_ns_ = s.now_ns;
-    next_hb_ns_ = next_odo_ns_ = next_slow_ns_ = s.now_ns;
+    next_hb_ns_ = next_slow_ns_ = s.now_ns;
+    next_odo_ns_ = odometry_grid_after(s.now_ns - 1);
     last_mode_ = s.mode;
     last_faults_ = s.faults;
   }
@@ -310,11 +317,10 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
   }
   const pipeline::NavEstimate* e = s.estimate;
   if (e != nullptr && t >= next_odo_ns_) {
-    // On the period's grid (the worker wakes on its inputs: a late wake does not shift later ones);
-    // after a gap longer than a period the grid restarts here (no burst of catch-up messages).
-    const std::int64_t period = static_cast<std::int64_t>(1e9 / cfg_.mavlink_odometry_hz);
-    next_odo_ns_ += period;
-    if (next_odo_ns_ <= t) next_odo_ns_ = t + period;
+    // On the period's grid, multiples of the period in sample time (the worker wakes on its inputs:
+    // a late wake does not shift later ones; the sim's AHRS streams on the same grid); after a gap
+    // longer than a period the next grid instant after now (no burst of catch-up messages).
+    next_odo_ns_ = odometry_grid_after(std::max(t, next_odo_ns_));
     const std::uint64_t usec = static_cast<std::uint64_t>(std::max<std::int64_t>(0, t) / 1000);
     const Eigen::Quaterniond q(s.world_R_body);
     mav::Odometry o;

@@ -12,7 +12,7 @@
 //    qnavd does not use, is counted (MavCounter, health log "mavlink").
 //  Sends (publish(), from a MavSnapshot of the worker's state at its sample time):
 //    HEARTBEAT 1 Hz (MAV_TYPE_ONBOARD_CONTROLLER, MAV_AUTOPILOT_INVALID; custom_mode = qnav's mode);
-//    ODOMETRY at odometry_hz (frame LOCAL_FRD = 20 north-aligned, child BODY_FRD = 12, the
+//    ODOMETRY at odometry_hz, on multiples of its period in sample time (frame LOCAL_FRD = 20 north-aligned, child BODY_FRD = 12, the
 //      NavEstimate's position, the attitude quaternion, the DVL body velocity, reset_counter, quality);
 //    VISION_POSITION_DELTA at the same rate (the estimate's motion since the last one, body frame);
 //    DISTANCE_SENSOR at the same rate with the DVL altitude (while it reports one);
@@ -162,6 +162,8 @@ class MavlinkEndpoint {
   // An answer decided in drain(), sent by publish().
   void defer_ack(std::uint16_t command, std::uint8_t result, const drivers::mavlink::Frame& f) noexcept;
   std::uint32_t boot_ms(std::int64_t now_ns) const noexcept;
+  // The first instant of the ODOMETRY grid (multiples of 1 / odometry_hz in sample time) after t.
+  std::int64_t odometry_grid_after(std::int64_t t) const noexcept;
   // The next signing timestamp to send (strictly increasing), and the parsers' local timestamp moved up to it.
   std::uint64_t next_sign_timestamp() noexcept;
   std::uint64_t utc_10us() const noexcept;
