@@ -15,6 +15,7 @@ constexpr MessageInfo kMessages[] = {
     {30, 39, 28, 28, "ATTITUDE"},
     {32, 185, 28, 28, "LOCAL_POSITION_NED"},
     {48, 41, 13, 21, "SET_GPS_GLOBAL_ORIGIN"},
+    {49, 39, 12, 20, "GPS_GLOBAL_ORIGIN"},
     {76, 152, 33, 33, "COMMAND_LONG"},
     {77, 143, 3, 10, "COMMAND_ACK"},
     {84, 143, 53, 53, "SET_POSITION_TARGET_LOCAL_NED"},

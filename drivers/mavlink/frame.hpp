@@ -49,7 +49,7 @@ struct MessageInfo {
   std::uint8_t full_len;
   const char* name;
 };
-// nullptr when the id is not in the table. O(table size) = O(16).
+// nullptr when the id is not in the table. O(table size) = O(17).
 const MessageInfo* message_info(std::uint32_t id) noexcept;
 Span<const MessageInfo> known_messages() noexcept;
 

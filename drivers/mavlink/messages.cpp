@@ -116,6 +116,17 @@ void decode_payload(const std::uint8_t* p, SetGpsGlobalOrigin& m) noexcept {
   m.time_usec = r.u64();
 }
 
+void encode_payload(const GpsGlobalOrigin& m, std::uint8_t* p) noexcept {
+  W(p).i32(m.latitude).i32(m.longitude).i32(m.altitude).u64(m.time_usec);
+}
+void decode_payload(const std::uint8_t* p, GpsGlobalOrigin& m) noexcept {
+  R r(p);
+  m.latitude = r.i32();
+  m.longitude = r.i32();
+  m.altitude = r.i32();
+  m.time_usec = r.u64();
+}
+
 void encode_payload(const CommandLong& m, std::uint8_t* p) noexcept {
   W(p).f32(m.param1).f32(m.param2).f32(m.param3).f32(m.param4).f32(m.param5).f32(m.param6).f32(m.param7)
       .u16(m.command).u8(m.target_system).u8(m.target_component).u8(m.confirmation);

@@ -67,6 +67,14 @@ struct SetGpsGlobalOrigin {  // id 48
   std::uint64_t time_usec = 0; // extension
 };
 
+struct GpsGlobalOrigin {  // id 49: the autopilot's EKF origin (its answer to SET_GPS_GLOBAL_ORIGIN)
+  static constexpr std::uint32_t kId = 49;
+  std::int32_t latitude = 0;   // degE7
+  std::int32_t longitude = 0;  // degE7
+  std::int32_t altitude = 0;   // mm (MSL)
+  std::uint64_t time_usec = 0; // extension
+};
+
 struct CommandLong {  // id 76
   static constexpr std::uint32_t kId = 76;
   std::uint8_t target_system = 0, target_component = 0;
@@ -174,6 +182,7 @@ QNAV_MAVLINK_CODEC(SystemTime)
 QNAV_MAVLINK_CODEC(Attitude)
 QNAV_MAVLINK_CODEC(LocalPositionNed)
 QNAV_MAVLINK_CODEC(SetGpsGlobalOrigin)
+QNAV_MAVLINK_CODEC(GpsGlobalOrigin)
 QNAV_MAVLINK_CODEC(CommandLong)
 QNAV_MAVLINK_CODEC(CommandAck)
 QNAV_MAVLINK_CODEC(SetPositionTargetLocalNed)

@@ -130,6 +130,10 @@ bool Parser::verify_signature(std::size_t frame_len) noexcept {
   }
   std::uint64_t ts = 0;
   for (int i = 0; i < 6; ++i) ts |= static_cast<std::uint64_t>(sig[1 + i]) << (8 * i);
+  if (ts + kSigningWindow10us < local_timestamp_) {  // more than a minute behind: an old frame replayed
+    counters_.increment(ParserCounter::kStaleTimestamp);
+    return false;
+  }
   const std::uint8_t sysid = buf_[5], compid = buf_[6], link = sig[0];
   SignStream* stream = nullptr;
   SignStream* free_slot = nullptr;
@@ -155,6 +159,7 @@ bool Parser::verify_signature(std::size_t frame_len) noexcept {
     return false;
   }
   stream->last_timestamp = ts;
+  if (ts > local_timestamp_) local_timestamp_ = ts;
   frame_.signature_verified = true;
   frame_.link_id = link;
   frame_.sign_timestamp = ts;

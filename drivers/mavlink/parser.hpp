@@ -12,7 +12,11 @@
 //    whole by their length field.
 //  - Signed frames (incompat flag 0x01): without a key they are refused (`signed_refused`); with a key
 //    (set_signing_key) the signature (SHA-256) is verified (`bad_signature`) and the timestamp must
-//    increase per (system, component, link) stream (`replay`); verified frames carry
+//    increase per (system, component, link) stream (`replay`) and be no more than one minute
+//    (kSigningWindow10us = 6,000,000 x 10 us, the signing specification's rule) behind the local
+//    timestamp (`stale_timestamp`): the newest of set_local_timestamp() (the caller's clock) and every
+//    verified frame's timestamp. So a stream new to this parser (after a restart, or a new link id)
+//    cannot replay a captured frame from further back. Verified frames carry
 //    Frame::signature_verified. Unknown incompat flags: `incompat_flags`.
 // Memory: one 280-byte frame buffer + one Frame (~300 bytes) + kMaxSigningStreams replay entries,
 // all members; no heap. Time: O(1) per byte on a clean stream; each rejected candidate costs at most
@@ -39,12 +43,13 @@ enum class ParserCounter : std::uint8_t {
   kReplay,           // signature timestamp not newer than the last one of its stream
   kSigningStreams,   // signed frame from a new stream and the stream table is full
   kV1Refused,        // a valid MAVLink 1 frame while set_accept_v1(false)
+  kStaleTimestamp,   // signed frame more than one minute behind the local timestamp
   kCount
 };
 inline constexpr const char* kParserCounterNames[] = {"garbage_bytes",  "bad_crc",        "unknown_message",
                                                       "bad_length",     "incompat_flags", "signed_refused",
                                                       "bad_signature",  "replay",         "signing_streams",
-                                                      "v1_refused"};
+                                                      "v1_refused",     "stale_timestamp"};
 
 struct ParserStats {
   std::uint32_t frames_v2 = 0;      // delivered MAVLink 2 frames
@@ -53,6 +58,7 @@ struct ParserStats {
 };
 
 constexpr std::size_t kMaxSigningStreams = 16;
+constexpr std::uint64_t kSigningWindow10us = 6000000;  // one minute in signing timestamp units (10 us)
 
 class Parser {
  public:
@@ -61,6 +67,12 @@ class Parser {
   // Verify signed frames with this key from now on (and reset the replay table).
   void set_signing_key(const SigningKey& key) noexcept;
   void clear_signing_key() noexcept { has_key_ = false; }
+  // The local timestamp (10 us units since 2015-01-01) moves up to t if t is newer (never back).
+  void set_local_timestamp(std::uint64_t t) noexcept {
+    if (t > local_timestamp_) local_timestamp_ = t;
+  }
+  // The newest of the caller's clock and every verified frame's timestamp.
+  std::uint64_t local_timestamp() const noexcept { return local_timestamp_; }
   // Accept MAVLink 1 frames (default true); when false, valid MAVLink 1 frames count `v1_refused`.
   void set_accept_v1(bool accept) noexcept { accept_v1_ = accept; }
 
@@ -103,6 +115,7 @@ class Parser {
   bool has_key_ = false;
   SigningKey key_;
   SignStream streams_[kMaxSigningStreams];
+  std::uint64_t local_timestamp_ = 0;
   CounterSet<ParserCounter> counters_{kParserCounterNames};
   ParserStats stats_;
 };

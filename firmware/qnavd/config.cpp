@@ -472,6 +472,21 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(int_key(
       "mavlink.autopilot_component_id", [](auto& c) -> auto& { return c.mavlink_autopilot_component_id; }, 1, 255, "",
       "The only component (of autopilot_system_id) whose mode commands qnavd accepts"));
+  t.push_back(string_key(
+      "mavlink.key_file", [](auto& c) -> auto& { return c.mavlink_key_file; }, "absolute path or \"\"",
+      [](const std::string& s) { return s.empty() || s[0] == '/' ? std::string() : std::string("must be an absolute path"); },
+      "MAVLink 2 signing key: a regular file owned by root, mode 0600, of 64 hex digits (32 bytes); mode commands must then be "
+      "signed with it and qnavd signs what it sends; \"\" = no signing"));
+  t.push_back(float_key(
+      "mavlink.origin_lat_deg", [](auto& c) -> auto& { return c.mavlink_origin_lat_deg; }, -90.0, 90.0, "deg",
+      "EKF origin latitude (WGS84), sent as SET_GPS_GLOBAL_ORIGIN until the autopilot answers GPS_GLOBAL_ORIGIN; "
+      "set with origin_lon_deg, or neither (no origin sent)"));
+  t.push_back(float_key(
+      "mavlink.origin_lon_deg", [](auto& c) -> auto& { return c.mavlink_origin_lon_deg; }, -180.0, 180.0, "deg",
+      "EKF origin longitude (WGS84); set with origin_lat_deg"));
+  t.push_back(float_key(
+      "mavlink.origin_alt_m", [](auto& c) -> auto& { return c.mavlink_origin_alt_m; }, -1000.0, 10000.0, "m",
+      "EKF origin altitude above mean sea level (the water surface's, for a depth-referenced vehicle); only with origin_lat_deg"));
   // [vo]
   t.push_back(bool_key(
       "vo.enabled", [](auto& c) -> auto& { return c.vo_enabled; },
@@ -1084,6 +1099,15 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
   if (c.mavlink_enabled && c.mavlink_udp_remote.empty() && c.mavlink_udp_listen_port == 0 && c.mavlink_serial_device.empty()) {
     return r.error("mavlink.enabled", at("mavlink.enabled", "mavlink.udp_remote"),
                    "needs a link: mavlink.udp_remote, mavlink.udp_listen_port or mavlink.serial_device");
+  }
+  {
+    const bool lat = r.line("mavlink.origin_lat_deg") > 0, lon = r.line("mavlink.origin_lon_deg") > 0, alt = r.line("mavlink.origin_alt_m") > 0;
+    if (lat != lon || (alt && !lat)) {
+      return r.error(lat ? "mavlink.origin_lon_deg" : "mavlink.origin_lat_deg",
+                     at(lat ? "mavlink.origin_lat_deg" : "mavlink.origin_lon_deg", "mavlink.origin_alt_m"),
+                     "the origin needs both mavlink.origin_lat_deg and mavlink.origin_lon_deg (origin_alt_m optional), or none of the three");
+    }
+    c.mavlink_origin = lat && lon;
   }
   if (c.backend == Backend::kSim && c.sim_mission.empty()) {
     return r.error("sim.pass", at("daemon.backend", "sim.pass"),

@@ -172,6 +172,17 @@ struct DaemonConfig {
   bool mavlink_guided = false;                // mavlink.guided: send SET_POSITION_TARGET_LOCAL_NED in GUIDED (Repeat)
   int mavlink_autopilot_system_id = 1;        // mavlink.autopilot_system_id [1, 255]: who may command qnav
   int mavlink_autopilot_component_id = 1;     // mavlink.autopilot_component_id [1, 255]: MAV_COMP_ID_AUTOPILOT1
+  std::string mavlink_key_file;               // mavlink.key_file: MAVLink 2 signing key (64 hex digits, root-owned, 0600); "" = unsigned
+  double mavlink_origin_lat_deg = 0.0;        // mavlink.origin_lat_deg [-90, 90]: with origin_lon_deg, sent as SET_GPS_GLOBAL_ORIGIN
+  double mavlink_origin_lon_deg = 0.0;        // mavlink.origin_lon_deg [-180, 180]
+  double mavlink_origin_alt_m = 0.0;          // mavlink.origin_alt_m [-1000, 10000] m above mean sea level
+  // Set by the configuration reader (not keys): an origin was configured (origin_lat_deg and
+  // origin_lon_deg given); the key file's uid rule (root; a test passes its own uid) and, after
+  // Daemon::init read mavlink.key_file (load_mavlink_key), its secret.
+  bool mavlink_origin = false;
+  std::uint32_t mavlink_key_owner_uid = 0;
+  bool mavlink_key_loaded = false;
+  std::uint8_t mavlink_key_secret[32] = {};
 
   // [budget] per-stage time budgets on the host, microseconds (docs/budgets.md)
   std::uint32_t ping_budget_us = 2000;       // budget.ping_us [10, 1000000]

@@ -14,6 +14,7 @@
 #include "firmware/qnavd/io_backend.hpp"
 #include "firmware/qnavd/linux_downward.hpp"
 #include "firmware/qnavd/linux_stereo.hpp"
+#include "firmware/qnavd/mavlink_key.hpp"
 #include "firmware/qnavd/software_fault.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
 #ifdef QNAV_HAVE_GPIOD
@@ -400,6 +401,12 @@ Status Daemon::init_pipeline() {
   QNAV_RETURN_IF_ERROR(make_ring(mem, "can_tx", can_tx_, cfg_.can_tx_queue));
   QNAV_RETURN_IF_ERROR(make_ring(mem, "dvl", dvl_q_, kDvlQueueCapacity));
   if (cfg_.mavlink_enabled) {
+    if (!cfg_.mavlink_key_file.empty()) {  // the signing key: root-owned, 0600, 32 bytes, or no start (mavlink_key.hpp)
+      Result<drivers::mavlink::SigningKey> key = load_mavlink_key(cfg_.mavlink_key_file.c_str(), cfg_.mavlink_key_owner_uid);
+      if (!key) return key.status();
+      std::memcpy(cfg_.mavlink_key_secret, key.value().secret, sizeof cfg_.mavlink_key_secret);
+      cfg_.mavlink_key_loaded = true;
+    }
     QNAV_RETURN_IF_ERROR(make_ring(mem, "mav_rx", mav_rx_, mav_rx_depth(cfg_)));
     QNAV_RETURN_IF_ERROR(make_ring(mem, "mav_tx", mav_tx_, mav_tx_depth(cfg_)));
     // Both backends: real UDP (and, on linux, the serial device); the sim's messages carry mission time.

@@ -18,11 +18,58 @@ constexpr std::uint8_t kDistanceSensorUltrasound = 1, kRotationPitch270 = 25;  /
 // SET_POSITION_TARGET_LOCAL_NED type_mask: position only (velocity, acceleration, yaw, yaw rate ignored).
 constexpr std::uint16_t kTypeMaskPositionOnly = 8 | 16 | 32 | 64 | 128 | 256 | 1024 | 2048;
 constexpr std::int64_t kNsPerS = 1000000000;
+constexpr std::int64_t kSigningEpochUnixNs = 1420070400LL * kNsPerS;  // 2015-01-01T00:00:00Z
 float nanf_() noexcept { return std::numeric_limits<float>::quiet_NaN(); }
 }  // namespace
 
-MavlinkEndpoint::MavlinkEndpoint(const DaemonConfig& c, FILE* log) noexcept
-    : cfg_(c), log_(log), enc_(static_cast<std::uint8_t>(c.mavlink_system_id), static_cast<std::uint8_t>(c.mavlink_component_id)) {}
+MavlinkEndpoint::MavlinkEndpoint(const DaemonConfig& c, FILE* log, const hal::Clock* utc) noexcept
+    : cfg_(c),
+      log_(log),
+      enc_(static_cast<std::uint8_t>(c.mavlink_system_id), static_cast<std::uint8_t>(c.mavlink_component_id)),
+      utc_(utc != nullptr ? utc : &system_utc_) {
+  signing_required_ = !c.mavlink_key_file.empty();
+  has_key_ = signing_required_ && c.mavlink_key_loaded;
+  if (has_key_) {
+    std::memcpy(key_.secret, c.mavlink_key_secret, sizeof key_.secret);
+    key_.link_id = kSignLinkId;
+    for (auto& p : parsers_) p.set_signing_key(key_);
+  }
+}
+
+std::uint32_t MavlinkEndpoint::signing_rejects() const noexcept {
+  std::uint64_t n = 0;
+  for (const auto& p : parsers_) {
+    const auto& k = p.counters();
+    n += k.get(mav::ParserCounter::kBadSignature) + k.get(mav::ParserCounter::kReplay) + k.get(mav::ParserCounter::kStaleTimestamp) +
+         k.get(mav::ParserCounter::kSignedRefused) + k.get(mav::ParserCounter::kSigningStreams);
+  }
+  return static_cast<std::uint32_t>(std::min<std::uint64_t>(n, UINT32_MAX));
+}
+
+std::uint64_t MavlinkEndpoint::utc_10us() const noexcept {
+  const std::int64_t t = utc_->now_ns() - kSigningEpochUnixNs;
+  return t > 0 ? static_cast<std::uint64_t>(t / 10000) : 0;
+}
+
+std::uint64_t MavlinkEndpoint::local_timestamp() const noexcept {
+  std::uint64_t t = last_sign_ts_;
+  for (const auto& p : parsers_) t = std::max(t, p.local_timestamp());
+  return t;
+}
+
+std::uint64_t MavlinkEndpoint::next_sign_timestamp() noexcept {
+  last_sign_ts_ = std::max({utc_10us(), local_timestamp(), last_sign_ts_ + 1});
+  return last_sign_ts_;
+}
+
+mav::SetGpsGlobalOrigin MavlinkEndpoint::origin_message(const DaemonConfig& c) noexcept {
+  mav::SetGpsGlobalOrigin o;
+  o.target_system = static_cast<std::uint8_t>(c.mavlink_autopilot_system_id);
+  o.latitude = static_cast<std::int32_t>(std::lround(c.mavlink_origin_lat_deg * 1e7));
+  o.longitude = static_cast<std::int32_t>(std::lround(c.mavlink_origin_lon_deg * 1e7));
+  o.altitude = static_cast<std::int32_t>(std::lround(c.mavlink_origin_alt_m * 1000.0));
+  return o;
+}
 
 std::uint32_t MavlinkEndpoint::parser_rejects() const noexcept {
   std::uint64_t n = 0;
@@ -32,7 +79,13 @@ std::uint32_t MavlinkEndpoint::parser_rejects() const noexcept {
 
 std::uint32_t MavlinkEndpoint::rejected() const noexcept {
   return parser_rejects() + counters_.get(MavCounter::kCmdWrongSender) + counters_.get(MavCounter::kCmdBadParam) +
-         counters_.get(MavCounter::kBadAttitude);
+         counters_.get(MavCounter::kBadAttitude) + counters_.get(MavCounter::kCmdUnsigned);
+}
+
+std::int64_t MavlinkEndpoint::odometry_grid_after(std::int64_t t) const noexcept {
+  const std::int64_t period = static_cast<std::int64_t>(1e9 / cfg_.mavlink_odometry_hz);
+  const std::int64_t k = t >= 0 ? t / period : -((-t + period - 1) / period);  // floor(t / period)
+  return (k + 1) * period;
 }
 
 std::uint32_t MavlinkEndpoint::boot_ms(std::int64_t now_ns) const noexcept {
@@ -44,7 +97,13 @@ void MavlinkEndpoint::send(const M& m, SpscRing<MavBytes>& tx) noexcept {
   MavBytes b;
   Result<std::size_t> n = mav::encode(enc_, m, Span<std::uint8_t>(b.data, kMavBytes));
   if (!n) return;  // every message here is in the codec's table and fits
-  b.len = static_cast<std::uint16_t>(n.value());
+  std::size_t len = n.value();
+  if (has_key_) {
+    Result<std::size_t> sn = mav::sign_frame(b.data, len, kMavBytes, key_, next_sign_timestamp());
+    if (!sn) return;  // a complete unsigned frame with room for the signature (kMavBytes = the largest signed frame)
+    len = sn.value();
+  }
+  b.len = static_cast<std::uint16_t>(len);
   if (!tx.try_push(b)) counters_.increment(MavCounter::kTxQueueFull);
 }
 
@@ -57,6 +116,10 @@ void MavlinkEndpoint::status_text(std::uint8_t severity, const char* text, SpscR
 
 MavInputs MavlinkEndpoint::drain(SpscRing<MavBytes>& rx) noexcept {
   MavInputs in;
+  if (has_key_ && rx.front() != nullptr) {  // the parsers' local timestamp: the clock, or the newest seen or sent
+    const std::uint64_t now = std::max(utc_10us(), local_timestamp());
+    for (auto& p : parsers_) p.set_local_timestamp(now);
+  }
   while (!in.mode_cmd) {
     const MavBytes* m = rx.front();
     if (m == nullptr) break;
@@ -87,6 +150,12 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
     if (c.target_system != cfg_.mavlink_system_id || (c.target_component != 0 && c.target_component != cfg_.mavlink_component_id)) {
       counters_.increment(MavCounter::kCmdNotForUs);
       return;
+    }
+    if (signing_required_ && (!has_key_ || !f.signature_verified)) {
+      counters_.increment(MavCounter::kCmdUnsigned);
+      if (log_) std::fprintf(log_, "{\"event\":\"mavlink_refused\",\"command\":%u,\"from_system\":%u,\"from_component\":%u,\"why\":\"%s\"}\n",
+                             c.command, f.sysid, f.compid, has_key_ ? "not signed with mavlink.key_file" : "signing key not loaded");
+      return;  // unauthenticated: no answer, never acted on
     }
     if (!from_ap) {
       counters_.increment(MavCounter::kCmdWrongSender);
@@ -124,6 +193,8 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
     if (f.compid != cfg_.mavlink_autopilot_component_id) return;  // other components of the vehicle (cameras, gimbals)
     mav::Heartbeat h;
     mav::decode(f, h);
+    if (ap_seen_ && arrival_ns - ap_last_hb_ns_ > kApSilentNs) origin_acked_ = false;  // it rebooted: its EKF has no origin
+    ap_last_hb_ns_ = arrival_ns;
     ap_seen_ = true;
     ap_custom_mode_ = h.custom_mode;
     ap_armed_ = (h.base_mode & mav::kMavModeFlagSafetyArmed) != 0;
@@ -139,6 +210,8 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
     in.roll_rad = static_cast<double>(a.roll);
     in.pitch_rad = static_cast<double>(a.pitch);
     in.yaw_rad = static_cast<double>(a.yaw);
+  } else if (f.msgid == mav::GpsGlobalOrigin::kId && from_ap) {
+    on_origin(f);
   } else if (f.msgid == mav::SystemTime::kId && from_ap) {
     mav::SystemTime st;
     mav::decode(f, st);
@@ -146,6 +219,29 @@ void MavlinkEndpoint::on_frame(const mav::Frame& f, std::int64_t arrival_ns, Mav
   } else {
     counters_.increment(MavCounter::kUnusedMessage);
   }
+}
+
+// The autopilot's EKF origin: ours is in place (stop repeating), or it already had another one
+// (ArduPilot keeps the first origin it is given until it reboots): reported, not fought over.
+void MavlinkEndpoint::on_origin(const mav::Frame& f) noexcept {
+  mav::GpsGlobalOrigin g;
+  mav::decode(f, g);
+  if (!cfg_.mavlink_origin) {
+    counters_.increment(MavCounter::kUnusedMessage);
+    return;
+  }
+  const bool was = origin_acked_;
+  origin_acked_ = true;
+  if (was) return;
+  const mav::SetGpsGlobalOrigin want = origin_message(cfg_);
+  // Within 1e-7 deg horizontally and 1 cm vertically (ArduPilot keeps altitude in cm).
+  const bool same = std::abs(static_cast<std::int64_t>(g.latitude) - want.latitude) <= 1 &&
+                    std::abs(static_cast<std::int64_t>(g.longitude) - want.longitude) <= 1 &&
+                    std::abs(static_cast<std::int64_t>(g.altitude) - want.altitude) <= 10;
+  if (!same) origin_mismatch_ = true;
+  if (log_)
+    std::fprintf(log_, "{\"event\":\"mavlink_origin\",\"lat_e7\":%d,\"lon_e7\":%d,\"alt_mm\":%d,\"matches_config\":%s,\"sent\":%u}\n",
+                 g.latitude, g.longitude, g.altitude, same ? "true" : "false", origins_sent_);
 }
 
 mav::CommandAck MavlinkEndpoint::make_ack(std::uint16_t command, std::uint8_t result, std::uint8_t sys, std::uint8_t comp) noexcept {
@@ -180,11 +276,21 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
   if (!started_) {
     started_ = true;
     start_ns_ = s.now_ns;
-    next_hb_ns_ = next_odo_ns_ = next_slow_ns_ = s.now_ns;
+    next_hb_ns_ = next_slow_ns_ = s.now_ns;
+    next_odo_ns_ = odometry_grid_after(s.now_ns - 1);
     last_mode_ = s.mode;
     last_faults_ = s.faults;
   }
   const std::int64_t t = s.now_ns;
+  if (origin_mismatch_) {
+    status_text(kSeverityWarning, "qnav: autopilot EKF origin differs from mavlink.origin", tx);
+    origin_mismatch_ = false;
+  }
+  if (cfg_.mavlink_origin && !origin_acked_ && t >= next_origin_ns_) {
+    send(origin_message(cfg_), tx);
+    ++origins_sent_;
+    next_origin_ns_ = t + kOriginPeriodNs;
+  }
   if (s.mode != last_mode_) {
     char text[51];
     std::snprintf(text, sizeof text, "qnav: mode %s", qc::mode_name(s.mode));
@@ -211,11 +317,10 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
   }
   const pipeline::NavEstimate* e = s.estimate;
   if (e != nullptr && t >= next_odo_ns_) {
-    // On the period's grid (the worker wakes on its inputs: a late wake does not shift later ones);
-    // after a gap longer than a period the grid restarts here (no burst of catch-up messages).
-    const std::int64_t period = static_cast<std::int64_t>(1e9 / cfg_.mavlink_odometry_hz);
-    next_odo_ns_ += period;
-    if (next_odo_ns_ <= t) next_odo_ns_ = t + period;
+    // On the period's grid, multiples of the period in sample time (the worker wakes on its inputs:
+    // a late wake does not shift later ones; the sim's AHRS streams on the same grid); after a gap
+    // longer than a period the next grid instant after now (no burst of catch-up messages).
+    next_odo_ns_ = odometry_grid_after(std::max(t, next_odo_ns_));
     const std::uint64_t usec = static_cast<std::uint64_t>(std::max<std::int64_t>(0, t) / 1000);
     const Eigen::Quaterniond q(s.world_R_body);
     mav::Odometry o;
@@ -282,6 +387,7 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
   }
   if (t >= next_slow_ns_) {
     next_slow_ns_ = t + kNsPerS;
+    log_signing(t);
     if (s.in_repeat) {
       const auto nvf = [&](const char* name, double v) {
         mav::NamedValueFloat n;
@@ -310,6 +416,25 @@ void MavlinkEndpoint::publish(const MavSnapshot& s, SpscRing<MavBytes>& tx) noex
       ++targets_sent_;
     }
   }
+}
+
+// Signing refusals, once a second at most and only when they changed (the health line's mavlink
+// event has the total in parser_rejects; this line says which rule refused).
+void MavlinkEndpoint::log_signing(std::int64_t t) noexcept {
+  if (!signing_required_ && signing_rejects() == 0) return;
+  const std::uint32_t n = signing_rejects() + counters_.get(MavCounter::kCmdUnsigned);
+  if (n == signing_logged_ || log_ == nullptr) return;
+  signing_logged_ = n;
+  std::uint32_t k[static_cast<int>(mav::ParserCounter::kCount)] = {};
+  for (const auto& p : parsers_)
+    for (int i = 0; i < static_cast<int>(mav::ParserCounter::kCount); ++i) k[i] += p.counters().get(static_cast<mav::ParserCounter>(i));
+  const auto at = [&k](mav::ParserCounter c) { return k[static_cast<int>(c)]; };
+  std::fprintf(log_,
+               "{\"event\":\"mavlink_signing\",\"t_s\":%.1f,\"signing\":%s,\"cmd_unsigned\":%u,\"bad_signature\":%u,\"replay\":%u,"
+               "\"stale_timestamp\":%u,\"signed_refused\":%u,\"signing_streams\":%u}\n",
+               static_cast<double>(t - start_ns_) * 1e-9, has_key_ ? "true" : "false", counters_.get(MavCounter::kCmdUnsigned),
+               at(mav::ParserCounter::kBadSignature), at(mav::ParserCounter::kReplay), at(mav::ParserCounter::kStaleTimestamp),
+               at(mav::ParserCounter::kSignedRefused), at(mav::ParserCounter::kSigningStreams));
 }
 
 }  // namespace qnav::daemon

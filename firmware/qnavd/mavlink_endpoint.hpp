@@ -12,7 +12,7 @@
 //    qnavd does not use, is counted (MavCounter, health log "mavlink").
 //  Sends (publish(), from a MavSnapshot of the worker's state at its sample time):
 //    HEARTBEAT 1 Hz (MAV_TYPE_ONBOARD_CONTROLLER, MAV_AUTOPILOT_INVALID; custom_mode = qnav's mode);
-//    ODOMETRY at odometry_hz (frame LOCAL_FRD = 20 north-aligned, child BODY_FRD = 12, the
+//    ODOMETRY at odometry_hz, on multiples of its period in sample time (frame LOCAL_FRD = 20 north-aligned, child BODY_FRD = 12, the
 //      NavEstimate's position, the attitude quaternion, the DVL body velocity, reset_counter, quality);
 //    VISION_POSITION_DELTA at the same rate (the estimate's motion since the last one, body frame);
 //    DISTANCE_SENSOR at the same rate with the DVL altitude (while it reports one);
@@ -20,6 +20,23 @@
 //      2 unknown), node; STATUSTEXT on a mode change, a refused command and a fault bit that rises;
 //    SET_POSITION_TARGET_LOCAL_NED 1 Hz with mavlink.guided, in Repeat with a route fix, while the
 //      autopilot's HEARTBEAT says GUIDED (ArduSub custom_mode 4) and armed.
+//  Signing (mavlink.key_file; the key read and checked at start by Daemon::init, mavlink_key.hpp):
+//    every parser verifies signed frames with the key (bad_signature, replay, stale_timestamp: counted
+//    by the parser, in parser_rejects); a COMMAND_LONG to qnavd that is not signed with the key is
+//    refused without an answer and counted (cmd_unsigned) before the sender is even looked at (an
+//    unsigned frame's ids prove nothing). Other messages (HEARTBEAT, ATTITUDE, SYSTEM_TIME) are read
+//    signed or not. Everything qnavd sends is signed (link id kSignLinkId), the timestamp the newest of
+//    the UTC clock (10 us units since 2015-01-01), every verified incoming timestamp, and the last one
+//    sent + 1; the same timestamp is the parsers' local one (a signed frame more than a minute behind
+//    it is stale). A configured key_file whose key was not loaded (a worker built without Daemon::init)
+//    refuses every mode command: signing fails closed. Refusals are logged once a second at most as a
+//    {"event":"mavlink_signing"} line (cmd_unsigned and the parsers' signing counters).
+//  EKF origin (mavlink.origin_lat_deg / origin_lon_deg / origin_alt_m): SET_GPS_GLOBAL_ORIGIN to the
+//    autopilot's system once a second (kOriginPeriodNs) from the first publish() until the autopilot
+//    answers GPS_GLOBAL_ORIGIN (ArduPilot does so once its EKF took the origin; an origin it already
+//    had is answered the same way, and reported if it differs from ours). When the autopilot's
+//    HEARTBEAT returns after kApSilentNs of silence (it rebooted: its EKF lost the origin), the origin
+//    is sent again.
 //  Loss (DVL lost, attitude lost, camera lost in Vo): ODOMETRY quality = -1 with velocity NaN at once
 //    (the next period), VISION_POSITION_DELTA not sent (and rebased: the first delta after the loss
 //    starts from the recovered position). Never a zero delta for "no data".
@@ -36,6 +53,8 @@
 #include "firmware/pipeline/nav_estimate.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/messages.hpp"
+#include "hal/core/clock.hpp"
+#include "hal/linux/monotonic_clock.hpp"
 #include "nav/core/counters.hpp"
 #include "nav/core/geometry.hpp"
 #include "nav/core/spsc_ring.hpp"
@@ -44,6 +63,9 @@ namespace qnav::daemon {
 
 constexpr std::uint16_t kMavCmdSetMode = 31010;  // MAV_CMD_USER_1: qnav's mode command
 constexpr std::uint32_t kArduSubGuided = 4;      // ArduSub custom_mode GUIDED
+constexpr std::uint8_t kSignLinkId = 0;          // the link id of qnavd's signatures (one stream: the same bytes go to every link)
+constexpr std::int64_t kOriginPeriodNs = 1000000000;  // SET_GPS_GLOBAL_ORIGIN repeat period until answered
+constexpr std::int64_t kApSilentNs = 5000000000;      // autopilot HEARTBEAT silence that counts as a reboot
 
 enum class MavCounter : std::uint8_t {
   kRxQueueOverflow,  // (io) bytes dropped before parsing: reported from IoCounters
@@ -56,10 +78,12 @@ enum class MavCounter : std::uint8_t {
   kCmdBadParam,      // a mode command with parameters out of range (DENIED)
   kBadAttitude,      // an ATTITUDE with non-finite angles
   kTxQueueFull,      // a frame not sent: the mav_tx queue was full
+  kCmdUnsigned,      // a mode command not signed with mavlink.key_file's key: refused (no answer)
   kCount
 };
 inline constexpr const char* kMavCounterNames[] = {"rx_overflow",     "parser_rejects", "foreign_system", "unused_message", "cmd_wrong_sender",
-                                                   "cmd_not_for_us", "cmd_unsupported", "cmd_bad_param",  "bad_attitude",   "tx_queue_full"};
+                                                   "cmd_not_for_us", "cmd_unsupported", "cmd_bad_param",  "bad_attitude",   "tx_queue_full",
+                                                   "cmd_unsigned"};
 
 // What the worker hands over each loop (its sample time, its mode, faults and the estimate).
 struct MavSnapshot {
@@ -96,7 +120,8 @@ struct MavInputs {
 
 class MavlinkEndpoint {
  public:
-  MavlinkEndpoint(const DaemonConfig& c, FILE* log) noexcept;
+  // utc: the wall clock of signing timestamps (ns since 1970); nullptr = the system's (CLOCK_REALTIME).
+  MavlinkEndpoint(const DaemonConfig& c, FILE* log, const hal::Clock* utc = nullptr) noexcept;
   // Parses what is queued, up to and including the first accepted mode command (the worker acts on
   // it, calls ack(), and drains again).
   MavInputs drain(SpscRing<MavBytes>& rx) noexcept;
@@ -114,6 +139,18 @@ class MavlinkEndpoint {
   std::uint32_t targets_sent() const noexcept { return targets_sent_; }
   // Refused inputs (for HEALTH.RejectedInputs): counters that are rejections, and parser rejects.
   std::uint32_t rejected() const noexcept;
+  // mavlink.key_file configured: mode commands must be signed (and what is sent is, when the key loaded).
+  bool signing_required() const noexcept { return signing_required_; }
+  bool signing() const noexcept { return has_key_; }
+  // The parsers' signing refusals summed (bad_signature, replay, stale_timestamp, signed_refused, signing_streams).
+  std::uint32_t signing_rejects() const noexcept;
+  // The newest signing timestamp (10 us units since 2015-01-01): qnavd's local one.
+  std::uint64_t local_timestamp() const noexcept;
+  // EKF origin: SET_GPS_GLOBAL_ORIGIN frames sent, and whether the autopilot answered GPS_GLOBAL_ORIGIN.
+  std::uint32_t origins_sent() const noexcept { return origins_sent_; }
+  bool origin_acknowledged() const noexcept { return origin_acked_; }
+  // SET_GPS_GLOBAL_ORIGIN from the configuration (degE7, mm), also what the tests compare with.
+  static drivers::mavlink::SetGpsGlobalOrigin origin_message(const DaemonConfig& c) noexcept;
 
  private:
   void on_frame(const drivers::mavlink::Frame& f, std::int64_t arrival_ns, MavInputs& in) noexcept;
@@ -125,11 +162,30 @@ class MavlinkEndpoint {
   // An answer decided in drain(), sent by publish().
   void defer_ack(std::uint16_t command, std::uint8_t result, const drivers::mavlink::Frame& f) noexcept;
   std::uint32_t boot_ms(std::int64_t now_ns) const noexcept;
+  // The first instant of the ODOMETRY grid (multiples of 1 / odometry_hz in sample time) after t.
+  std::int64_t odometry_grid_after(std::int64_t t) const noexcept;
+  // The next signing timestamp to send (strictly increasing), and the parsers' local timestamp moved up to it.
+  std::uint64_t next_sign_timestamp() noexcept;
+  std::uint64_t utc_10us() const noexcept;
+  void on_origin(const drivers::mavlink::Frame& f) noexcept;
+  void log_signing(std::int64_t t) noexcept;
 
   const DaemonConfig& cfg_;
   FILE* log_;
   drivers::mavlink::FrameEncoder enc_;
   drivers::mavlink::Parser parsers_[3];
+  // signing (mavlink.key_file)
+  hal::RealtimeClock system_utc_;
+  const hal::Clock* utc_;
+  bool signing_required_ = false, has_key_ = false;
+  drivers::mavlink::SigningKey key_;
+  std::uint64_t last_sign_ts_ = 0;
+  std::uint32_t signing_logged_ = 0;
+  // EKF origin
+  std::int64_t next_origin_ns_ = 0;
+  std::uint32_t origins_sent_ = 0;
+  bool origin_acked_ = false, origin_mismatch_ = false;
+  std::int64_t ap_last_hb_ns_ = 0;
   CounterSet<MavCounter> counters_{kMavCounterNames};
   std::uint32_t frames_rx_ = 0, odometry_sent_ = 0, commands_accepted_ = 0, targets_sent_ = 0;
   // the autopilot

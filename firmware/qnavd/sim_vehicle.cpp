@@ -87,6 +87,7 @@ void SimVehicle::record(const hal::CanFrame& f, std::int64_t t_ns) noexcept {
 }
 
 Status SimVehicle::init(hal::CanBus& autopilot, hal::SerialPort& dvl_out) {
+  if (cfg_.mavlink_enabled && cfg_.mavlink_odometry_hz > 0.0) ahrs_tick_ns_ = static_cast<std::int64_t>(1e9 / cfg_.mavlink_odometry_hz);
   if (!cfg_.sim_candump.empty()) {
     candump_ = std::fopen(cfg_.sim_candump.c_str(), "w");
     if (!candump_) {
@@ -319,6 +320,22 @@ void SimVehicle::send_dvl(double fwd, double stbd, std::int64_t t_ns) noexcept {
     static_cast<void>(dvl_->write(Span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(line), n)));
     io_->faults_injected.fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+// Between two pings of a pass (mavlink.enabled): the AHRS sample at the next instant of the
+// odometry grid (multiples of ahrs_tick_ns_ in mission time, the grid MavlinkEndpoint publishes on)
+// before the held ping, its heading interpolated between the two pings' (the shorter way round). The
+// dead reckoning is unchanged: each DVL sample still comes with the heading of its own instant.
+bool SimVehicle::ahrs_tick() noexcept {
+  if (ahrs_tick_ns_ <= 0 || !have_prev_ || replay_attitude_ || !has_held_) return false;
+  const std::int64_t tick = (clock_.now_ns() / ahrs_tick_ns_ + 1) * ahrs_tick_ns_;
+  if (tick <= last_sample_ns_ || tick >= held_.t_ns) return false;
+  clock_.set(tick);
+  inject_bus_faults(tick);
+  const double f = static_cast<double>(tick - last_sample_ns_) / static_cast<double>(held_.t_ns - last_sample_ns_);
+  const double dh = std::remainder(held_.nav.heading_rad - prev_nav_.heading_rad, kTwoPi);
+  send_attitude(prev_nav_.heading_rad + f * dh);
+  return true;
 }
 
 // Between passes the vehicle is alive: time passes and the AHRS streams.
@@ -797,6 +814,13 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
           return StepResult::kWaiting;
         }
         has_held_ = true;
+      }
+      if (ahrs_tick_ns_ > 0 && have_prev_ && !replay_attitude_) {  // the AHRS between pings (mavlink.enabled)
+        const std::int64_t tick = (clock_.now_ns() / ahrs_tick_ns_ + 1) * ahrs_tick_ns_;
+        if (tick > last_sample_ns_ && tick < held_.t_ns) {
+          if (!pace(tick, true)) return StepResult::kWaiting;
+          if (ahrs_tick()) return StepResult::kProduced;
+        }
       }
       if (!pace(held_.t_ns, true)) return StepResult::kWaiting;
       has_held_ = false;

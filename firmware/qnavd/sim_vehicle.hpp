@@ -183,6 +183,11 @@ class SimVehicle {
   RoverSample held_rover_{};
   bool have_prev_ = false;
   Pose2 prev_nav_{};
+  // mavlink.enabled: the AHRS also streams between a pass's pings on the grid of mavlink.odometry_hz
+  // (its period, ns; 0 = one AHRS sample per ping only). In a fast mission the nav worker sees no
+  // finer time than its inputs', so ODOMETRY could come no faster than the pings (5 Hz) without it.
+  std::int64_t ahrs_tick_ns_ = 0;
+  bool ahrs_tick() noexcept;  // true when it sent one (the step produced)
   double last_heading_ = 0.0;
   std::int64_t last_tov_us_ = 0;
   std::int64_t last_att_ns_ = -1;

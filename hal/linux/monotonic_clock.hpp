@@ -20,4 +20,11 @@ class MonotonicClock final : public Clock {
   bool sleep_until_ns(std::int64_t t_ns) noexcept override;
 };
 
+// RealtimeClock: CLOCK_REALTIME in ns since 1970-01-01 UTC (steps when the system time is set: not for
+// intervals; for wall-clock stamps such as MAVLink signing timestamps).
+class RealtimeClock final : public Clock {
+ public:
+  std::int64_t now_ns() const noexcept override { return realtime_now_ns(); }
+};
+
 }  // namespace qnav::hal

@@ -80,12 +80,12 @@ void NavSource::log_counters(const IoCounters& io) const noexcept {
                "{\"event\":\"mavlink\",\"t_s\":%.1f,\"frames_rx\":%u,\"odometry_sent\":%u,\"commands_accepted\":%u,\"targets_sent\":%u,"
                "\"reset_counter\":%u,\"fixes\":%u,\"parser_rejects\":%u,\"rx_overflow\":%u,\"tx_errors\":%u,\"device_errors\":%u,"
                "\"foreign_system\":%u,\"unused_message\":%u,\"cmd_wrong_sender\":%u,\"cmd_not_for_us\":%u,\"cmd_unsupported\":%u,"
-               "\"cmd_bad_param\":%u,\"bad_attitude\":%u,\"tx_queue_full\":%u}\n",
+               "\"cmd_bad_param\":%u,\"bad_attitude\":%u,\"tx_queue_full\":%u,\"cmd_unsigned\":%u,\"signing_rejects\":%u}\n",
                ctx_.clock->t_s(), mav_->frames_rx(), mav_->odometry_sent(), mav_->commands_accepted(), mav_->targets_sent(), est_.reset_counter(),
                est_.fixes(), mav_->parser_rejects(), io.mav_rx_overflow.load(), io.mav_tx_errors.load(), io.mav_device_errors.load(),
                mc.get(MavCounter::kForeignSystem), mc.get(MavCounter::kUnusedMessage), mc.get(MavCounter::kCmdWrongSender),
                mc.get(MavCounter::kCmdNotForUs), mc.get(MavCounter::kCmdUnsupported), mc.get(MavCounter::kCmdBadParam),
-               mc.get(MavCounter::kBadAttitude), mc.get(MavCounter::kTxQueueFull));
+               mc.get(MavCounter::kBadAttitude), mc.get(MavCounter::kTxQueueFull), mc.get(MavCounter::kCmdUnsigned), mav_->signing_rejects());
 }
 
 }  // namespace qnav::daemon

@@ -26,7 +26,7 @@ if (!fs.existsSync(modDir)) {
 const mav = require(modDir);
 const { MavLinkPacketSplitter, MavLinkPacketParser, MavLinkProtocolV1, MavLinkProtocolV2, MavLinkPacketSignature } = mav;
 const REGISTRY = { ...mav.minimal.REGISTRY, ...mav.common.REGISTRY, ...mav.ardupilotmega.REGISTRY };
-const IDS = [0, 2, 30, 32, 48, 76, 77, 84, 102, 103, 132, 193, 251, 253, 331, 11011];
+const IDS = [0, 2, 30, 32, 48, 49, 76, 77, 84, 102, 103, 132, 193, 251, 253, 331, 11011];
 const MAGIC = {};
 for (const id of IDS) {
   if (!REGISTRY[id]) { console.log(`FAIL: node-mavlink has no message ${id}`); process.exit(1); }

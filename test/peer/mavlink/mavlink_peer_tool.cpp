@@ -104,6 +104,11 @@ std::string fields(const SetGpsGlobalOrigin& m) {
   j.num("altitude", m.altitude); j.u64("time_usec", m.time_usec);
   return j.done();
 }
+std::string fields(const GpsGlobalOrigin& m) {
+  Json j;
+  j.num("latitude", m.latitude); j.num("longitude", m.longitude); j.num("altitude", m.altitude); j.u64("time_usec", m.time_usec);
+  return j.done();
+}
 std::string fields(const CommandLong& m) {
   Json j;
   j.num("target_system", m.target_system); j.num("target_component", m.target_component); j.num("command", m.command);
@@ -184,7 +189,7 @@ bool with_typed(std::uint32_t msgid, const std::uint8_t* payload, Fn&& fn) {
   switch (msgid) {
 #define QNAV_CASE(T) case T::kId: { T m; decode_payload(payload, m); fn(m); return true; }
     QNAV_CASE(Heartbeat) QNAV_CASE(SystemTime) QNAV_CASE(Attitude) QNAV_CASE(LocalPositionNed)
-    QNAV_CASE(SetGpsGlobalOrigin) QNAV_CASE(CommandLong) QNAV_CASE(CommandAck) QNAV_CASE(SetPositionTargetLocalNed)
+    QNAV_CASE(SetGpsGlobalOrigin) QNAV_CASE(GpsGlobalOrigin) QNAV_CASE(CommandLong) QNAV_CASE(CommandAck) QNAV_CASE(SetPositionTargetLocalNed)
     QNAV_CASE(VisionPositionEstimate) QNAV_CASE(VisionSpeedEstimate) QNAV_CASE(DistanceSensor)
     QNAV_CASE(EkfStatusReport) QNAV_CASE(NamedValueFloat) QNAV_CASE(StatusText) QNAV_CASE(Odometry)
     QNAV_CASE(VisionPositionDelta)

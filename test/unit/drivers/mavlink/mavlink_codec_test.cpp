@@ -143,7 +143,7 @@ TEST(MavlinkFrame, EncoderErrorsWriteNothing) {
 
 TEST(MavlinkMessages, TableMatchesCommonXmlLengths) {
   // Full and base lengths from the sum of each message's field sizes in common.xml/ardupilotmega.xml.
-  EXPECT_EQ(known_messages().size(), 16u);
+  EXPECT_EQ(known_messages().size(), 17u);
   for (const MessageInfo& m : known_messages()) {
     EXPECT_LE(m.base_len, m.full_len) << m.name;
     EXPECT_EQ(message_info(m.id), &m);
@@ -152,6 +152,13 @@ TEST(MavlinkMessages, TableMatchesCommonXmlLengths) {
   EXPECT_EQ(message_info(Odometry::kId)->crc_extra, 91);
   EXPECT_EQ(message_info(VisionPositionDelta::kId)->full_len, 44);
   EXPECT_EQ(message_info(12345), nullptr);
+  // The EKF origin pair (common.xml): SET_GPS_GLOBAL_ORIGIN 48 and the autopilot's answer GPS_GLOBAL_ORIGIN 49.
+  EXPECT_EQ(message_info(SetGpsGlobalOrigin::kId)->crc_extra, 41);
+  EXPECT_EQ(message_info(SetGpsGlobalOrigin::kId)->base_len, 13);
+  EXPECT_EQ(message_info(SetGpsGlobalOrigin::kId)->full_len, 21);
+  EXPECT_EQ(message_info(GpsGlobalOrigin::kId)->crc_extra, 39);
+  EXPECT_EQ(message_info(GpsGlobalOrigin::kId)->base_len, 12);
+  EXPECT_EQ(message_info(GpsGlobalOrigin::kId)->full_len, 20);
 }
 
 TEST(MavlinkMessages, OdometryFieldOffsetsFollowTheXml) {
@@ -266,7 +273,7 @@ TEST(MavlinkMessages, EveryMessageRoundTripsRandomPayloads) {
     }
   }
   EXPECT_EQ(parser.counters().total(), 0u);
-  EXPECT_EQ(parser.stats().frames_v2, 16u * 200u);
+  EXPECT_EQ(parser.stats().frames_v2, known_messages().size() * 200u);
 }
 
 }  // namespace

@@ -300,6 +300,35 @@ TEST(MavlinkParser, SignedFramesVerifiedWithTheKeyOnly) {
   }
 }
 
+// The signing specification's one-minute rule: a signed frame more than 6,000,000 x 10 us behind the
+// local timestamp (the caller's clock, or the newest verified frame) is stale, also on a new stream.
+TEST(MavlinkParser, SignedFramesMoreThanAMinuteBehindTheLocalTimestampAreStale) {
+  const SigningKey key = key_of(5, 1);
+  const std::uint64_t now = 100000000000ull;  // ~11.6 days after 2015-01-01 in 10 us units
+  Parser p;
+  p.set_signing_key(key);
+  p.set_local_timestamp(now);
+  p.set_local_timestamp(now - 5);  // never moves back
+  EXPECT_EQ(p.local_timestamp(), now);
+  Sink sink;
+  FrameEncoder a(1, 1), b(2, 1), c(3, 1);
+  test::feed_all(p, signed_command(a, key, now - kSigningWindow10us - 1), sink);  // 1 tick past the minute
+  EXPECT_TRUE(sink.frames.empty());
+  EXPECT_EQ(p.counters().get(ParserCounter::kStaleTimestamp), 1u);
+  test::feed_all(p, signed_command(a, key, now - kSigningWindow10us), sink);  // exactly a minute: accepted
+  ASSERT_EQ(sink.frames.size(), 1u);
+  // A verified frame ahead of the clock moves the local timestamp: an old stream falls behind it.
+  test::feed_all(p, signed_command(b, key, now + 2 * kSigningWindow10us), sink);
+  EXPECT_EQ(p.local_timestamp(), now + 2 * kSigningWindow10us);
+  test::feed_all(p, signed_command(c, key, now), sink);
+  EXPECT_EQ(sink.frames.size(), 2u);
+  EXPECT_EQ(p.counters().get(ParserCounter::kStaleTimestamp), 2u);
+  // A frame that fails its signature never moves the local timestamp.
+  test::feed_all(p, signed_command(c, key_of(6, 1), now + 10 * kSigningWindow10us), sink);
+  EXPECT_EQ(p.local_timestamp(), now + 2 * kSigningWindow10us);
+  EXPECT_EQ(p.counters().get(ParserCounter::kBadSignature), 1u);
+}
+
 TEST(MavlinkParser, SigningStreamTableIsBounded) {
   const SigningKey key = key_of(7, 0);
   Parser p;

@@ -42,7 +42,7 @@ inline bool typed_round_trip(std::uint32_t msgid, const std::uint8_t* in, std::u
   switch (msgid) {
 #define QNAV_CASE(T) case T::kId: { T m; decode_payload(in, m); encode_payload(m, out); return true; }
     QNAV_CASE(Heartbeat) QNAV_CASE(SystemTime) QNAV_CASE(Attitude) QNAV_CASE(LocalPositionNed)
-    QNAV_CASE(SetGpsGlobalOrigin) QNAV_CASE(CommandLong) QNAV_CASE(CommandAck) QNAV_CASE(SetPositionTargetLocalNed)
+    QNAV_CASE(SetGpsGlobalOrigin) QNAV_CASE(GpsGlobalOrigin) QNAV_CASE(CommandLong) QNAV_CASE(CommandAck) QNAV_CASE(SetPositionTargetLocalNed)
     QNAV_CASE(VisionPositionEstimate) QNAV_CASE(VisionSpeedEstimate) QNAV_CASE(DistanceSensor)
     QNAV_CASE(EkfStatusReport) QNAV_CASE(NamedValueFloat) QNAV_CASE(StatusText) QNAV_CASE(Odometry)
     QNAV_CASE(VisionPositionDelta)

@@ -118,6 +118,10 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(mavlink_guided),
       QNAV_FIELD(mavlink_autopilot_system_id),
       QNAV_FIELD(mavlink_autopilot_component_id),
+      QNAV_FIELD(mavlink_key_file),
+      QNAV_FIELD(mavlink_origin_lat_deg),
+      QNAV_FIELD(mavlink_origin_lon_deg),
+      QNAV_FIELD(mavlink_origin_alt_m),
       QNAV_FIELD(vo_enabled),
       QNAV_FIELD(vo_camera),
       QNAV_FIELD(vo_left_device),
@@ -442,6 +446,10 @@ odometry_hz = 20.0
 guided = true
 autopilot_system_id = 2
 autopilot_component_id = 2
+key_file = "/etc/qnav/mavlink.key"
+origin_lat_deg = 47.25
+origin_lon_deg = -122.5
+origin_alt_m = 3.5
 
 [vo]
 enabled = false
