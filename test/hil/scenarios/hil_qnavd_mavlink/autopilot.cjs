@@ -6,9 +6,13 @@
 // Links: UDP 127.0.0.1:14550 (qnavd's mavlink.udp_remote: qnavd is the client, this replies to the
 // address its datagrams come from) and the serial line (qnavd's mavlink.serial_device: the slave of
 // a pseudo-terminal whose master this reads and writes).
+// And a ground station on the vehicle's network (component 190 of system 1, so that qnavd ignores its
+// HEARTBEAT without a count and the flood's counts stay exact): a UDP socket of its own
+// that sends a HEARTBEAT 1 Hz to qnavd's server port (mavlink.udp_listen_port 14555), the port the
+// flood hits too, and records what qnavd sends back (rx_gcs.bin).
 // Writes at the end (SIGTERM), each read as it came, stamped on arrival with CLOCK_MONOTONIC
 // (process.hrtime: the clock of qnavd's sample times on the linux backend) and the wall clock:
-//   rx_udp.bin, rx_serial.bin   records: mono_us (u64 LE), wall_us (u64 LE), length (u32 LE), bytes
+//   rx_udp.bin, rx_serial.bin, rx_gcs.bin   records: mono_us (u64 LE), wall_us (u64 LE), length (u32 LE), bytes
 //   sent.jsonl                  every frame it sent: {"l": link, "m": mono_us, "what", "cmd", "p1", "from"}
 // Sends: HEARTBEAT 1 Hz on both links (ArduSub: type SUBMARINE, autopilot ARDUPILOTMEGA, system 1
 // component 1, armed, MANUAL). qnavd's own HEARTBEAT (a UDP datagram is one frame: msgid and
@@ -36,7 +40,7 @@ const { MavLinkProtocolV2 } = mav;
 const hr0 = process.hrtime.bigint();
 const wall0 = BigInt(Date.now()) * 1000n;
 const monoUs = () => process.hrtime.bigint() / 1000n;
-const rx = { udp: [], serial: [] };
+const rx = { udp: [], serial: [], gcs: [] };
 const sent = [];
 function record(link, b) {
   const m = monoUs();
@@ -44,15 +48,18 @@ function record(link, b) {
 }
 
 const udp = dgram.createSocket('udp4');
+const gcs = dgram.createSocket('udp4');
 let qnavdUdp = null;  // qnavd's client endpoint, learnt from its first datagram
 const links = {
   udp: (b) => { if (qnavdUdp) udp.send(b, qnavdUdp.port, qnavdUdp.address); },
   serial: (b) => fs.write(masterFd, b, () => {}),
+  gcs: (b) => gcs.send(b, 14555, '127.0.0.1'),
 };
 const seq = { 1: 0, 77: 0 };
+const gcsSeq = { n: 0 };
 function sendMsg(link, data, sysid, what, extra = {}) {
-  seq[sysid] = (seq[sysid] + 1) & 255;
-  links[link](new MavLinkProtocolV2(sysid, 1).serialize(data, seq[sysid]));
+  const q = link === 'gcs' ? (gcsSeq.n = (gcsSeq.n + 1) & 255) : (seq[sysid] = (seq[sysid] + 1) & 255);
+  links[link](new MavLinkProtocolV2(sysid, link === 'gcs' ? 190 : 1).serialize(data, q));
   if (what) sent.push({ l: link, m: monoUs().toString(), what, ...extra });
 }
 function command(link, cmd, p1, sysid, what) {
@@ -93,6 +100,8 @@ udp.on('message', (b, rinfo) => {
 });
 // The pty master: blocking reads in libuv's thread pool, each chunk as it comes.
 fs.createReadStream(null, { fd: masterFd, autoClose: false, highWaterMark: 4096 }).on('data', (b) => record('serial', b));
+gcs.on('message', (b) => record('gcs', b));
+gcs.bind(0, '127.0.0.1');
 udp.bind(14550, '127.0.0.1', () => fs.writeFileSync('/tmp/autopilot.ready', `${monoUs()}\n`));
 
 // HEARTBEAT 1 Hz on both links: ArduSub, armed, MANUAL (custom_mode 19).
@@ -101,6 +110,9 @@ setInterval(() => {
   h.type = 12; h.autopilot = 3; h.baseMode = 128 | 1; h.customMode = 19; h.systemStatus = 4; h.mavlinkVersion = 3;
   sendMsg('udp', h, 1);
   sendMsg('serial', h, 1);
+  const g = new mav.minimal.Heartbeat();
+  g.type = 6; g.autopilot = 8; g.baseMode = 0; g.customMode = 0; g.systemStatus = 4; g.mavlinkVersion = 3;
+  sendMsg('gcs', g, 1);
 }, 1000);
 
 process.on('SIGTERM', () => {

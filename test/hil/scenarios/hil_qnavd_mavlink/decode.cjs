@@ -1,5 +1,5 @@
 // hil_qnavd_mavlink (host, from check): node-mavlink decodes what the autopilot received.
-//   node decode.cjs NPM_PREFIX     (in the work folder: rx_udp.bin, rx_serial.bin from autopilot.cjs)
+//   node decode.cjs NPM_PREFIX     (in the work folder: rx_udp.bin, rx_serial.bin, rx_gcs.bin from autopilot.cjs)
 // Writes rx.jsonl, one line per frame, in arrival order per link:
 //   {"l": link, "m": CLOCK_MONOTONIC us of the read that completed it, "r": wall-clock us, "id", "s",
 //    "c", "q" (seq), ...fields}
@@ -70,7 +70,7 @@ async function decode(link) {
 
 (async () => {
   const all = [], stats = {};
-  for (const link of ['udp', 'serial']) {
+  for (const link of ['udp', 'serial', 'gcs']) {
     const r = await decode(link);
     all.push(...r.lines);
     stats[link] = r.stats;
