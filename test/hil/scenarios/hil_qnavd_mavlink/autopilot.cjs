@@ -2,7 +2,7 @@
 // implementation) making every frame it sends; what it receives is recorded raw here and decoded by
 // node-mavlink on the host (decode.cjs, from check): decoding ~60 frames/s in the emulated CPU would
 // delay the very receive times being measured.
-//   pty_exec.py /tmp/mav0 node autopilot.cjs NPM_PREFIX   (pty_exec.py appends the pty master's fd)
+//   pty_exec.py /tmp/mav0 node autopilot.cjs NPM_PREFIX   (pty_exec.py appends the pty master's and slave's fds)
 // Links: UDP 127.0.0.1:14550 (qnavd's mavlink.udp_remote: qnavd is the client, this replies to the
 // address its datagrams come from) and the serial line (qnavd's mavlink.serial_device: the slave of
 // a pseudo-terminal whose master this reads and writes).
@@ -33,7 +33,7 @@ const path = require('path');
 const dgram = require('dgram');
 
 const prefix = process.argv[2];
-const masterFd = Number(process.argv[3]);
+const masterFd = Number(process.argv[3]), slaveFd = Number(process.argv[4]);
 const mav = require(path.join(prefix, 'node_modules', 'node-mavlink'));
 const { MavLinkProtocolV2 } = mav;
 
@@ -128,5 +128,8 @@ process.on('SIGTERM', () => {
     fs.writeFileSync(`rx_${link}.bin`, Buffer.concat(parts));
   }
   fs.writeFileSync('sent.jsonl', sent.map((s) => JSON.stringify(s)).join('\n') + '\n');
+  // The read blocked on the master (a thread-pool thread) ends once no slave is open (qnavd has
+  // exited): without that, node's exit waits for it for ever.
+  fs.closeSync(slaveFd);
   process.exit(0);
 });

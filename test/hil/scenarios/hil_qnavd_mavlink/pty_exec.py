@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """hil_qnavd_mavlink (guest): the autopilot's serial line. Makes a pseudo-terminal (raw), puts its
 slave behind the symlink LINK (qnavd's mavlink.serial_device) and runs COMMAND with the master's
-descriptor appended as its last argument; the slave stays open in COMMAND too, so the line stays up
-while qnavd reopens it. No relay: the autopilot reads and writes the master itself.
+and the slave's descriptors appended as its last two arguments; the slave stays open in COMMAND too,
+so the line stays up while qnavd reopens it (COMMAND closes it at its end: a read blocked on the
+master then returns). No relay: the autopilot reads and writes the master itself.
   pty_exec.py LINK COMMAND [ARGS...]"""
 import os
 import sys
@@ -19,4 +20,4 @@ os.symlink(os.ttyname(slave), link)
 os.set_inheritable(master, True)
 os.set_inheritable(slave, True)
 print(f"pty_exec: {link} -> {os.ttyname(slave)}, master fd {master}", flush=True)
-os.execvp(cmd[0], cmd + [str(master)])
+os.execvp(cmd[0], cmd + [str(master), str(slave)])
