@@ -116,6 +116,12 @@ void MavlinkEndpoint::status_text(std::uint8_t severity, const char* text, SpscR
 
 MavInputs MavlinkEndpoint::drain(SpscRing<MavBytes>& rx) noexcept {
   MavInputs in;
+  if (has_next_cmd_) {  // the second command of the item drained before
+    has_next_cmd_ = false;
+    in.mode_cmd = true;
+    in.cmd = next_cmd_;
+    return in;
+  }
   if (has_key_ && rx.front() != nullptr) {  // the parsers' local timestamp: the clock, or the newest seen or sent
     const std::uint64_t now = std::max(utc_10us(), local_timestamp());
     for (auto& p : parsers_) p.set_local_timestamp(now);
@@ -126,10 +132,21 @@ MavInputs MavlinkEndpoint::drain(SpscRing<MavBytes>& rx) noexcept {
     const std::uint8_t link = m->link < 3 ? m->link : 2;
     const std::int64_t t = m->arrival_ns;
     // A mode command ends the drain (the worker acts on it first); bytes after it in the same item
-    // are parsed now and their frames handled, but a second command in one item is refused as busy.
+    // are parsed now and their frames handled. A command after it goes through the same checks; an
+    // accepted mode command is kept for the next drain (an item holds a poll's reads, MavlinkIo), a
+    // third in one item is refused as busy.
     parsers_[link].feed(Span<const std::uint8_t>(m->data, m->len), [&](const mav::Frame& f) {
       if (in.mode_cmd && f.msgid == mav::CommandLong::kId) {
-        counters_.increment(MavCounter::kCmdUnsupported);
+        MavInputs later;
+        on_frame(f, t, later);
+        if (later.mode_cmd) {
+          if (has_next_cmd_) {
+            counters_.increment(MavCounter::kCmdUnsupported);
+          } else {
+            next_cmd_ = later.cmd;
+            has_next_cmd_ = true;
+          }
+        }
         return;
       }
       on_frame(f, t, in);

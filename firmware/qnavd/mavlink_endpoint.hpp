@@ -123,7 +123,7 @@ class MavlinkEndpoint {
   // utc: the wall clock of signing timestamps (ns since 1970); nullptr = the system's (CLOCK_REALTIME).
   MavlinkEndpoint(const DaemonConfig& c, FILE* log, const hal::Clock* utc = nullptr) noexcept;
   // Parses what is queued, up to and including the first accepted mode command (the worker acts on
-  // it, calls ack(), and drains again).
+  // it, calls ack(), and drains again; a second one in the same item is what the next drain returns).
   MavInputs drain(SpscRing<MavBytes>& rx) noexcept;
   // The answer to the mode command drain() returned: accepted, or refused with qnav's reason.
   void ack(bool accepted, const char* why, SpscRing<MavBytes>& tx) noexcept;
@@ -194,6 +194,8 @@ class MavlinkEndpoint {
   std::uint64_t ap_unix_usec_ = 0;
   // the pending command (drain -> ack)
   std::uint8_t cmd_sys_ = 0, cmd_comp_ = 0;
+  drivers::qnavcan::ModeCmd next_cmd_{};  // a second mode command found in the item of the first
+  bool has_next_cmd_ = false;
   drivers::mavlink::CommandAck pending_ack_{};  // an answer decided in drain() (unsupported, bad parameters), sent by publish()
   bool has_pending_ack_ = false;
   // output timing and state

@@ -35,27 +35,39 @@ Status MavlinkIo::open_links(bool first) noexcept {
 }
 
 bool MavlinkIo::read_link(hal::SerialPort& port, std::uint8_t link, SpscRing<MavBytes>& rx, IoCounters& io, bool& failed) noexcept {
+  // The reads of one poll are packed back to back into as few items as they fill: the link is one byte
+  // stream to its parser (a UDP datagram's end means nothing to it), so a flood of small datagrams
+  // takes a queue item per kMavBytes, not one per datagram, and leaves room for the autopilot's frames.
   bool did = false;
+  MavBytes m;
+  m.link = link;
+  m.len = 0;
+  const auto flush = [&]() {
+    if (m.len == 0) return;
+    if (!rx.try_push(m)) io.mav_rx_overflow.fetch_add(1, std::memory_order_relaxed);
+    m.len = 0;
+  };
   for (int i = 0; i < kMaxReadsPerPoll; ++i) {
     Result<hal::SerialRead> r = port.read(Span<std::uint8_t>(buf_, sizeof buf_), 0);
     if (!r) {
       failed = true;
       io.mav_device_errors.fetch_add(1, std::memory_order_relaxed);
-      return did;
+      break;
     }
     const std::size_t n = r.value().bytes;
     if (n == 0) break;
     did = true;
     const std::int64_t t = clock_.now_ns();
-    for (std::size_t off = 0; off < n; off += kMavBytes) {
-      MavBytes m;
-      m.len = static_cast<std::uint16_t>(std::min(kMavBytes, n - off));
-      m.link = link;
-      m.arrival_ns = t;
-      std::memcpy(m.data, buf_ + off, m.len);
-      if (!rx.try_push(m)) io.mav_rx_overflow.fetch_add(1, std::memory_order_relaxed);
+    for (std::size_t off = 0; off < n;) {
+      if (m.len == 0) m.arrival_ns = t;  // an item's time is its first read's
+      const std::size_t k = std::min<std::size_t>(kMavBytes - m.len, n - off);
+      std::memcpy(m.data + m.len, buf_ + off, k);
+      m.len = static_cast<std::uint16_t>(m.len + k);
+      off += k;
+      if (m.len == kMavBytes) flush();
     }
   }
+  flush();
   return did;
 }
 

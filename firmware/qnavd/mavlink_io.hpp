@@ -1,8 +1,10 @@
 // MavlinkIo: the io thread's MAVLink links ([mavlink] configuration): a UDP client to udp_remote, a
 // UDP server on udp_listen_port, and the serial device (termios, baud); any that are configured.
-//  - poll(rx, io): non-blocking reads of every open link; each read's bytes go into the mav_rx queue
-//    as MavBytes items (split at kMavBytes), stamped with the sample clock (mission time on the sim
-//    backend). A full queue drops the bytes and counts mav_rx_overflow.
+//  - poll(rx, io): non-blocking reads of every open link; a link's reads of one poll go into the
+//    mav_rx queue packed back to back as MavBytes items of up to kMavBytes (one item per 280 bytes, not
+//    per datagram: a flood of small datagrams cannot fill the queue item by item), each stamped with
+//    the sample clock at its first read (mission time on the sim backend). A full queue drops the
+//    item and counts mav_rx_overflow.
 //  - send(item, io): writes one encoded frame to every open link (a UDP server only once a peer has
 //    been heard); a failed write is counted (mav_tx_errors), never retried.
 //  - A link that fails to open or read is counted (mav_device_errors) and reopened once a second.

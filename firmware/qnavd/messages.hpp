@@ -52,8 +52,8 @@ struct FramePool {
   std::uint8_t* slot(std::uint32_t s) const noexcept { return pool + static_cast<std::size_t>(s) * slot_bytes; }
 };
 
-// MAVLink bytes between the io thread and the nav worker ([mav_rx], [mav_tx]): rx, what one read of
-// link `link` delivered (a UDP datagram or serial bytes, split into items of at most kMavBytes; the
+// MAVLink bytes between the io thread and the nav worker ([mav_rx], [mav_tx]): rx, bytes link `link`
+// delivered (its reads of one poll packed into items of at most kMavBytes, MavlinkIo; the
 // nav worker's MavlinkEndpoint parses them, one parser per link); tx, one encoded frame, written by
 // the io thread to every open link.
 constexpr std::size_t kMavBytes = 280;  // drivers/mavlink kMaxFrameBytes

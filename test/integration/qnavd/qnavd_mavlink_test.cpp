@@ -605,7 +605,11 @@ TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
   hal::UdpPort gcs;
   ASSERT_TRUE(gcs.open_client("127.0.0.1", port));
   const std::uint8_t hello[] = {0xFD, 0x09, 0x00, 0x00, 0x00, 0xFF, 0xBE, 0x00, 0x00, 0x00};
-  for (int i = 0; i < 3; ++i) ASSERT_TRUE(gcs.write(Span<const std::uint8_t>(hello, sizeof hello)));
+  // A poll packs its reads (at most kMaxReadsPerPoll datagrams) into one item: three polls' worth of
+  // datagrams, a queue of 2 items.
+  constexpr int kDatagrams = 3 * MavlinkIo::kMaxReadsPerPoll;
+  for (int i = 0; i < kDatagrams; ++i) ASSERT_TRUE(gcs.write(Span<const std::uint8_t>(hello, sizeof hello)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // all in the socket's buffer
   bool got = false;
   for (int i = 0; i < 200 && !got; ++i) {
     got = io_links.poll(rx, counters);
@@ -619,9 +623,9 @@ TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
   MavBytes m;
   ASSERT_TRUE(rx.try_pop(m));
   EXPECT_EQ(m.link, 1) << "the server link";
-  EXPECT_EQ(m.len, sizeof hello);
-  EXPECT_EQ(std::memcmp(m.data, hello, sizeof hello), 0);
-  EXPECT_EQ(counters.mav_rx_overflow.load(), 1u) << "a queue of 2 held two of the three datagrams";
+  ASSERT_EQ(m.len, MavlinkIo::kMaxReadsPerPoll * sizeof hello) << "one poll's datagrams back to back in one item";
+  for (int k = 0; k < MavlinkIo::kMaxReadsPerPoll; ++k) EXPECT_EQ(std::memcmp(m.data + k * sizeof hello, hello, sizeof hello), 0);
+  EXPECT_EQ(counters.mav_rx_overflow.load(), 1u) << "a queue of 2 held two of the three polls' items";
   // The answer goes to the ground station (the server's last sender).
   MavBytes out;
   out.len = 4;
