@@ -1,4 +1,5 @@
 #include "hal/linux/tcp_client_port.hpp"
+#include "hal/linux/inet_address.hpp"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -23,10 +24,8 @@ void TcpClientPort::close() noexcept {
 
 Status TcpClientPort::begin_connect(const char* ipv4, std::uint16_t port) noexcept {
   close();
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(port);
-  if (ipv4 == nullptr || ::inet_pton(AF_INET, ipv4, &addr.sin_addr) != 1)
+  sockaddr_in addr;
+  if (!ipv4_sockaddr(ipv4, port, addr))
     return Status(StatusCode::kInvalidArgument, "not a numeric IPv4 address");
   const int s = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (s < 0) return Status(StatusCode::kIoError, "socket() failed");

@@ -1,4 +1,5 @@
 #include "hal/linux/tcp_server_port.hpp"
+#include "hal/linux/inet_address.hpp"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -27,10 +28,8 @@ void TcpServerPort::close() noexcept {
 
 Status TcpServerPort::listen(const char* ipv4, std::uint16_t port) noexcept {
   close();
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(port);
-  if (ipv4 == nullptr || ::inet_pton(AF_INET, ipv4, &a.sin_addr) != 1) {
+  sockaddr_in a;
+  if (!ipv4_sockaddr(ipv4, port, a)) {
     return Status(StatusCode::kInvalidArgument, "listen address is not a numeric IPv4 address");
   }
   listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);

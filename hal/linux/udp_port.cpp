@@ -1,4 +1,5 @@
 #include "hal/linux/udp_port.hpp"
+#include "hal/linux/inet_address.hpp"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -48,10 +49,8 @@ void UdpPort::close() noexcept {
 
 Status UdpPort::open_socket(const char* bind_ipv4, std::uint16_t bind_port) noexcept {
   close();
-  sockaddr_in local{};
-  local.sin_family = AF_INET;
-  local.sin_port = htons(bind_port);
-  if (bind_ipv4 == nullptr || ::inet_pton(AF_INET, bind_ipv4, &local.sin_addr) != 1)
+  sockaddr_in local;
+  if (!ipv4_sockaddr(bind_ipv4, bind_port, local))
     return Status(StatusCode::kInvalidArgument, "UDP bind address is not a numeric IPv4 address");
   const int s = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (s < 0) return Status(StatusCode::kIoError, "UDP socket() failed");
