@@ -94,10 +94,10 @@ Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
   QNAV_RETURN_IF_ERROR(pipeline::start_closed_loop(track, node_at, c.truth_poly, sc, pipeline::Guide::kDeadReckoning, age_s,
                                                    survey_->route.speed_mps, t0, c.twin, c.twin_ap));
   const std::size_t pings = static_cast<std::size_t>(c.max_travel_m / (survey_->route.speed_mps * c.dt_s)) + 16;
-  c.xt_qnav.clear();
-  c.xt_dr.clear();
-  c.xt_qnav.reserve(pings);
-  c.xt_dr.reserve(pings);
+  for (std::vector<double>* v : {&c.xt_qnav, &c.xt_dr, &c.flown_qnav, &c.flown_dr}) {
+    v->clear();
+    v->reserve(pings);
+  }
   c.index = 0;
   c.twin_done = false;
   c.active = true;
@@ -137,6 +137,7 @@ bool SimVehicle::next_closed_loop(Sample& out) noexcept {
   pipeline::polyline_offsets(c.truth_poly, c.veh.truth().translation(), along, cross, hdg);
   c.along_m = along;
   c.xt_qnav.push_back(std::fabs(cross));
+  c.flown_qnav.push_back(c.veh.travelled_m());
   if (c.index % ClosedLoopPass::kCsvEvery == 0) csv_row(c.csv, c.seed, "qnav", c.veh, cross, along, c.ap.command().mode, t0);
   // The twin on dead reckoning alone, in step with it.
   if (!c.twin_done) {
@@ -146,6 +147,7 @@ bool SimVehicle::next_closed_loop(Sample& out) noexcept {
       pipeline::polyline_offsets(c.truth_poly, c.twin.truth().translation(), ta, tc, hdg);
       c.twin_along_m = ta;
       c.xt_dr.push_back(std::fabs(tc));
+      c.flown_dr.push_back(c.twin.travelled_m());
       if (c.index % ClosedLoopPass::kCsvEvery == 0)
         csv_row(c.csv, c.seed, "dead_reckoning", c.twin, tc, ta, c.twin_ap.command().mode, t0);
     }
@@ -181,25 +183,39 @@ void SimVehicle::finish_closed_loop() noexcept {
     pipeline::polyline_offsets(c.truth_poly, c.twin.truth().translation(), ta, tc, hdg);
     c.twin_along_m = ta;
     c.xt_dr.push_back(std::fabs(tc));
+    c.flown_dr.push_back(c.twin.travelled_m());
     if (c.xt_dr.size() % ClosedLoopPass::kCsvEvery == 1) csv_row(c.csv, c.seed, "dead_reckoning", c.twin, tc, ta, c.twin_ap.command().mode, pass_start_ns_);
   }
+  // Each track's last row is where it stopped.
+  double fa = 0.0, fc = 0.0;
+  pipeline::polyline_offsets(c.truth_poly, c.veh.truth().translation(), fa, fc, hdg);
+  csv_row(c.csv, c.seed, "qnav", c.veh, fc, fa, c.ap.command().mode, pass_start_ns_);
+  pipeline::polyline_offsets(c.truth_poly, c.twin.truth().translation(), fa, fc, hdg);
+  csv_row(c.csv, c.seed, "dead_reckoning", c.twin, fc, fa, c.twin_ap.command().mode, pass_start_ns_);
   const Vec2d end = c.truth_poly.back();
   const double q_end = (c.veh.truth().translation() - end).norm(), d_end = (c.twin.truth().translation() - end).norm();
   const bool q_stopped = c.ap.command().mode == pipeline::AutopilotMode::kStopped;
   const bool d_stopped = c.twin_ap.command().mode == pipeline::AutopilotMode::kStopped;
   const auto mx = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
+  // Join: the distance flown before |cross-track| stays within 10 % of the swath (-1: it never does),
+  // as `qnav route follow` reports it.
+  const auto join_m = [&c](const std::vector<double>& xt, const std::vector<double>& flown) {
+    for (std::size_t i = xt.size(); i-- > 0;)
+      if (xt[i] > 0.1 * c.swath_m) return i + 1 < flown.size() ? flown[i + 1] : -1.0;
+    return 0.0;
+  };
   char line[768];
   std::snprintf(line, sizeof line,
                 "{\"event\":\"sim_closed_loop\",\"pass\":%u,\"reverse\":%s,\"swath_m\":%.2f,\"node_spacing_m\":%.2f,\"length_m\":%.0f,"
                 "\"qnav\":{\"cross_track_p50_m\":%.2f,\"cross_track_p95_m\":%.2f,\"cross_track_max_m\":%.2f,\"end_offset_m\":%.2f,"
-                "\"reached_end\":%s,\"travelled_m\":%.0f,\"steer_fixes\":%u,\"decode_errors\":%u},"
+                "\"reached_end\":%s,\"travelled_m\":%.0f,\"join_m\":%.0f,\"steer_fixes\":%u,\"decode_errors\":%u},"
                 "\"dead_reckoning\":{\"cross_track_p50_m\":%.2f,\"cross_track_p95_m\":%.2f,\"cross_track_max_m\":%.2f,"
-                "\"end_offset_m\":%.2f,\"reached_end\":%s,\"travelled_m\":%.0f}}",
+                "\"end_offset_m\":%.2f,\"reached_end\":%s,\"travelled_m\":%.0f,\"join_m\":%.0f}}",
                 c.pass, c.reverse ? "true" : "false", c.swath_m, c.spacing_m, c.length_m, percentile(c.xt_qnav, 0.5),
                 percentile(c.xt_qnav, 0.95), mx(c.xt_qnav), q_end, q_stopped && q_end <= c.spacing_m ? "true" : "false",
-                c.veh.travelled_m(), c.ap.counters().get(pipeline::AutopilotCounter::kSteerFixes),
+                c.veh.travelled_m(), join_m(c.xt_qnav, c.flown_qnav), c.ap.counters().get(pipeline::AutopilotCounter::kSteerFixes),
                 c.ap.counters().get(pipeline::AutopilotCounter::kDecodeErrors), percentile(c.xt_dr, 0.5), percentile(c.xt_dr, 0.95),
-                mx(c.xt_dr), d_end, d_stopped && d_end <= c.spacing_m ? "true" : "false", c.twin.travelled_m());
+                mx(c.xt_dr), d_end, d_stopped && d_end <= c.spacing_m ? "true" : "false", c.twin.travelled_m(), join_m(c.xt_dr, c.flown_dr));
   std::fprintf(stderr, "sim autopilot: %s\n", line);
   if (log_ != nullptr) std::fprintf(log_, "%s\n", line);
   if (c.csv) std::fflush(c.csv);

@@ -37,7 +37,8 @@ struct SimVehicle::ClosedLoopPass {
   pipeline::ClosedLoopVehicle veh, twin;
   pipeline::RouteAutopilot ap, twin_ap;
   std::uint32_t index = 0;
-  std::vector<double> xt_qnav, xt_dr;  // |truth cross-track| per ping
+  std::vector<double> xt_qnav, xt_dr;          // |truth cross-track| per ping
+  std::vector<double> flown_qnav, flown_dr;    // true distance flown per ping
   double along_m = 0.0, twin_along_m = 0.0;
   std::FILE* csv = nullptr;
   std::uint64_t seed = 0;

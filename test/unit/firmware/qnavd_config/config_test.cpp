@@ -164,6 +164,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(sim_replay_nav),
       QNAV_FIELD(sim_ahrs),
       QNAV_FIELD(sim_candump),
+      QNAV_FIELD(sim_closed_loop_csv),
       QNAV_FIELD(sim_stall),
       QNAV_FIELD(sim_stall_pass),
       QNAV_FIELD(sim_stall_start_s),
@@ -317,6 +318,9 @@ TEST(QnavdConfig, SimExampleLoadsAndFliesTheDocumentedMission) {
     EXPECT_EQ(c.sim_mission[i].reverse, reverse[i]) << i;
   }
   EXPECT_EQ(c.sim_mission[4].length_m, 10.0);
+  EXPECT_TRUE(c.sim_mission[3].closed_loop);  // the demo's closed-loop repeat
+  EXPECT_FALSE(c.sim_mission[1].closed_loop);
+  EXPECT_EQ(c.sim_closed_loop_csv, "build/demo/qnavd_closed_loop.csv");
   EXPECT_TRUE(c.vo_enabled);
   EXPECT_EQ(c.vo_camera, CameraSource::kSim);
   expect_stages_init(c);
@@ -612,6 +616,8 @@ TEST(QnavdConfig, EveryConfigurationTheBoundsAllowInitialisesTheStages) {
     const std::string text = config_text(rows, [high](const Row& r) -> std::string {
       std::string lo, hi;
       if (range_of(r, lo, hi)) return high ? hi : lo;
+      // (sim.pass.closed_loop needs a repeat pass after a teach: its own rows in kBadConfigs, the demo's sim.toml)
+      if (r.key == "sim.pass.closed_loop") return "";
       if (r.type == "boolean") return high ? "true" : "false";
       if (r.type == "string" && r.allowed[0] == '"') {
         const std::vector<std::string> items = list_of(r);
@@ -728,6 +734,10 @@ const BadConfig kBadConfigs[] = {
      "must be one of teach, repeat, hold, vo, map, got \"fly\""},
     {"pass_unknown_key", "[[sim.pass]]\nmode = \"teach\"\noffset = 5\n", "sim.pass[0].offset", 3,
      "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping, candump, dvl_log, images, max_frames"},
+    {"closed_loop_in_a_teach_pass", "[[sim.pass]]\nmode = \"teach\"\nclosed_loop = true\n", "sim.pass[0].closed_loop", 3,
+     "a closed-loop pass is a simulated repeat"},
+    {"closed_loop_without_a_teach", "[[sim.pass]]\nmode = \"repeat\"\nclosed_loop = true\n", "sim.pass[0].closed_loop", 3,
+     "needs a simulated teach pass before it"},
     {"images_in_a_teach_pass", "[[sim.pass]]\nmode = \"teach\"\nimages = \"seq\"\n", "sim.pass[0].images", 3,
      "a stereo sequence is replayed in a pass with mode = \"vo\""},
     {"logs_with_the_simulated_rover", "[[sim.pass]]\nmode = \"vo\"\ncandump = \"dive.log\"\n", "sim.pass[0].images", 3,
