@@ -521,6 +521,7 @@ replay_stride = 150
 replay_nav = "dr"
 ahrs = "dronecan"
 candump = "/tmp/qnavd.candump"
+closed_loop_csv = "/tmp/qnavd_closed_loop.csv"
 stall = "dvl"
 stall_pass = 0
 stall_start_s = 30.0
@@ -546,6 +547,7 @@ max_frames = 30
 [[sim.pass]]
 mode = "repeat"
 offset_pct = 100
+closed_loop = true
 )";
 
 TEST(QnavdConfig, EveryKeyReachesItsFields) {
@@ -593,6 +595,7 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_EQ(c.sim_mission[0].dvl_log, "dive.dvl");
   EXPECT_EQ(c.sim_mission[0].images, "dive_stereo");
   EXPECT_EQ(c.sim_mission[0].max_frames, 30);
+  EXPECT_TRUE(c.sim_mission[1].closed_loop);
   EXPECT_EQ(c.vo_preset, VoPreset::kEuroc);
   EXPECT_EQ(c.vo.stereo.max_disparity_px, pipeline::euroc_vo_config(64, 64, 100.0, 10.0, 10.0, 0.1).stereo.max_disparity_px)
       << "the preset's settings that have no key";
