@@ -39,7 +39,8 @@
 // start, drift and current on dead reckoning alone (no pings). At the pass's end: one
 // `sim_closed_loop` line (truth cross-track of both) on the io log and stderr; sim.closed_loop_csv the
 // tracks.
-// init() allocates the seabed and simulator; step() allocates nothing.
+// init() allocates the seabed and simulator; step() allocates nothing, except when a closed-loop pass
+// starts (its taught track, the route's node poses, the per-ping records: sim_closed_loop.hpp).
 #pragma once
 
 #include <atomic>
