@@ -101,11 +101,6 @@ Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
   c.index = 0;
   c.twin_done = false;
   c.active = true;
-  if (!cfg_.sim_closed_loop_csv.empty() && c.csv == nullptr) {
-    c.csv = std::fopen(cfg_.sim_closed_loop_csv.c_str(), "w");
-    if (c.csv == nullptr) return Status(StatusCode::kIoError, "sim.closed_loop_csv cannot be written");
-    std::fprintf(c.csv, "seed,track,t_s,north_m,east_m,cross_track_m,along_m,travelled_m,mode,dvl_lost\n");
-  }
   if (c.csv) {
     for (const Vec2d& w : survey_->route.waypoints_ne)
       std::fprintf(c.csv, "%llu,taught,0,%.2f,%.2f,0,0,0,,0\n", static_cast<unsigned long long>(c.seed), w.x(), w.y());

@@ -140,6 +140,14 @@ Status SimVehicle::init(hal::CanBus& autopilot, hal::SerialPort& dvl_out) {
     const std::size_t n = static_cast<std::size_t>(2.0 * cfg_.sim_length_m / ClosedLoopPass::kLogStepM) + 64;
     cl_->log.reserve(n);
     cl_->log_dist_m.reserve(n);
+    if (!cfg_.sim_closed_loop_csv.empty()) {  // opened here: a bad path is a start-up error, not a skipped pass
+      cl_->csv = std::fopen(cfg_.sim_closed_loop_csv.c_str(), "w");
+      if (cl_->csv == nullptr) {
+        std::fprintf(stderr, "qnavd: sim.closed_loop_csv %s: %s\n", cfg_.sim_closed_loop_csv.c_str(), std::strerror(errno));
+        return Status(StatusCode::kIoError, "sim: cannot write sim.closed_loop_csv (see the line above)");
+      }
+      std::fprintf(cl_->csv, "seed,track,t_s,north_m,east_m,cross_track_m,along_m,travelled_m,mode,dvl_lost\n");
+    }
   }
   phase_ = Phase::kCommand;
   next_idle_att_ns_ = clock_.now_ns();
