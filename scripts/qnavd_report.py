@@ -20,22 +20,30 @@ def main():
     if len(sys.argv) != 3:
         print(__doc__, file=sys.stderr)
         return 2
-    tiles, events = [], []
+    tiles, events, records = [], [], []
     with open(sys.argv[1]) as f:
         for line in f:
             line = line.strip()
             if not line.startswith("{"):
                 continue
             rec = json.loads(line)
+            records.append(rec)
             (tiles if rec.get("event") == "tile" else events).append(rec)
     vo = [e for e in events if e.get("event") == "vo"]
     taught = [t["truth_along_m"] for t in tiles if t["mode"] == "teach"]
+    # A pass: the repeat tiles between two mode commands (a closed-loop pass, sim.pass.closed_loop,
+    # has no constant offset: each tile is judged against its own true offset).
     passes, cur = [], None
-    for t in tiles:
+    for t in records:
+        if t.get("event") == "mode":
+            cur = None
+            continue
+        if t.get("event") != "tile":
+            continue
         if t["mode"] != "repeat":
             cur = None
             continue
-        if cur is None or cur["reverse"] != t["reverse"] or abs(cur["lateral"] - t["truth_lateral_m"]) > 1e-6:
+        if cur is None or cur["reverse"] != t["reverse"]:
             cur = {"reverse": t["reverse"], "lateral": t["truth_lateral_m"], "tiles": []}
             passes.append(cur)
         cur["tiles"].append(t)
@@ -50,7 +58,7 @@ def main():
         n = w1 = decided = side_ok = 0
         for i, t in enumerate(p["tiles"]):
             truth = min(range(len(taught)), key=lambda j: abs(taught[j] - t["truth_along_m"]))
-            lat = p["lateral"]
+            lat = t["truth_lateral_m"]
             want = "on_route" if abs(lat) <= deadband else ("starboard" if (lat > 0) != p["reverse"] else "port")
             true_ct = -lat if p["reverse"] else lat
             print(f"{k:4d}  {'reverse' if p['reverse'] else 'forward':7s}  {lat:8.1f}  {t['seq']:4d}  {truth:4d}  {t['estimate']:4d}  "
@@ -118,8 +126,7 @@ def main():
         sc = axes[1].scatter(seq, [t["estimate"] for t in p["tiles"]], c=[t["p"] for t in p["tiles"]], cmap=cmap, vmin=0.0, vmax=1.0,
                              marker=mk, s=18, edgecolors="none")
         axes[1].plot([], [], mk, color="0.3", ms=4, label=label)
-        true_ct = -p["lateral"] if p["reverse"] else p["lateral"]
-        axes[2].plot(seq, [true_ct] * len(seq), "k-", lw=3, alpha=0.25)
+        axes[2].plot(seq, [-t["truth_lateral_m"] if p["reverse"] else t["truth_lateral_m"] for t in p["tiles"]], "k-", lw=3, alpha=0.25)
         # Tracking tiles filled with their sigma; the others (hold course, dead-reckoned, route end)
         # hollow: their cross-track is not a fix the autopilot should steer by.
         eb = axes[2].errorbar([t["seq"] for t in trk], [t["cross_track_m"] for t in trk], yerr=[min(t["sigma_m"], 50) for t in trk],

@@ -114,6 +114,78 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
   return Status::ok();
 }
 
+void taught_track_from_log(const std::vector<Pose2>& log, const std::vector<double>& log_dist_m,
+                           const std::vector<route::NodeMeta>& nodes, std::vector<Pose2>& track,
+                           std::vector<std::uint32_t>& node_at) {
+  track.clear();
+  node_at.clear();
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < log.size() && i < log_dist_m.size(); ++i) {
+    for (; j < nodes.size() && nodes[j].along_m <= log_dist_m[i]; ++j) {
+      node_at.push_back(static_cast<std::uint32_t>(track.size()));
+      track.push_back(nodes[j].pose);
+    }
+    track.push_back(log[i]);
+  }
+  for (; j < nodes.size(); ++j) {  // nodes past the log's end (the log stops at the teach's last ping)
+    node_at.push_back(static_cast<std::uint32_t>(track.size()));
+    track.push_back(nodes[j].pose);
+  }
+}
+
+ClosedLoopScenario follow_scenario(std::uint64_t seed, bool reverse, double start_offset_m, const FollowDrift& d) {
+  ClosedLoopScenario sc;
+  sc.reverse = reverse;
+  sc.start_offset_m = start_offset_m;
+  sc.drift.heading_bias_rad = deg_to_rad(d.heading_bias_deg) * (seed % 2 ? 1.0 : -1.0);
+  sc.drift.dvl_scale_error = d.dvl_scale_pct / 100.0 * ((seed / 2) % 2 ? -1.0 : 1.0);
+  sc.drift.dropout_every_s = d.dropout_every_s;
+  sc.drift.seed = seed * 31 + (reverse ? 17 : 3);
+  const double current_dir = 2.0 * kPi * std::fmod(static_cast<double>(seed) * 0.6180339887498949 + 0.25, 1.0);
+  sc.dynamics.current_ne = d.current_mps * Vec2d(std::cos(current_dir), std::sin(current_dir));
+  sc.pass_seed = repeat_pass_seed(seed) + (reverse ? 1 : 0);
+  return sc;
+}
+
+Status start_closed_loop(Span<const Pose2> track, Span<const std::uint32_t> node_at, const std::vector<Vec2d>& truth_poly,
+                         const ClosedLoopScenario& sc, Guide guide, double guidance_age_s, double speed_mps,
+                         std::int64_t t_ns, ClosedLoopVehicle& veh, RouteAutopilot& ap) {
+  if (truth_poly.size() < 2 || track.size() < 2)
+    return Status(StatusCode::kInvalidArgument, "closed loop: the taught track needs >= 2 points");
+  const bool qnav = guide == Guide::kQnav;
+  const Vec2d d0 = truth_poly[1] - truth_poly[0];
+  const double h0 = std::atan2(d0.y(), d0.x());
+  const Vec2d p0 = truth_poly[0] + sc.start_offset_m * Vec2d(-std::sin(h0), std::cos(h0));
+  const Pose2 truth0{p0.x(), p0.y(), h0};
+  const std::size_t n = track.size();
+  const Pose2& track0 = sc.reverse ? track[n - 1] : track[0];
+  const Pose2 dr0 = qnav ? truth0 : Pose2{track0.x_m, track0.y_m, h0};
+  veh.reset(sc.dynamics, sc.drift, truth0, dr0, speed_mps, t_ns);
+  RouteAutopilotConfig apc = sc.autopilot;
+  apc.cruise_speed_mps = speed_mps;
+  apc.guidance_age_s = qnav ? guidance_age_s : 0.0;
+  apc.reverse = sc.reverse;
+  QNAV_RETURN_IF_ERROR(ap.reset(apc, track, node_at, veh.t_ns(), veh.dr_pose()));
+  if (!qnav) {
+    ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
+  } else if (apc.follow_track_on_hold) {
+    // Until qnav's first fix: "I am at the track's start, pointing along it" (its first segment).
+    const Vec2d a = track[sc.reverse ? n - 1 : 0].translation(), b = track[sc.reverse ? n - 2 : 1].translation();
+    const Vec2d d = b - a;
+    const Pose2 start_teach{a.x(), a.y(), std::atan2(d.y(), d.x())};
+    ap.set_frame(start_teach.compose(veh.dr_pose().inverse()));
+  }
+  return Status::ok();
+}
+
+bool closed_loop_step(ClosedLoopVehicle& veh, RouteAutopilot& ap, double dt_s, double max_travel_m) noexcept {
+  const AutopilotCommand cmd = ap.command();
+  if (cmd.mode == AutopilotMode::kStopped || veh.travelled_m() > max_travel_m) return false;
+  veh.step(dt_s, cmd.heading_rad, cmd.speed_mps);
+  ap.on_nav(veh.t_ns(), veh.dr_pose(), veh.sideslip_rad());
+  return true;
+}
+
 Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc, Guide guide, double join_band_m,
                        ClosedLoopResult& out, const std::function<void(const TrackSample&)>& on_sample) {
   out = ClosedLoopResult{};
@@ -123,43 +195,14 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   std::vector<Vec2d> truth_poly(w.route.waypoints_ne.begin(), w.route.waypoints_ne.end());
   if (sc.reverse) std::reverse(truth_poly.begin(), truth_poly.end());
   const double length = poly_length(truth_poly);
-  const Vec2d d0 = truth_poly[1] - truth_poly[0];
-  const double h0 = std::atan2(d0.y(), d0.x());
-  const Vec2d p0 = truth_poly[0] + sc.start_offset_m * Vec2d(-std::sin(h0), std::cos(h0));
-  const Pose2 truth0{p0.x(), p0.y(), h0};
-  // The baseline's dead reckoning continues the teach's frame from the taught track's start (its end
-  // in reverse): it believes it starts where the teach began (or ended).
-  const Pose2& track0 = sc.reverse ? route.track.back() : route.track.front();
-  const Pose2 dr0 = qnav ? truth0 : Pose2{track0.x_m, track0.y_m, h0};
-
   const double dt = 1.0 / w.route.ping_rate_hz;
   const double speed = w.route.speed_mps;
   const float altitude = static_cast<float>(w.route.altitude_m);
   ClosedLoopVehicle veh;
-  veh.reset(sc.dynamics, sc.drift, truth0, dr0, speed, 0);
-  RouteAutopilotConfig apc = sc.autopilot;
-  apc.cruise_speed_mps = speed;
-  if (qnav)
-    apc.guidance_age_s = route.tile_age_s;
-  else
-    apc.guidance_age_s = 0.0;
-  apc.reverse = sc.reverse;
   RouteAutopilot ap;
-  QNAV_RETURN_IF_ERROR(ap.reset(apc, Span<const Pose2>(route.track.data(), route.track.size()),
-                                Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()), veh.t_ns(),
-                                veh.dr_pose()));
-  if (!qnav) {
-    ap.set_frame(Pose2{});  // dead reckoning IS the teach frame
-  } else if (apc.follow_track_on_hold) {
-    // Until qnav's first fix: "I am at the track's start, pointing along it" (its first segment).
-    const std::size_t n = route.track.size();
-    const Vec2d a = route.track[sc.reverse ? n - 1 : 0].translation(),
-                b = route.track[sc.reverse ? n - 2 : 1].translation();
-    const Vec2d d = b - a;
-    const Pose2 start_teach{a.x(), a.y(), std::atan2(d.y(), d.x())};
-    const Pose2 start_dr = veh.dr_pose();
-    ap.set_frame(start_teach.compose(start_dr.inverse()));
-  }
+  QNAV_RETURN_IF_ERROR(start_closed_loop(Span<const Pose2>(route.track.data(), route.track.size()),
+                                         Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()),
+                                         truth_poly, sc, guide, route.tile_age_s, speed, 0, veh, ap));
 
   // qnav's side: tiles -> repeater -> CAN publisher on a sim bus; the autopilot is another node.
   std::unique_ptr<RouteTilePipeline> pipe;
@@ -204,16 +247,12 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   const double max_travel = sc.max_travel_factor * length;
   double along = 0.0, cross = 0.0, hdg = 0.0;
   for (std::uint32_t k = 1;; ++k) {
-    const AutopilotCommand cmd = ap.command();
-    if (cmd.mode == AutopilotMode::kStopped) {
-      out.stopped = true;
+    if (!closed_loop_step(veh, ap, dt, max_travel)) {
+      out.stopped = ap.command().mode == AutopilotMode::kStopped;
       break;
     }
-    if (veh.travelled_m() > max_travel) break;
-    veh.step(dt, cmd.heading_rad, cmd.speed_mps);
     const std::int64_t t = veh.t_ns();
     const Pose2 dr = veh.dr_pose();
-    ap.on_nav(t, dr, veh.sideslip_rad());
     polyline_offsets(truth_poly, veh.truth().translation(), along, cross, hdg);
     if (qnav) {
       PingTruth pt;

@@ -22,6 +22,7 @@
 #include "firmware/pipeline/route_autopilot.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/pipeline/sim_survey.hpp"
+#include "nav/core/span.hpp"
 #include "nav/route/route_types.hpp"
 
 namespace qnav::pipeline {
@@ -75,6 +76,38 @@ struct ClosedLoopResult {
   std::uint32_t tiles = 0, steer_fixes = 0, fixes = 0;
   double dropout_s = 0.0;
 };
+
+// The autopilot's taught track from its own log of a teach (qnavd's sim vehicle, the HIL player):
+// log[i] = its dead-reckoned pose (teach frame) when it had flown log_dist_m[i] (increasing); each
+// node's pose (nodes[j].pose, the route file's numbers) inserted where the log passed the node's
+// along-track distance (nodes[j].along_m), so node j = track[node_at[j]]. Allocates the outputs.
+void taught_track_from_log(const std::vector<Pose2>& log, const std::vector<double>& log_dist_m,
+                           const std::vector<route::NodeMeta>& nodes, std::vector<Pose2>& track,
+                           std::vector<std::uint32_t>& node_at);
+
+// The drift and current of a closed-loop run for a seed, as `qnav route follow --sim` flies them and
+// qnavd's closed-loop sim passes (sim.pass.closed_loop) too: compass bias +-heading_bias_deg (the sign
+// alternates with the seed), DVL scale error +-dvl_scale_pct (the sign alternates every 2 seeds), a
+// current of current_mps in a seeded direction (seed x golden ratio of a turn + a quarter), DVL
+// dropouts every dropout_every_s on average. pass_seed: repeat_pass_seed(seed) (+1 in reverse).
+struct FollowDrift {
+  double heading_bias_deg = 1.0, dvl_scale_pct = 1.0, current_mps = 0.2, dropout_every_s = 600.0;
+};
+ClosedLoopScenario follow_scenario(std::uint64_t seed, bool reverse, double start_offset_m, const FollowDrift& drift);
+
+// The start of one closed-loop run, shared by run_closed_loop and qnavd's sim vehicle: the vehicle at
+// the start of truth_poly (the taught track's truth in the direction of travel, >= 2 points) offset
+// sc.start_offset_m to starboard, pointing along its first segment; its dead reckoning starts there
+// (kQnav) or at the taught track's start in the teach frame (kDeadReckoning: it believes it starts
+// where the teach began, or ended); the autopilot reset on the taught track (track, node_at: borrowed,
+// as RouteAutopilot::reset) with its frame fixed for kDeadReckoning (and for kQnav with
+// follow_track_on_hold: "at the track's start, pointing along it"). guidance_age_s: qnav's tile age.
+Status start_closed_loop(Span<const Pose2> track, Span<const std::uint32_t> node_at, const std::vector<Vec2d>& truth_poly,
+                         const ClosedLoopScenario& sc, Guide guide, double guidance_age_s, double speed_mps,
+                         std::int64_t t_ns, ClosedLoopVehicle& veh, RouteAutopilot& ap);
+// One control step of dt_s: the autopilot's command flown by the vehicle, its dead reckoning back to
+// the autopilot. False (nothing flown) once the autopilot stops or the vehicle has flown max_travel_m.
+bool closed_loop_step(ClosedLoopVehicle& veh, RouteAutopilot& ap, double dt_s, double max_travel_m) noexcept;
 
 // join_band_m: the band for join_distance_m (10 % of the swath in `route follow`).
 Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& scenario, Guide guide, double join_band_m,

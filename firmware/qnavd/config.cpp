@@ -722,6 +722,10 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(string_key(
       "sim.candump", [](auto& c) -> auto& { return c.sim_candump; }, "any; \"\" = off", nullptr,
       "File the simulated autopilot records every bus frame to (candump -l format, `qnav can decode` reads it)"));
+  t.push_back(string_key(
+      "sim.closed_loop_csv", [](auto& c) -> auto& { return c.sim_closed_loop_csv; }, "any; \"\" = off", nullptr,
+      "File the closed-loop passes (sim.pass.closed_loop) write their tracks to: taught, qnav-guided, dead reckoning alone "
+      "(the CSV of `qnav route follow --csv`; scripts/route_follow_plot.py draws it)"));
   t.push_back(enum_key(
       "sim.stall", [](auto& c) -> auto& { return c.sim_stall; },
       std::vector<std::pair<std::string, std::string>>{
@@ -798,6 +802,11 @@ std::vector<KeySpec> build_key_table() {
       "Mode vo: replay this rectified stereo sequence (KITTI layout left/ right/, or EuRoC cam0/ cam1/) instead of the simulated rover; "
       "mode map: the downward camera's frames, every .png/.jpg/.pgm of the folder in name order, map.width x map.height; \"\" = the "
       "synthetic seabed loop (drivers/downward_sim: 320 x 240, f 300 px, 2 m up, 90 frames per lap of radius 0.8 m)"));
+  t.push_back(bool_key(
+      "sim.pass.closed_loop", [](auto& c) -> auto& { return pass_of(c).closed_loop; },
+      "Mode repeat, simulated: fly the pass in closed loop -- the vehicle steers on qnavd's QNAV_ROUTE_GUIDANCE / STATUS "
+      "frames (the autopilot law of `qnav route follow`, docs/route.md) with 1 deg compass bias, 1 % DVL scale error, "
+      "DVL dropouts and a 0.2 m/s current, starting offset_pct off the route; a twin flies the same on dead reckoning alone"));
   t.push_back(int_key(
       "sim.pass.max_frames", [](auto& c) -> auto& { return pass_of(c).max_frames; }, 0, 1000000, "pairs",
       "Pairs (mode vo) or frames (mode map) of sim.pass.images replayed; 0 = all (the synthetic seabed loop: 120 frames)"));
@@ -866,7 +875,7 @@ std::string suggest_key(const std::string& name, bool in_pass) {
   const std::string probe = in_pass ? leaf(name) : name;
   const std::string best = closest(probe, candidates);
   if (!best.empty()) return "did you mean " + best + "?";
-  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping, candump, dvl_log, images, max_frames";
+  if (in_pass) return "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping, candump, dvl_log, images, max_frames, closed_loop";
   std::vector<std::string> same_leaf;
   for (const std::string& c : candidates)
     if (leaf(c) == leaf(name)) same_leaf.push_back(c);
@@ -1151,6 +1160,18 @@ void check_across_keys(Reader& r, DaemonConfig& c) {
     if (p.mode == drivers::qnavcan::Mode::kVo && p.images.empty() && (!p.candump.empty() || !p.dvl_log.empty()))
       return r.error(pk + "images", pass_at("candump", "dvl_log"),
                      "a vo pass replays recorded sensor logs with its recorded stereo sequence (sim.pass.images), not with the simulated rover");
+    if (p.closed_loop) {
+      if (p.mode != drivers::qnavcan::Mode::kRepeat || !p.file.empty() || !p.candump.empty() || !p.dvl_log.empty())
+        return r.error(pk + "closed_loop", pass_at("closed_loop", "mode"),
+                       "a closed-loop pass is a simulated repeat (mode = \"repeat\", no file, candump or dvl_log)");
+      bool taught = false;
+      for (std::size_t k = 0; k < i; ++k)
+        taught |= c.sim_mission[k].mode == drivers::qnavcan::Mode::kTeach && c.sim_mission[k].file.empty() &&
+                  c.sim_mission[k].candump.empty() && c.sim_mission[k].dvl_log.empty();
+      if (!taught)
+        return r.error(pk + "closed_loop", pass_at("closed_loop", "mode"),
+                       "a closed-loop pass needs a simulated teach pass before it (its autopilot logs the taught track there)");
+    }
     if (p.mode == drivers::qnavcan::Mode::kVo && !p.file.empty())
       return r.error(pk + "file", pass_at("file", "mode"), "a side-scan file is replayed in a teach, repeat or hold pass, not in mode = \"vo\"");
   }

@@ -55,6 +55,10 @@ struct SimPass {
                             // mode = "map": a folder of downward frames (.png/.jpg/.pgm, name order), "" = the
                             // synthetic seabed loop (drivers/downward_sim)
   std::int64_t max_frames = 0;  // sim.pass.max_frames [0, 1e6]: pairs / frames of sim.pass.images replayed; 0 = all
+  // sim.pass.closed_loop: a simulated repeat pass flown in closed loop: the vehicle steers on the
+  // daemon's QNAV_ROUTE_GUIDANCE / STATUS frames (pipeline::RouteAutopilot, as `qnav route follow`),
+  // with drift and a current; offset_pct is where it starts. Needs a simulated teach pass before it.
+  bool closed_loop = false;
 };
 
 struct DaemonConfig {
@@ -208,6 +212,7 @@ struct DaemonConfig {
   std::string sim_replay_nav = "fix";        // sim.replay_nav = "fix" | "dr"
   std::string sim_ahrs = "qnav";              // sim.ahrs = "qnav" (QNAV_ATTITUDE_IN) | "dronecan" (uavcan.equipment.ahrs.Solution, node 42)
   std::string sim_candump;                   // sim.candump: the autopilot records the bus here (candump -l format); "" = off
+  std::string sim_closed_loop_csv;           // sim.closed_loop_csv: the closed-loop passes' tracks (scripts/route_follow_plot.py); "" = off
   // A sensor of the simulated vehicle stops for a while (fault tests): sim.stall = "none" | "dvl" |
   // "attitude" | "sonar", from sim.stall_start_s [0, 100000] after the start of pass sim.stall_pass
   // [0, 15] for sim.stall_s [0, 3600] seconds of mission time.

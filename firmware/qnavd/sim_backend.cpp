@@ -96,7 +96,10 @@ class SimBackend final : public SimIoBackend {
     log_pace(false);
     return did;
   }
-  void set_log(FILE* log) noexcept override { log_ = log; }
+  void set_log(FILE* log) noexcept override {
+    log_ = log;
+    vehicle_.set_log(log);
+  }
   void send(const hal::CanFrame& f, IoCounters& io) noexcept override {
     if (!daemon_can_->send(f)) io.can_tx_errors.fetch_add(1, std::memory_order_relaxed);
   }

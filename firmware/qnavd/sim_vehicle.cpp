@@ -10,6 +10,7 @@
 #include "drivers/dronecan/transfer.hpp"
 #include "drivers/dvl/wl_parser.hpp"
 #include "firmware/pipeline/dead_reckoner.hpp"
+#include "firmware/qnavd/sim_closed_loop.hpp"
 #include "firmware/tools/image_reader.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/candump.hpp"
@@ -24,6 +25,9 @@ constexpr std::int64_t kIdleTickNs = 100000000;      // the AHRS streams between
 constexpr std::int64_t kStateTimeoutNs = 5000000000;  // 5 s of mission time for NAV_STATUS to confirm
 constexpr double kTwoPi = 6.283185307179586;
 }  // namespace
+
+SimVehicle::SimVehicle(const DaemonConfig& config, SimClock& clock, hal::Clock& wall) noexcept
+    : cfg_(config), clock_(clock), pacer_(wall, config.sim_speed) {}
 
 SimVehicle::~SimVehicle() {
   if (candump_) std::fclose(candump_);
@@ -131,6 +135,21 @@ Status SimVehicle::init(hal::CanBus& autopilot, hal::SerialPort& dvl_out) {
     }
     recordings_.push_back(std::move(r));
   }
+  for (const SimPass& p : cfg_.sim_mission) {
+    if (!p.closed_loop || cl_) continue;
+    cl_ = std::make_unique<ClosedLoopPass>();
+    const std::size_t n = static_cast<std::size_t>(2.0 * cfg_.sim_length_m / ClosedLoopPass::kLogStepM) + 64;
+    cl_->log.reserve(n);
+    cl_->log_dist_m.reserve(n);
+    if (!cfg_.sim_closed_loop_csv.empty()) {  // opened here: a bad path is a start-up error, not a skipped pass
+      cl_->csv = std::fopen(cfg_.sim_closed_loop_csv.c_str(), "w");
+      if (cl_->csv == nullptr) {
+        std::fprintf(stderr, "qnavd: sim.closed_loop_csv %s: %s\n", cfg_.sim_closed_loop_csv.c_str(), std::strerror(errno));
+        return Status(StatusCode::kIoError, "sim: cannot write sim.closed_loop_csv (see the line above)");
+      }
+      std::fprintf(cl_->csv, "seed,track,t_s,north_m,east_m,cross_track_m,along_m,travelled_m,mode,dvl_lost\n");
+    }
+  }
   phase_ = Phase::kCommand;
   next_idle_att_ns_ = clock_.now_ns();
   return Status::ok();
@@ -223,6 +242,8 @@ void SimVehicle::drain_bus() noexcept {
   while (bus_->receive(rx, 0)) {
     if (observer_) observer_(observer_ctx_, rx);
     record(rx.frame, rx.stamp.sample_ns);
+    // A closed-loop pass: the autopilot steers on the guidance it hears (bad frames are counted by it).
+    if (cl_ && cl_->active) cl_->ap.on_frame(rx.frame, clock_.now_ns()).ignore();
     if (rx.frame.id == qc::kIdNavStatus) {
       qc::NavStatus ns;
       if (qc::decode(rx.frame, ns)) {
@@ -359,6 +380,10 @@ Status SimVehicle::start_pass() {
   replay_dvl_ = rs_ != nullptr && !rs_->dvl.empty();
   have_prev_ = false;
   pass_start_ns_ = clock_.now_ns();
+  if (cl_) {  // the autopilot logs its taught track in a simulated teach pass
+    cl_->logging = p.mode == qc::Mode::kTeach && recording_ == nullptr && rs_ == nullptr;
+    if (cl_->logging) cl_->have_log = false;
+  }
   if (p.mode == qc::Mode::kMap) {
     map_next_ = 0;
     map_t_ns_ = clock_.now_ns() + kPassLeadNs;
@@ -393,6 +418,11 @@ Status SimVehicle::start_pass() {
   pass_cfg_.start_stamp_ns = static_cast<std::uint64_t>(clock_.now_ns() + static_cast<std::int64_t>(1e9 / pass_cfg_.ping_rate_hz));
   QNAV_RETURN_IF_ERROR(traj_.init(pass_cfg_));
   QNAV_RETURN_IF_ERROR(sonar_->init(survey_->sonar_for(pass_cfg_.seed), &survey_->seabed));
+  if (p.closed_loop) {
+    const Status st = start_closed_loop_pass(seed);
+    if (!st) std::fprintf(stderr, "sim autopilot: pass %u: %s; skipping the pass\n", pass_, st.message());
+    return st;
+  }
   return Status::ok();
 }
 
@@ -430,6 +460,7 @@ void SimVehicle::release_ping(SpscRing<PingMsg>& pings, IoCounters& io) noexcept
 bool SimVehicle::next_simulated(Sample& out) noexcept {
   sidescan::TrajectorySample s;
   if (!traj_.next(s)) return false;
+  if (cl_) log_teach_pose(s.nav);
   out.t_ns = static_cast<std::int64_t>(s.stamp_ns);
   out.nav = s.nav;
   out.ping_number = s.index;
@@ -809,7 +840,7 @@ SimVehicle::StepResult SimVehicle::step(SpscRing<std::uint32_t>& free_slots, Sps
       if (rs_ != nullptr) return fly_replay(free_slots, pings, pool, stride, io);
       if (cfg_.sim_mission[pass_].mode == qc::Mode::kVo) return fly_rover(io);
       if (!has_held_) {
-        if (!(recording_ ? next_recorded(held_) : next_simulated(held_))) {
+        if (!(recording_ ? next_recorded(held_) : (cl_ && cl_->active) ? next_closed_loop(held_) : next_simulated(held_))) {
           phase_ = Phase::kEndPass;
           return StepResult::kWaiting;
         }

@@ -28,7 +28,19 @@
 // bus-off, NaN or damaged-range pings, pings stamped in the past, a full disk. Every injected sample
 // is counted in IoCounters::faults_injected (the tests compare it with the daemon's rejections).
 // sim.candump records every frame on the bus in candump -l format (`qnav can decode` reads it).
-// init() allocates the seabed and simulator; step() allocates nothing.
+// Closed loop (sim.pass.closed_loop, a simulated repeat): the vehicle's autopilot logs its own dead
+// reckoning while qnavd teaches (every 10 m) and, when the repeat starts, reads the taught route's
+// node poses (the route file: the numbers NAV_STATUS.NodeIndex points at) into its taught track; it
+// then steers with pipeline::RouteAutopilot on the QNAV_ROUTE_GUIDANCE / STATUS frames it receives
+// on this bus (decoded with drivers/qnavcan), flying pipeline::ClosedLoopVehicle (dynamics, current,
+// drifting compass and DVL: pipeline::follow_scenario for sim.seed, as `qnav route follow --sim`);
+// each ping is rendered from the TRUE pose, the AHRS and DVL report its dead reckoning (in a DVL
+// dropout the velocity through the water, as a DVL in water-track would). A twin flies the same
+// start, drift and current on dead reckoning alone (no pings). At the pass's end: one
+// `sim_closed_loop` line (truth cross-track of both) on the io log and stderr; sim.closed_loop_csv the
+// tracks.
+// init() allocates the seabed and simulator; step() allocates nothing, except when a closed-loop pass
+// starts (its taught track, the route's node poses, the per-ping records: sim_closed_loop.hpp).
 #pragma once
 
 #include <atomic>
@@ -74,8 +86,7 @@ class SimVehicle {
  public:
   enum class StepResult : std::uint8_t { kProduced, kWaiting, kDone };
 
-  SimVehicle(const DaemonConfig& config, SimClock& clock, hal::Clock& wall) noexcept
-      : cfg_(config), clock_(clock), pacer_(wall, config.sim_speed) {}
+  SimVehicle(const DaemonConfig& config, SimClock& clock, hal::Clock& wall) noexcept;  // out of line: cl_'s type is sim_closed_loop.hpp's
   ~SimVehicle();
   SimVehicle(const SimVehicle&) = delete;
   SimVehicle& operator=(const SimVehicle&) = delete;
@@ -88,6 +99,8 @@ class SimVehicle {
   // Fault injection's reach: the CAN network (error frames) and the route store (a full disk).
   void set_fault_targets(hal::SimCanNetwork* net, hal::FaultFileStore* store) noexcept { net_ = net, store_ = store; }
   void set_bus_observer(BusObserver f, void* ctx) noexcept { observer_ = f, observer_ctx_ = ctx; }
+  // The io thread's log (the closed-loop passes' summary lines); null = stderr only.
+  void set_log(std::FILE* log) noexcept { log_ = log; }
   // Lockstep between passes: while the vehicle waits for the daemon to report a commanded mode, its
   // clock moves on (idle_tick) only once the nav worker has taken every input of the last tick and its
   // answer is on the bus (the backend says so before each step). The length of a mode handshake in
@@ -132,6 +145,14 @@ class SimVehicle {
   // index), later ones are absolute (ns since the epoch) and shared by a pass's sources.
   static constexpr std::int64_t kEpochFloorNs = 100000000000000000LL;
   bool next_simulated(Sample& out) noexcept;
+  // Closed loop (see above): the state lives in closed_loop.cpp's ClosedLoopPass.
+  Status start_closed_loop_pass(std::uint64_t pass_seed);
+  bool next_closed_loop(Sample& out) noexcept;
+  void finish_closed_loop() noexcept;
+  void log_teach_pose(const Pose2& nav) noexcept;  // a simulated teach pass's ping: the autopilot's log
+  struct ClosedLoopPass;
+  std::unique_ptr<ClosedLoopPass> cl_;
+  std::FILE* log_ = nullptr;
   bool next_recorded(Sample& out) noexcept;
   StepResult emit(const Sample& s, SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride, IoCounters& io) noexcept;
   void drain_bus() noexcept;

@@ -11,7 +11,14 @@
 #include <thread>
 
 #include "drivers/sidescan/jsf_parser.hpp"
+#include "drivers/dvl/wl_parser.hpp"
+#include "drivers/route_store/route_file.hpp"
+#include "drivers/route_store/route_open.hpp"
+#include "firmware/pipeline/closed_loop.hpp"
+#include "firmware/pipeline/dead_reckoner.hpp"
+#include "firmware/tools/sim_dive.hpp"
 #include "firmware/tools/text_file.hpp"
+#include "hal/linux/posix_file_store.hpp"
 #include "hal/core/candump.hpp"
 #include "hal/linux/monotonic_clock.hpp"
 #include "hal/linux/pty_device.hpp"
@@ -110,7 +117,17 @@ bool parse_mode(const std::string& s, qc::Mode& m) {
 
 bool read_pass(const toml::table& t, int index, const std::string& dir, HilPass& p, std::string& error) {
   TableReader r(t, "pass[" + std::to_string(index) + "]", error);
-  if (!r.only({"name", "jsf", "dvl", "candump", "mode", "route", "reverse", "lead_s", "pings", "idle_after", "after_s", "silence"})) return false;
+  if (!r.only({"name", "jsf", "dvl", "candump", "mode", "route", "reverse", "lead_s", "pings", "idle_after", "after_s", "silence", "closed_loop",
+               "seed", "pass_seed", "samples", "length_m", "speed_mps", "range_m", "offset_m", "start_s", "guidance_age_s", "teach_truth",
+               "route_file", "truth_csv"}))
+    return false;
+  if (!r.boolean("closed_loop", p.closed_loop) || !r.integer("seed", p.seed, 0, 1000000000) || !r.integer("pass_seed", p.pass_seed, 0, 1000000000) ||
+      !r.integer("samples", p.samples, 64, 16384) || !r.number("length_m", p.length_m, 10.0, 50000.0) ||
+      !r.number("speed_mps", p.speed_mps, 0.1, 20.0) || !r.number("range_m", p.range_m, 1.0, 1000.0) ||
+      !r.number("offset_m", p.offset_m, -1000.0, 1000.0) || !r.number("start_s", p.start_s, 0.0, 4e9) ||
+      !r.number("guidance_age_s", p.guidance_age_s, 0.0, 600.0) || !r.text("teach_truth", p.teach_truth) ||
+      !r.text("route_file", p.route_file) || !r.text("truth_csv", p.truth_csv))
+    return false;
   std::string mode;
   long long route = 0, pings = 0;
   if (!r.text("name", p.name) || !r.text("jsf", p.jsf) || !r.text("dvl", p.dvl) || !r.text("candump", p.candump) ||
@@ -126,7 +143,16 @@ bool read_pass(const toml::table& t, int index, const std::string& dir, HilPass&
   p.route = static_cast<std::uint16_t>(route);
   p.pings = static_cast<int>(pings);
   p.jsf = relative_to(dir, p.jsf), p.dvl = relative_to(dir, p.dvl), p.candump = relative_to(dir, p.candump);
-  if (p.jsf.empty() && p.dvl.empty() && p.candump.empty()) return r.fail("", t.source().begin.line, "plays nothing: give jsf, dvl or candump");
+  if (p.closed_loop) {
+    if (!p.jsf.empty() || !p.dvl.empty() || !p.candump.empty())
+      return r.fail("closed_loop", t.get("closed_loop")->source().begin.line, "a closed-loop pass flies live: no jsf, dvl or candump");
+    if (p.teach_truth.empty() || p.route_file.empty())
+      return r.fail("closed_loop", t.get("closed_loop")->source().begin.line, "needs teach_truth and route_file (the taught track)");
+    p.teach_truth = relative_to(dir, p.teach_truth);
+    if (!p.truth_csv.empty()) p.truth_csv = relative_to(dir, p.truth_csv);
+  } else if (p.jsf.empty() && p.dvl.empty() && p.candump.empty()) {
+    return r.fail("", t.source().begin.line, "plays nothing: give jsf, dvl or candump");
+  }
   if (const toml::node* s = t.get("silence")) {
     const toml::array* a = s->as_array();
     if (a == nullptr || !a->is_array_of_tables()) return r.fail("silence", s->source().begin.line, "must be [[pass.silence]] tables");
@@ -309,7 +335,9 @@ class Vehicle {
       hal::SocketCanConfig c;
       c.interface = sc_.can_interface.c_str();
       c.error_mask = 0;
-      c.receive = false;  // the player only sends: nothing of the bus's traffic is queued for it
+      // The player only sends unless a pass flies in closed loop (then it reads qnavd's guidance).
+      c.receive = false;
+      for (const HilPass& p : sc_.passes) c.receive = c.receive || p.closed_loop;
       if (Status s = can_.open(c); !s) return fail(error, "CAN " + sc_.can_interface + ": " + s.message());
     }
     if (!sc_.dvl_pty.empty()) {
@@ -360,6 +388,7 @@ class Vehicle {
       ++st_.sonar_unsent;
     }
   }
+  bool receive(hal::CanRxFrame& rx) { return can_.is_open() && can_.receive(rx, 0).is_ok(); }
   void finish() {
     st_.sonar_connections = sonar_.connections();
     st_.sonar_drops = sonar_.drops();
@@ -406,6 +435,143 @@ void hover(Vehicle& v, const hal::CanFrame* frame, double rate_hz, double second
   sleep_until_ns(t0 + static_cast<std::int64_t>(seconds * 1e9));
 }
 
+// The AHRS frame of a compass heading (rad; qnav's QNAV_ATTITUDE_IN).
+hal::CanFrame attitude_frame(double heading_rad) {
+  double h = std::fmod(heading_rad, 2.0 * kPi);
+  if (h < 0) h += 2.0 * kPi;
+  qc::AttitudeIn a;
+  a.heading_rad = std::fmin(h, 6.2832);
+  a.valid = true;
+  hal::CanFrame f;
+  (void)qc::encode(a, f);
+  return f;
+}
+
+// The teach dive's navigation as the autopilot logged it (every 10 m, qnavd's teach frame: the dive's
+// dead reckoning less its first ping's position), from `qnav sonar simulate --truth-csv`.
+bool read_teach_log(const std::string& path, std::vector<Pose2>& log, std::vector<double>& dist, std::string& error) {
+  std::string text;
+  if (Status s = read_text_file(path.c_str(), kMaxDiveBytes, text); !s) {
+    error = path + ": " + s.message();
+    return false;
+  }
+  std::size_t a = text.find('\n');
+  Pose2 first{}, prev{}, last{};
+  bool have = false;
+  double d = 0.0, since = 0.0;
+  while (a != std::string::npos && a + 1 < text.size()) {
+    const std::size_t e = text.find('\n', a + 1);
+    const std::string line = text.substr(a + 1, e == std::string::npos ? std::string::npos : e - a - 1);
+    a = e;
+    double v[9];
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7], &v[8]) != 9) continue;
+    const Pose2 nav{v[6], v[7], v[8]};
+    if (!have) first = prev = nav;
+    const double step = (nav.translation() - prev.translation()).norm();
+    d += step, since += step;
+    prev = nav;
+    last = Pose2{nav.x_m - first.x_m, nav.y_m - first.y_m, nav.heading_rad};
+    if (!have || since >= 10.0) {
+      log.push_back(last);
+      dist.push_back(d);
+      since = 0.0;
+    }
+    have = true;
+  }
+  if (log.size() < 2) {
+    error = path + ": fewer than two navigation rows (want the CSV of qnav sonar simulate --truth-csv)";
+    return false;
+  }
+  log.push_back(last);
+  dist.push_back(d);
+  return true;
+}
+
+// One closed-loop pass, live (HilPass::closed_loop): see hil_player.hpp.
+bool fly_closed_loop(Vehicle& v, const HilScenario& sc, const HilPass& p, std::size_t pass_index, std::FILE* played, std::FILE* log,
+                     HilPlayStats& st, std::string& error) {
+  std::vector<Pose2> teach;
+  std::vector<double> dist;
+  if (!read_teach_log(p.teach_truth, teach, dist, error)) return false;
+  drivers::route_store::RouteFileReader reader(hal::host_file_store());
+  std::vector<route::NodeMeta> meta;
+  const drivers::route_store::RepeatOpenReport rr = drivers::route_store::open_route_for_repeat(reader, p.route_file.c_str(), meta, 100000);
+  if (rr.outcome != drivers::route_store::RepeatOpen::kOk && rr.outcome != drivers::route_store::RepeatOpen::kGoodPrefix) {
+    error = p.route_file + ": " + rr.why.message();
+    return false;
+  }
+  std::vector<Pose2> track;
+  std::vector<std::uint32_t> node_at;
+  pipeline::taught_track_from_log(teach, dist, meta, track, node_at);
+  std::vector<Vec2d> truth_poly = {Vec2d(0.0, 0.0), Vec2d(p.length_m, 0.0)};  // the survey line, north
+  if (p.reverse) std::swap(truth_poly[0], truth_poly[1]);
+  pipeline::ClosedLoopScenario scn = pipeline::follow_scenario(static_cast<std::uint64_t>(p.seed), p.reverse, p.offset_m, pipeline::FollowDrift{});
+  const double dt = 1.0 / sc.rate_hz, max_travel = scn.max_travel_factor * p.length_m;
+  pipeline::ClosedLoopVehicle veh;
+  pipeline::RouteAutopilot ap;
+  if (Status s = pipeline::start_closed_loop(Span<const Pose2>(track.data(), track.size()), Span<const std::uint32_t>(node_at.data(), node_at.size()),
+                                             truth_poly, scn, pipeline::Guide::kQnav, p.guidance_age_s, p.speed_mps, 0, veh, ap);
+      !s) {
+    error = std::string("closed loop: ") + s.message();
+    return false;
+  }
+  sidescan::Seabed bed;
+  sidescan::SideScanSimulator sim;
+  if (Status s = bed.init(sim_dive_seabed(p.length_m, static_cast<std::uint64_t>(p.seed))); !s || !(s = sim.init(sim_dive_sonar(p.samples, p.range_m, static_cast<std::uint64_t>(p.pass_seed)), &bed))) {
+    error = std::string("closed loop: the simulated dive: ") + s.message();
+    return false;
+  }
+  std::FILE* truth = p.truth_csv.empty() ? nullptr : std::fopen(p.truth_csv.c_str(), "w");
+  if (truth != nullptr) std::fprintf(truth, "ping,time_s,along_m,north_m,east_m,heading_rad,nav_north_m,nav_east_m,nav_heading_rad\n");
+  std::fprintf(log, "hil play: pass %zu %s: closed loop on the guidance read from %s: %zu nodes, taught track of %zu poses\n", pass_index,
+               p.name.c_str(), sc.can_interface.c_str(), meta.size(), track.size());
+  std::fflush(log);
+  hal::CanRxFrame rx;
+  while (v.receive(rx)) {
+  }  // what queued before this pass (the teach's frames)
+  const float altitude = static_cast<float>(sidescan::TrajectoryConfig{}.altitude_m);
+  std::vector<float> port(static_cast<std::size_t>(p.samples)), stbd(static_cast<std::size_t>(p.samples));
+  std::vector<std::uint8_t> buf;
+  std::string ping;
+  Pose2 prev = veh.dr_pose();
+  const std::int64_t period = static_cast<std::int64_t>(1e9 / sc.rate_hz), t0 = hal::monotonic_now_ns();
+  const std::uint64_t stamp0 = static_cast<std::uint64_t>(p.start_s * 1e9);
+  std::uint32_t k = 0;
+  for (; pipeline::closed_loop_step(veh, ap, dt, max_travel); ++k) {
+    sleep_until_ns(t0 + static_cast<std::int64_t>(k) * period);
+    const Pose2 dr = veh.dr_pose(), tr = veh.truth();
+    const std::uint64_t stamp = stamp0 + static_cast<std::uint64_t>(k) * static_cast<std::uint64_t>(period);
+    const double wall = static_cast<double>(hal::realtime_now_ns()) * 1e-9;
+    v.ahrs(attitude_frame(dr.heading_rad));
+    double fwd = 0.0, stb = 0.0;
+    if (k > 0) pipeline::body_velocity_between(prev, dr, dt, fwd, stb);
+    prev = dr;
+    char line[240];
+    const long long t_us = static_cast<long long>(stamp / 1000);
+    const std::size_t n = drivers::dvl::wl_velocity_report(fwd, stb, 0.0, 10.0, t_us, t_us, line, sizeof line);
+    v.dvl(std::string(line, n));
+    (void)sim.ping(tr, altitude, k, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
+    ping.clear();
+    if (append_sim_dive_jsf(ping, k, stamp, p.range_m, altitude, dr, port, stbd, buf)) v.sonar(ping);
+    while (v.receive(rx)) (void)ap.on_frame(rx.frame, veh.t_ns());  // decode errors are counted by the autopilot
+    double along = 0.0, cross = 0.0, hdg = 0.0;
+    pipeline::polyline_offsets(truth_poly, tr.translation(), along, cross, hdg);
+    if (truth != nullptr)
+      std::fprintf(truth, "%u,%.3f,%.3f,%.3f,%.3f,%.5f,%.3f,%.3f,%.5f\n", k, static_cast<double>(stamp) * 1e-9, p.reverse ? p.length_m - along : along,
+                   tr.x_m, tr.y_m, tr.heading_rad, dr.x_m, dr.y_m, dr.heading_rad);
+    ++st.pings;
+    if (played != nullptr) std::fprintf(played, "%zu,%u,%.6f,1,1,1\n", pass_index, k, wall);
+  }
+  if (truth != nullptr) std::fclose(truth);
+  double along = 0.0, cross = 0.0, hdg = 0.0;
+  pipeline::polyline_offsets(truth_poly, veh.truth().translation(), along, cross, hdg);
+  std::fprintf(log, "hil play: pass %zu %s: closed loop flew %u pings, %.0f m; %s %.2f m from the route's end (cross-track %+.2f m); %u fixes steered, %u decode errors\n",
+               pass_index, p.name.c_str(), k, veh.travelled_m(), ap.command().mode == pipeline::AutopilotMode::kStopped ? "stopped" : "NOT stopped",
+               (veh.truth().translation() - truth_poly.back()).norm(), cross, ap.counters().get(pipeline::AutopilotCounter::kSteerFixes),
+               ap.counters().get(pipeline::AutopilotCounter::kDecodeErrors));
+  return true;
+}
+
 }  // namespace
 
 bool play_hil_scenario(const HilScenario& sc, std::FILE* log, HilPlayStats& st, std::string& error) {
@@ -429,6 +595,16 @@ bool play_hil_scenario(const HilScenario& sc, std::FILE* log, HilPlayStats& st, 
   for (std::size_t i = 0; ok && i < sc.passes.size(); ++i) {
     const HilPass& p = sc.passes[i];
     const HilDive& d = dives[i];
+    if (p.closed_loop) {
+      const hal::CanFrame hover_frame = attitude_frame(p.reverse ? kPi : 0.0);
+      hover(v, &hover_frame, sc.rate_hz, p.lead_s);
+      if (p.send_mode) v.mode(p.mode, p.route, p.reverse);
+      hover(v, &hover_frame, sc.rate_hz, 1.0 / sc.rate_hz);
+      ok = fly_closed_loop(v, sc, p, i, played, log, st, error);
+      if (p.idle_after && !sc.can_interface.empty()) v.mode(qc::Mode::kIdle, p.route, false);
+      hover(v, &hover_frame, sc.rate_hz, p.after_s);
+      continue;
+    }
     std::size_t n = d.pings();
     if (p.pings > 0 && static_cast<std::size_t>(p.pings) < n) n = static_cast<std::size_t>(p.pings);
     std::fprintf(log, "hil play: pass %zu %s: %zu pings at %.1f Hz (%.1f s)%s\n", i, p.name.c_str(), n, sc.rate_hz,

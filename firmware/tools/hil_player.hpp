@@ -45,6 +45,19 @@ struct HilPass {
   bool idle_after = true;  // QNAV_MODE_CMD Idle after the last ping
   double after_s = 2.0;    // hovering after the pass
   std::vector<HilSilence> silences;
+  // A live closed-loop pass (closed_loop = true) plays no recorded dive: the player flies the dive of
+  // `qnav sonar simulate` (seed, length_m, samples, range_m; its own pass_seed) with a
+  // pipeline::ClosedLoopVehicle (the drift and current of `qnav route follow --sim` for `seed`),
+  // starting offset_m to starboard, steered by pipeline::RouteAutopilot on the QNAV_ROUTE_GUIDANCE /
+  // STATUS frames it reads from the CAN interface; each ping rendered from the true pose and sent as
+  // JSF with the vehicle's dead reckoning, the DVL and AHRS from the same. The taught track: the
+  // teach dive's navigation (teach_truth, the CSV of `qnav sonar simulate --truth-csv`) and the
+  // taught route's nodes (route_file, read when the pass starts). truth_csv: the true pose per ping
+  // (the columns of --truth-csv); the pass ends at RouteEnd or after 1.3 x length_m.
+  bool closed_loop = false;
+  long long seed = 1, pass_seed = 2, samples = 512;
+  double length_m = 150.0, speed_mps = 3.0, range_m = 40.0, offset_m = 0.0, start_s = 1700000600.0, guidance_age_s = 0.0;
+  std::string teach_truth, route_file, truth_csv;
 };
 
 struct HilScenario {

@@ -1,8 +1,8 @@
-# demo: qnavd, the flight daemon, flies a mission on the simulated vehicle (teach, repeat forwards and in reverse with lateral offsets, then visual odometry on a rover; modes switched by CAN)
+# demo: qnavd, the flight daemon, flies a mission on the simulated vehicle (teach, repeat forwards and in reverse with lateral offsets, one repeat in closed loop on its own guidance, then visual odometry on a rover; modes switched by CAN)
 set -eu
 out="$OUT/qnavd"
 mkdir -p "$out"
-rm -rf build/demo/routes build/demo/qnavd.candump
+rm -rf build/demo/routes build/demo/qnavd.candump build/demo/qnavd_closed_loop.csv
 # The daemon is configured by one TOML file; check it, and show the static pipeline it gives.
 "$QNAVD" --check-config firmware/qnavd/config/sim.toml
 "$QNAVD" --print-deployment --config firmware/qnavd/config/sim.toml
@@ -17,6 +17,11 @@ echo "qnavd flew the mission in $(awk -v a="$start" -v b="$end" 'BEGIN { printf 
 # qnavd_mission.png (the track in the route's frame, the node estimate coloured by its belief, the
 # cross-track), qnavd_vo.png (the rover's VO track over the true one).
 /usr/bin/python3 scripts/qnavd_report.py "$out/qnavd.jsonl" "$out"
+# Pass 4 flew in closed loop (sim.pass.closed_loop): the vehicle steered on the QNAV_ROUTE_GUIDANCE
+# frames it heard, a twin on dead reckoning alone; the truth cross-track of both, and the plan view.
+grep '"event":"sim_closed_loop"' "$out/qnavd.jsonl"
+/usr/bin/python3 scripts/route_follow_plot.py build/demo/qnavd_closed_loop.csv "$out/qnavd_closed_loop.png"
+echo "closed loop: taught, dead-reckoning-only and qnav-guided tracks in $out/qnavd_closed_loop.png"
 # What the autopilot saw on the bus, decoded with the DBC (the companion ROUTE_STATUS frame carries
 # the guidance status, side and cross-track sigma).
 "$QNAV" route info build/demo/routes/route_1.qroute

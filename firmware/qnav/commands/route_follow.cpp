@@ -127,18 +127,15 @@ int cmd_follow() {
         std::fprintf(csv, "%ld,taught,0,%.2f,%.2f,0,0,0,,0\n", seed, p.x(), p.y());
     }
     // The drift of this seed: the signs alternate with the seed, the current's direction is seeded.
-    pipeline::ClosedLoopScenario sc;
-    sc.reverse = g_f.reverse;
-    sc.start_offset_m = g_f.start_offset_pct / 100.0 * swath;
-    sc.drift.heading_bias_rad = deg_to_rad(g_f.heading_bias_deg) * (seed % 2 ? 1.0 : -1.0);
-    sc.drift.dvl_scale_error = g_f.dvl_scale_pct / 100.0 * ((seed / 2) % 2 ? -1.0 : 1.0);
-    sc.drift.dropout_every_s = g_f.dropout_every_s;
-    sc.drift.seed = static_cast<std::uint64_t>(seed) * 31 + (g_f.reverse ? 17 : 3);
-    const double current_dir = 2.0 * kPi * std::fmod(static_cast<double>(seed) * 0.6180339887498949 + 0.25, 1.0);
-    sc.dynamics.current_ne = g_f.current_mps * Vec2d(std::cos(current_dir), std::sin(current_dir));
+    pipeline::FollowDrift drift;
+    drift.heading_bias_deg = g_f.heading_bias_deg;
+    drift.dvl_scale_pct = g_f.dvl_scale_pct;
+    drift.current_mps = g_f.current_mps;
+    drift.dropout_every_s = g_f.dropout_every_s;
+    pipeline::ClosedLoopScenario sc =
+        pipeline::follow_scenario(static_cast<std::uint64_t>(seed), g_f.reverse, g_f.start_offset_pct / 100.0 * swath, drift);
     sc.autopilot.lookahead_m = g_f.lookahead_m;
     sc.autopilot.follow_track_on_hold = g_f.hold_on_track;
-    sc.pass_seed = pipeline::repeat_pass_seed(static_cast<std::uint64_t>(seed)) + (g_f.reverse ? 1 : 0);
     for (const pipeline::Guide guide : {pipeline::Guide::kQnav, pipeline::Guide::kDeadReckoning}) {
       pipeline::ClosedLoopResult r;
       const auto t1 = std::chrono::steady_clock::now();

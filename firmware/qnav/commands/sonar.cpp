@@ -44,6 +44,7 @@
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/raster_plot.hpp"
+#include "firmware/tools/sim_dive.hpp"
 #include "firmware/tools/sonar_file.hpp"
 #include "hal/core/candump.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
@@ -355,24 +356,10 @@ int simulate() {
     return 2;
   }
   if (!make_out_parent("simulate", out)) return 1;
-  SeabedConfig bc;
-  bc.seed = static_cast<std::uint64_t>(seed);
-  SeabedObject wreck;
-  wreck.north_m = length * 0.3;
-  wreck.east_m = 12.0;
-  wreck.length_m = 14.0f;
-  wreck.width_m = 4.0f;
-  wreck.height_m = 2.5f;
-  wreck.heading_rad = 0.5f;
-  (void)bc.objects.push_back(wreck);
+  const SeabedConfig bc = sim_dive_seabed(length, static_cast<std::uint64_t>(seed));
   Seabed bed;
-  SideScanSimConfig sc;
-  sc.samples_per_side = static_cast<int>(samples);
-  sc.slant_range_m = static_cast<float>(range);
-  // The pass seed drives speckle and navigation noise: two passes over one seabed need their own
-  // (with one seed their vehicle-fixed speckle would register perfectly at any offset).
   if (pass_seed < 0) pass_seed = seed;
-  sc.seed = static_cast<std::uint64_t>(pass_seed) * 7919u;
+  const SideScanSimConfig sc = sim_dive_sonar(samples, range, static_cast<std::uint64_t>(pass_seed));
   SideScanSimulator sim;
   TrajectoryConfig trc;
   (void)trc.waypoints_ne.push_back(Vec2d(0.0, 0.0));
@@ -421,6 +408,8 @@ int simulate() {
   float peak = 0.0f;
   std::vector<float> port(static_cast<std::size_t>(samples)), stbd(static_cast<std::size_t>(samples));
   std::vector<std::vector<float>> first_pings;
+  std::string jsf_bytes;
+  std::vector<std::uint8_t> jsf_buf;
   while (traj.next(ts)) {
     (void)sim.ping(ts.truth, ts.altitude_m, ts.index, Span<float>(port.data(), port.size()), Span<float>(stbd.data(), stbd.size()));
     for (float v : port) peak = v > peak ? v : peak;
@@ -431,23 +420,9 @@ int simulate() {
     }
     if (jsf) {
       // Two message-80 records per ping (port, starboard), positions in mm (coordinate units 1).
-      bool ok = true;
-      for (std::uint8_t ch = 0; ch < 2 && ok; ++ch) {
-        JsfWriteSonar j;
-        j.channel = ch;
-        j.ping_number = ts.index;
-        j.stamp_ns = t0_ns + ts.stamp_ns;
-        j.sample_interval_ns = static_cast<std::uint32_t>(std::lround(2.0 * range / 1500.0 / static_cast<double>(samples) * 1e9));
-        j.altitude_m = ts.altitude_m;
-        j.heading_deg = static_cast<float>(rad_to_deg(ts.nav.heading_rad));
-        j.coordinate_units = 1;
-        j.y_m = ts.nav.x_m;
-        j.x_m = ts.nav.y_m;
-        j.samples = ch == 0 ? Span<const float>(port.data(), port.size()) : Span<const float>(stbd.data(), stbd.size());
-        j.weighting_factor = 2;  // stored x4 (simulator amplitude ~ 0..16000 -> 16-bit)
-        const Result<std::size_t> b = encode_jsf_sonar_message(Span<std::uint8_t>(buf.data(), buf.size()), j);
-        ok = b.is_ok() && std::fwrite(buf.data(), 1, b.value(), f) == b.value();
-      }
+      jsf_bytes.clear();
+      const bool ok = append_sim_dive_jsf(jsf_bytes, ts.index, t0_ns + ts.stamp_ns, range, ts.altitude_m, ts.nav, port, stbd, jsf_buf) &&
+                      std::fwrite(jsf_bytes.data(), 1, jsf_bytes.size(), f) == jsf_bytes.size();
       if (!ok) {
         std::fclose(f);
         std::fprintf(stderr, "qnav sonar simulate: write failed\n");
@@ -481,7 +456,7 @@ int simulate() {
   std::printf("simulated %u pings (%.0f m at %.1f m/s, %.0f Hz, %ld samples/side, %.0f m range, offset %.1f m%s) -> %s; "
               "wreck 14 x 4 x 2.5 m at N %.1f E %.1f (%s)\n",
               n, length, trc.speed_mps, trc.ping_rate_hz, samples, range, offset, trc.reverse ? ", reverse" : "", out,
-              wreck.north_m, wreck.east_m,
+              bc.objects[0].north_m, bc.objects[0].east_m,
               jsf ? "EdgeTech JSF, message 80 per side, positions in mm" : "XTF, metric nav around a false origin N 5000000 E 500000");
   if (const char* truth = g_opt.truth.empty() ? nullptr : g_opt.truth.c_str()) {
     const double res = 0.1;

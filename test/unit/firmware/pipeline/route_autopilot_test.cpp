@@ -212,4 +212,33 @@ TEST(ClosedLoop, PolylineOffsetsAreSignedRightOfTravelAndExtendPastTheEnds) {
   EXPECT_NEAR(h, kPi / 2, 1e-9);
 }
 
+// qnavd's sim vehicle (and any autopilot that logs the teach): the node poses go into the log where
+// the log passed their along-track distance, and node_at points at them.
+TEST(ClosedLoop, TaughtTrackFromLogInsertsEachNodeWhereTheLogPassedIt) {
+  const std::vector<Pose2> log = {Pose2{0, 0, 0}, Pose2{10, 0, 0}, Pose2{20, 0, 0}, Pose2{30, 0, 0}};
+  const std::vector<double> dist = {0.0, 10.0, 20.0, 30.0};
+  std::vector<route::NodeMeta> nodes(3);
+  nodes[0].pose = Pose2{5, 0.5, 0};
+  nodes[0].along_m = 5.0;
+  nodes[1].pose = Pose2{15, 0.5, 0};
+  nodes[1].along_m = 15.0;
+  nodes[2].pose = Pose2{35, 0.5, 0};  // past the log's end: appended
+  nodes[2].along_m = 35.0;
+  std::vector<Pose2> track;
+  std::vector<std::uint32_t> node_at;
+  taught_track_from_log(log, dist, nodes, track, node_at);
+  ASSERT_EQ(track.size(), 7u);
+  ASSERT_EQ(node_at.size(), 3u);
+  EXPECT_EQ(node_at[0], 1u);
+  EXPECT_EQ(node_at[1], 3u);
+  EXPECT_EQ(node_at[2], 6u);
+  for (std::size_t j = 0; j < 3; ++j) EXPECT_DOUBLE_EQ(track[node_at[j]].x_m, nodes[j].pose.x_m);
+  EXPECT_DOUBLE_EQ(track[2].x_m, 10.0);
+  // The result is a track the autopilot takes.
+  RouteAutopilot ap;
+  EXPECT_TRUE(ap.reset(RouteAutopilotConfig{}, Span<const Pose2>(track.data(), track.size()),
+                       Span<const std::uint32_t>(node_at.data(), node_at.size()), 0, Pose2{})
+                  .is_ok());
+}
+
 }  // namespace

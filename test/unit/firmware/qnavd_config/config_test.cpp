@@ -168,6 +168,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(sim_replay_nav),
       QNAV_FIELD(sim_ahrs),
       QNAV_FIELD(sim_candump),
+      QNAV_FIELD(sim_closed_loop_csv),
       QNAV_FIELD(sim_stall),
       QNAV_FIELD(sim_stall_pass),
       QNAV_FIELD(sim_stall_start_s),
@@ -321,6 +322,9 @@ TEST(QnavdConfig, SimExampleLoadsAndFliesTheDocumentedMission) {
     EXPECT_EQ(c.sim_mission[i].reverse, reverse[i]) << i;
   }
   EXPECT_EQ(c.sim_mission[4].length_m, 10.0);
+  EXPECT_TRUE(c.sim_mission[3].closed_loop);  // the demo's closed-loop repeat
+  EXPECT_FALSE(c.sim_mission[1].closed_loop);
+  EXPECT_EQ(c.sim_closed_loop_csv, "build/demo/qnavd_closed_loop.csv");
   EXPECT_TRUE(c.vo_enabled);
   EXPECT_EQ(c.vo_camera, CameraSource::kSim);
   expect_stages_init(c);
@@ -525,6 +529,7 @@ replay_stride = 150
 replay_nav = "dr"
 ahrs = "dronecan"
 candump = "/tmp/qnavd.candump"
+closed_loop_csv = "/tmp/qnavd_closed_loop.csv"
 stall = "dvl"
 stall_pass = 0
 stall_start_s = 30.0
@@ -550,6 +555,7 @@ max_frames = 30
 [[sim.pass]]
 mode = "repeat"
 offset_pct = 100
+closed_loop = true
 )";
 
 TEST(QnavdConfig, EveryKeyReachesItsFields) {
@@ -597,6 +603,7 @@ TEST(QnavdConfig, EveryKeyReachesItsFields) {
   EXPECT_EQ(c.sim_mission[0].dvl_log, "dive.dvl");
   EXPECT_EQ(c.sim_mission[0].images, "dive_stereo");
   EXPECT_EQ(c.sim_mission[0].max_frames, 30);
+  EXPECT_TRUE(c.sim_mission[1].closed_loop);
   EXPECT_EQ(c.vo_preset, VoPreset::kEuroc);
   EXPECT_EQ(c.vo.stereo.max_disparity_px, pipeline::euroc_vo_config(64, 64, 100.0, 10.0, 10.0, 0.1).stereo.max_disparity_px)
       << "the preset's settings that have no key";
@@ -620,6 +627,8 @@ TEST(QnavdConfig, EveryConfigurationTheBoundsAllowInitialisesTheStages) {
     const std::string text = config_text(rows, [high](const Row& r) -> std::string {
       std::string lo, hi;
       if (range_of(r, lo, hi)) return high ? hi : lo;
+      // (sim.pass.closed_loop needs a repeat pass after a teach: its own rows in kBadConfigs, the demo's sim.toml)
+      if (r.key == "sim.pass.closed_loop") return "";
       if (r.type == "boolean") return high ? "true" : "false";
       if (r.type == "string" && r.allowed[0] == '"') {
         const std::vector<std::string> items = list_of(r);
@@ -736,6 +745,10 @@ const BadConfig kBadConfigs[] = {
      "must be one of teach, repeat, hold, vo, map, got \"fly\""},
     {"pass_unknown_key", "[[sim.pass]]\nmode = \"teach\"\noffset = 5\n", "sim.pass[0].offset", 3,
      "a [[sim.pass]] has mode, offset_pct, reverse, length_m, file, first_ping, last_ping, candump, dvl_log, images, max_frames"},
+    {"closed_loop_in_a_teach_pass", "[[sim.pass]]\nmode = \"teach\"\nclosed_loop = true\n", "sim.pass[0].closed_loop", 3,
+     "a closed-loop pass is a simulated repeat"},
+    {"closed_loop_without_a_teach", "[[sim.pass]]\nmode = \"repeat\"\nclosed_loop = true\n", "sim.pass[0].closed_loop", 3,
+     "needs a simulated teach pass before it"},
     {"images_in_a_teach_pass", "[[sim.pass]]\nmode = \"teach\"\nimages = \"seq\"\n", "sim.pass[0].images", 3,
      "a stereo sequence is replayed in a pass with mode = \"vo\""},
     {"logs_with_the_simulated_rover", "[[sim.pass]]\nmode = \"vo\"\ncandump = \"dive.log\"\n", "sim.pass[0].images", 3,

@@ -85,6 +85,14 @@ TEST(HilPlayer, ScenarioErrorsNameTheKeyAndLine) {
   EXPECT_NE(e.find("plays nothing"), std::string::npos) << e;
   e = load_error(d, "[[pass]\n");
   EXPECT_NE(e.find("(line 1)"), std::string::npos) << e;
+  // A closed-loop pass flies live: no recorded dive, and it needs its taught track.
+  e = load_error(d, "[[pass]]\nclosed_loop = true\ndvl = \"a.txt\"\n");
+  EXPECT_NE(e.find("pass[0].closed_loop (line 2): a closed-loop pass flies live"), std::string::npos) << e;
+  e = load_error(d, "[[pass]]\nclosed_loop = true\nteach_truth = \"t.csv\"\n");
+  EXPECT_NE(e.find("needs teach_truth and route_file"), std::string::npos) << e;
+  e = load_error(d, "[[pass]]\nclosed_loop = true\nspeed_mps = 0\n");
+  EXPECT_NE(e.find("speed_mps (line 3): out of range"), std::string::npos) << e;
+  EXPECT_EQ(load_error(d, "[[pass]]\nclosed_loop = true\nteach_truth = \"t.csv\"\nroute_file = \"/tmp/r.qroute\"\n"), "");
 
   // The dive's files are checked before anything is played.
   tools::HilPass p;
