@@ -444,7 +444,7 @@ std::vector<KeySpec> build_key_table() {
       "Send to this UDP endpoint (the autopilot, mavlink-router, a ground station) and read its replies; \"\" = none"));
   t.push_back(int_key(
       "mavlink.udp_listen_port", [](auto& c) -> auto& { return c.mavlink_udp_listen_port; }, 0, 65535, "",
-      "Also serve MAVLink on this UDP port (replies go to the last sender); 0 = none"));
+      "Also serve MAVLink on this UDP port (replies go to the sender of valid frames, kept while it is alive); 0 = none"));
   t.push_back(string_key(
       "mavlink.serial_device", [](auto& c) -> auto& { return c.mavlink_serial_device; }, "device path or \"\"", nullptr,
       "The autopilot's serial port (linux backend, e.g. /dev/ttyAMA0); \"\" = none"));

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "drivers/mavlink/parser.hpp"
+
 namespace qnav::daemon {
 
 Status MavlinkIo::open() noexcept { return open_links(true); }
@@ -19,6 +21,7 @@ Status MavlinkIo::open_links(bool first) noexcept {
     }
   }
   if (cfg_.mavlink_udp_listen_port != 0 && !server_.is_open()) {
+    server_.set_adopt_senders(false);  // judge_server_sender() chooses the peer
     const Status s = server_.open_server(static_cast<std::uint16_t>(cfg_.mavlink_udp_listen_port));
     if (!s) {
       if (first) return s;
@@ -57,6 +60,7 @@ bool MavlinkIo::read_link(hal::SerialPort& port, std::uint8_t link, SpscRing<Mav
     const std::size_t n = r.value().bytes;
     if (n == 0) break;
     did = true;
+    if (&port == &server_) judge_server_sender(n);
     const std::int64_t t = clock_.now_ns();
     for (std::size_t off = 0; off < n;) {
       if (m.len == 0) m.arrival_ns = t;  // an item's time is its first read's
@@ -69,6 +73,20 @@ bool MavlinkIo::read_link(hal::SerialPort& port, std::uint8_t link, SpscRing<Mav
   }
   flush();
   return did;
+}
+
+void MavlinkIo::judge_server_sender(std::size_t bytes) noexcept {
+  drivers::mavlink::Parser check;  // a datagram holds whole frames: judged on its own
+  bool valid = false;
+  check.feed(Span<const std::uint8_t>(buf_, bytes), [&](const drivers::mavlink::Frame&) { valid = true; });
+  if (!valid) return;
+  const std::int64_t now = clock_.now_ns();
+  if (server_.last_sender_is_peer()) {
+    peer_valid_ns_ = now;
+  } else if (!server_.has_peer() || now - peer_valid_ns_ > kPeerSilenceNs) {
+    server_.adopt_last_sender();
+    peer_valid_ns_ = now;
+  }
 }
 
 bool MavlinkIo::poll(SpscRing<MavBytes>& rx, IoCounters& io) noexcept {

@@ -7,6 +7,10 @@
 //    item and counts mav_rx_overflow.
 //  - send(item, io): writes one encoded frame to every open link (a UDP server only once a peer has
 //    been heard); a failed write is counted (mav_tx_errors), never retried.
+//  - The UDP server's peer (where qnavd's frames go) is a sender whose datagram held a valid MAVLink
+//    frame (CRC and length checked by a drivers/mavlink Parser here); it stays the peer while it sends
+//    valid frames, and another sender takes over only after kPeerSilenceNs without one. Junk, foreign
+//    floods and a second station cannot divert the outputs from a live ground station.
 //  - A link that fails to open or read is counted (mav_device_errors) and reopened once a second.
 // Memory: the ports and a 2 KiB read buffer, no heap after open. Time: at most kMaxReadsPerPoll
 // reads per link per poll. Runs on the io thread only (both backends).
@@ -27,6 +31,7 @@ namespace qnav::daemon {
 class MavlinkIo {
  public:
   static constexpr int kMaxReadsPerPoll = 8;
+  static constexpr std::int64_t kPeerSilenceNs = 3000000000;  // three missed 1 Hz HEARTBEATs
   MavlinkIo(const DaemonConfig& c, const hal::Clock& clock, FILE* log) noexcept : cfg_(c), clock_(clock), log_(log) {}
   // Opens the configured links; a UDP endpoint that does not parse is an error (the configuration
   // checked its form), a serial device that is absent is retried.
@@ -42,6 +47,7 @@ class MavlinkIo {
  private:
   Status open_links(bool first) noexcept;
   bool read_link(hal::SerialPort& port, std::uint8_t link, SpscRing<MavBytes>& rx, IoCounters& io, bool& failed) noexcept;
+  void judge_server_sender(std::size_t bytes) noexcept;
 
   const DaemonConfig& cfg_;
   const hal::Clock& clock_;
@@ -49,6 +55,7 @@ class MavlinkIo {
   hal::UdpPort client_, server_;
   hal::TermiosSerialPort serial_;
   std::int64_t next_retry_ns_ = 0;
+  std::int64_t peer_valid_ns_ = 0;  // the server peer's last valid frame (sample clock)
   std::uint8_t buf_[2048] = {};
 };
 

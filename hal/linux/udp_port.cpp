@@ -45,6 +45,7 @@ void UdpPort::close() noexcept {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
   has_peer_ = false;
+  has_last_ = false;
 }
 
 Status UdpPort::open_socket(const char* bind_ipv4, std::uint16_t bind_port) noexcept {
@@ -137,9 +138,10 @@ Result<SerialRead> UdpPort::read(Span<std::uint8_t> buf, int timeout_ms) noexcep
       got = buf.size();
     }
     if (!client_) {
-      peer_addr_ = from.sin_addr.s_addr;
-      peer_port_ = from.sin_port;
-      has_peer_ = true;
+      last_addr_ = from.sin_addr.s_addr;
+      last_port_ = from.sin_port;
+      has_last_ = true;
+      if (adopt_senders_) adopt_last_sender();
     }
     r.arrival_ns = monotonic_now_ns();
     r.bytes = got;

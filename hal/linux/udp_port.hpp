@@ -5,7 +5,10 @@
 //    delivers only that endpoint's datagrams (any other that slips through is dropped and counted in
 //    UdpStats::rx_foreign) and reports "port unreachable".
 //  - open_server(port, bind_ipv4): listens on a port (all interfaces by default); receives from
-//    anyone and replies to the last sender; write() before the first datagram is kNotReady.
+//    anyone and replies to the last sender; write() before the first datagram is kNotReady. With
+//    set_adopt_senders(false) a sender becomes the peer only when the caller says so
+//    (adopt_last_sender(): e.g. once its datagram held a valid frame), so a flood of junk from
+//    another address cannot take the replies away from the peer.
 //  - read(buf, timeout_ms): waits at most timeout_ms (0 = poll) for a datagram, returns one datagram
 //    (0 bytes on timeout); a datagram longer than buf is cut and counted in rx_truncated.
 //  - write(data): one datagram, non-blocking: a full socket buffer returns 0 bytes (tx_short); an
@@ -50,6 +53,14 @@ class UdpPort final : public SerialPort {
   std::uint16_t local_port() const noexcept;
   // Server: a sender has been seen (write() has somewhere to go). Client: always true when open.
   bool has_peer() const noexcept { return has_peer_; }
+  // Server: whether read() makes each datagram's sender the peer (default true).
+  void set_adopt_senders(bool adopt) noexcept { adopt_senders_ = adopt; }
+  // Server: the sender of the last datagram read is the peer (already, or from now on).
+  bool last_sender_is_peer() const noexcept { return has_peer_ && last_addr_ == peer_addr_ && last_port_ == peer_port_; }
+  void adopt_last_sender() noexcept {
+    if (client_ || !has_last_) return;
+    peer_addr_ = last_addr_, peer_port_ = last_port_, has_peer_ = true;
+  }
 
   Result<SerialRead> read(Span<std::uint8_t> buf, int timeout_ms) noexcept override;
   Result<std::size_t> write(Span<const std::uint8_t> data) noexcept override;
@@ -61,6 +72,10 @@ class UdpPort final : public SerialPort {
   int fd_ = -1;
   bool client_ = false;
   bool has_peer_ = false;
+  bool adopt_senders_ = true;
+  bool has_last_ = false;
+  std::uint32_t last_addr_ = 0;  // the last datagram's sender (server), network byte order
+  std::uint16_t last_port_ = 0;
   std::uint32_t peer_addr_ = 0;  // network byte order
   std::uint16_t peer_port_ = 0;  // network byte order
   SerialStats stats_;

@@ -604,11 +604,16 @@ TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
   IoCounters counters;
   hal::UdpPort gcs;
   ASSERT_TRUE(gcs.open_client("127.0.0.1", port));
-  const std::uint8_t hello[] = {0xFD, 0x09, 0x00, 0x00, 0x00, 0xFF, 0xBE, 0x00, 0x00, 0x00};
+  // A ground station's HEARTBEAT (system 255): a valid frame, so its sender becomes the server's peer.
+  std::uint8_t frame[64];
+  mav::FrameEncoder gcs_enc(255, 190);
+  const Result<std::size_t> hn = mav::encode(gcs_enc, mav::Heartbeat{}, Span<std::uint8_t>(frame, sizeof frame));
+  ASSERT_TRUE(hn);
+  const std::vector<std::uint8_t> hello(frame, frame + hn.value());
   // A poll packs its reads (at most kMaxReadsPerPoll datagrams) into one item: three polls' worth of
   // datagrams, a queue of 2 items.
   constexpr int kDatagrams = 3 * MavlinkIo::kMaxReadsPerPoll;
-  for (int i = 0; i < kDatagrams; ++i) ASSERT_TRUE(gcs.write(Span<const std::uint8_t>(hello, sizeof hello)));
+  for (int i = 0; i < kDatagrams; ++i) ASSERT_TRUE(gcs.write(Span<const std::uint8_t>(hello.data(), hello.size())));
   std::this_thread::sleep_for(std::chrono::milliseconds(20));  // all in the socket's buffer
   bool got = false;
   for (int i = 0; i < 200 && !got; ++i) {
@@ -623,8 +628,8 @@ TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
   MavBytes m;
   ASSERT_TRUE(rx.try_pop(m));
   EXPECT_EQ(m.link, 1) << "the server link";
-  ASSERT_EQ(m.len, MavlinkIo::kMaxReadsPerPoll * sizeof hello) << "one poll's datagrams back to back in one item";
-  for (int k = 0; k < MavlinkIo::kMaxReadsPerPoll; ++k) EXPECT_EQ(std::memcmp(m.data + k * sizeof hello, hello, sizeof hello), 0);
+  ASSERT_EQ(m.len, MavlinkIo::kMaxReadsPerPoll * hello.size()) << "one poll's datagrams back to back in one item";
+  for (int k = 0; k < MavlinkIo::kMaxReadsPerPoll; ++k) EXPECT_EQ(std::memcmp(m.data + k * hello.size(), hello.data(), hello.size()), 0);
   EXPECT_EQ(counters.mav_rx_overflow.load(), 1u) << "a queue of 2 held two of the three polls' items";
   // The answer goes to the ground station (the server's last sender).
   MavBytes out;
@@ -636,6 +641,71 @@ TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
   Result<hal::SerialRead> r = gcs.read(Span<std::uint8_t>(back, sizeof back), 1000);
   ASSERT_TRUE(r);
   EXPECT_EQ(r.value().bytes, 4u);
+}
+
+// The server's peer is a sender of valid frames, and it stays the peer while it is alive: junk from
+// another address, even a stream of it, does not take qnavd's frames away from the ground station.
+TEST(QnavdMavlinkIo, AFloodOfJunkDoesNotTakeTheServersRepliesFromTheGroundStation) {
+  hal::UdpPort probe;
+  ASSERT_TRUE(probe.open_server(0, "127.0.0.1"));
+  const std::uint16_t port = probe.local_port();
+  probe.close();
+  DaemonConfig c;
+  c.mavlink_enabled = true;
+  c.mavlink_udp_listen_port = port;
+  hal::MonotonicClock clock;
+  MavlinkIo io_links(c, clock, nullptr);
+  ASSERT_TRUE(io_links.open());
+  std::vector<MavBytes> items(64);
+  SpscRing<MavBytes> rx;
+  ASSERT_TRUE(rx.init(Span<MavBytes>(items.data(), items.size())));
+  IoCounters counters;
+  const auto drain = [&] {
+    for (int i = 0; i < 50; ++i) {
+      (void)io_links.poll(rx, counters);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    MavBytes m;
+    while (rx.try_pop(m)) {
+    }
+  };
+  hal::UdpPort gcs, flooder;
+  ASSERT_TRUE(gcs.open_client("127.0.0.1", port));
+  ASSERT_TRUE(flooder.open_client("127.0.0.1", port));
+  const std::uint8_t junk[] = {0xFD, 0x09, 0x00, 0x00, 0x00, 0xFF, 0xBE, 0x00, 0x00, 0x00, 0x55, 0x66};
+  // Junk first: no valid frame, no peer, nothing sent anywhere.
+  ASSERT_TRUE(flooder.write(Span<const std::uint8_t>(junk, sizeof junk)));
+  drain();
+  MavBytes out;
+  out.len = 4;
+  out.data[0] = 0xFD;
+  io_links.send(out, counters);
+  std::uint8_t back[64];
+  Result<hal::SerialRead> r = flooder.read(Span<std::uint8_t>(back, sizeof back), 100);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r.value().bytes, 0u) << "junk made its sender the peer";
+  // The ground station's HEARTBEAT makes it the peer; the flood after it does not move the replies.
+  std::uint8_t frame[64];
+  mav::FrameEncoder gcs_enc(255, 190);
+  const Result<std::size_t> hn = mav::encode(gcs_enc, mav::Heartbeat{}, Span<std::uint8_t>(frame, sizeof frame));
+  ASSERT_TRUE(hn);
+  ASSERT_TRUE(gcs.write(Span<const std::uint8_t>(frame, hn.value())));
+  drain();
+  for (int i = 0; i < 40; ++i) ASSERT_TRUE(flooder.write(Span<const std::uint8_t>(junk, sizeof junk)));
+  // A valid frame from the flooder too: the live ground station keeps the replies (another sender
+  // takes over only after kPeerSilenceNs of silence).
+  mav::FrameEncoder other(77, 1);
+  const Result<std::size_t> on = mav::encode(other, mav::Heartbeat{}, Span<std::uint8_t>(frame, sizeof frame));
+  ASSERT_TRUE(on);
+  ASSERT_TRUE(flooder.write(Span<const std::uint8_t>(frame, on.value())));
+  drain();
+  io_links.send(out, counters);
+  r = gcs.read(Span<std::uint8_t>(back, sizeof back), 1000);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r.value().bytes, 4u) << "the ground station lost qnavd's frames to the flood";
+  r = flooder.read(Span<std::uint8_t>(back, sizeof back), 100);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r.value().bytes, 0u);
 }
 
 }  // namespace
