@@ -35,7 +35,7 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   if ((map_runs(cfg_) || cfg_.vo_enabled) && (!q.frames || !q.free_frames || !q.frame_pool))
     return Status(StatusCode::kInvalidArgument, "nav worker: frame queues missing");
   tx_bus_ = std::make_unique<QueueCanBus>(q.can_tx);
-  QNAV_RETURN_IF_ERROR(source_.init(q.mav_rx, q.mav_tx));
+  QNAV_RETURN_IF_ERROR(source_.init(q.mav_rx, q.mav_tx, mem));
   publisher_ = std::make_unique<qc::QnavCanPublisher>(*tx_bus_);
   Result<Arena*> a = tiles_arena_.take(mem, "tile_pipeline", pipeline::RouteTilePipeline::arena_bytes(cfg_.tiles));
   if (!a) return a.status();
@@ -210,7 +210,10 @@ ModeReject NavWorker::enter_mode(const qc::ModeCmd& cmd, std::uint16_t id) noexc
   ModeReject why = ModeReject::kNone;
   if (cmd.mode == qc::Mode::kTeach) why = teach_.enter(id, spacing_m_, swath_m_);
   if (cmd.mode == qc::Mode::kRepeat) why = repeat_.enter(id, cmd.reverse);
-  if (cmd.mode == qc::Mode::kMap) why = map_.enter(id);
+  if (cmd.mode == qc::Mode::kMap) {
+    why = map_.enter(id);
+    source_.map_start();
+  }
   if (cmd.mode == qc::Mode::kVo) vo_.reset(clock_.now_ns);
   if (why == ModeReject::kNone) {
     const bool uses_route = cmd.mode == qc::Mode::kTeach || cmd.mode == qc::Mode::kRepeat || cmd.mode == qc::Mode::kMap;
@@ -348,6 +351,7 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
     if (!QNAVD_CHECK(f.width == cfg_.map_width && f.height == cfg_.map_height, "downward frame of another size than map.width x map.height"))
       return;
     map_.on_frame(f, frame_slot(f.slot));
+    if (source_.enabled() && map_.step().observed) source_.map_step(map_.step().place, inputs_.dr());
     stage_time(Stage::kMap, t0);
     map_.log_frame(f, static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6);
     return;

@@ -40,6 +40,7 @@ class MapComponent {
   bool camera_lost(std::int64_t now_ns) const noexcept;
 
   const pipeline::TopoMapper& mapper() const noexcept { return mapper_; }
+  const pipeline::MapperStep& step() const noexcept { return step_; }  // the last frame's
   std::uint32_t frames() const noexcept { return frames_; }
   std::uint32_t bad_frames() const noexcept { return bad_frames_; }
   std::uint32_t saves() const noexcept { return saves_; }

@@ -1,16 +1,51 @@
 #include "firmware/qnavd/components/nav_source.hpp"
 
+#include <limits>
+#include <new>
+
 namespace qnav::daemon {
 
 namespace qc = drivers::qnavcan;
 
-Status NavSource::init(SpscRing<MavBytes>* rx, SpscRing<MavBytes>* tx) {
+Status NavSource::init(SpscRing<MavBytes>* rx, SpscRing<MavBytes>* tx, StaticMemory* mem) {
   if (!ctx_.cfg->mavlink_enabled) return Status::ok();
   if (!rx || !tx) return Status(StatusCode::kInvalidArgument, "nav worker: mavlink queues missing");
   rx_ = rx;
   tx_ = tx;
   mav_ = std::make_unique<MavlinkEndpoint>(*ctx_.cfg, ctx_.log);
+  if (map_runs(*ctx_.cfg)) {
+    const std::size_t n = ctx_.cfg->map_max_nodes;
+    if (mem != nullptr) {
+      Result<Span<Vec2d>> r = mem->take_array<Vec2d>("map_fixes", n);
+      if (!r) return r.status();
+      map_fixes_ = r.value();
+    } else {
+      own_map_fixes_.reset(new (std::nothrow) Vec2d[n]);
+      if (!own_map_fixes_) return Status(StatusCode::kCapacityExceeded, "nav worker: cannot allocate the map fixes");
+      map_fixes_ = Span<Vec2d>(own_map_fixes_.get(), n);
+    }
+    map_start();
+  }
   return Status::ok();
+}
+
+void NavSource::map_start() noexcept {
+  for (Vec2d& p : map_fixes_) p = Vec2d::Constant(std::numeric_limits<double>::quiet_NaN());
+}
+
+void NavSource::map_step(const topo::ObserveResult& place, const pipeline::DeadReckoner& dr) noexcept {
+  if (place.node == topo::kNoNode || place.node >= map_fixes_.size()) return;
+  Vec2d& kept = map_fixes_[place.node];
+  const Pose2 dr_now = dr.pose_at(ctx_.clock->now_ns);
+  est_.track(dr_now);  // the estimate up to this frame's instant
+  if (place.kind == topo::ObserveKind::kCreated) {
+    kept = Vec2d(est_.north_m(), est_.east_m());
+    return;
+  }
+  if (place.kind != topo::ObserveKind::kMatched || !place.revisit || !kept.allFinite()) return;
+  est_.apply_fix(kept.x(), kept.y());
+  est_.rebase();
+  est_.track(dr_now);
 }
 
 void NavSource::route_fix(const pipeline::RouteTile& t, const route::LocaliserStep& step, const route::NodeMeta* node, bool reverse,
