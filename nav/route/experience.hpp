@@ -21,7 +21,7 @@
 //        48 max_keypoints x { f32 x_m, f32 y_m, f32 score, i8[64] descriptor } (unused slots zero)
 //        last 4 bytes: u32 crc32 of everything before it.
 //    The binding (route_header_crc = CRC-32 of the route header as this code encodes it,
-//    route_node0_crc = CRC-32 of node 0's record as encoded) ties the companion to one teach: a route
+//    route_node0_crc = node 0's record CRC as encoded) ties the companion to one teach: a route
 //    taught again (same parameters, other nodes) does not take the old route's experiences.
 //    Records are only appended: a later record for the same (node, slot) replaces the earlier one.
 //  - ExperienceIndex: per node, up to max_per_node slots (record number, pass id, direction, offset);
@@ -107,7 +107,7 @@ inline Status route_binding(const RouteParams& params, const RouteNode& node0, S
   RouteNode n0 = node0;
   n0.meta.index = 0;
   QNAV_RETURN_IF_ERROR(encode_node(params, n0, scratch));
-  node0_crc = crc32(scratch.data(), record_bytes(params.max_keypoints));
+  node0_crc = load_le_u32(scratch.data() + record_bytes(params.max_keypoints) - 4);  // the record's own CRC
   return Status::ok();
 }
 
