@@ -1,0 +1,256 @@
+// qnav route: experiences (issue 29): `route repeat --learn` / `--no-experiences`, the experience
+// listing of `route info`, and `route eval --multi-pass` (learn reverse passes at 30 % and 40 % of the
+// swath, then repeat in reverse at 55-65 %: node +/-1 with and without learning; poisoning passes).
+#include "firmware/qnav/commands/route/route_cmd.hpp"
+
+#include <unistd.h>
+
+namespace route_cmd {
+
+void configure_experiences(route::LocaliserConfig& lc) {
+  if (!g_opt.no_experiences) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
+}
+
+bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& reader, const std::vector<route::NodeMeta>& meta,
+                             pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse) {
+  if (g_opt.no_experiences) return true;
+  const auto per_node = static_cast<std::uint16_t>(g_opt.max_experiences);
+  Status s = exps.init(meta.size(), per_node, route::ExperienceLearnConfig{});
+  drivers::route_store::ExperienceOpenReport r;
+  if (s) s = exps.open(route_path, reader.params(), reader, g_opt.learn, &r);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s%s: %s\n", route_path, ".exp", s.message());
+    if (g_opt.learn) return false;
+    std::fprintf(stderr, "qnav route repeat: WARNING: repeating without experiences\n");
+    return true;
+  }
+  if (!exps.has_experiences()) return true;
+  if (r.moved_stale) std::fprintf(stderr, "qnav route repeat: %s belonged to an earlier teach of this route: kept as %s.stale\n", exps.path(), exps.path());
+  if (r.created) std::fprintf(stderr, "qnav route repeat: %s created (up to %u experiences per node)\n", exps.path(), per_node);
+  if (r.torn_bytes > 0)
+    std::fprintf(stderr, "qnav route repeat: WARNING: %s: torn tail: %llu bytes after record %u (a partial experience, %s)\n", exps.path(),
+                 static_cast<unsigned long long>(r.torn_bytes), r.records, g_opt.learn ? "cut" : "ignored");
+  if (r.damaged > 0)
+    std::fprintf(stderr, "qnav route repeat: WARNING: %s: %u damaged experience records skipped (the first: record %u)\n", exps.path(), r.damaged,
+                 r.first_damaged);
+  std::fprintf(stderr, "qnav route repeat: %u experiences of %zu nodes from %s%s\n", r.live, meta.size(), exps.path(),
+               g_opt.learn ? "; learning this pass" : "");
+  s = rep.attach_experiences(exps.index(), exps.source());
+  if (s) s = exps.begin_pass(Span<const route::NodeMeta>(meta.data(), meta.size()), rep.localiser().node_spacing_m(), reverse);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: experiences: %s\n", s.message());
+    return false;
+  }
+  return true;
+}
+
+void report_learned(FILE* f, const pipeline::RouteExperiences& exps) {
+  if (!exps.learning()) return;
+  const auto& c = exps.learner().counters();
+  std::string why;
+  for (std::size_t i = 1; i < c.size(); ++i)
+    if (c.count_at(i) > 0) why += std::string(why.empty() ? "" : " ") + c.name_at(i) + "=" + std::to_string(c.count_at(i));
+  std::fprintf(f, "learned %u experiences (pass %u) into %s; tiles not learned: %s\n", exps.learned(), exps.pass_id() - 1, exps.path(),
+               why.empty() ? "none" : why.c_str());
+}
+
+bool print_route_experiences(const char* route_path, tools::RouteFileReader& reader) {
+  char path[drivers::route_store::kExperiencePathBytes];
+  if (!drivers::route_store::experience_path(route_path, path) || access(path, F_OK) != 0) {
+    std::printf("experiences: none (no %s.exp)\n", route_path);
+    return true;
+  }
+  pipeline::RouteExperiences exps(hal::host_file_store());
+  drivers::route_store::ExperienceOpenReport r;
+  Status s = exps.init(reader.node_count(), route::kMaxExperiencesPerNode, route::ExperienceLearnConfig{});
+  if (s) s = exps.open(route_path, reader.params(), reader, false, &r);
+  if (!s) {
+    std::printf("experiences: %s: %s\n", path, s.message());
+    return false;
+  }
+  const auto& f = exps.file();
+  std::printf("experiences: %s: format %u, <= %u per node, %u records, %u live", path, f.header().version, f.header().max_per_node, r.records,
+              r.live);
+  if (r.torn_bytes > 0) std::printf(", torn tail %llu bytes after record %u (ignored)", static_cast<unsigned long long>(r.torn_bytes), r.records);
+  if (r.damaged > 0) std::printf(", %u DAMAGED records skipped (the first: record %u)", r.damaged, r.first_damaged);
+  std::printf("\n");
+  const route::ExperienceIndex& ix = *exps.index();
+  for (std::uint32_t n = 0; n < ix.node_count(); ++n) {
+    std::string line;
+    int count = 0;
+    for (const route::ExperienceSlot& e : ix.slots(n)) {
+      if (e.record == route::kNoExperience) continue;
+      route::ExperienceMeta m;
+      if (!exps.source()) continue;
+      char buf[160];
+      if (const_cast<drivers::route_store::ExperienceFile&>(f).load_meta(e.record, m))
+        std::snprintf(buf, sizeof buf, " [pass %u %s offset %+.1f m, %u inliers, %u keypoints, record %u]", m.pass_id, m.reverse ? "reverse" : "forward",
+                      static_cast<double>(m.offset_m), m.inliers, m.keypoint_count, m.record);
+      else
+        std::snprintf(buf, sizeof buf, " [record %u unreadable]", e.record);
+      line += buf;
+      ++count;
+    }
+    if (count > 0) std::printf("  node %u: %d%s\n", n, count, line.c_str());
+  }
+  return r.damaged == 0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// route eval --multi-pass
+namespace {
+
+struct MpPass {
+  int scored = 0, within1 = 0, learned = 0, registered = 0;
+};
+
+// One pass through a repeater (experiences optional, learning optional), scored from kWarmupTiles on.
+Status run_pass(const route::RouteParams& params, const std::vector<route::NodeMeta>& meta, route::NodeSource& nodes, const char* route_path,
+                const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along, bool reverse, bool use_exp, bool learn,
+                MpPass& out, route::RouteDirection told) {
+  out = MpPass{};
+  route::LocaliserConfig lc = pipeline::default_localiser_config(told, meta.size() + 8);
+  if (use_exp) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
+  auto rep = std::make_unique<pipeline::RouteRepeater>();
+  QNAV_RETURN_IF_ERROR(rep->init(lc));
+  QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), nodes));
+  pipeline::RouteExperiences exps(hal::host_file_store());
+  if (use_exp) {
+    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), route::ExperienceLearnConfig{}));
+    QNAV_RETURN_IF_ERROR(exps.open(route_path, params, nodes, learn));
+    if (exps.has_experiences()) {
+      QNAV_RETURN_IF_ERROR(rep->attach_experiences(exps.index(), exps.source()));
+      QNAV_RETURN_IF_ERROR(exps.begin_pass(Span<const route::NodeMeta>(meta.data(), meta.size()), rep->localiser().node_spacing_m(),
+                                           told == route::RouteDirection::kReverse));
+    }
+  }
+  (void)reverse;
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    route::LocaliserStep st;
+    const double d = k == 0 ? 0.0 : tiles[k].nav_step_m;
+    QNAV_RETURN_IF_ERROR(rep->step(tiles[k].node, d, st));
+    if (use_exp) QNAV_RETURN_IF_ERROR(exps.on_step(tiles[k].node, d, st));
+    if (static_cast<int>(k) >= kWarmupTiles) {
+      ++out.scored;
+      out.within1 += std::abs(static_cast<int>(st.estimate) - true_node(node_along, tiles[k].truth_along_m)) <= 1;
+      out.registered += st.registration.ok && st.registration.inliers > 5;
+    }
+  }
+  exps.end_pass();
+  out.learned = static_cast<int>(exps.learned());
+  return Status::ok();
+}
+
+double pct(int a, int b) { return b > 0 ? 100.0 * a / b : 0.0; }
+
+}  // namespace
+
+int cmd_eval_multi_pass() {
+  const double length_m = g_opt.length_m;
+  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
+  const std::string out_dir = g_opt.eval_out;
+  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+    std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
+    return 1;
+  }
+  FILE* log = g_opt.json ? stderr : stdout;
+  const std::vector<int> learn_pcts{30, 40};
+  const std::vector<int> test_pcts = g_opt.quick ? std::vector<int>{60} : std::vector<int>{55, 60, 65};
+  pipeline::RouteTilePipeline pipe;
+  Status s = pipe.init(pipeline::default_route_tile_config());
+  const auto t_all = Clock::now();
+  int tot_scored = 0, tot_before = 0, tot_after = 0, tot_learned = 0, poison_learned = 0, poison_passes = 0, learn_scored = 0, learn_within = 0;
+  int reg_before = 0, reg_after = 0;
+  std::fprintf(log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
+                    "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
+               g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
+  for (long sb = 1; s && sb <= seabeds; ++sb) {
+    pipeline::SimSurvey w;
+    std::vector<pipeline::RouteTile> train;
+    s = w.init(length_m, static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, w, w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), train);
+    if (!s || train.size() < 2) break;
+    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+    const std::string route_path = out_dir + "/route_multipass_" + std::to_string(sb) + ".qroute";
+    const std::string exp_path = route_path + ".exp";
+    std::remove(exp_path.c_str());  // a fresh experiment
+    tools::RouteFileWriter writer;
+    if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
+    for (const pipeline::RouteTile& t : train)
+      if (s) s = writer.append(t.node);
+    if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
+    tools::RouteFileReader reader;
+    std::vector<route::NodeMeta> meta;
+    std::uint32_t bad = 0;
+    s = reader.open(route_path.c_str());
+    if (s) s = reader.read_all_meta(meta, &bad);
+    if (!s) break;
+    std::vector<double> node_along;
+    for (const pipeline::RouteTile& t : train) node_along.push_back(t.truth_along_m);
+    const auto rev = route::RouteDirection::kReverse;
+    std::uint64_t seed = 50000 + 1000 * static_cast<std::uint64_t>(sb);
+    // The test passes, flown once, localised without experiences now and with them after learning.
+    std::vector<std::vector<pipeline::RouteTile>> tests(test_pcts.size());
+    std::vector<MpPass> before(test_pcts.size()), after(test_pcts.size());
+    for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+      s = fly(pipe, w, w.pass(test_pcts[i] / 100.0 * w.swath_m, true, ++seed), tests[i]);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, false, before[i], rev);
+    }
+    // Poisoning, before anything is learnt: a pass over another seabed (the wrong route) and a pass
+    // flown forwards while the localiser is told it runs in reverse (its odometry contradicts every
+    // registration), both with --learn.
+    MpPass wrong, forced;
+    std::vector<pipeline::RouteTile> tiles;
+    if (s) {
+      pipeline::SimSurvey other;
+      s = other.init(length_m, 900 + static_cast<std::uint64_t>(sb));
+      if (s) s = fly(pipe, other, other.pass(0.3 * other.swath_m, true, ++seed), tiles);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, wrong, rev);
+    }
+    if (s) s = fly(pipe, w, w.pass(0.3 * w.swath_m, false, ++seed), tiles);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, forced, rev);
+    poison_learned += wrong.learned + forced.learned;
+    poison_passes += 2;
+    // Learning passes.
+    int learned = 0;
+    for (int lp : learn_pcts) {
+      MpPass l;
+      if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, l, rev);
+      learned += l.learned;
+      learn_scored += l.scored;
+      learn_within += l.within1;
+      std::fprintf(log, "  seabed %ld learn reverse %d%%: node +/-1 %5.1f%% (%d tiles), learned %d\n", sb, lp, pct(l.within1, l.scored), l.scored, l.learned);
+    }
+    tot_learned += learned;
+    for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+      s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, true, false, after[i], rev);
+      tot_scored += before[i].scored;
+      tot_before += before[i].within1;
+      tot_after += after[i].within1;
+      reg_before += before[i].registered;
+      reg_after += after[i].registered;
+      std::fprintf(log, "  seabed %ld reverse %d%% (%5.1f m): node +/-1 without %5.1f%%, with experiences %5.1f%% (%d tiles); registered (> 5 inliers) %d -> %d\n", sb,
+                   test_pcts[i], test_pcts[i] / 100.0 * w.swath_m, pct(before[i].within1, before[i].scored), pct(after[i].within1, after[i].scored),
+                   before[i].scored, before[i].registered, after[i].registered);
+    }
+    std::fprintf(log, "  seabed %ld: %zu nodes, %d experiences learnt; poisoning: wrong route learned %d, forced mislocalisation learned %d\n", sb,
+                 train.size(), learned, wrong.learned, forced.learned);
+  }
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval --multi-pass: %s\n", s.message());
+    return 1;
+  }
+  std::fprintf(log, "multi-pass, %ld seabeds: reverse at %s%%: node +/-1 without experiences %.2f%%, after learning 30%% + 40%% %.2f%% (%d tiles); "
+                    "registered %d -> %d; learnt %d experiences; poisoning passes learned %d (of %d passes); %.1f s\n",
+               seabeds, g_opt.quick ? "60" : "55-65", pct(tot_before, tot_scored), pct(tot_after, tot_scored), tot_scored, reg_before, reg_after, tot_learned,
+               poison_learned, poison_passes, ms_since(t_all) / 1000.0);
+  if (g_opt.json)
+    std::printf("{\"seabeds\": %ld, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"registered_without\": %d, "
+                "\"registered_with\": %d, \"learned\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld}\n",
+                seabeds, tot_scored, pct(tot_before, tot_scored), pct(tot_after, tot_scored), reg_before, reg_after, tot_learned,
+                pct(learn_within, learn_scored), poison_learned, g_opt.max_experiences);
+  return 0;
+}
+
+}  // namespace route_cmd
