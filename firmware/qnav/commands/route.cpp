@@ -459,6 +459,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*r, "--learn", g_opt.learn, "append this pass's confidently localised tiles to the route's experiences (FILE.exp)");
   add_flag(*r, "--no-experiences", g_opt.no_experiences, "ignore FILE.exp (register against the taught nodes only)");
   add_number(*r, "--max-experiences", g_opt.max_experiences, "experiences per node (a new FILE.exp is created with it)", "", 1, 8);
+  add_number(*r, "--learn-min-inliers", g_opt.learn_min_inliers, "with --learn: a tile is learnt only when registered with this many inliers", "", 5, 128);
   add_file_pass_options(*r);
   run.on(r, cmd_repeat);
 
@@ -471,6 +472,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*e, "--quick", g_opt.quick, "fewer passes and one seabed (a smoke run)");
   add_flag(*e, "--multi-pass", g_opt.multi_pass, "the experiences experiment: learn reverse passes at 30 and 40 % of the swath, then repeat in reverse at 55-65 %");
   add_number(*e, "--max-experiences", g_opt.max_experiences, "with --multi-pass: experiences per node", "", 1, 8);
+  add_number(*e, "--learn-min-inliers", g_opt.learn_min_inliers, "with --multi-pass: a tile is learnt only when registered with this many inliers", "", 5, 128);
   run.on(e, cmd_eval);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");

@@ -7,6 +7,13 @@
 
 namespace route_cmd {
 
+// The learner's settings (--learn-min-inliers).
+route::ExperienceLearnConfig learn_config() {
+  route::ExperienceLearnConfig c;
+  c.min_inliers = static_cast<std::uint32_t>(g_opt.learn_min_inliers);
+  return c;
+}
+
 void configure_experiences(route::LocaliserConfig& lc) {
   if (!g_opt.no_experiences) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
 }
@@ -15,7 +22,7 @@ bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& rea
                              pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse) {
   if (g_opt.no_experiences) return true;
   const auto per_node = static_cast<std::uint16_t>(g_opt.max_experiences);
-  Status s = exps.init(meta.size(), per_node, route::ExperienceLearnConfig{});
+  Status s = exps.init(meta.size(), per_node, learn_config());
   drivers::route_store::ExperienceOpenReport r;
   if (s) s = exps.open(route_path, reader.params(), reader, g_opt.learn, &r);
   if (!s) {
@@ -116,7 +123,7 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
   QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), nodes));
   pipeline::RouteExperiences exps(hal::host_file_store());
   if (use_exp) {
-    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), route::ExperienceLearnConfig{}));
+    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config()));
     QNAV_RETURN_IF_ERROR(exps.open(route_path, params, nodes, learn));
     if (exps.has_experiences()) {
       QNAV_RETURN_IF_ERROR(rep->attach_experiences(exps.index(), exps.source()));

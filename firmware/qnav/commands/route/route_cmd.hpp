@@ -52,7 +52,7 @@ struct RouteOptions {
   bool sim = false, force = false, reverse = false, json = false, quick = false;
   // Experiences (issue 29, route/experiences.cpp).
   bool learn = false, no_experiences = false, multi_pass = false;
-  long max_experiences = 4;
+  long max_experiences = 4, learn_min_inliers = 8;
 };
 extern RouteOptions g_opt;
 constexpr int kWarmupTiles = 2;  // tiles before scoring (uniform start; the paper's first tile copies eq. 9)
