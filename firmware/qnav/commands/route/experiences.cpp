@@ -150,6 +150,83 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
 
 double pct(int a, int b) { return b > 0 ? 100.0 * a / b : 0.0; }
 
+// A 10,000-node route in memory: the taught block repeated along the track (as `route eval` times it).
+class ReplicatedRoute final : public route::NodeSource {
+ public:
+  ReplicatedRoute(const std::vector<pipeline::RouteTile>* t, std::uint32_t n, double block_m) : t_(t), n_(n), block_m_(block_m) {}
+  std::uint32_t node_count() const noexcept override { return n_; }
+  Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
+    if (i >= n_) return Status(StatusCode::kOutOfRange, "no such node");
+    out = (*t_)[i % t_->size()].node;
+    const double shift = block_m_ * static_cast<double>(i / t_->size());
+    out.meta.index = i;
+    out.meta.pose.x_m += shift;
+    out.meta.along_m += shift;
+    return Status::ok();
+  }
+  route::NodeMeta meta(std::uint32_t i) {
+    route::RouteNode n;
+    load(i, n).ignore();
+    return n.meta;
+  }
+
+ private:
+  const std::vector<pipeline::RouteTile>* t_;
+  std::uint32_t n_;
+  double block_m_;
+};
+
+// Every slot of every node filled: record r = node * per_node + slot -> one of the learnt experiences
+// (the block node's own first, then the others in turn), its node renumbered.
+class FilledExperiences final : public route::NodeSource {
+ public:
+  std::vector<route::RouteNode> learnt;
+  std::vector<std::uint32_t> block_node;  // the learnt experience's node
+  std::uint32_t per_node = 4, nodes = 0, block = 1;
+  std::uint32_t node_count() const noexcept override { return nodes * per_node; }
+  Status load(std::uint32_t r, route::RouteNode& out) noexcept override {
+    if (r >= node_count() || learnt.empty()) return Status(StatusCode::kOutOfRange, "no such record");
+    out = learnt[pick(r)];
+    out.meta.index = r / per_node;
+    return Status::ok();
+  }
+  std::size_t pick(std::uint32_t r) const noexcept {
+    const std::uint32_t node = r / per_node, slot = r % per_node;
+    std::uint32_t seen = 0;
+    for (std::size_t k = 0; k < learnt.size(); ++k)
+      if (block_node[k] == node % block && seen++ == slot) return k;
+    return (static_cast<std::size_t>(node) * per_node + slot) % learnt.size();
+  }
+};
+
+struct UpdateCost {
+  double cpu_mean = 0.0, cpu_max = 0.0;
+  std::uint32_t max_registrations = 0;
+};
+
+Status time_updates(const route::RouteParams& params, ReplicatedRoute& route_nodes, const std::vector<route::NodeMeta>& meta,
+                    FilledExperiences* exp, route::ExperienceIndex* index, const std::vector<pipeline::RouteTile>& tiles, UpdateCost& out) {
+  route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kReverse, meta.size());
+  if (exp != nullptr) pipeline::enable_experiences(lc, exp->per_node);
+  auto rep = std::make_unique<pipeline::RouteRepeater>();
+  QNAV_RETURN_IF_ERROR(rep->init(lc));
+  QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), route_nodes));
+  if (exp != nullptr) QNAV_RETURN_IF_ERROR(rep->attach_experiences(index, exp));
+  out = UpdateCost{};
+  double sum = 0.0;
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    route::LocaliserStep st;
+    const double c0 = cpu_ms();
+    QNAV_RETURN_IF_ERROR(rep->step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, st));
+    const double c = cpu_ms() - c0;
+    sum += c;
+    out.cpu_max = std::max(out.cpu_max, c);
+    out.max_registrations = std::max(out.max_registrations, st.registrations);
+  }
+  out.cpu_mean = tiles.empty() ? 0.0 : sum / static_cast<double>(tiles.size());
+  return Status::ok();
+}
+
 }  // namespace
 
 int cmd_eval_multi_pass() {
@@ -168,6 +245,7 @@ int cmd_eval_multi_pass() {
   const auto t_all = Clock::now();
   int tot_scored = 0, tot_before = 0, tot_after = 0, tot_learned = 0, poison_learned = 0, poison_passes = 0, learn_scored = 0, learn_within = 0;
   int reg_before = 0, reg_after = 0;
+  double cost_with = -1.0, cost_with_max = -1.0, cost_without = -1.0;
   std::fprintf(log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
                     "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
                g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
@@ -243,6 +321,54 @@ int cmd_eval_multi_pass() {
     }
     std::fprintf(log, "  seabed %ld: %zu nodes, %d experiences learnt; poisoning: wrong route learned %d, forced mislocalisation learned %d\n", sb,
                  train.size(), learned, wrong.learned, forced.learned);
+    if (sb == 1 && s && !tests.empty()) {
+      // Cost: a 10,000-node route (the taught block repeated: ambiguous, so every update runs at the
+      // searching budget), every node holding --max-experiences experiences, against the same route
+      // without: thread CPU per update over the 60 % pass's tiles, both from memory.
+      const double block_m = node_along.back() + spacing;
+      ReplicatedRoute big(&train, 10000, block_m);
+      std::vector<route::NodeMeta> bmeta;
+      for (std::uint32_t i = 0; i < 10000; ++i) bmeta.push_back(big.meta(i));
+      auto filled = std::make_unique<FilledExperiences>();
+      filled->per_node = static_cast<std::uint32_t>(g_opt.max_experiences);
+      filled->nodes = 10000;
+      filled->block = static_cast<std::uint32_t>(train.size());
+      {
+        pipeline::RouteExperiences e(hal::host_file_store());
+        s = e.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config());
+        if (s) s = e.open(route_path.c_str(), reader.params(), reader, false);
+        for (std::uint32_t r = 0; s && e.has_experiences() && r < e.file().records(); ++r) {
+          route::RouteNode n;
+          if (!e.source()->load(r, n)) continue;
+          filled->block_node.push_back(n.meta.index);
+          filled->learnt.push_back(n);
+        }
+      }
+      ArenaStorage ia(route::ExperienceIndex::arena_bytes(10000, filled->per_node));
+      route::ExperienceIndex bindex;
+      if (s) s = bindex.init(10000, filled->per_node, ia);
+      if (s) s = bindex.reset(10000);
+      for (std::uint32_t n = 0; s && n < 10000; ++n)
+        for (std::uint16_t k = 0; k < filled->per_node; ++k) {
+          route::ExperienceMeta m;
+          m.record = n * filled->per_node + k;
+          m.node = n;
+          m.slot = k;
+          m.pass_id = 1 + k;
+          s = bindex.set(m);
+        }
+      UpdateCost without, with;
+      const std::vector<pipeline::RouteTile>& tt = tests[tests.size() > 1 ? 1 : 0];
+      if (s && !filled->learnt.empty()) s = time_updates(reader.params(), big, bmeta, nullptr, nullptr, tt, without);
+      if (s && !filled->learnt.empty()) s = time_updates(reader.params(), big, bmeta, filled.get(), &bindex, tt, with);
+      std::fprintf(log, "  cost, 10,000 nodes (memory), %u experiences on every node: update thread CPU mean %.2f ms, max %.2f ms, <= %u registrations; "
+                        "without experiences %.2f ms, max %.2f ms, <= %u registrations (%zu updates each)\n",
+                   filled->per_node, with.cpu_mean, with.cpu_max, with.max_registrations, without.cpu_mean, without.cpu_max, without.max_registrations,
+                   tt.size());
+      cost_with = with.cpu_mean;
+      cost_with_max = with.cpu_max;
+      cost_without = without.cpu_mean;
+    }
   }
   if (!s) {
     std::fprintf(stderr, "qnav route eval --multi-pass: %s\n", s.message());
@@ -254,9 +380,10 @@ int cmd_eval_multi_pass() {
                poison_learned, poison_passes, ms_since(t_all) / 1000.0);
   if (g_opt.json)
     std::printf("{\"seabeds\": %ld, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"registered_without\": %d, "
-                "\"registered_with\": %d, \"learned\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld}\n",
+                "\"registered_with\": %d, \"learned\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld, "
+                "\"update_cpu_ms_10000_nodes_with\": %.2f, \"update_cpu_ms_10000_nodes_with_max\": %.2f, \"update_cpu_ms_10000_nodes_without\": %.2f}\n",
                 seabeds, tot_scored, pct(tot_before, tot_scored), pct(tot_after, tot_scored), reg_before, reg_after, tot_learned,
-                pct(learn_within, learn_scored), poison_learned, g_opt.max_experiences);
+                pct(learn_within, learn_scored), poison_learned, g_opt.max_experiences, cost_with, cost_with_max, cost_without);
   return 0;
 }
 
