@@ -103,6 +103,7 @@ class RouteExperiences {
     if (!learner_.observe(sensed, distance_m, step, index_, *out_)) return Status::ok();
     QNAV_RETURN_IF_ERROR(file_.append(*out_, index_));
     ++learned_;
+    last_node_ = out_->meta.node;
     if (learned != nullptr) *learned = true;
     return Status::ok();
   }
@@ -114,6 +115,8 @@ class RouteExperiences {
     if (file_.is_open() && learn_) file_.close();
   }
   std::uint32_t learned() const noexcept { return learned_; }
+  // The node of the last experience on_step() appended (it was the previous step's tile).
+  std::uint32_t last_learned_node() const noexcept { return last_node_; }
   std::uint32_t pass_id() const noexcept { return next_pass_; }
   const route::ExperienceLearner& learner() const noexcept { return learner_; }
 
@@ -128,7 +131,7 @@ class RouteExperiences {
   char path_[drivers::route_store::kExperiencePathBytes] = {};
   std::uint16_t per_node_ = 0;
   bool has_ = false, learn_ = false, pass_open_ = false;
-  std::uint32_t next_pass_ = 1, learned_ = 0;
+  std::uint32_t next_pass_ = 1, learned_ = 0, last_node_ = 0;
 };
 
 }  // namespace qnav::pipeline

@@ -109,6 +109,7 @@ namespace {
 
 struct MpPass {
   int scored = 0, within1 = 0, learned = 0, registered = 0;
+  int learned_wrong = 0;  // experiences appended to a node more than 1 from the learnt tile's true node
 };
 
 // One pass through a repeater (experiences optional, learning optional), scored from kWarmupTiles on.
@@ -136,7 +137,10 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
     route::LocaliserStep st;
     const double d = k == 0 ? 0.0 : tiles[k].nav_step_m;
     QNAV_RETURN_IF_ERROR(rep->step(tiles[k].node, d, st));
-    if (use_exp) QNAV_RETURN_IF_ERROR(exps.on_step(tiles[k].node, d, st));
+    bool learned = false;
+    if (use_exp) QNAV_RETURN_IF_ERROR(exps.on_step(tiles[k].node, d, st, &learned));
+    if (learned && k > 0)  // the experience is the previous tile's
+      out.learned_wrong += std::abs(static_cast<int>(exps.last_learned_node()) - true_node(node_along, tiles[k - 1].truth_along_m)) > 1;
     if (static_cast<int>(k) >= kWarmupTiles) {
       ++out.scored;
       out.within1 += std::abs(static_cast<int>(st.estimate) - true_node(node_along, tiles[k].truth_along_m)) <= 1;
@@ -244,7 +248,7 @@ int cmd_eval_multi_pass() {
   Status s = pipe.init(pipeline::default_route_tile_config());
   const auto t_all = Clock::now();
   int tot_scored = 0, tot_before = 0, tot_after = 0, tot_learned = 0, poison_learned = 0, poison_passes = 0, learn_scored = 0, learn_within = 0;
-  int reg_before = 0, reg_after = 0;
+  int reg_before = 0, reg_after = 0, tot_learned_wrong = 0;
   double cost_with = -1.0, cost_with_max = -1.0, cost_without = -1.0;
   std::fprintf(log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
                     "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
@@ -297,17 +301,20 @@ int cmd_eval_multi_pass() {
     poison_learned += wrong.learned + forced.learned;
     poison_passes += 2;
     // Learning passes.
-    int learned = 0;
+    int learned = 0, learned_wrong = 0;
     for (int lp : learn_pcts) {
       MpPass l;
       if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
       if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, l, rev);
       learned += l.learned;
+      learned_wrong += l.learned_wrong;
       learn_scored += l.scored;
       learn_within += l.within1;
-      std::fprintf(log, "  seabed %ld learn reverse %d%%: node +/-1 %5.1f%% (%d tiles), learned %d\n", sb, lp, pct(l.within1, l.scored), l.scored, l.learned);
+      std::fprintf(log, "  seabed %ld learn reverse %d%%: node +/-1 %5.1f%% (%d tiles), learned %d (%d on a node > 1 from the truth)\n", sb, lp,
+                   pct(l.within1, l.scored), l.scored, l.learned, l.learned_wrong);
     }
     tot_learned += learned;
+    tot_learned_wrong += learned_wrong;
     for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
       s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, true, false, after[i], rev);
       tot_scored += before[i].scored;
@@ -375,14 +382,14 @@ int cmd_eval_multi_pass() {
     return 1;
   }
   std::fprintf(log, "multi-pass, %ld seabeds: reverse at %s%%: node +/-1 without experiences %.2f%%, after learning 30%% + 40%% %.2f%% (%d tiles); "
-                    "registered %d -> %d; learnt %d experiences; poisoning passes learned %d (of %d passes); %.1f s\n",
+                    "registered %d -> %d; learnt %d experiences (%d on a node > 1 from the truth); poisoning passes learned %d (of %d passes); %.1f s\n",
                seabeds, g_opt.quick ? "60" : "55-65", pct(tot_before, tot_scored), pct(tot_after, tot_scored), tot_scored, reg_before, reg_after, tot_learned,
-               poison_learned, poison_passes, ms_since(t_all) / 1000.0);
+               tot_learned_wrong, poison_learned, poison_passes, ms_since(t_all) / 1000.0);
   if (g_opt.json)
     std::printf("{\"seabeds\": %ld, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"registered_without\": %d, "
-                "\"registered_with\": %d, \"learned\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld, "
+                "\"registered_with\": %d, \"learned\": %d, \"learned_wrong_node\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld, "
                 "\"update_cpu_ms_10000_nodes_with\": %.2f, \"update_cpu_ms_10000_nodes_with_max\": %.2f, \"update_cpu_ms_10000_nodes_without\": %.2f}\n",
-                seabeds, tot_scored, pct(tot_before, tot_scored), pct(tot_after, tot_scored), reg_before, reg_after, tot_learned,
+                seabeds, tot_scored, pct(tot_before, tot_scored), pct(tot_after, tot_scored), reg_before, reg_after, tot_learned, tot_learned_wrong,
                 pct(learn_within, learn_scored), poison_learned, g_opt.max_experiences, cost_with, cost_with_max, cost_without);
   return 0;
 }
