@@ -10,13 +10,14 @@ bool experience_path(const char* route_path, char (&out)[kExperiencePathBytes]) 
   return n > 0 && n < static_cast<int>(sizeof out);
 }
 
-Status route_identity(const route::RouteParams& params, route::NodeSource& nodes, route::RouteNode& scratch, RouteIdentity& out) {
+Status route_identity(const route::RouteParams& params, route::NodeSource& nodes, route::RouteNode& scratch, Span<std::uint8_t> scratch_bytes,
+                      RouteIdentity& out) {
   if (nodes.node_count() == 0) return Status(StatusCode::kInvalidArgument, "route identity: the route has no node");
+  if (scratch_bytes.size() < route::record_bytes(params.max_keypoints)) return Status(StatusCode::kCapacityExceeded, "route identity: scratch too small");
   QNAV_RETURN_IF_ERROR(nodes.load(0, scratch));
-  std::vector<std::uint8_t> buf(route::record_bytes(params.max_keypoints));
   out.params = params;
   out.node_count = nodes.node_count();
-  return route::route_binding(params, scratch, Span<std::uint8_t>(buf.data(), buf.size()), out.header_crc, out.node0_crc);
+  return route::route_binding(params, scratch, scratch_bytes, out.header_crc, out.node0_crc);
 }
 
 ExperienceFile::~ExperienceFile() { close(); }

@@ -43,8 +43,10 @@ struct RouteIdentity {
   std::uint32_t header_crc = 0;  // route::route_binding
   std::uint32_t node0_crc = 0;
 };
-// The binding of a route from its header and node 0 (scratch: a route::RouteNode the caller owns).
-Status route_identity(const route::RouteParams& params, route::NodeSource& nodes, route::RouteNode& scratch, RouteIdentity& out);
+// The binding of a route from its header and node 0. scratch / scratch_bytes (>= the route's record
+// size) are the caller's, so this allocates nothing.
+Status route_identity(const route::RouteParams& params, route::NodeSource& nodes, route::RouteNode& scratch, Span<std::uint8_t> scratch_bytes,
+                      RouteIdentity& out);
 
 struct ExperienceOpenReport {
   bool created = false;        // open_append: there was no companion; a new one was created

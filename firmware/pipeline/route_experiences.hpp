@@ -13,7 +13,8 @@
 //       appends a confirmed experience durably, pwrite + fdatasync, one record ~10 KB)
 //   end_pass() when leaving repeat (drops an unconfirmed candidate, syncs, closes the file).
 // Memory: index max_nodes x per_node x 16 bytes, one pending + one output experience (~10 KB each),
-// one record buffer. Time: open reads every experience record once; on_step O(keypoints) + an append.
+// one record buffer, all from init(): open() and the rest allocate nothing (a daemon opens routes
+// after start-up). Time: open reads every experience record once; on_step O(keypoints) + an append.
 #pragma once
 
 #include <cstddef>
@@ -52,6 +53,7 @@ class RouteExperiences {
     QNAV_RETURN_IF_ERROR(learner_.init(learn, *arena_));
     out_ = std::make_unique<route::Experience>();
     scratch_ = std::make_unique<route::RouteNode>();
+    id_bytes_.assign(route::record_bytes(route::kMaxKeypointsPerNode), 0);
     file_.reserve(route::exp_record_bytes(route::kMaxKeypointsPerNode));
     per_node_ = per_node;
     return Status::ok();
@@ -66,7 +68,7 @@ class RouteExperiences {
     if (!out_) return Status(StatusCode::kNotReady, "route experiences: init() first");
     if (!drivers::route_store::experience_path(route_path, path_)) return Status(StatusCode::kInvalidArgument, "route experiences: path too long");
     QNAV_RETURN_IF_ERROR(index_.reset(route_nodes.node_count()));
-    QNAV_RETURN_IF_ERROR(drivers::route_store::route_identity(params, route_nodes, *scratch_, identity_));
+    QNAV_RETURN_IF_ERROR(drivers::route_store::route_identity(params, route_nodes, *scratch_, Span<std::uint8_t>(id_bytes_.data(), id_bytes_.size()), identity_));
     drivers::route_store::ExperienceOpenReport rep;
     Status s = learn ? file_.open_append(path_, identity_, per_node_, index_, &rep) : file_.open_read(path_, identity_, index_, &rep);
     if (report != nullptr) *report = rep;
@@ -127,6 +129,7 @@ class RouteExperiences {
   route::ExperienceLearner learner_;
   std::unique_ptr<route::Experience> out_;
   std::unique_ptr<route::RouteNode> scratch_;
+  std::vector<std::uint8_t> id_bytes_;
   drivers::route_store::RouteIdentity identity_{};
   char path_[drivers::route_store::kExperiencePathBytes] = {};
   std::uint16_t per_node_ = 0;

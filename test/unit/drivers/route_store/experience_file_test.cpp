@@ -57,7 +57,8 @@ RouteIdentity teach(Store& s, const char* path, std::uint32_t nodes, int stamp) 
   EXPECT_TRUE(r.open(path));
   RouteIdentity id;
   route::RouteNode scratch;
-  EXPECT_TRUE(route_identity(r.params(), r, scratch, id));
+  std::vector<std::uint8_t> bytes(route::record_bytes(8));
+  EXPECT_TRUE(route_identity(r.params(), r, scratch, Span<std::uint8_t>(bytes.data(), bytes.size()), id));
   return id;
 }
 
@@ -217,7 +218,6 @@ TEST(ExperienceFile, ACompanionOfAnotherTeachIsRefusedForRepeatAndMovedAsideForL
   EXPECT_EQ(rep.records, 0u);
   EXPECT_EQ(s->size_of("a.qroute.exp.stale"), route::kExpHeaderBytes + kExpRec) << "nothing learnt is deleted";
   // More experiences per node in the file than configured: refused with a reason.
-  Index small;
   ArenaStorage a1(route::ExperienceIndex::arena_bytes(16, 1));
   route::ExperienceIndex one;
   ASSERT_TRUE(one.init(16, 1, a1));
