@@ -472,6 +472,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*e, "--quick", g_opt.quick, "fewer passes and one seabed (a smoke run)");
   add_flag(*e, "--multi-pass", g_opt.multi_pass, "the experiences experiment: learn reverse passes at 30 and 40 % of the swath, then repeat in reverse at 55-65 %");
   add_number(*e, "--max-experiences", g_opt.max_experiences, "with --multi-pass: experiences per node", "", 1, 8);
+  add_flag(*e, "--changed-seabed", g_opt.changed_seabed, "the seabed changed since the teach (20/40/60 %): repeats at 20 % without, then after learning one repeat");
   add_number(*e, "--learn-min-inliers", g_opt.learn_min_inliers, "with --multi-pass: a tile is learnt only when registered with this many inliers", "", 5, 128);
   run.on(e, cmd_eval);
 

@@ -394,4 +394,103 @@ int cmd_eval_multi_pass() {
   return 0;
 }
 
+// ---------------------------------------------------------------------------------------------------
+// route eval --changed-seabed: the seabed changed between the teach and the repeats (ripples moved,
+// patches of changed reflectivity, rocks gone or new), at several degrees; repeats at 20 % forwards
+// and in reverse, localised without experiences, then again after one forward repeat at 0 % over the
+// changed seabed was learnt.
+int cmd_eval_changed_seabed() {
+  const double length_m = g_opt.length_m;
+  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
+  const std::string out_dir = g_opt.eval_out;
+  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+    std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
+    return 1;
+  }
+  FILE* log = g_opt.json ? stderr : stdout;
+  const std::vector<int> degrees{20, 40, 60};
+  pipeline::RouteTilePipeline pipe;
+  Status s = pipe.init(pipeline::default_route_tile_config());
+  const auto t_all = Clock::now();
+  std::vector<int> scored(degrees.size(), 0), before(degrees.size(), 0), after(degrees.size(), 0), learnt(degrees.size(), 0);
+  std::fprintf(log, "changed seabed: per seabed and degree d: ripples moved by d%% x 2 wavelengths, d%% of 12 m cells with reflectivity +/-0.3, d%% of rock cells "
+                    "flipped (a rock gone or new); repeats at 20%% forwards and reverse without experiences, then after learning one forward repeat at 0%% "
+                    "over the changed seabed\n");
+  for (long sb = 1; s && sb <= seabeds; ++sb) {
+    pipeline::SimSurvey w;
+    std::vector<pipeline::RouteTile> train;
+    s = w.init(length_m, static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, w, w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), train);
+    if (!s || train.size() < 2) break;
+    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+    const std::string route_path = out_dir + "/route_changed_" + std::to_string(sb) + ".qroute";
+    tools::RouteFileWriter writer;
+    if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
+    for (const pipeline::RouteTile& t : train)
+      if (s) s = writer.append(t.node);
+    if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
+    tools::RouteFileReader reader;
+    std::vector<route::NodeMeta> meta;
+    std::uint32_t bad = 0;
+    s = reader.open(route_path.c_str());
+    if (s) s = reader.read_all_meta(meta, &bad);
+    if (!s) break;
+    std::vector<double> node_along;
+    for (const pipeline::RouteTile& t : train) node_along.push_back(t.truth_along_m);
+    std::uint64_t seed = 70000 + 1000 * static_cast<std::uint64_t>(sb);
+    for (std::size_t di = 0; s && di < degrees.size(); ++di) {
+      const float f = static_cast<float>(degrees[di]) / 100.0f;
+      pipeline::SimSurvey changed;
+      s = changed.init(length_m, static_cast<std::uint64_t>(sb));
+      sidescan::SeabedConfig sc = w.seabed.config();
+      sc.change_fraction = f;
+      sc.change_ripple_shift_m = f * 2.0f * sc.ripple_wavelength_m;
+      sc.change_seed = 17 + static_cast<std::uint64_t>(sb);
+      if (s) s = changed.seabed.init(sc);
+      std::remove((route_path + ".exp").c_str());
+      std::vector<std::vector<pipeline::RouteTile>> tests(2);
+      MpPass b[2], a[2], l;
+      for (int r = 0; s && r < 2; ++r) {
+        s = fly(pipe, changed, changed.pass(0.2 * changed.swath_m, r == 1, ++seed), tests[static_cast<std::size_t>(r)]);
+        if (s)
+          s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, r == 1, false, false, b[r],
+                       r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
+      }
+      std::vector<pipeline::RouteTile> tiles;
+      if (s) s = fly(pipe, changed, changed.pass(0.0, false, ++seed), tiles);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, l, route::RouteDirection::kForward);
+      for (int r = 0; s && r < 2; ++r)
+        s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, r == 1, true, false, a[r],
+                     r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
+      if (!s) break;
+      for (int r = 0; r < 2; ++r) {
+        scored[di] += b[r].scored;
+        before[di] += b[r].within1;
+        after[di] += a[r].within1;
+      }
+      learnt[di] += l.learned;
+      std::fprintf(log, "  seabed %ld change %d%%: learnt %d (%d wrong node); 20%% forward node +/-1 %5.1f%% -> %5.1f%%, reverse %5.1f%% -> %5.1f%%; "
+                        "registered %d -> %d, %d -> %d\n",
+                   sb, degrees[di], l.learned, l.learned_wrong, pct(b[0].within1, b[0].scored), pct(a[0].within1, a[0].scored), pct(b[1].within1, b[1].scored),
+                   pct(a[1].within1, a[1].scored), b[0].registered, a[0].registered, b[1].registered, a[1].registered);
+    }
+  }
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval --changed-seabed: %s\n", s.message());
+    return 1;
+  }
+  std::string json = "{\"seabeds\": " + std::to_string(seabeds) + ", \"degrees\": [";
+  for (std::size_t di = 0; di < degrees.size(); ++di) {
+    std::fprintf(log, "changed seabed %d%%, %ld seabeds: node +/-1 without learning %.2f%%, after learning one repeat %.2f%% (%d tiles, %d experiences)\n",
+                 degrees[di], seabeds, pct(before[di], scored[di]), pct(after[di], scored[di]), scored[di], learnt[di]);
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%s{\"change_pct\": %d, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"learned\": %d}",
+                  di ? ", " : "", degrees[di], scored[di], pct(before[di], scored[di]), pct(after[di], scored[di]), learnt[di]);
+    json += buf;
+  }
+  std::fprintf(log, "%.1f s\n", ms_since(t_all) / 1000.0);
+  if (g_opt.json) std::printf("%s]}\n", json.c_str());
+  return 0;
+}
+
 }  // namespace route_cmd

@@ -51,7 +51,7 @@ struct RouteOptions {
   long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
   bool sim = false, force = false, reverse = false, json = false, quick = false;
   // Experiences (issue 29, route/experiences.cpp).
-  bool learn = false, no_experiences = false, multi_pass = false;
+  bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false;
   long max_experiences = 4, learn_min_inliers = 8;
 };
 extern RouteOptions g_opt;
@@ -95,5 +95,6 @@ void report_learned(FILE* f, const pipeline::RouteExperiences& exps);
 // route info: the experiences of every node (ROUTE.exp), if any; false when the companion is damaged.
 bool print_route_experiences(const char* route_path, tools::RouteFileReader& reader);
 int cmd_eval_multi_pass();            // route/experiences.cpp: eval --multi-pass
+int cmd_eval_changed_seabed();        // route/experiences.cpp: eval --changed-seabed
 
 }  // namespace route_cmd
