@@ -28,8 +28,8 @@ cmp -s "$W/a.qroute" "$W/orig.qroute" || fail "learning changed the route file"
 grep -q "experiences: .*a.qroute.exp: format 1, <= 4 per node, $N records, $N live" "$W/info1.txt" || fail "info: $(cat "$W/info1.txt")"
 [ "$(grep -c '^  node [0-9]*: [0-9] \[pass 1 reverse offset' "$W/info1.txt")" -ge 1 ] || fail "info lists no node's experiences"
 
-# 2. The wrong route: a pass over another seabed learns nothing.
-"$Q" route repeat --route "$W/a.qroute" --sim --length-m $LEN --seed 9 --reverse --offset-pct 30 --learn --csv "$W/w.csv" > "$W/w.txt" 2>&1 \
+# 2. The wrong route: a pass over another seabed learns nothing (backfill on: it never has a confirmed fix).
+"$Q" route repeat --route "$W/a.qroute" --sim --length-m $LEN --seed 9 --reverse --offset-pct 30 --learn --backfill --csv "$W/w.csv" > "$W/w.txt" 2>&1 \
   || { cat "$W/w.txt"; fail "repeat --learn (wrong route)"; }
 grep -q "^learned 0 experiences" "$W/w.txt" || fail "the wrong route learned: $(cat "$W/w.txt")"
 [ "$(records)" -eq "$N" ] || fail "the wrong route added records"

@@ -22,7 +22,7 @@ bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& rea
                              pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse) {
   if (g_opt.no_experiences) return true;
   const auto per_node = static_cast<std::uint16_t>(g_opt.max_experiences);
-  Status s = exps.init(meta.size(), per_node, learn_config());
+  Status s = exps.init(meta.size(), per_node, learn_config(), g_opt.backfill ? &rep.config().registration : nullptr);
   drivers::route_store::ExperienceOpenReport r;
   if (s) s = exps.open(route_path, reader.params(), reader, g_opt.learn, &r);
   if (!s) {
@@ -57,8 +57,8 @@ void report_learned(FILE* f, const pipeline::RouteExperiences& exps) {
   std::string why;
   for (std::size_t i = 1; i < c.size(); ++i)
     if (c.count_at(i) > 0) why += std::string(why.empty() ? "" : " ") + c.name_at(i) + "=" + std::to_string(c.count_at(i));
-  std::fprintf(f, "learned %u experiences (pass %u) into %s; tiles not learned: %s\n", exps.learned(), exps.pass_id() - 1, exps.path(),
-               why.empty() ? "none" : why.c_str());
+  std::fprintf(f, "learned %u experiences (pass %u) into %s (%u of them tiles before the pass's first confirmed fix); tiles not learned: %s\n",
+               exps.learned(), exps.pass_id() - 1, exps.path(), exps.backfilled(), why.empty() ? "none" : why.c_str());
 }
 
 bool print_route_experiences(const char* route_path, tools::RouteFileReader& reader) {
@@ -124,7 +124,8 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
   QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), nodes));
   pipeline::RouteExperiences exps(hal::host_file_store());
   if (use_exp) {
-    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config()));
+    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config(),
+                                   g_opt.backfill ? &lc.registration : nullptr));
     QNAV_RETURN_IF_ERROR(exps.open(route_path, params, nodes, learn));
     if (exps.has_experiences()) {
       QNAV_RETURN_IF_ERROR(rep->attach_experiences(exps.index(), exps.source()));
@@ -141,6 +142,11 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
     if (use_exp) QNAV_RETURN_IF_ERROR(exps.on_step(tiles[k].node, d, st, &learned));
     if (learned && k > 0)  // the experience is the previous tile's
       out.learned_wrong += std::abs(static_cast<int>(exps.last_learned_node()) - true_node(node_along, tiles[k - 1].truth_along_m)) > 1;
+    for (std::size_t b = 0; k > 0 && b < exps.last_backfill_count(); ++b) {  // tiles before it, learnt from that fix
+      const std::size_t tile = k - 1 - exps.last_backfill_age(b);
+      if (tile < tiles.size())
+        out.learned_wrong += std::abs(static_cast<int>(exps.last_backfill_node(b)) - true_node(node_along, tiles[tile].truth_along_m)) > 1;
+    }
     if (static_cast<int>(k) >= kWarmupTiles) {
       ++out.scored;
       out.within1 += std::abs(static_cast<int>(st.estimate) - true_node(node_along, tiles[k].truth_along_m)) <= 1;

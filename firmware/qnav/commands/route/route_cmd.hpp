@@ -51,7 +51,7 @@ struct RouteOptions {
   long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
   bool sim = false, force = false, reverse = false, json = false, quick = false;
   // Experiences (issue 29, route/experiences.cpp).
-  bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false;
+  bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false, backfill = false;
   long max_experiences = 4, learn_min_inliers = 8;
 };
 extern RouteOptions g_opt;
