@@ -7,7 +7,7 @@
 //     route knows (< redundant_inliers: a view the route has needs no second copy),
 //   - the estimate agrees with the odometry's expected node: the previous confident estimate moved
 //     on by the distance travelled (in nodes of the route's spacing, in the pass's direction), within
-//     max_node_disagreement nodes;
+//     max_node_disagreement + 0.5 nodes (the half node: the estimate is a whole node, the odometry not);
 // and it is learnt only when the NEXT step confirms it (confident, agreeing with odometry again). A
 // pass on another route (no strong registration), one never confident, or one whose estimate jumps
 // against its odometry (a forced mislocalisation) therefore learns nothing. finish() (end of the
