@@ -76,11 +76,23 @@ SeabedSample Seabed::sample(double n, double e, SeabedCache& cache) const noexce
   }
   float refl = cfg_.base_reflectivity + 2.0f * cfg_.patch_contrast * patch + 2.0f * cfg_.texture_contrast * tex;
   float height = 0.0f;
+  // Changed seabed: soft discs of changed reflectivity in a fraction of change_scale_m cells.
+  if (cfg_.change_fraction > 0.0f && cfg_.change_scale_m > 0.0f) {
+    const double cs = static_cast<double>(cfg_.change_scale_m);
+    const double fn = std::floor(n / cs), fe = std::floor(e / cs);
+    const std::uint64_t h = hash3(static_cast<std::int64_t>(fn), static_cast<std::int64_t>(fe), cfg_.change_seed * 0x9E3779B97F4A7C15ULL + 300);
+    if (unit(h) < cfg_.change_fraction) {
+      const double dn = n / cs - (fn + 0.5), de = e / cs - (fe + 0.5);
+      const float w = clampf((0.45f - static_cast<float>(std::sqrt(dn * dn + de * de))) * 10.0f, 0.0f, 1.0f);
+      refl += ((mix64(h) & 1u) ? 1.0f : -1.0f) * cfg_.change_contrast * w;
+    }
+  }
   // Ripples where the patch field is "sandy" (patch > 0), fading in smoothly.
   if (cfg_.ripple_wavelength_m > 0.0f && patch > -0.05f) {
     const float w = clampf((patch + 0.05f) * 8.0f, 0.0f, 1.0f);
-    const double ph = (n * static_cast<double>(ripple_cn_) + e * static_cast<double>(ripple_ce_)) /
-                      static_cast<double>(cfg_.ripple_wavelength_m);
+    double ph = (n * static_cast<double>(ripple_cn_) + e * static_cast<double>(ripple_ce_)) /
+                static_cast<double>(cfg_.ripple_wavelength_m);
+    if (cfg_.change_ripple_shift_m != 0.0f) ph -= static_cast<double>(cfg_.change_ripple_shift_m) / static_cast<double>(cfg_.ripple_wavelength_m);
     const float sn = static_cast<float>(std::sin(2.0 * 3.14159265358979323846 * ph));
     height += w * cfg_.ripple_height_m * sn;
     refl += w * cfg_.ripple_contrast * sn;
@@ -95,6 +107,9 @@ SeabedSample Seabed::sample(double n, double e, SeabedCache& cache) const noexce
       cache.rock_fn = kn;
       cache.rock_fe = ke;
       cache.rock = unit(h) < cfg_.rock_probability;
+      // Changed seabed: a rock vanished from this cell, or one appeared.
+      if (cfg_.change_fraction > 0.0f && unit(hash3(kn, ke, cfg_.change_seed * 0x9E3779B97F4A7C15ULL + 200)) < cfg_.change_fraction)
+        cache.rock = !cache.rock;
       if (cache.rock) {
         const std::uint64_t h2 = mix64(h);
         const std::uint64_t h3 = mix64(h2);

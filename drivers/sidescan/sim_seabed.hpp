@@ -46,6 +46,16 @@ struct SeabedConfig {
   float rock_height_ratio = 0.7f;    // height = ratio * radius
   float rock_reflectivity = 0.85f;
   FixedVector<SeabedObject, 16> objects;
+  // A seabed that changed since a route was taught over it (issue 29): all zero = unchanged, and the
+  // seabed is then bit for bit the one above. The sand ripples moved by change_ripple_shift_m along
+  // their crest normal; a fraction change_fraction of change_scale_m cells holds a patch whose
+  // reflectivity moved by +/- change_contrast (a soft disc); and of the rock cells the same fraction
+  // flipped: a rock vanished, or one appeared. change_seed says which.
+  float change_ripple_shift_m = 0.0f;
+  float change_fraction = 0.0f;
+  float change_contrast = 0.3f;
+  float change_scale_m = 12.0f;
+  std::uint64_t change_seed = 7;
 };
 
 // What the seabed is at one point.

@@ -37,6 +37,11 @@ class RouteRepeater {
     if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: step() before init()");
     return localiser_->step(sensed, distance_m, out);
   }
+  // See RouteLocaliser::attach_experiences (firmware/pipeline/route_experiences.hpp opens them).
+  Status attach_experiences(const route::ExperienceIndex* index, route::NodeSource* records) noexcept {
+    if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: attach_experiences() before init()");
+    return localiser_->attach_experiences(index, records);
+  }
   void set_motion(route::RouteDirection direction, route::MotionModel motion) noexcept {
     if (localiser_) localiser_->set_motion(direction, motion);
     config_.filter.direction = direction;

@@ -658,6 +658,13 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(float_key(
       "route.dead_reckon_max_m", [](auto& c) -> auto& { return c.localiser.guidance.dead_reckon_max_m; }, 0.0, 10000.0,
       "m", "Travel after the last fix still steered on dead reckoning; 0 = never"));
+  t.push_back(bool_key(
+      "route.learn", [](auto& c) -> auto& { return c.route_learn; },
+      "Repeat learns: confidently localised tiles that agree with odometry are appended to the route's experiences (ROUTE.exp)"));
+  t.push_back(int_key(
+      "route.max_experiences", [](auto& c) -> auto& { return c.max_experiences; }, 1,
+      static_cast<std::int64_t>(route::kMaxExperiencesPerNode), "experiences",
+      "Experiences per route node beside the taught one (fixed memory; a new ROUTE.exp is created with it)"));
   t.push_back(enum_key(
       "route.motion", [](auto& c) -> auto& { return c.localiser.filter.motion; },
       std::vector<std::pair<std::string, route::MotionModel>>{{"odometry", route::MotionModel::kOdometry},

@@ -98,6 +98,8 @@ struct DaemonConfig {
   // [route]
   std::uint16_t route_id = 1;                // route.id [0, 65535]: route used when a MODE_CMD gives 0
   std::size_t max_nodes = 10000;             // route.max_nodes [2, 65535]
+  bool route_learn = false;                  // route.learn: Repeat appends confident tiles to ROUTE.exp (issue 29)
+  std::uint16_t max_experiences = 4;         // route.max_experiences [1, 8]: experiences per node (fixed memory)
   pipeline::RouteTileConfig tiles = pipeline::default_route_tile_config();
   route::LocaliserConfig localiser = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
   //   route.scanlines_per_tile [20, 4000]   -> tiles.tiles.scanlines_per_tile

@@ -12,8 +12,10 @@ std::size_t max_selected(const LocaliserConfig& c) noexcept {
 
 std::size_t RouteLocaliser::arena_bytes(const LocaliserConfig& c) noexcept {
   const std::size_t k = max_selected(c);
+  const std::size_t exp = c.experiences_per_node == 0 ? 0
+                          : NodeWindow::arena_bytes(c.experience_window_slots) + k * (sizeof(std::uint32_t) + sizeof(std::uint8_t)) + 64;
   return RouteFilter::arena_bytes(c.filter) + Registrar::arena_bytes(c.registration) + NodeWindow::arena_bytes(c.window_slots) +
-         k * (sizeof(std::uint32_t) + sizeof(NodeMeasurement) + sizeof(RegistrationResult)) + 512;
+         k * (sizeof(std::uint32_t) + sizeof(NodeMeasurement) + sizeof(RegistrationResult)) + exp + 512;
 }
 
 Status RouteLocaliser::init(const LocaliserConfig& c, Arena& arena) noexcept {
@@ -30,6 +32,13 @@ Status RouteLocaliser::init(const LocaliserConfig& c, Arena& arena) noexcept {
   measurements_ = arena.allocate<NodeMeasurement>(k);
   results_ = arena.allocate<RegistrationResult>(k);
   if (selected_.empty() || measurements_.empty() || results_.empty()) return Status(StatusCode::kCapacityExceeded, "localiser: arena too small");
+  if (c.experiences_per_node > kMaxExperiencesPerNode) return Status(StatusCode::kInvalidArgument, "localiser: experiences_per_node > 8");
+  if (c.experiences_per_node > 0) {
+    QNAV_RETURN_IF_ERROR(exp_window_.init(c.experience_window_slots, arena));
+    winner_ = arena.allocate<std::uint32_t>(k);
+    tried_ = arena.allocate<std::uint8_t>(k);
+    if (winner_.empty() || tried_.empty()) return Status(StatusCode::kCapacityExceeded, "localiser: arena too small");
+  }
   config_ = c;
   guidance_ = Guidance(c.guidance);
   ready_ = true;
@@ -65,6 +74,86 @@ Status RouteLocaliser::start(const RouteParams& params, Span<const NodeMeta> met
   return Status::ok();
 }
 
+Status RouteLocaliser::attach_experiences(const ExperienceIndex* index, NodeSource* records) noexcept {
+  if (index == nullptr || records == nullptr) {
+    exp_index_ = nullptr;
+    return Status::ok();
+  }
+  if (config_.experiences_per_node == 0 || winner_.empty())
+    return Status(StatusCode::kInvalidArgument, "localiser: experiences_per_node is 0 (nothing allocated for experiences)");
+  if (index->per_node() > config_.experiences_per_node)
+    return Status(StatusCode::kInvalidArgument, "localiser: the experience index holds more per node than experiences_per_node");
+  QNAV_RETURN_IF_ERROR(exp_window_.bind(*records));
+  exp_index_ = index;
+  last_pass_ = 0;
+  return Status::ok();
+}
+
+std::size_t RouteLocaliser::candidates(std::uint32_t node) const noexcept {
+  std::size_t n = 1;
+  if (exp_index_ != nullptr)
+    for (const ExperienceSlot& e : exp_index_->slots(node)) n += e.record != kNoExperience;
+  return n;
+}
+
+bool RouteLocaliser::candidate(std::uint32_t node, std::size_t c, std::uint32_t& record) const noexcept {
+  record = kNoExperience;
+  if (exp_index_ == nullptr) return true;
+  const Span<const ExperienceSlot> slots = exp_index_->slots(node);
+  // The preferred experience: the slot of the last update's winning pass.
+  std::size_t pref = slots.size();
+  if (last_pass_ != 0)
+    for (std::size_t i = 0; i < slots.size(); ++i)
+      if (slots[i].record != kNoExperience && slots[i].pass_id == last_pass_) {
+        pref = i;
+        break;
+      }
+  std::size_t at = 0;
+  if (pref < slots.size()) {
+    if (c == at++) {
+      record = slots[pref].record;
+      return false;
+    }
+  }
+  if (c == at++) return true;  // the taught keypoints
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (i == pref || slots[i].record == kNoExperience) continue;
+    if (c == at++) {
+      record = slots[i].record;
+      return false;
+    }
+  }
+  return true;  // beyond the candidates: the taught keypoints (not reached: callers bound c)
+}
+
+Status RouteLocaliser::try_candidate(const RouteNode& sensed, std::uint32_t node, std::size_t c, RegistrationResult& r, std::uint32_t& winner,
+                                     LocaliserStep& out) noexcept {
+  std::uint32_t record = kNoExperience;
+  const bool taught = candidate(node, c, record);
+  Status ls;
+  const RouteNode* ref = taught ? window_.get(node, &ls) : exp_window_.get(record, &ls);
+  if (ref == nullptr) {
+    counters_.increment(LocaliserCounter::kLoadError);
+    ++out.load_errors;
+    return Status::ok();
+  }
+  if (!taught && ref->meta.index != node) {  // an experience record of another node: damage, not similarity
+    counters_.increment(LocaliserCounter::kLoadError);
+    ++out.load_errors;
+    return Status::ok();
+  }
+  RegistrationResult& t = scratch_;
+  t = RegistrationResult{};
+  QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, t));
+  ++out.registrations;
+  if (!taught) ++out.experience_registrations;
+  if (c == 0 || (t.ok && (!r.ok || t.inliers > r.inliers))) {  // the first result stands unless a better one follows
+    r = t;
+    winner = record;
+  }
+  return Status::ok();
+}
+
 Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, LocaliserStep& out) noexcept {
   out = LocaliserStep{};
   last_nm_ = 0;
@@ -76,21 +165,51 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
   QNAV_RETURN_IF_ERROR(filter_.predict(distance_m));
   const std::size_t k = filter_.select_nodes(Span<std::uint32_t>(selected_.data(), selected_.size() - 1));
   std::size_t nm = 0;
+  const bool with_exp = exp_index_ != nullptr;
   for (std::size_t i = 0; i < k; ++i) {
-    const std::uint32_t node = selected_[i];
-    RegistrationResult& r = results_[i];
-    r = RegistrationResult{};
-    Status ls;
-    const RouteNode* ref = window_.get(node, &ls);
-    if (ref == nullptr) {
-      counters_.increment(LocaliserCounter::kLoadError);
-      ++out.load_errors;
-    } else if (usable) {
-      QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, r));
+    results_[i] = RegistrationResult{};
+    if (with_exp) {
+      winner_[i] = kNoExperience;
+      tried_[i] = 0;
     }
-    measurements_[nm++] = NodeMeasurement{node, static_cast<float>(r.inliers)};
   }
-  out.registrations = static_cast<std::uint32_t>(k);
+  // Round 0: every selected node's first candidate (without experiences: its taught keypoints).
+  for (std::size_t i = 0; i < k; ++i) {
+    if (!usable) {  // still fetched (a damaged record is counted) and counted as before, not registered
+      ++out.registrations;
+      Status ls;
+      if (window_.get(selected_[i], &ls) == nullptr) {
+        counters_.increment(LocaliserCounter::kLoadError);
+        ++out.load_errors;
+      }
+      continue;
+    }
+    std::uint32_t w = kNoExperience;
+    QNAV_RETURN_IF_ERROR(try_candidate(sensed, selected_[i], 0, results_[i], w, out));
+    if (with_exp) {
+      winner_[i] = w;
+      tried_[i] = 1;
+    }
+  }
+  // Further rounds on experiences (and the taught keypoints when an experience went first), while
+  // the extra budget lasts.
+  if (with_exp && usable) {
+    const std::uint32_t budget = config_.experience_registrations > 0 ? config_.experience_registrations : config_.filter.max_registrations();
+    std::uint32_t spent = 0;
+    bool more = true;
+    while (more && spent < budget) {
+      more = false;
+      for (std::size_t i = 0; i < k && spent < budget; ++i) {
+        if (results_[i].ok && results_[i].inliers >= config_.enough_inliers) continue;
+        if (tried_[i] >= candidates(selected_[i])) continue;
+        QNAV_RETURN_IF_ERROR(try_candidate(sensed, selected_[i], tried_[i], results_[i], winner_[i], out));
+        ++tried_[i];
+        ++spent;
+        more = true;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < k; ++i) measurements_[nm++] = NodeMeasurement{selected_[i], static_cast<float>(results_[i].inliers)};
   last_nm_ = nm;
   Status us = filter_.update(Span<const NodeMeasurement>(measurements_.data(), nm));
   us.ignore();  // a degenerate belief was reset to uniform and counted by the filter
@@ -104,15 +223,14 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
   for (std::size_t i = 0; i < k; ++i)
     if (selected_[i] == out.estimate) {
       out.registration = results_[i];
+      if (with_exp) out.experience_record = winner_[i];
       found = true;
       break;
     }
-  if (!found && usable) {
-    const RouteNode* ref = window_.get(out.estimate);
-    if (ref != nullptr) {
-      QNAV_RETURN_IF_ERROR(registrar_.register_tile(sensed, *ref, out.registration));
-      ++out.registrations;
-    }
+  if (!found && usable) {  // one more registration: the estimate's first candidate
+    std::uint32_t w = kNoExperience;
+    QNAV_RETURN_IF_ERROR(try_candidate(sensed, out.estimate, 0, out.registration, w, out));
+    out.experience_record = w;
   }
   // A neighbour (+/- 1 node) registered with more inliers than the estimate: use it, carried into
   // the estimate's frame through the two nodes' route-frame poses (the tile lies between nodes).
@@ -129,6 +247,7 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
     if (best < k) {
       const Pose2 est_from_nb = meta_[out.estimate].pose.inverse().compose(meta_[selected_[best]].pose);
       out.registration = results_[best];
+      if (with_exp) out.experience_record = winner_[best];
       out.registration.sensed_to_node = est_from_nb.compose(results_[best].sensed_to_node);
       // The translation's covariance turns with it (heading variance and cross terms likewise).
       Mat3d j = Mat3d::Identity();
@@ -138,6 +257,17 @@ Status RouteLocaliser::step(const RouteNode& sensed, double distance_m, Localise
     }
   }
   out.best_inliers = out.registration.inliers;
+  if (with_exp) {  // the pass whose view matched best is tried first next update
+    out.experience_pass = 0;
+    if (out.experience_record != kNoExperience)
+      for (std::int64_t d = -1; d <= 1; ++d) {  // the winner is the estimate's or a neighbour's experience
+        const std::int64_t n = static_cast<std::int64_t>(out.estimate) + d;
+        if (n < 0) continue;
+        for (const ExperienceSlot& e : exp_index_->slots(static_cast<std::uint32_t>(n)))
+          if (e.record == out.experience_record) out.experience_pass = e.pass_id;
+      }
+    last_pass_ = out.experience_pass;
+  }
   const std::int64_t dir = config_.filter.direction == RouteDirection::kForward ? 1 : -1;
   std::int64_t ahead = static_cast<std::int64_t>(out.estimate) + dir * static_cast<std::int64_t>(std::lround(config_.guidance.lookahead_nodes));
   if (ahead < 0) ahead = 0;

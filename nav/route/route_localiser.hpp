@@ -5,8 +5,15 @@
 //   node and its +/- 1 neighbours (a neighbour's carried into the argmax's frame through the node poses).
 // Owns the filter, registrar, window and guidance; the NodeSource (route file / memory) and the route
 // metadata index (per-node pose and along-track distance, for guidance) are the caller's.
-// Bounds: registrations per update <= filter.max_registrations() (+1 when the
-// argmax was not registered); memory: sum of the parts' arena_bytes(). No heap after init().
+// Experiences (issue 29, nav/route/experience.hpp; optional, attach_experiences()): each selected node
+// is registered against its taught keypoints and its experiences, the measurement is the best match
+// per node. Try-order: first the experience of the pass that gave the estimate its best match in the
+// last update (the same view usually matches the next node too), else the taught keypoints; then the
+// rest (taught, then the slots in order), in rounds over the selected nodes (belief nodes first) while
+// the extra budget lasts, skipping nodes that already matched with >= enough_inliers.
+// Bounds: registrations per update <= filter.max_registrations() (+1 when the argmax was not
+// registered) + experience_registrations; memory: sum of the parts' arena_bytes() (+ the experience
+// window, experience_window_slots x ~10 KB, when experiences_per_node > 0). No heap after init().
 #pragma once
 
 #include <cstddef>
@@ -15,6 +22,7 @@
 #include "nav/core/arena.hpp"
 #include "nav/core/span.hpp"
 #include "nav/core/status.hpp"
+#include "nav/route/experience.hpp"
 #include "nav/route/guidance.hpp"
 #include "nav/route/node_window.hpp"
 #include "nav/route/registration.hpp"
@@ -29,6 +37,11 @@ struct LocaliserConfig {
   GuidanceConfig guidance;
   std::size_t window_slots = 32;
   SensorKind sensor = SensorKind::kSideScan;  // must match the route's
+  // Experiences: 0 = none (nothing allocated for them). Else up to this many per node are tried.
+  std::size_t experiences_per_node = 0;
+  std::size_t experience_window_slots = 32;    // decoded experiences cached (LRU)
+  std::uint32_t experience_registrations = 0;  // extra registrations per update on experiences
+  std::uint32_t enough_inliers = 12;           // a node matched this well is not tried further
 };
 
 struct LocaliserStep {
@@ -43,6 +56,11 @@ struct LocaliserStep {
   bool via_neighbour = false;       // registration came from node estimate +/- 1 (composed through the node poses)
   GuidanceOutput guidance;
   std::uint32_t load_errors = 0;    // damaged records met this step (treated as no similarity)
+  // Experiences: the record whose match is `registration` (kNoExperience: the taught keypoints),
+  // and the registrations spent on experiences this step.
+  std::uint32_t experience_record = kNoExperience;
+  std::uint32_t experience_pass = 0;
+  std::uint32_t experience_registrations = 0;
 };
 
 // kBadSensedTile: a sensed tile whose heading is not finite: not registered (the filter still predicts
@@ -68,6 +86,11 @@ class RouteLocaliser {
   // One update. sensed: keypoints of the new tile (meta.pose.heading_rad = compass heading);
   // distance_m: distance travelled since the previous tile (DVL/INS).
   Status step(const RouteNode& sensed, double distance_m, LocaliserStep& out) noexcept;
+  // Registers against experiences too from now on: index = which records each node has, records =
+  // where an experience record is loaded from (its NodeSource index is the record number). Both are
+  // the caller's and outlive the repeat; nullptr detaches. Needs experiences_per_node > 0 at init
+  // and index->per_node() <= it. O(1).
+  Status attach_experiences(const ExperienceIndex* index, NodeSource* records) noexcept;
 
   // See RouteFilter::set_motion (guidance follows the direction too). O(1), no heap.
   void set_motion(RouteDirection direction, MotionModel motion) noexcept {
@@ -98,6 +121,19 @@ class RouteLocaliser {
   Span<NodeMeasurement> measurements_;
   std::size_t last_nm_ = 0;
   Span<RegistrationResult> results_;
+  // Experiences (attach_experiences).
+  const ExperienceIndex* exp_index_ = nullptr;
+  NodeWindow exp_window_;
+  Span<std::uint32_t> winner_;   // per selected node: the record of its best match (kNoExperience: taught)
+  Span<std::uint8_t> tried_;     // per selected node: candidates tried
+  std::uint32_t last_pass_ = 0;  // pass id of the estimate's best match in the last update (0: taught)
+  RegistrationResult scratch_;
+  // The c-th candidate of `node` in try-order: the taught keypoints (true) or an experience record.
+  bool candidate(std::uint32_t node, std::size_t c, std::uint32_t& record) const noexcept;
+  std::size_t candidates(std::uint32_t node) const noexcept;
+  // Registers sensed against candidate c of node; r = the better of r and this one (winner updated).
+  Status try_candidate(const RouteNode& sensed, std::uint32_t node, std::size_t c, RegistrationResult& r, std::uint32_t& winner,
+                       LocaliserStep& out) noexcept;
   CounterSet<LocaliserCounter> counters_;
 };
 

@@ -235,12 +235,13 @@ int cmd_info() {
     return 1;
   }
   std::printf("all %u records pass their CRC and field checks\n", r.node_count());
+  const bool exp_ok = print_route_experiences(path, r);
   // The spacing the localiser's motion model divides odometry by, from the nodes just read.
   if (meta.size() >= 2)
     std::printf("node spacing flown: %.2f m (dead-reckoned, first to last node; the header's nominal %.2f m)\n",
                 route::odometry_node_spacing_m(p, Span<const route::NodeMeta>(meta.data(), meta.size())),
                 static_cast<double>(p.node_spacing_m));
-  return 0;
+  return exp_ok ? 0 : 1;
 }
 
 // The per-tile CSV of `route repeat`: --csv FILE or stdout, header written. nullptr (reported) if FILE
@@ -305,6 +306,8 @@ int cmd_repeat() {
   const char* path = g_opt.route.c_str();
   const double offset_pct = g_opt.offset_pct, length_m = g_opt.length_m;
   const long seed = g_opt.seed;
+  if (g_opt.learn && g_opt.no_experiences) return usage("repeat", "--learn and --no-experiences contradict each other");
+  if (g_opt.learn && !g_opt.sonar.empty()) return usage("repeat", "--learn works with --sim only (recorded passes: not yet)");
   if (const char* file = opt_or_null(g_opt.sonar)) return cmd_repeat_file(file);
   if (!g_opt.sim) {
     std::fprintf(stderr, "qnav route repeat: give --sim or --sonar FILE (XTF or JSF)\n");
@@ -319,6 +322,7 @@ int cmd_repeat() {
   Status s = w.init(length_m, static_cast<std::uint64_t>(seed));
   if (s) s = pipe.init(pipeline::default_route_tile_config());
   route::LocaliserConfig lc = pipeline::default_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
+  configure_experiences(lc);
   auto loc = std::make_unique<pipeline::RouteRepeater>();
   if (s) s = loc->init(lc);
   if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
@@ -326,6 +330,8 @@ int cmd_repeat() {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
   }
+  pipeline::RouteExperiences exps(hal::host_file_store());
+  if (!open_repeat_experiences(path, reader, meta, *loc, exps, reverse)) return 1;
   // Node truth: trained on the route at zero offset, node i's tile centre is at along_m (nav) ~ truth.
   std::vector<double> node_along;
   for (const route::NodeMeta& m : meta) node_along.push_back(m.along_m);
@@ -374,6 +380,7 @@ int cmd_repeat() {
     const auto t0 = Clock::now();
     step_status = loc->step(t.node, tiles == 0 ? 0.0 : t.nav_step_m, st);
     worst_ms = std::max(worst_ms, ms_since(t0));
+    if (step_status) step_status = exps.on_step(t.node, tiles == 0 ? 0.0 : t.nav_step_m, st);
     if (!step_status) return false;  // reported below: the pass stops, the command fails
     const double along_fwd = t.truth_along_m;
     const int tn = true_node(node_along, along_fwd);
@@ -383,6 +390,7 @@ int cmd_repeat() {
     return true;
   });
   const bool written = close_csv(f);
+  exps.end_pass();
   if (s && !step_status) s = step_status;
   if (s && !written) return 1;
   if (!s) {
@@ -391,6 +399,7 @@ int cmd_repeat() {
   }
   std::fprintf(csv ? stdout : stderr, "repeat %s offset %.0f%% of swath (%.1f m)%s: %d tiles, estimate within +/-1 node on %d (%.1f%%), worst update %.1f ms\n",
                path, offset_pct, lateral, reverse ? " reverse" : "", tiles, ok1, tiles ? 100.0 * ok1 / tiles : 0.0, worst_ms);
+  report_learned(csv ? stdout : stderr, exps);
   return 0;
 }
 
@@ -440,6 +449,11 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*r, "--length-m", g_opt.length_m, "length of the simulated route (as taught)", "m", 200, 50000);
   add_number(*r, "--dump-tile", g_opt.dump_tile, "debug: write tile N's raster and keypoints (route_dump_*); -1 none", "", -1, 1e9);
   add_text(*r, "--pings", g_opt.pings, "with --sonar: repeat on pings A to B-1 (default: all)")->type_name("A:B");
+  add_flag(*r, "--learn", g_opt.learn, "append this pass's confidently localised tiles to the route's experiences (FILE.exp)");
+  add_flag(*r, "--no-experiences", g_opt.no_experiences, "ignore FILE.exp (register against the taught nodes only)");
+  add_number(*r, "--max-experiences", g_opt.max_experiences, "experiences per node (a new FILE.exp is created with it)", "", 1, 8);
+  add_number(*r, "--learn-min-inliers", g_opt.learn_min_inliers, "with --learn: a tile is learnt only when registered with this many inliers", "", 5, 128);
+  add_flag(*r, "--backfill", g_opt.backfill, "with --learn: also learn the tiles before the pass's first confirmed fix, placed by odometry from it");
   add_file_pass_options(*r);
   run.on(r, cmd_repeat);
 
@@ -450,6 +464,11 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*e, "--seabeds", g_opt.seabeds, "simulated seabeds", "", 1, 20)
       ->description("simulated seabeds (default 3, 1 with --quick; 1..20)");
   add_flag(*e, "--quick", g_opt.quick, "fewer passes and one seabed (a smoke run)");
+  add_flag(*e, "--multi-pass", g_opt.multi_pass, "the experiences experiment: learn reverse passes at 30 and 40 % of the swath, then repeat in reverse at 55-65 %");
+  add_number(*e, "--max-experiences", g_opt.max_experiences, "with --multi-pass: experiences per node", "", 1, 8);
+  add_flag(*e, "--changed-seabed", g_opt.changed_seabed, "the seabed changed since the teach (20/40/60 %): repeats at 20 % without, then after learning one repeat");
+  add_number(*e, "--learn-min-inliers", g_opt.learn_min_inliers, "with --multi-pass: a tile is learnt only when registered with this many inliers", "", 5, 128);
+  add_flag(*e, "--backfill", g_opt.backfill, "with --multi-pass / --changed-seabed: learning passes also learn the tiles before their first confirmed fix");
   run.on(e, cmd_eval);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");

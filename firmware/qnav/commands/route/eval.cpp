@@ -182,6 +182,8 @@ bool ensure_dir(const std::string& d) {
 }  // namespace
 
 int cmd_eval() {
+  if (g_opt.multi_pass) return cmd_eval_multi_pass();  // route/experiences.cpp
+  if (g_opt.changed_seabed) return cmd_eval_changed_seabed();
   const double length_m = g_opt.length_m;
   if (!(length_m >= 400.0 && length_m <= 20000.0)) return usage("eval", "--length-m: eval needs 400..20000 m");
   const bool json = g_opt.json;

@@ -24,6 +24,7 @@
 #include "drivers/route_store/route_open.hpp"
 #include "firmware/tools/route_file.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
+#include "firmware/pipeline/route_experiences.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/pipeline/sim_survey.hpp"
@@ -49,6 +50,9 @@ struct RouteOptions {
   double camera_length_m = 12.0;
   long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
   bool sim = false, force = false, reverse = false, json = false, quick = false;
+  // Experiences (issue 29, route/experiences.cpp).
+  bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false, backfill = false;
+  long max_experiences = 4, learn_min_inliers = 8;
 };
 extern RouteOptions g_opt;
 constexpr int kWarmupTiles = 2;  // tiles before scoring (uniform start; the paper's first tile copies eq. 9)
@@ -80,5 +84,17 @@ int cmd_xtf();                        // route/recorded.cpp
 int cmd_train_file(const char* path);
 int cmd_repeat_file(const char* path);
 int cmd_camera();                     // route/camera.cpp
+// route/experiences.cpp: the route's experiences for a repeat (ROUTE.exp; --learn appends to it,
+// --no-experiences ignores it): opened, reported on stderr and attached to the repeater. false
+// (reported) when learning was asked for and cannot be done.
+bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& reader, const std::vector<route::NodeMeta>& meta,
+                             pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse);
+// The localiser configuration with experiences enabled when the repeat may use them.
+void configure_experiences(route::LocaliserConfig& lc);
+void report_learned(FILE* f, const pipeline::RouteExperiences& exps);
+// route info: the experiences of every node (ROUTE.exp), if any; false when the companion is damaged.
+bool print_route_experiences(const char* route_path, tools::RouteFileReader& reader);
+int cmd_eval_multi_pass();            // route/experiences.cpp: eval --multi-pass
+int cmd_eval_changed_seabed();        // route/experiences.cpp: eval --changed-seabed
 
 }  // namespace route_cmd

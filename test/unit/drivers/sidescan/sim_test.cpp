@@ -66,6 +66,47 @@ TEST(SideScanSim, SeabedCacheGivesBitIdenticalSamples) {
   EXPECT_GT(rocks, 0);  // the march crossed rocks
 }
 
+// A changed seabed (issue 29): unchanged where the change parameters are zero (bit for bit), and
+// with change_fraction f about f of the rock cells flipped and a share of the ground brighter or darker.
+TEST(SideScanSim, AChangedSeabedDiffersByAboutItsFractionAndZeroChangeIsTheSameSeabed) {
+  SeabedConfig bc;
+  Seabed bed, same, changed;
+  ASSERT_TRUE(bed.init(bc).is_ok());
+  SeabedConfig zero = bc;
+  zero.change_seed = 99;  // a seed alone changes nothing
+  ASSERT_TRUE(same.init(zero).is_ok());
+  SeabedConfig cc = bc;
+  cc.change_fraction = 0.3f;
+  cc.change_ripple_shift_m = 0.3f;
+  ASSERT_TRUE(changed.init(cc).is_ok());
+  int differ = 0, rock_cells = 0, rock_flips = 0;
+  const int n_pts = 20000;
+  for (int k = 0; k < n_pts; ++k) {
+    const double n = -300.0 + 0.031 * k, e = 40.0 - 0.017 * k;
+    const SeabedSample a = bed.sample(n, e), z = same.sample(n, e), c = changed.sample(n, e);
+    ASSERT_EQ(a.reflectivity, z.reflectivity) << k;
+    ASSERT_EQ(a.height_m, z.height_m) << k;
+    differ += std::fabs(a.reflectivity - c.reflectivity) > 0.05f;
+  }
+  // Rock cells: sample every cell centre's 5 x 5 grid for any height above the ripples.
+  for (int cn = 0; cn < 40; ++cn)
+    for (int ce = 0; ce < 40; ++ce) {
+      bool ra = false, rc = false;
+      for (int i = 0; i < 15; ++i)
+        for (int j = 0; j < 15; ++j) {
+          const double n = cn * 15.0 + i + 0.5, e = ce * 15.0 + j + 0.5;
+          ra = ra || bed.sample(n, e).height_m > 0.2f;
+          rc = rc || changed.sample(n, e).height_m > 0.2f;
+        }
+      rock_cells += ra;
+      rock_flips += ra != rc;
+    }
+  EXPECT_GT(rock_cells, 200);
+  EXPECT_NEAR(static_cast<double>(rock_flips) / 1600.0, 0.3, 0.06) << rock_flips << " of 1600 cells flipped";
+  EXPECT_GT(differ, n_pts / 10) << "moved ripples and changed patches";
+  EXPECT_LT(differ, n_pts * 9 / 10);
+}
+
 TEST(SideScanSim, ObjectCastsAShadowOfTheExpectedLength) {
   SeabedConfig bc = flat_seabed();
   SeabedObject box;

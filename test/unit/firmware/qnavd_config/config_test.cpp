@@ -81,6 +81,8 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(dvl_stale_s),
       QNAV_FIELD(route_id),
       QNAV_FIELD(max_nodes),
+      QNAV_FIELD(route_learn),
+      QNAV_FIELD(max_experiences),
       QNAV_FIELD(localiser.filter.max_nodes),
       QNAV_FIELD(tiles.tiles.scanlines_per_tile),
       QNAV_FIELD(tiles.tiles.scanline_stride),
@@ -497,6 +499,8 @@ stale_s = 4.0
 [route]
 id = 7
 max_nodes = 20000
+learn = true
+max_experiences = 2
 scanlines_per_tile = 500
 scanline_stride = 250
 resolution_m = 0.1

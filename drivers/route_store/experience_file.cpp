@@ -1,0 +1,207 @@
+#include "drivers/route_store/experience_file.hpp"
+
+#include <cstdio>
+#include <cstring>
+
+namespace qnav::drivers::route_store {
+
+bool experience_path(const char* route_path, char (&out)[kExperiencePathBytes]) noexcept {
+  const int n = std::snprintf(out, sizeof out, "%s.exp", route_path);
+  return n > 0 && n < static_cast<int>(sizeof out);
+}
+
+Status route_identity(const route::RouteParams& params, route::NodeSource& nodes, route::RouteNode& scratch, Span<std::uint8_t> scratch_bytes,
+                      RouteIdentity& out) {
+  if (nodes.node_count() == 0) return Status(StatusCode::kInvalidArgument, "route identity: the route has no node");
+  if (scratch_bytes.size() < route::record_bytes(params.max_keypoints)) return Status(StatusCode::kCapacityExceeded, "route identity: scratch too small");
+  QNAV_RETURN_IF_ERROR(nodes.load(0, scratch));
+  out.params = params;
+  out.node_count = nodes.node_count();
+  return route::route_binding(params, scratch, scratch_bytes, out.header_crc, out.node0_crc);
+}
+
+ExperienceFile::~ExperienceFile() { close(); }
+
+void ExperienceFile::close() {
+  if (fd_ >= 0) {
+    store_.sync(fd_).ignore();
+    store_.close(fd_);
+  }
+  fd_ = -1;
+  records_ = 0;
+}
+
+Status ExperienceFile::open_common(const char* path, const RouteIdentity& route, route::ExperienceIndex& index, ExperienceOpenReport* report,
+                                   bool write, std::uint64_t& file_size) {
+  other_route_ = false;
+  Result<int> h = store_.open(path, write ? hal::FileMode::kReadWrite : hal::FileMode::kRead);
+  if (!h) return h.status();
+  fd_ = *h;
+  auto fail = [this](Status s) {
+    store_.close(fd_);
+    fd_ = -1;
+    return s;
+  };
+  Result<std::uint64_t> size = store_.size(fd_);
+  if (!size) return fail(size.status());
+  file_size = *size;
+  std::uint8_t hb[route::kExpHeaderBytes];
+  if (*size < route::kExpHeaderBytes) {
+    counters_.increment(route::ExperienceFormatCounter::kShortBuffer);
+    return fail(Status(StatusCode::kTruncated, "experience file shorter than its header"));
+  }
+  const Status hs = store_.read_at(fd_, hb, sizeof hb, 0);
+  if (!hs) return fail(hs);
+  Result<route::ExperienceHeader> hd = route::decode_exp_header(Span<const std::uint8_t>(hb), &counters_);
+  if (!hd) return fail(hd.status());
+  if (hd->route_header_crc != route.header_crc || hd->route_node0_crc != route.node0_crc) {
+    counters_.increment(route::ExperienceFormatCounter::kOtherRoute);
+    other_route_ = true;
+    return fail(Status(StatusCode::kInvalidArgument, "experience file belongs to another route (taught again since?)"));
+  }
+  if (hd->max_keypoints != route.params.max_keypoints) {
+    counters_.increment(route::ExperienceFormatCounter::kBadHeader);
+    return fail(Status(StatusCode::kCorrupt, "experience file: max_keypoints differs from the route's"));
+  }
+  if (hd->max_per_node > index.per_node())
+    return fail(Status(StatusCode::kInvalidArgument, "experience file holds more experiences per node than configured (route.max_experiences)"));
+  header_ = *hd;
+  params_ = route.params;
+  route_nodes_ = route.node_count;
+  const std::size_t rec = route::exp_record_bytes(header_.max_keypoints);
+  record_.assign(rec, 0);
+  const std::uint64_t body = *size - route::kExpHeaderBytes;
+  if (body / rec > 0xFFFFFFF0ull) return fail(Status(StatusCode::kUnsupported, "experience file: too many records"));
+  records_ = static_cast<std::uint32_t>(body / rec);
+  const Status rs = index.reset(route.node_count);
+  if (!rs) return fail(rs);
+  ExperienceOpenReport r;
+  r.records = records_;
+  r.torn_bytes = body % rec;
+  if (r.torn_bytes > 0) counters_.increment(route::ExperienceFormatCounter::kTornTail);
+  for (std::uint32_t i = 0; i < records_; ++i) {
+    route::ExperienceMeta m;
+    const Status ms = load_meta(i, m);
+    if (!ms) {
+      if (r.damaged++ == 0) r.first_damaged = i;
+      continue;
+    }
+    if (m.slot >= index.per_node()) {  // cannot be: checked against the header's max_per_node
+      ++r.damaged;
+      continue;
+    }
+    index.set(m).ignore();
+  }
+  r.live = static_cast<std::uint32_t>(index.live());
+  if (report != nullptr) {
+    const bool created = report->created, moved = report->moved_stale;
+    *report = r;
+    report->created = created;
+    report->moved_stale = moved;
+  }
+  return Status::ok();
+}
+
+Status ExperienceFile::open_read(const char* path, const RouteIdentity& route, route::ExperienceIndex& index, ExperienceOpenReport* report) {
+  close();
+  if (report != nullptr) *report = ExperienceOpenReport{};
+  std::uint64_t size = 0;
+  return open_common(path, route, index, report, false, size);
+}
+
+Status ExperienceFile::open_append(const char* path, const RouteIdentity& route, std::uint16_t per_node, route::ExperienceIndex& index,
+                                   ExperienceOpenReport* report, bool sync_each) {
+  close();
+  if (report != nullptr) *report = ExperienceOpenReport{};
+  sync_each_ = sync_each;
+  if (per_node == 0 || per_node > index.per_node())
+    return Status(StatusCode::kInvalidArgument, "experience file: per_node must be 1..the index's per_node");
+  route::ExperienceHeader want;
+  want.max_keypoints = route.params.max_keypoints;
+  want.max_per_node = per_node;
+  want.route_header_crc = route.header_crc;
+  want.route_node0_crc = route.node0_crc;
+  std::uint8_t hb[route::kExpHeaderBytes];
+  QNAV_RETURN_IF_ERROR(route::encode_exp_header(want, Span<std::uint8_t>(hb)));
+  auto create = [&](hal::FileMode mode) -> Status {
+    Result<int> h = store_.open(path, mode);
+    if (!h) return h.status();
+    Status s = store_.write_at(*h, hb, sizeof hb, 0);
+    if (s) s = store_.sync(*h);
+    store_.close(*h);
+    if (s) s = store_.sync_name(path);
+    if (s && report != nullptr) report->created = true;
+    return s;
+  };
+  Result<int> probe = store_.open(path, hal::FileMode::kRead);
+  if (!probe) {
+    if (probe.status().code() != StatusCode::kNotFound) return probe.status();
+    QNAV_RETURN_IF_ERROR(create(hal::FileMode::kCreateNew));
+  } else {
+    Result<std::uint64_t> sz = store_.size(*probe);
+    store_.close(*probe);
+    if (!sz) return sz.status();
+    // Shorter than its header: a power cut while it was created (no record can be in it).
+    if (*sz < route::kExpHeaderBytes) QNAV_RETURN_IF_ERROR(create(hal::FileMode::kCreateOrTruncate));
+  }
+  std::uint64_t size = 0;
+  Status s = open_common(path, route, index, report, true, size);
+  if (!s && other_route_) {
+    // Another teach's experiences: kept aside (never deleted), a new companion for this route.
+    char stale[kExperiencePathBytes + 8];
+    if (std::snprintf(stale, sizeof stale, "%s.stale", path) >= static_cast<int>(sizeof stale))
+      return Status(StatusCode::kInvalidArgument, "experience file: path too long");
+    QNAV_RETURN_IF_ERROR(store_.rename(path, stale));
+    QNAV_RETURN_IF_ERROR(create(hal::FileMode::kCreateNew));
+    if (report != nullptr) report->moved_stale = true;
+    s = open_common(path, route, index, report, true, size);
+  }
+  QNAV_RETURN_IF_ERROR(s);
+  const std::uint64_t end = route::kExpHeaderBytes + static_cast<std::uint64_t>(records_) * record_.size();
+  if (size > end) {  // a torn tail: cut before anything is appended
+    s = store_.truncate(fd_, end);
+    if (s) s = store_.sync(fd_);
+    if (!s) {
+      close();
+      return s;
+    }
+  }
+  return Status::ok();
+}
+
+Status ExperienceFile::append(route::Experience& e, route::ExperienceIndex& index) {
+  if (fd_ < 0) return Status(StatusCode::kNotReady, "experience file: not open");
+  e.meta.record = records_;
+  QNAV_RETURN_IF_ERROR(route::encode_experience(params_, header_, route_nodes_, e, Span<std::uint8_t>(record_.data(), record_.size())));
+  const std::uint64_t at = route::kExpHeaderBytes + static_cast<std::uint64_t>(records_) * record_.size();
+  Status s = store_.write_at(fd_, record_.data(), record_.size(), at);
+  if (s && sync_each_) s = store_.sync_data(fd_);
+  if (!s) {
+    store_.truncate(fd_, at).ignore();  // a partial record is cut (a reader would ignore it as a torn tail)
+    return s;
+  }
+  ++records_;
+  e.meta.keypoint_count = static_cast<std::uint16_t>(e.node.keypoints.size());
+  return index.set(e.meta);
+}
+
+Status ExperienceFile::read_record(std::uint32_t record) noexcept {
+  if (fd_ < 0) return Status(StatusCode::kNotReady, "experience file: not open");
+  if (record >= records_) return Status(StatusCode::kOutOfRange, "experience file: record beyond the file");
+  return store_.read_at(fd_, record_.data(), record_.size(), route::kExpHeaderBytes + static_cast<std::uint64_t>(record) * record_.size());
+}
+
+Status ExperienceFile::load(std::uint32_t record, route::RouteNode& out) noexcept {
+  QNAV_RETURN_IF_ERROR(read_record(record));
+  route::ExperienceMeta m;
+  return route::decode_experience(params_, header_, route_nodes_, Span<const std::uint8_t>(record_.data(), record_.size()), record, m, &out,
+                                  &counters_);
+}
+
+Status ExperienceFile::load_meta(std::uint32_t record, route::ExperienceMeta& out) noexcept {
+  QNAV_RETURN_IF_ERROR(read_record(record));
+  return route::decode_experience(params_, header_, route_nodes_, Span<const std::uint8_t>(record_.data(), record_.size()), record, out, nullptr,
+                                  &counters_);
+}
+
+}  // namespace qnav::drivers::route_store

@@ -1,0 +1,502 @@
+// qnav route: experiences (issue 29): `route repeat --learn` / `--no-experiences`, the experience
+// listing of `route info`, and `route eval --multi-pass` (learn reverse passes at 30 % and 40 % of the
+// swath, then repeat in reverse at 55-65 %: node +/-1 with and without learning; poisoning passes).
+#include "firmware/qnav/commands/route/route_cmd.hpp"
+
+#include <unistd.h>
+
+namespace route_cmd {
+
+// The learner's settings (--learn-min-inliers).
+route::ExperienceLearnConfig learn_config() {
+  route::ExperienceLearnConfig c;
+  c.min_inliers = static_cast<std::uint32_t>(g_opt.learn_min_inliers);
+  return c;
+}
+
+void configure_experiences(route::LocaliserConfig& lc) {
+  if (!g_opt.no_experiences) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
+}
+
+bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& reader, const std::vector<route::NodeMeta>& meta,
+                             pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse) {
+  if (g_opt.no_experiences) return true;
+  const auto per_node = static_cast<std::uint16_t>(g_opt.max_experiences);
+  Status s = exps.init(meta.size(), per_node, learn_config(), g_opt.backfill ? &rep.config().registration : nullptr);
+  drivers::route_store::ExperienceOpenReport r;
+  if (s) s = exps.open(route_path, reader.params(), reader, g_opt.learn, &r);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: %s%s: %s\n", route_path, ".exp", s.message());
+    if (g_opt.learn) return false;
+    std::fprintf(stderr, "qnav route repeat: WARNING: repeating without experiences\n");
+    return true;
+  }
+  if (!exps.has_experiences()) return true;
+  if (r.moved_stale) std::fprintf(stderr, "qnav route repeat: %s belonged to an earlier teach of this route: kept as %s.stale\n", exps.path(), exps.path());
+  if (r.created) std::fprintf(stderr, "qnav route repeat: %s created (up to %u experiences per node)\n", exps.path(), per_node);
+  if (r.torn_bytes > 0)
+    std::fprintf(stderr, "qnav route repeat: WARNING: %s: torn tail: %llu bytes after record %u (a partial experience, %s)\n", exps.path(),
+                 static_cast<unsigned long long>(r.torn_bytes), r.records, g_opt.learn ? "cut" : "ignored");
+  if (r.damaged > 0)
+    std::fprintf(stderr, "qnav route repeat: WARNING: %s: %u damaged experience records skipped (the first: record %u)\n", exps.path(), r.damaged,
+                 r.first_damaged);
+  std::fprintf(stderr, "qnav route repeat: %u experiences of %zu nodes from %s%s\n", r.live, meta.size(), exps.path(),
+               g_opt.learn ? "; learning this pass" : "");
+  s = rep.attach_experiences(exps.index(), exps.source());
+  if (s) s = exps.begin_pass(Span<const route::NodeMeta>(meta.data(), meta.size()), rep.localiser().node_spacing_m(), reverse);
+  if (!s) {
+    std::fprintf(stderr, "qnav route repeat: experiences: %s\n", s.message());
+    return false;
+  }
+  return true;
+}
+
+void report_learned(FILE* f, const pipeline::RouteExperiences& exps) {
+  if (!exps.learning()) return;
+  const auto& c = exps.learner().counters();
+  std::string why;
+  for (std::size_t i = 1; i < c.size(); ++i)
+    if (c.count_at(i) > 0) why += std::string(why.empty() ? "" : " ") + c.name_at(i) + "=" + std::to_string(c.count_at(i));
+  std::fprintf(f, "learned %u experiences (pass %u) into %s (%u of them tiles before the pass's first confirmed fix); tiles not learned: %s\n",
+               exps.learned(), exps.pass_id() - 1, exps.path(), exps.backfilled(), why.empty() ? "none" : why.c_str());
+}
+
+bool print_route_experiences(const char* route_path, tools::RouteFileReader& reader) {
+  char path[drivers::route_store::kExperiencePathBytes];
+  if (!drivers::route_store::experience_path(route_path, path) || access(path, F_OK) != 0) {
+    std::printf("experiences: none (no %s.exp)\n", route_path);
+    return true;
+  }
+  pipeline::RouteExperiences exps(hal::host_file_store());
+  drivers::route_store::ExperienceOpenReport r;
+  Status s = exps.init(reader.node_count(), route::kMaxExperiencesPerNode, route::ExperienceLearnConfig{});
+  if (s) s = exps.open(route_path, reader.params(), reader, false, &r);
+  if (!s) {
+    std::printf("experiences: %s: %s\n", path, s.message());
+    return false;
+  }
+  const auto& f = exps.file();
+  std::printf("experiences: %s: format %u, <= %u per node, %u records, %u live", path, f.header().version, f.header().max_per_node, r.records,
+              r.live);
+  if (r.torn_bytes > 0) std::printf(", torn tail %llu bytes after record %u (ignored)", static_cast<unsigned long long>(r.torn_bytes), r.records);
+  if (r.damaged > 0) std::printf(", %u DAMAGED records skipped (the first: record %u)", r.damaged, r.first_damaged);
+  std::printf("\n");
+  const route::ExperienceIndex& ix = *exps.index();
+  for (std::uint32_t n = 0; n < ix.node_count(); ++n) {
+    std::string line;
+    int count = 0;
+    for (const route::ExperienceSlot& e : ix.slots(n)) {
+      if (e.record == route::kNoExperience) continue;
+      route::ExperienceMeta m;
+      if (!exps.source()) continue;
+      char buf[160];
+      if (const_cast<drivers::route_store::ExperienceFile&>(f).load_meta(e.record, m))
+        std::snprintf(buf, sizeof buf, " [pass %u %s offset %+.1f m, %u inliers, %u keypoints, record %u]", m.pass_id, m.reverse ? "reverse" : "forward",
+                      static_cast<double>(m.offset_m), m.inliers, m.keypoint_count, m.record);
+      else
+        std::snprintf(buf, sizeof buf, " [record %u unreadable]", e.record);
+      line += buf;
+      ++count;
+    }
+    if (count > 0) std::printf("  node %u: %d%s\n", n, count, line.c_str());
+  }
+  return r.damaged == 0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// route eval --multi-pass
+namespace {
+
+struct MpPass {
+  int scored = 0, within1 = 0, learned = 0, registered = 0;
+  int learned_wrong = 0;  // experiences appended to a node more than 1 from the learnt tile's true node
+};
+
+// One pass through a repeater (experiences optional, learning optional), scored from kWarmupTiles on.
+Status run_pass(const route::RouteParams& params, const std::vector<route::NodeMeta>& meta, route::NodeSource& nodes, const char* route_path,
+                const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along, bool reverse, bool use_exp, bool learn,
+                MpPass& out, route::RouteDirection told) {
+  out = MpPass{};
+  route::LocaliserConfig lc = pipeline::default_localiser_config(told, meta.size() + 8);
+  if (use_exp) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
+  auto rep = std::make_unique<pipeline::RouteRepeater>();
+  QNAV_RETURN_IF_ERROR(rep->init(lc));
+  QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), nodes));
+  pipeline::RouteExperiences exps(hal::host_file_store());
+  if (use_exp) {
+    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config(),
+                                   g_opt.backfill ? &lc.registration : nullptr));
+    QNAV_RETURN_IF_ERROR(exps.open(route_path, params, nodes, learn));
+    if (exps.has_experiences()) {
+      QNAV_RETURN_IF_ERROR(rep->attach_experiences(exps.index(), exps.source()));
+      QNAV_RETURN_IF_ERROR(exps.begin_pass(Span<const route::NodeMeta>(meta.data(), meta.size()), rep->localiser().node_spacing_m(),
+                                           told == route::RouteDirection::kReverse));
+    }
+  }
+  (void)reverse;
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    route::LocaliserStep st;
+    const double d = k == 0 ? 0.0 : tiles[k].nav_step_m;
+    QNAV_RETURN_IF_ERROR(rep->step(tiles[k].node, d, st));
+    bool learned = false;
+    if (use_exp) QNAV_RETURN_IF_ERROR(exps.on_step(tiles[k].node, d, st, &learned));
+    if (learned && k > 0)  // the experience is the previous tile's
+      out.learned_wrong += std::abs(static_cast<int>(exps.last_learned_node()) - true_node(node_along, tiles[k - 1].truth_along_m)) > 1;
+    for (std::size_t b = 0; k > 0 && b < exps.last_backfill_count(); ++b) {  // tiles before it, learnt from that fix
+      const std::size_t tile = k - 1 - exps.last_backfill_age(b);
+      if (tile < tiles.size())
+        out.learned_wrong += std::abs(static_cast<int>(exps.last_backfill_node(b)) - true_node(node_along, tiles[tile].truth_along_m)) > 1;
+    }
+    if (static_cast<int>(k) >= kWarmupTiles) {
+      ++out.scored;
+      out.within1 += std::abs(static_cast<int>(st.estimate) - true_node(node_along, tiles[k].truth_along_m)) <= 1;
+      out.registered += st.registration.ok && st.registration.inliers > 5;
+    }
+  }
+  exps.end_pass();
+  out.learned = static_cast<int>(exps.learned());
+  return Status::ok();
+}
+
+double pct(int a, int b) { return b > 0 ? 100.0 * a / b : 0.0; }
+
+// A 10,000-node route in memory: the taught block repeated along the track (as `route eval` times it).
+class ReplicatedRoute final : public route::NodeSource {
+ public:
+  ReplicatedRoute(const std::vector<pipeline::RouteTile>* t, std::uint32_t n, double block_m) : t_(t), n_(n), block_m_(block_m) {}
+  std::uint32_t node_count() const noexcept override { return n_; }
+  Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
+    if (i >= n_) return Status(StatusCode::kOutOfRange, "no such node");
+    out = (*t_)[i % t_->size()].node;
+    const double shift = block_m_ * static_cast<double>(i / t_->size());
+    out.meta.index = i;
+    out.meta.pose.x_m += shift;
+    out.meta.along_m += shift;
+    return Status::ok();
+  }
+  route::NodeMeta meta(std::uint32_t i) {
+    route::RouteNode n;
+    load(i, n).ignore();
+    return n.meta;
+  }
+
+ private:
+  const std::vector<pipeline::RouteTile>* t_;
+  std::uint32_t n_;
+  double block_m_;
+};
+
+// Every slot of every node filled: record r = node * per_node + slot -> one of the learnt experiences
+// (the block node's own first, then the others in turn), its node renumbered.
+class FilledExperiences final : public route::NodeSource {
+ public:
+  std::vector<route::RouteNode> learnt;
+  std::vector<std::uint32_t> block_node;  // the learnt experience's node
+  std::uint32_t per_node = 4, nodes = 0, block = 1;
+  std::uint32_t node_count() const noexcept override { return nodes * per_node; }
+  Status load(std::uint32_t r, route::RouteNode& out) noexcept override {
+    if (r >= node_count() || learnt.empty()) return Status(StatusCode::kOutOfRange, "no such record");
+    out = learnt[pick(r)];
+    out.meta.index = r / per_node;
+    return Status::ok();
+  }
+  std::size_t pick(std::uint32_t r) const noexcept {
+    const std::uint32_t node = r / per_node, slot = r % per_node;
+    std::uint32_t seen = 0;
+    for (std::size_t k = 0; k < learnt.size(); ++k)
+      if (block_node[k] == node % block && seen++ == slot) return k;
+    return (static_cast<std::size_t>(node) * per_node + slot) % learnt.size();
+  }
+};
+
+struct UpdateCost {
+  double cpu_mean = 0.0, cpu_max = 0.0;
+  std::uint32_t max_registrations = 0;
+};
+
+Status time_updates(const route::RouteParams& params, ReplicatedRoute& route_nodes, const std::vector<route::NodeMeta>& meta,
+                    FilledExperiences* exp, route::ExperienceIndex* index, const std::vector<pipeline::RouteTile>& tiles, UpdateCost& out) {
+  route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kReverse, meta.size());
+  if (exp != nullptr) pipeline::enable_experiences(lc, exp->per_node);
+  auto rep = std::make_unique<pipeline::RouteRepeater>();
+  QNAV_RETURN_IF_ERROR(rep->init(lc));
+  QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), route_nodes));
+  if (exp != nullptr) QNAV_RETURN_IF_ERROR(rep->attach_experiences(index, exp));
+  out = UpdateCost{};
+  double sum = 0.0;
+  for (std::size_t k = 0; k < tiles.size(); ++k) {
+    route::LocaliserStep st;
+    const double c0 = cpu_ms();
+    QNAV_RETURN_IF_ERROR(rep->step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, st));
+    const double c = cpu_ms() - c0;
+    sum += c;
+    out.cpu_max = std::max(out.cpu_max, c);
+    out.max_registrations = std::max(out.max_registrations, st.registrations);
+  }
+  out.cpu_mean = tiles.empty() ? 0.0 : sum / static_cast<double>(tiles.size());
+  return Status::ok();
+}
+
+}  // namespace
+
+int cmd_eval_multi_pass() {
+  const double length_m = g_opt.length_m;
+  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
+  const std::string out_dir = g_opt.eval_out;
+  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+    std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
+    return 1;
+  }
+  FILE* log = g_opt.json ? stderr : stdout;
+  const std::vector<int> learn_pcts{30, 40};
+  const std::vector<int> test_pcts = g_opt.quick ? std::vector<int>{60} : std::vector<int>{55, 60, 65};
+  pipeline::RouteTilePipeline pipe;
+  Status s = pipe.init(pipeline::default_route_tile_config());
+  const auto t_all = Clock::now();
+  int tot_scored = 0, tot_before = 0, tot_after = 0, tot_learned = 0, poison_learned = 0, poison_passes = 0, learn_scored = 0, learn_within = 0;
+  int reg_before = 0, reg_after = 0, tot_learned_wrong = 0;
+  double cost_with = -1.0, cost_with_max = -1.0, cost_without = -1.0;
+  std::fprintf(log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
+                    "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
+               g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
+  for (long sb = 1; s && sb <= seabeds; ++sb) {
+    pipeline::SimSurvey w;
+    std::vector<pipeline::RouteTile> train;
+    s = w.init(length_m, static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, w, w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), train);
+    if (!s || train.size() < 2) break;
+    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+    const std::string route_path = out_dir + "/route_multipass_" + std::to_string(sb) + ".qroute";
+    const std::string exp_path = route_path + ".exp";
+    std::remove(exp_path.c_str());  // a fresh experiment
+    tools::RouteFileWriter writer;
+    if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
+    for (const pipeline::RouteTile& t : train)
+      if (s) s = writer.append(t.node);
+    if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
+    tools::RouteFileReader reader;
+    std::vector<route::NodeMeta> meta;
+    std::uint32_t bad = 0;
+    s = reader.open(route_path.c_str());
+    if (s) s = reader.read_all_meta(meta, &bad);
+    if (!s) break;
+    std::vector<double> node_along;
+    for (const pipeline::RouteTile& t : train) node_along.push_back(t.truth_along_m);
+    const auto rev = route::RouteDirection::kReverse;
+    std::uint64_t seed = 50000 + 1000 * static_cast<std::uint64_t>(sb);
+    // The test passes, flown once, localised without experiences now and with them after learning.
+    std::vector<std::vector<pipeline::RouteTile>> tests(test_pcts.size());
+    std::vector<MpPass> before(test_pcts.size()), after(test_pcts.size());
+    for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+      s = fly(pipe, w, w.pass(test_pcts[i] / 100.0 * w.swath_m, true, ++seed), tests[i]);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, false, before[i], rev);
+    }
+    // Poisoning, before anything is learnt: a pass over another seabed (the wrong route) and a pass
+    // flown forwards while the localiser is told it runs in reverse (its odometry contradicts every
+    // registration), both with --learn.
+    MpPass wrong, forced;
+    std::vector<pipeline::RouteTile> tiles;
+    if (s) {
+      pipeline::SimSurvey other;
+      s = other.init(length_m, 900 + static_cast<std::uint64_t>(sb));
+      if (s) s = fly(pipe, other, other.pass(0.3 * other.swath_m, true, ++seed), tiles);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, wrong, rev);
+    }
+    if (s) s = fly(pipe, w, w.pass(0.3 * w.swath_m, false, ++seed), tiles);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, forced, rev);
+    poison_learned += wrong.learned + forced.learned;
+    poison_passes += 2;
+    // Learning passes.
+    int learned = 0, learned_wrong = 0;
+    for (int lp : learn_pcts) {
+      MpPass l;
+      if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, l, rev);
+      learned += l.learned;
+      learned_wrong += l.learned_wrong;
+      learn_scored += l.scored;
+      learn_within += l.within1;
+      std::fprintf(log, "  seabed %ld learn reverse %d%%: node +/-1 %5.1f%% (%d tiles), learned %d (%d on a node > 1 from the truth)\n", sb, lp,
+                   pct(l.within1, l.scored), l.scored, l.learned, l.learned_wrong);
+    }
+    tot_learned += learned;
+    tot_learned_wrong += learned_wrong;
+    for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+      s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, true, false, after[i], rev);
+      tot_scored += before[i].scored;
+      tot_before += before[i].within1;
+      tot_after += after[i].within1;
+      reg_before += before[i].registered;
+      reg_after += after[i].registered;
+      std::fprintf(log, "  seabed %ld reverse %d%% (%5.1f m): node +/-1 without %5.1f%%, with experiences %5.1f%% (%d tiles); registered (> 5 inliers) %d -> %d\n", sb,
+                   test_pcts[i], test_pcts[i] / 100.0 * w.swath_m, pct(before[i].within1, before[i].scored), pct(after[i].within1, after[i].scored),
+                   before[i].scored, before[i].registered, after[i].registered);
+    }
+    std::fprintf(log, "  seabed %ld: %zu nodes, %d experiences learnt; poisoning: wrong route learned %d, forced mislocalisation learned %d\n", sb,
+                 train.size(), learned, wrong.learned, forced.learned);
+    if (sb == 1 && s && !tests.empty()) {
+      // Cost: a 10,000-node route (the taught block repeated: ambiguous, so every update runs at the
+      // searching budget), every node holding --max-experiences experiences, against the same route
+      // without: thread CPU per update over the 60 % pass's tiles, both from memory.
+      const double block_m = node_along.back() + spacing;
+      ReplicatedRoute big(&train, 10000, block_m);
+      std::vector<route::NodeMeta> bmeta;
+      for (std::uint32_t i = 0; i < 10000; ++i) bmeta.push_back(big.meta(i));
+      auto filled = std::make_unique<FilledExperiences>();
+      filled->per_node = static_cast<std::uint32_t>(g_opt.max_experiences);
+      filled->nodes = 10000;
+      filled->block = static_cast<std::uint32_t>(train.size());
+      {
+        pipeline::RouteExperiences e(hal::host_file_store());
+        s = e.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config());
+        if (s) s = e.open(route_path.c_str(), reader.params(), reader, false);
+        for (std::uint32_t r = 0; s && e.has_experiences() && r < e.file().records(); ++r) {
+          route::RouteNode n;
+          if (!e.source()->load(r, n)) continue;
+          filled->block_node.push_back(n.meta.index);
+          filled->learnt.push_back(n);
+        }
+      }
+      ArenaStorage ia(route::ExperienceIndex::arena_bytes(10000, filled->per_node));
+      route::ExperienceIndex bindex;
+      if (s) s = bindex.init(10000, filled->per_node, ia);
+      if (s) s = bindex.reset(10000);
+      for (std::uint32_t n = 0; s && n < 10000; ++n)
+        for (std::uint16_t k = 0; k < filled->per_node; ++k) {
+          route::ExperienceMeta m;
+          m.record = n * filled->per_node + k;
+          m.node = n;
+          m.slot = k;
+          m.pass_id = 1 + k;
+          s = bindex.set(m);
+        }
+      UpdateCost without, with;
+      const std::vector<pipeline::RouteTile>& tt = tests[tests.size() > 1 ? 1 : 0];
+      if (s && !filled->learnt.empty()) s = time_updates(reader.params(), big, bmeta, nullptr, nullptr, tt, without);
+      if (s && !filled->learnt.empty()) s = time_updates(reader.params(), big, bmeta, filled.get(), &bindex, tt, with);
+      std::fprintf(log, "  cost, 10,000 nodes (memory), %u experiences on every node: update thread CPU mean %.2f ms, max %.2f ms, <= %u registrations; "
+                        "without experiences %.2f ms, max %.2f ms, <= %u registrations (%zu updates each)\n",
+                   filled->per_node, with.cpu_mean, with.cpu_max, with.max_registrations, without.cpu_mean, without.cpu_max, without.max_registrations,
+                   tt.size());
+      cost_with = with.cpu_mean;
+      cost_with_max = with.cpu_max;
+      cost_without = without.cpu_mean;
+    }
+  }
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval --multi-pass: %s\n", s.message());
+    return 1;
+  }
+  std::fprintf(log, "multi-pass, %ld seabeds: reverse at %s%%: node +/-1 without experiences %.2f%%, after learning 30%% + 40%% %.2f%% (%d tiles); "
+                    "registered %d -> %d; learnt %d experiences (%d on a node > 1 from the truth); poisoning passes learned %d (of %d passes); %.1f s\n",
+               seabeds, g_opt.quick ? "60" : "55-65", pct(tot_before, tot_scored), pct(tot_after, tot_scored), tot_scored, reg_before, reg_after, tot_learned,
+               tot_learned_wrong, poison_learned, poison_passes, ms_since(t_all) / 1000.0);
+  if (g_opt.json)
+    std::printf("{\"seabeds\": %ld, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"registered_without\": %d, "
+                "\"registered_with\": %d, \"learned\": %d, \"learned_wrong_node\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld, "
+                "\"update_cpu_ms_10000_nodes_with\": %.2f, \"update_cpu_ms_10000_nodes_with_max\": %.2f, \"update_cpu_ms_10000_nodes_without\": %.2f}\n",
+                seabeds, tot_scored, pct(tot_before, tot_scored), pct(tot_after, tot_scored), reg_before, reg_after, tot_learned, tot_learned_wrong,
+                pct(learn_within, learn_scored), poison_learned, g_opt.max_experiences, cost_with, cost_with_max, cost_without);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// route eval --changed-seabed: the seabed changed between the teach and the repeats (ripples moved,
+// patches of changed reflectivity, rocks gone or new), at several degrees; repeats at 20 % forwards
+// and in reverse, localised without experiences, then again after one forward repeat at 0 % over the
+// changed seabed was learnt.
+int cmd_eval_changed_seabed() {
+  const double length_m = g_opt.length_m;
+  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
+  const std::string out_dir = g_opt.eval_out;
+  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+    std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
+    return 1;
+  }
+  FILE* log = g_opt.json ? stderr : stdout;
+  const std::vector<int> degrees{20, 40, 60};
+  pipeline::RouteTilePipeline pipe;
+  Status s = pipe.init(pipeline::default_route_tile_config());
+  const auto t_all = Clock::now();
+  std::vector<int> scored(degrees.size(), 0), before(degrees.size(), 0), after(degrees.size(), 0), learnt(degrees.size(), 0);
+  std::fprintf(log, "changed seabed: per seabed and degree d: ripples moved by d%% x 2 wavelengths, d%% of 12 m cells with reflectivity +/-0.3, d%% of rock cells "
+                    "flipped (a rock gone or new); repeats at 20%% forwards and reverse without experiences, then after learning one forward repeat at 0%% "
+                    "over the changed seabed\n");
+  for (long sb = 1; s && sb <= seabeds; ++sb) {
+    pipeline::SimSurvey w;
+    std::vector<pipeline::RouteTile> train;
+    s = w.init(length_m, static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, w, w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), train);
+    if (!s || train.size() < 2) break;
+    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+    const std::string route_path = out_dir + "/route_changed_" + std::to_string(sb) + ".qroute";
+    tools::RouteFileWriter writer;
+    if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
+    for (const pipeline::RouteTile& t : train)
+      if (s) s = writer.append(t.node);
+    if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
+    tools::RouteFileReader reader;
+    std::vector<route::NodeMeta> meta;
+    std::uint32_t bad = 0;
+    s = reader.open(route_path.c_str());
+    if (s) s = reader.read_all_meta(meta, &bad);
+    if (!s) break;
+    std::vector<double> node_along;
+    for (const pipeline::RouteTile& t : train) node_along.push_back(t.truth_along_m);
+    std::uint64_t seed = 70000 + 1000 * static_cast<std::uint64_t>(sb);
+    for (std::size_t di = 0; s && di < degrees.size(); ++di) {
+      const float f = static_cast<float>(degrees[di]) / 100.0f;
+      pipeline::SimSurvey changed;
+      s = changed.init(length_m, static_cast<std::uint64_t>(sb));
+      sidescan::SeabedConfig sc = w.seabed.config();
+      sc.change_fraction = f;
+      sc.change_ripple_shift_m = f * 2.0f * sc.ripple_wavelength_m;
+      sc.change_seed = 17 + static_cast<std::uint64_t>(sb);
+      if (s) s = changed.seabed.init(sc);
+      std::remove((route_path + ".exp").c_str());
+      std::vector<std::vector<pipeline::RouteTile>> tests(2);
+      MpPass b[2], a[2], l;
+      for (int r = 0; s && r < 2; ++r) {
+        s = fly(pipe, changed, changed.pass(0.2 * changed.swath_m, r == 1, ++seed), tests[static_cast<std::size_t>(r)]);
+        if (s)
+          s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, r == 1, false, false, b[r],
+                       r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
+      }
+      std::vector<pipeline::RouteTile> tiles;
+      if (s) s = fly(pipe, changed, changed.pass(0.0, false, ++seed), tiles);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, l, route::RouteDirection::kForward);
+      for (int r = 0; s && r < 2; ++r)
+        s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, r == 1, true, false, a[r],
+                     r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
+      if (!s) break;
+      for (int r = 0; r < 2; ++r) {
+        scored[di] += b[r].scored;
+        before[di] += b[r].within1;
+        after[di] += a[r].within1;
+      }
+      learnt[di] += l.learned;
+      std::fprintf(log, "  seabed %ld change %d%%: learnt %d (%d wrong node); 20%% forward node +/-1 %5.1f%% -> %5.1f%%, reverse %5.1f%% -> %5.1f%%; "
+                        "registered %d -> %d, %d -> %d\n",
+                   sb, degrees[di], l.learned, l.learned_wrong, pct(b[0].within1, b[0].scored), pct(a[0].within1, a[0].scored), pct(b[1].within1, b[1].scored),
+                   pct(a[1].within1, a[1].scored), b[0].registered, a[0].registered, b[1].registered, a[1].registered);
+    }
+  }
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval --changed-seabed: %s\n", s.message());
+    return 1;
+  }
+  std::string json = "{\"seabeds\": " + std::to_string(seabeds) + ", \"degrees\": [";
+  for (std::size_t di = 0; di < degrees.size(); ++di) {
+    std::fprintf(log, "changed seabed %d%%, %ld seabeds: node +/-1 without learning %.2f%%, after learning one repeat %.2f%% (%d tiles, %d experiences)\n",
+                 degrees[di], seabeds, pct(before[di], scored[di]), pct(after[di], scored[di]), scored[di], learnt[di]);
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%s{\"change_pct\": %d, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"learned\": %d}",
+                  di ? ", " : "", degrees[di], scored[di], pct(before[di], scored[di]), pct(after[di], scored[di]), learnt[di]);
+    json += buf;
+  }
+  std::fprintf(log, "%.1f s\n", ms_since(t_all) / 1000.0);
+  if (g_opt.json) std::printf("%s]}\n", json.c_str());
+  return 0;
+}
+
+}  // namespace route_cmd
