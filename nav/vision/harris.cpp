@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace qnav::vision {
 
@@ -105,6 +106,61 @@ void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1,
   }
 }
 
+// Block radius 1 on an 8-bit image: the structure tensor from integer gradients, one pass per image row.
+// Row py's Sobel sums dx, dy (|.| <= 1020: the integers sobel_row scales by 1/8) come from the
+// separable column terms v = a + 2b + c and d = c - a kept in registers; their products, summed over
+// columns x-1..x+1 in integers (|.| < 2^22, exact in float), go to ring slot py % 3 as floats, and
+// once three rows are in, output row py-1 sums the three slots (|.| <= 9 * 1020^2 < 2^24, exact).
+// The same floats as the float path: there gx = dx / 8, so every product and partial box sum is an
+// integer multiple of 1/64 below 2^24 / 64, exact in any order; so sxx = Sxx / 64 (exact) etc., and
+// the response is the same expression on the same values. Per pixel: 3 byte loads, 3 integer
+// multiplies and 3 int -> float conversions, no gradient or product rows (a LEON3 converts through
+// memory, and has no SIMD for the float passes this replaces).
+template <bool kOutput>
+inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
+                             int x0, int x1, float* __restrict nxx, float* __restrict nyy, float* __restrict nxy,
+                             const float* __restrict r1, const float* __restrict r2, std::size_t wz, float k,
+                             float* __restrict out) noexcept {
+  const auto v = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
+  const auto d = [&](int x) { return c[x] - a[x]; };
+  // Columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
+  const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
+  int va = v(x0), da = d(x0), vb = v(x0 + 1), db = d(x0 + 1);
+  int gx = va - vm2, gy = dm2 + 2 * dm1 + da;
+  int mxx = gx * gx, myy = gy * gy, mxy = gx * gy;
+  gx = vb - vm1;
+  gy = dm1 + 2 * da + db;
+  int zxx = gx * gx, zyy = gy * gy, zxy = gx * gy;
+  for (int x = x0; x < x1; ++x) {
+    const int vc = v(x + 2), dc = d(x + 2);
+    gx = vc - va;
+    gy = da + 2 * db + dc;
+    const int pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
+    const float hxx = static_cast<float>(mxx + zxx + pxx), hyy = static_cast<float>(myy + zyy + pyy),
+                hxy = static_cast<float>(mxy + zxy + pxy);
+    nxx[x] = hxx;
+    nyy[x] = hyy;
+    nxy[x] = hxy;
+    if (kOutput) {
+      const float sxx = (hxx + r1[x] + r2[x]) * 0.015625f;
+      const float syy = (hyy + r1[wz + x] + r2[wz + x]) * 0.015625f;
+      const float sxy = (hxy + r1[2 * wz + x] + r2[2 * wz + x]) * 0.015625f;
+      const float tr = sxx + syy;
+      out[x] = sxx * syy - sxy * sxy - k * tr * tr;
+    }
+    va = vb;
+    da = db;
+    vb = vc;
+    db = dc;
+    mxx = zxx;
+    myy = zyy;
+    mxy = zxy;
+    zxx = pxx;
+    zyy = pyy;
+    zxy = pxy;
+  }
+}
+
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (vectorisable without
 // -ffast-math; the lane order is fixed, so the result is deterministic).
 inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum) noexcept {
@@ -128,6 +184,29 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
 }
 
 }  // namespace
+
+bool harris_response_u8_r1(ConstImageViewU8 img, RectI g, float k, ImageViewF32 resp, Span<float> ring) noexcept {
+  const std::size_t wz = ring.size() / 9;
+  if (g.empty() || g.x < 2 || g.y < 2 || g.x + g.width > img.width() - 2 || g.y + g.height > img.height() - 2 ||
+      resp.width() < g.x + g.width || resp.height() < g.y + g.height || wz < static_cast<std::size_t>(g.x + g.width))
+    return false;
+  const int x0 = g.x, x1 = g.x + g.width;
+  for (int py = g.y - 1; py <= g.y + g.height; ++py) {
+    const int s = (py - (g.y - 1)) % 3;
+    float* slot = ring.data() + static_cast<std::size_t>(3 * s) * wz;
+    const float* r1 = ring.data() + static_cast<std::size_t>(3 * ((s + 2) % 3)) * wz;  // row py - 1
+    const float* r2 = ring.data() + static_cast<std::size_t>(3 * ((s + 1) % 3)) * wz;  // row py - 2
+    const std::uint8_t* a = img.row(py - 1);
+    const std::uint8_t* b = img.row(py);
+    const std::uint8_t* c = img.row(py + 1);
+    if (py < g.y + 1) {
+      tensor_row_u8_r1<false>(a, b, c, x0, x1, slot, slot + wz, slot + 2 * wz, r1, r2, wz, k, nullptr);
+    } else {
+      tensor_row_u8_r1<true>(a, b, c, x0, x1, slot, slot + wz, slot + 2 * wz, r1, r2, wz, k, resp.row(py - 1));
+    }
+  }
+  return true;
+}
 
 std::size_t HarrisDetector::arena_bytes(const HarrisConfig& config) noexcept {
   const Sizes s = sizes_for(config);
@@ -231,7 +310,11 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
   float* csxy = colsum_.data() + 2 * wz;
   const int px0 = g.x - r, px1 = g.x + g.width + r;  // product columns needed
   const float k = config_.k;
-  for (int py = g.y - r; py < g.y + g.height + r; ++py) {
+  bool integer_tensor = false;
+  if constexpr (kHarrisIntegerTensor && std::is_same<Pixel, std::uint8_t>::value) {
+    if (r == 1) integer_tensor = harris_response_u8_r1(image, g, k, resp, ring_);  // g is 2 px inside (valid)
+  }
+  for (int py = g.y - r; !integer_tensor && py < g.y + g.height + r; ++py) {
     const int slot = (py - (g.y - r)) % nrows;
     float* __restrict pxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
     float* __restrict pyy = pxx + wz;
