@@ -118,47 +118,53 @@ void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1,
 // memory, and has no SIMD for the float passes this replaces).
 template <bool kOutput>
 inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
-                             int x0, int x1, float* __restrict nxx, float* __restrict nyy, float* __restrict nxy,
-                             const float* __restrict r1, const float* __restrict r2, std::size_t wz, float k,
-                             float* __restrict out) noexcept {
+                             int x0, int x1, float* __restrict slot, const float* __restrict r1, const float* __restrict r2,
+                             float k, float* __restrict out) noexcept {
   const auto v = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
   const auto d = [&](int x) { return c[x] - a[x]; };
   // Columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
   const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
   int va = v(x0), da = d(x0), vb = v(x0 + 1), db = d(x0 + 1);
-  int gx = va - vm2, gy = dm2 + 2 * dm1 + da;
-  int mxx = gx * gx, myy = gy * gy, mxy = gx * gy;
-  gx = vb - vm1;
-  gy = dm1 + 2 * da + db;
-  int zxx = gx * gx, zyy = gy * gy, zxy = gx * gy;
-  for (int x = x0; x < x1; ++x) {
-    const int vc = v(x + 2), dc = d(x + 2);
-    gx = vc - va;
-    gy = da + 2 * db + dc;
+  int gx0 = va - vm2, gy0 = dm2 + 2 * dm1 + da;
+  int mxx = gx0 * gx0, myy = gy0 * gy0, mxy = gx0 * gy0;
+  gx0 = vb - vm1;
+  gy0 = dm1 + 2 * da + db;
+  int zxx = gx0 * gx0, zyy = gy0 * gy0, zxy = gx0 * gy0;
+  // One column x: (v0, d0) = column x, d1 = column x+1's d, p0 = products at x-1, p1 at x. The
+  // new column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles
+  // swapped make one step of period 2 without register moves (no copies on an in-order core).
+  const auto step = [&](int x, int& v0, int& d0, int d1, int& p0xx, int& p0yy, int& p0xy, int p1xx, int p1yy,
+                        int p1xy) {
+    const int v2 = v(x + 2), d2 = d(x + 2);
+    const int gx = v2 - v0, gy = d0 + 2 * d1 + d2;
     const int pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
-    const float hxx = static_cast<float>(mxx + zxx + pxx), hyy = static_cast<float>(myy + zyy + pyy),
-                hxy = static_cast<float>(mxy + zxy + pxy);
-    nxx[x] = hxx;
-    nyy[x] = hyy;
-    nxy[x] = hxy;
+    const float hxx = static_cast<float>(p0xx + p1xx + pxx), hyy = static_cast<float>(p0yy + p1yy + pyy),
+                hxy = static_cast<float>(p0xy + p1xy + pxy);
+    float* __restrict sl = slot + 3 * x;  // this row's slot, xx yy xy interleaved per column
+    sl[0] = hxx;
+    sl[1] = hyy;
+    sl[2] = hxy;
     if (kOutput) {
-      const float sxx = (hxx + r1[x] + r2[x]) * 0.015625f;
-      const float syy = (hyy + r1[wz + x] + r2[wz + x]) * 0.015625f;
-      const float sxy = (hxy + r1[2 * wz + x] + r2[2 * wz + x]) * 0.015625f;
+      const float* __restrict q1 = r1 + 3 * x;
+      const float* __restrict q2 = r2 + 3 * x;
+      const float sxx = (hxx + q1[0] + q2[0]) * 0.015625f;
+      const float syy = (hyy + q1[1] + q2[1]) * 0.015625f;
+      const float sxy = (hxy + q1[2] + q2[2]) * 0.015625f;
       const float tr = sxx + syy;
       out[x] = sxx * syy - sxy * sxy - k * tr * tr;
     }
-    va = vb;
-    da = db;
-    vb = vc;
-    db = dc;
-    mxx = zxx;
-    myy = zyy;
-    mxy = zxy;
-    zxx = pxx;
-    zyy = pyy;
-    zxy = pxy;
+    v0 = v2;
+    d0 = d2;
+    p0xx = pxx;
+    p0yy = pyy;
+    p0xy = pxy;
+  };
+  int x = x0;
+  for (; x + 2 <= x1; x += 2) {
+    step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
+    step(x + 1, vb, db, da, zxx, zyy, zxy, mxx, myy, mxy);
   }
+  if (x < x1) step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
 }
 
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (vectorisable without
@@ -186,7 +192,7 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
 }  // namespace
 
 bool harris_response_u8_r1(ConstImageViewU8 img, RectI g, float k, ImageViewF32 resp, Span<float> ring) noexcept {
-  const std::size_t wz = ring.size() / 9;
+  const std::size_t wz = ring.size() / 9;  // a slot: 3 products interleaved per column
   if (g.empty() || g.x < 2 || g.y < 2 || g.x + g.width > img.width() - 2 || g.y + g.height > img.height() - 2 ||
       resp.width() < g.x + g.width || resp.height() < g.y + g.height || wz < static_cast<std::size_t>(g.x + g.width))
     return false;
@@ -200,9 +206,9 @@ bool harris_response_u8_r1(ConstImageViewU8 img, RectI g, float k, ImageViewF32 
     const std::uint8_t* b = img.row(py);
     const std::uint8_t* c = img.row(py + 1);
     if (py < g.y + 1) {
-      tensor_row_u8_r1<false>(a, b, c, x0, x1, slot, slot + wz, slot + 2 * wz, r1, r2, wz, k, nullptr);
+      tensor_row_u8_r1<false>(a, b, c, x0, x1, slot, r1, r2, k, nullptr);
     } else {
-      tensor_row_u8_r1<true>(a, b, c, x0, x1, slot, slot + wz, slot + 2 * wz, r1, r2, wz, k, resp.row(py - 1));
+      tensor_row_u8_r1<true>(a, b, c, x0, x1, slot, r1, r2, k, resp.row(py - 1));
     }
   }
   return true;
