@@ -439,12 +439,29 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
     // a third of the compares of a full column pass, the same candidates.
     const float* __restrict own = nms_ring_.data() + static_cast<std::size_t>((y - (det.y - nms)) % nwin) * wz;
     const float* row = resp.row(y);
+    // With SIMD the full window maximum (max over the ring) is a few vector instructions per pixel, and
+    // then only local maxima take a branch: the per-pixel compares and their mispredicted branches were
+    // most of the host's Harris time. The same candidates either way (v < max of the ring <=> v below
+    // one of its rows; own is one of them).
+    float* __restrict wmax = colsum_.data();  // scratch (the float tensor's column sums are done with)
+    if constexpr (!kHarrisIntegerTensor) {
+      const float* __restrict r0 = nms_ring_.data();
+      for (int x = dx0; x < dx1; ++x) wmax[x] = r0[x];
+      for (int j = 1; j < nwin; ++j) {
+        const float* __restrict rj = r0 + static_cast<std::size_t>(j) * wz;
+        for (int x = dx0; x < dx1; ++x) wmax[x] = rj[x] > wmax[x] ? rj[x] : wmax[x];
+      }
+    }
     for (int x = dx0; x < dx1; ++x) {
       const float v = row[x];
-      if (v < own[x] || !(v > thresh)) continue;
-      bool below = false;
-      for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
-      if (below) continue;
+      if constexpr (!kHarrisIntegerTensor) {
+        if (v < wmax[x] || !(v > thresh)) continue;
+      } else {
+        if (v < own[x] || !(v > thresh)) continue;
+        bool below = false;
+        for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
+        if (below) continue;
+      }
       // Exact check with the tie rule: the earlier pixel in raster order wins.
       bool is_max = true;
       for (int dy = -nms; dy <= nms && is_max; ++dy) {
