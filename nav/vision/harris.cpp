@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace qnav::vision {
 
@@ -105,6 +106,67 @@ void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1,
   }
 }
 
+// Block radius 1 on an 8-bit image: the structure tensor from integer gradients, one pass per image row.
+// Row py's Sobel sums dx, dy (|.| <= 1020: the integers sobel_row scales by 1/8) come from the
+// separable column terms v = a + 2b + c and d = c - a kept in registers; their products, summed over
+// columns x-1..x+1 in integers (|.| < 2^22, exact in float), go to ring slot py % 3 as floats, and
+// once three rows are in, output row py-1 sums the three slots (|.| <= 9 * 1020^2 < 2^24, exact).
+// The same floats as the float path: there gx = dx / 8, so every product and partial box sum is an
+// integer multiple of 1/64 below 2^24 / 64, exact in any order; so sxx = Sxx / 64 (exact) etc., and
+// the response is the same expression on the same values. Per pixel: 3 byte loads, 3 integer
+// multiplies and 3 int -> float conversions, no gradient or product rows (a LEON3 converts through
+// memory, and has no SIMD for the float passes this replaces).
+template <bool kOutput>
+inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
+                             int x0, int x1, float* __restrict slot, const float* __restrict r1, const float* __restrict r2,
+                             float k, float* __restrict out) noexcept {
+  const auto v = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
+  const auto d = [&](int x) { return c[x] - a[x]; };
+  // Columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
+  const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
+  int va = v(x0), da = d(x0), vb = v(x0 + 1), db = d(x0 + 1);
+  int gx0 = va - vm2, gy0 = dm2 + 2 * dm1 + da;
+  int mxx = gx0 * gx0, myy = gy0 * gy0, mxy = gx0 * gy0;
+  gx0 = vb - vm1;
+  gy0 = dm1 + 2 * da + db;
+  int zxx = gx0 * gx0, zyy = gy0 * gy0, zxy = gx0 * gy0;
+  // One column x: (v0, d0) = column x, d1 = column x+1's d, p0 = products at x-1, p1 at x. The
+  // new column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles
+  // swapped make one step of period 2 without register moves (no copies on an in-order core).
+  const auto step = [&](int x, int& v0, int& d0, int d1, int& p0xx, int& p0yy, int& p0xy, int p1xx, int p1yy,
+                        int p1xy) {
+    const int v2 = v(x + 2), d2 = d(x + 2);
+    const int gx = v2 - v0, gy = d0 + 2 * d1 + d2;
+    const int pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
+    const float hxx = static_cast<float>(p0xx + p1xx + pxx), hyy = static_cast<float>(p0yy + p1yy + pyy),
+                hxy = static_cast<float>(p0xy + p1xy + pxy);
+    float* __restrict sl = slot + 3 * x;  // this row's slot, xx yy xy interleaved per column
+    sl[0] = hxx;
+    sl[1] = hyy;
+    sl[2] = hxy;
+    if (kOutput) {
+      const float* __restrict q1 = r1 + 3 * x;
+      const float* __restrict q2 = r2 + 3 * x;
+      const float sxx = (hxx + q1[0] + q2[0]) * 0.015625f;
+      const float syy = (hyy + q1[1] + q2[1]) * 0.015625f;
+      const float sxy = (hxy + q1[2] + q2[2]) * 0.015625f;
+      const float tr = sxx + syy;
+      out[x] = sxx * syy - sxy * sxy - k * tr * tr;
+    }
+    v0 = v2;
+    d0 = d2;
+    p0xx = pxx;
+    p0yy = pyy;
+    p0xy = pxy;
+  };
+  int x = x0;
+  for (; x + 2 <= x1; x += 2) {
+    step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
+    step(x + 1, vb, db, da, zxx, zyy, zxy, mxx, myy, mxy);
+  }
+  if (x < x1) step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
+}
+
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (vectorisable without
 // -ffast-math; the lane order is fixed, so the result is deterministic).
 inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum) noexcept {
@@ -128,6 +190,29 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
 }
 
 }  // namespace
+
+bool harris_response_u8_r1(ConstImageViewU8 img, RectI g, float k, ImageViewF32 resp, Span<float> ring) noexcept {
+  const std::size_t wz = ring.size() / 9;  // a slot: 3 products interleaved per column
+  if (g.empty() || g.x < 2 || g.y < 2 || g.x + g.width > img.width() - 2 || g.y + g.height > img.height() - 2 ||
+      resp.width() < g.x + g.width || resp.height() < g.y + g.height || wz < static_cast<std::size_t>(g.x + g.width))
+    return false;
+  const int x0 = g.x, x1 = g.x + g.width;
+  for (int py = g.y - 1; py <= g.y + g.height; ++py) {
+    const int s = (py - (g.y - 1)) % 3;
+    float* slot = ring.data() + static_cast<std::size_t>(3 * s) * wz;
+    const float* r1 = ring.data() + static_cast<std::size_t>(3 * ((s + 2) % 3)) * wz;  // row py - 1
+    const float* r2 = ring.data() + static_cast<std::size_t>(3 * ((s + 1) % 3)) * wz;  // row py - 2
+    const std::uint8_t* a = img.row(py - 1);
+    const std::uint8_t* b = img.row(py);
+    const std::uint8_t* c = img.row(py + 1);
+    if (py < g.y + 1) {
+      tensor_row_u8_r1<false>(a, b, c, x0, x1, slot, r1, r2, k, nullptr);
+    } else {
+      tensor_row_u8_r1<true>(a, b, c, x0, x1, slot, r1, r2, k, resp.row(py - 1));
+    }
+  }
+  return true;
+}
 
 std::size_t HarrisDetector::arena_bytes(const HarrisConfig& config) noexcept {
   const Sizes s = sizes_for(config);
@@ -231,7 +316,11 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
   float* csxy = colsum_.data() + 2 * wz;
   const int px0 = g.x - r, px1 = g.x + g.width + r;  // product columns needed
   const float k = config_.k;
-  for (int py = g.y - r; py < g.y + g.height + r; ++py) {
+  bool integer_tensor = false;
+  if constexpr (kHarrisIntegerTensor && std::is_same<Pixel, std::uint8_t>::value) {
+    if (r == 1) integer_tensor = harris_response_u8_r1(image, g, k, resp, ring_);  // g is 2 px inside (valid)
+  }
+  for (int py = g.y - r; !integer_tensor && py < g.y + g.height + r; ++py) {
     const int slot = (py - (g.y - r)) % nrows;
     float* __restrict pxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
     float* __restrict pyy = pxx + wz;
@@ -350,12 +439,29 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
     // a third of the compares of a full column pass, the same candidates.
     const float* __restrict own = nms_ring_.data() + static_cast<std::size_t>((y - (det.y - nms)) % nwin) * wz;
     const float* row = resp.row(y);
+    // With SIMD the full window maximum (max over the ring) is a few vector instructions per pixel, and
+    // then only local maxima take a branch: the per-pixel compares and their mispredicted branches were
+    // most of the host's Harris time. The same candidates either way (v < max of the ring <=> v below
+    // one of its rows; own is one of them).
+    float* __restrict wmax = colsum_.data();  // scratch (the float tensor's column sums are done with)
+    if constexpr (!kHarrisIntegerTensor) {
+      const float* __restrict r0 = nms_ring_.data();
+      for (int x = dx0; x < dx1; ++x) wmax[x] = r0[x];
+      for (int j = 1; j < nwin; ++j) {
+        const float* __restrict rj = r0 + static_cast<std::size_t>(j) * wz;
+        for (int x = dx0; x < dx1; ++x) wmax[x] = rj[x] > wmax[x] ? rj[x] : wmax[x];
+      }
+    }
     for (int x = dx0; x < dx1; ++x) {
       const float v = row[x];
-      if (v < own[x] || !(v > thresh)) continue;
-      bool below = false;
-      for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
-      if (below) continue;
+      if constexpr (!kHarrisIntegerTensor) {
+        if (v < wmax[x] || !(v > thresh)) continue;
+      } else {
+        if (v < own[x] || !(v > thresh)) continue;
+        bool below = false;
+        for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
+        if (below) continue;
+      }
       // Exact check with the tie rule: the earlier pixel in raster order wins.
       bool is_max = true;
       for (int dy = -nms; dy <= nms && is_max; ++dy) {

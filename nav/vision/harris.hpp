@@ -57,6 +57,24 @@ struct HarrisConfig {
   bool subpixel = true;       // parabola refinement of x, y (|offset| <= 0.5 px)
 };
 
+// Whether detect() computes the structure tensor of 8-bit images with block_radius 1 from integer
+// gradients (harris_response_u8_r1) instead of its float passes: on targets without SIMD (LEON3, armhf
+// without NEON), where the float passes are not vectorised and each int -> float conversion counts;
+// with SIMD the float passes are vectorised and cheaper. Both give the same response bit for bit
+// (test HarrisIntegerTensor.*), so corners do not depend on the choice.
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__)
+inline constexpr bool kHarrisIntegerTensor = false;
+#else
+inline constexpr bool kHarrisIntegerTensor = true;
+#endif
+
+// The Harris response R = det(M) - k trace(M)^2, M the products of the Sobel gradients (scaled by 1/8)
+// summed over 3 x 3 (block_radius 1), of an 8-bit image at the pixels of `area`, written to response
+// at the same coordinates; ring is scratch of 9 rows of at least area.x + area.width floats. False (and
+// nothing written) when area is not at least 2 px inside the image or ring or response is too small.
+// What detect() runs when kHarrisIntegerTensor (public for the tests). Time O(area), no allocation.
+bool harris_response_u8_r1(ConstImageViewU8 image, RectI area, float k, ImageViewF32 response, Span<float> ring) noexcept;
+
 class HarrisDetector {
  public:
   HarrisDetector() noexcept : counters_(kVisionCounterNames) {}

@@ -120,4 +120,27 @@ class CannedMap {
   std::unique_ptr<Impl> d_;
 };
 
+// The MAVLink codec (drivers/mavlink) per message, as qnavd's MAVLink endpoint uses it: encode one
+// message to a complete MAVLink 2 frame (FrameEncoder + the typed payload), parse one frame from a byte
+// stream (Parser::feed + the typed decode), sign a frame (SHA-256) and parse a signed one (verification
+// and replay check). Each call does one message; result() hashes the last call's output afterwards
+// (outside the counted region: hashing a frame costs more than encoding it).
+// (canned_mavlink.cpp: not in the freestanding LEON3 image's workload.)
+class CannedMavlink {
+ public:
+  static constexpr int kCalls = 8;  // messages per stage, each with other field values
+  enum Kind : int { kOdometry, kDelta, kDistance, kHeartbeat, kNamed, kCommand, kSignedOdometry, kSign, kKinds };
+  CannedMavlink();
+  ~CannedMavlink();
+  Status init();
+  std::uint64_t encode(int kind, int k);  // kOdometry .. kNamed; returns the frame length (0: failed)
+  std::uint64_t parse(int kind, int k);   // kOdometry .. kSignedOdometry; 1 when the frame decoded
+  std::uint64_t sign(int k);              // signs an ODOMETRY frame
+  std::uint64_t result(bool parsed) const;  // hash of the last call's frame (encode, sign) or fields (parse)
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> d_;
+};
+
 }  // namespace qnav::timing

@@ -1,0 +1,122 @@
+// harris_response_u8_r1 (the structure tensor from integer gradients that detect() runs for 8-bit
+// images with block_radius 1 on targets without SIMD, kHarrisIntegerTensor) against the float passes
+// (detect() on the same image as floats: the float path on every target): the same response bit for
+// bit, on images with the largest gradients an 8-bit image has, and the same corners.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "nav/vision/harris.hpp"
+#include "test_images.hpp"
+
+namespace qnav::vision {
+namespace {
+
+std::uint32_t bits(float v) {
+  std::uint32_t u = 0;
+  std::memcpy(&u, &v, sizeof u);
+  return u;
+}
+
+struct Images {
+  static constexpr int kW = 96, kH = 80;
+  std::vector<std::uint8_t> u8 = std::vector<std::uint8_t>(kW * kH);
+  std::vector<float> f32 = std::vector<float>(kW * kH);
+  void sync() {
+    for (std::size_t i = 0; i < u8.size(); ++i) f32[i] = static_cast<float>(u8[i]);
+  }
+};
+
+// 0: uniform noise; 1: binary 0/255 noise (Sobel sums up to +-1020 with both signs of the product);
+// 2: a 255 square on 0 (step corners) plus a 0/255 checkerboard patch.
+void make(Images& im, int kind) {
+  std::uint32_t s = 12345u + static_cast<std::uint32_t>(kind);
+  for (int y = 0; y < Images::kH; ++y)
+    for (int x = 0; x < Images::kW; ++x) {
+      s = s * 1664525u + 1013904223u;
+      std::uint8_t v = 0;
+      if (kind == 0) v = static_cast<std::uint8_t>(s >> 24);
+      if (kind == 1) v = (s >> 31) != 0 ? 255 : 0;
+      if (kind == 2) v = (x >= 20 && x < 60 && y >= 15 && y < 50) || (x >= 70 && y >= 55 && ((x + y) & 1)) ? 255 : 0;
+      im.u8[static_cast<std::size_t>(y * Images::kW + x)] = v;
+    }
+  im.sync();
+}
+
+TEST(HarrisIntegerTensor, SameResponseBitForBitAsTheFloatPasses) {
+  HarrisConfig c;
+  c.max_width = Images::kW;
+  c.max_height = Images::kH;
+  c.block_radius = 1;
+  ArenaStorage arena(HarrisDetector::arena_bytes(c));
+  HarrisDetector det;
+  ASSERT_TRUE(det.init(c, arena).is_ok());
+  std::vector<Corner> storage(500);
+  BoundedVector<Corner> out(Span<Corner>(storage.data(), storage.size()));
+  std::vector<float> resp(Images::kW * Images::kH, -1.0f), ring(9 * Images::kW);
+  const RectI area{2, 2, Images::kW - 4, Images::kH - 4};  // every pixel where the response is defined
+  for (int kind = 0; kind < 3; ++kind) {
+    Images im;
+    make(im, kind);
+    ASSERT_TRUE(det.detect(ConstImageViewF32(ImageViewF32::make(im.f32.data(), Images::kW, Images::kH).value()), out).is_ok());
+    const ConstImageViewF32 ref = det.response();
+    ImageViewF32 got = ImageViewF32::make(resp.data(), Images::kW, Images::kH).value();
+    ASSERT_TRUE(harris_response_u8_r1(ConstImageViewU8(ImageViewU8::make(im.u8.data(), Images::kW, Images::kH).value()), area, c.k, got,
+                                      Span<float>(ring.data(), ring.size())));
+    int differ = 0;
+    float rmax = 0.0f;
+    for (int y = area.y; y < area.y + area.height; ++y)
+      for (int x = area.x; x < area.x + area.width; ++x) {
+        differ += bits(got.row(y)[x]) != bits(ref.row(y)[x]) ? 1 : 0;
+        rmax = std::max(rmax, ref.row(y)[x]);
+      }
+    EXPECT_EQ(differ, 0) << "image " << kind;
+    EXPECT_GT(rmax, 0.0f) << "image " << kind;  // the images do have corners
+    // Outside the area nothing is written.
+    EXPECT_EQ(got.row(0)[0], -1.0f);
+    EXPECT_EQ(got.row(Images::kH - 1)[Images::kW - 1], -1.0f);
+  }
+}
+
+TEST(HarrisIntegerTensor, SameCornersFromTheByteAndTheFloatImage) {
+  HarrisConfig c;
+  c.max_width = Images::kW;
+  c.max_height = Images::kH;
+  ArenaStorage arena(HarrisDetector::arena_bytes(c));
+  HarrisDetector det;
+  ASSERT_TRUE(det.init(c, arena).is_ok());
+  std::vector<Corner> s1(500), s2(500);
+  BoundedVector<Corner> o1(Span<Corner>(s1.data(), s1.size())), o2(Span<Corner>(s2.data(), s2.size()));
+  for (int kind = 0; kind < 3; ++kind) {
+    Images im;
+    make(im, kind);
+    ASSERT_TRUE(det.detect(ConstImageViewU8(ImageViewU8::make(im.u8.data(), Images::kW, Images::kH).value()), o1).is_ok());
+    ASSERT_TRUE(det.detect(ConstImageViewF32(ImageViewF32::make(im.f32.data(), Images::kW, Images::kH).value()), o2).is_ok());
+    ASSERT_EQ(o1.size(), o2.size()) << "image " << kind;
+    ASSERT_GT(o1.size(), 0u);
+    for (std::size_t i = 0; i < o1.size(); ++i) {
+      EXPECT_EQ(bits(o1[i].x), bits(o2[i].x));
+      EXPECT_EQ(bits(o1[i].y), bits(o2[i].y));
+      EXPECT_EQ(bits(o1[i].score), bits(o2[i].score));
+    }
+  }
+}
+
+TEST(HarrisIntegerTensor, RefusesAnAreaTooCloseToTheEdgeOrTooLittleScratch) {
+  std::vector<std::uint8_t> px(40 * 30, 7);
+  std::vector<float> resp(40 * 30), ring(9 * 40);
+  const ConstImageViewU8 img(ImageViewU8::make(px.data(), 40, 30).value());
+  ImageViewF32 r = ImageViewF32::make(resp.data(), 40, 30).value();
+  const Span<float> scratch(ring.data(), ring.size());
+  EXPECT_TRUE(harris_response_u8_r1(img, RectI{2, 2, 36, 26}, 0.04f, r, scratch));
+  EXPECT_FALSE(harris_response_u8_r1(img, RectI{1, 2, 36, 26}, 0.04f, r, scratch));
+  EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 37, 26}, 0.04f, r, scratch));
+  EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 36, 27}, 0.04f, r, scratch));
+  EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 36, 26}, 0.04f, r, Span<float>(ring.data(), 9 * 30)));
+  EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 0, 26}, 0.04f, r, scratch));
+}
+
+}  // namespace
+}  // namespace qnav::vision
