@@ -10,6 +10,7 @@
 #include "drivers/camera/stereo_camera.hpp"
 #include "drivers/sidescan/jsf_framer.hpp"
 #include "drivers/sonar_stream/jsf_stream_driver.hpp"
+#include "firmware/pipeline/route_experiences.hpp"
 #include "firmware/qnavd/messages.hpp"
 #include "hal/core/camera.hpp"
 #include "hal/core/can.hpp"
@@ -64,6 +65,7 @@ std::size_t Deployment::bytes(BufferKind k) const noexcept {
 route::LocaliserConfig repeat_localiser_config(const DaemonConfig& c) noexcept {
   route::LocaliserConfig lc = c.localiser;
   lc.filter.max_nodes = c.max_nodes;
+  pipeline::enable_experiences(lc, c.max_experiences);  // a route's experiences are read when it has them
   return lc;
 }
 
@@ -116,6 +118,9 @@ Deployment make_deployment(const DaemonConfig& c) {
   add(d, "route_meta", "nav: route reader", BufferKind::kOwned, c.max_nodes * sizeof(route::NodeMeta), "per-node metadata of the loaded route (route.max_nodes)");
   add(d, "route_records", "nav: route writer + reader", BufferKind::kOwned, 2 * route::record_bytes(route::kMaxKeypointsPerNode),
       "one node record buffer each");
+  add(d, "route_experiences", "nav: RouteRepeat", BufferKind::kOwned,
+      route::ExperienceIndex::arena_bytes(c.max_nodes, c.max_experiences) + route::ExperienceLearner::arena_bytes() + 256,
+      "experience index (route.max_nodes x route.max_experiences) + learner; with two ~10 KB experience buffers and a record buffer");
   add(d, "dvl_driver_queue", "io: DvlSerialDriver", BufferKind::kOwned, sizeof(drivers::dvl::DvlVelocity) * drivers::dvl::DvlSerialDriver::kQueueDepth,
       "velocities parsed in one read, before the dvl queue");
   if (linux_backend) {

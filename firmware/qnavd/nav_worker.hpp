@@ -149,6 +149,9 @@ class NavWorker {
   bool commit_failed() const noexcept { return teach_.commit_failed(); }
   // The bytes its "route_meta" buffer holds (the deployment test compares them with the table).
   std::size_t route_meta_bytes() const noexcept { return repeat_.meta_bytes(); }
+  // Route experiences (route.learn): learnt in Repeat since start; companions or appends that failed.
+  std::uint32_t experiences_learned() const noexcept { return repeat_.learned(); }
+  std::uint32_t experience_errors() const noexcept { return repeat_.experience_errors(); }
   // MAVLink (mavlink.enabled): the endpoint (nullptr when off) and the estimate it publishes.
   const MavlinkEndpoint* mavlink() const noexcept { return source_.endpoint(); }
   const pipeline::NavEstimate& estimate() const noexcept { return source_.estimate(); }

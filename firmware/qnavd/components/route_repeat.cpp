@@ -14,6 +14,7 @@ Status RouteRepeat::init(StaticMemory* mem, qc::QnavCanPublisher& publisher) {
   Result<Arena*> a = arena_.take(mem, "localiser", route::RouteLocaliser::arena_bytes(lc));
   if (!a) return a.status();
   QNAV_RETURN_IF_ERROR(repeater_.init(lc, *a.value()));
+  QNAV_RETURN_IF_ERROR(experiences_.init(ctx_.cfg->max_nodes, ctx_.cfg->max_experiences, route::ExperienceLearnConfig{}));
   meta_.reserve(ctx_.cfg->max_nodes);
   reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   return Status::ok();
@@ -70,10 +71,53 @@ ModeReject RouteRepeat::enter(std::uint16_t route_id, bool reverse) noexcept {
     reader_.close();
     return ModeReject::kRouteMismatch;
   }
-  route_damaged_ = prefix_only;  // a good route clears the fault
   reverse_ = reverse;
+  open_experiences(path);
+  route_damaged_ = prefix_only;  // a good route clears the fault
   eq5_ = false;
   return ModeReject::kNone;
+}
+
+// The route's experiences for this repeat (read, or with route.learn opened for appending).
+void RouteRepeat::open_experiences(const char* path) noexcept {
+  with_experiences_ = false;
+  drivers::route_store::ExperienceOpenReport rep;
+  const Status s = experiences_.open(path, reader_.params(), reader_, ctx_.cfg->route_learn, &rep);
+  if (!s) {
+    ++experience_errors_;
+    if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_experiences_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", experiences_.path(), s.message());
+    (void)repeater_.attach_experiences(nullptr, nullptr);
+    return;
+  }
+  if (!experiences_.has_experiences()) return;  // no companion, not learning
+  Status a = repeater_.attach_experiences(experiences_.index(), experiences_.source());
+  if (a) a = experiences_.begin_pass(Span<const route::NodeMeta>(meta_.data(), meta_.size()), repeater_.localiser().node_spacing_m(), reverse_);
+  if (!a) {
+    ++experience_errors_;
+    if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_experiences_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", experiences_.path(), a.message());
+    experiences_.end_pass();
+    (void)repeater_.attach_experiences(nullptr, nullptr);
+    return;
+  }
+  with_experiences_ = true;
+  if (ctx_.log)
+    std::fprintf(ctx_.log,
+                 "{\"event\":\"route_experiences\",\"file\":\"%s\",\"learn\":%s,\"live\":%u,\"records\":%u,\"damaged\":%u,"
+                 "\"torn_bytes\":%llu,\"created\":%s,\"moved_stale\":%s}\n",
+                 experiences_.path(), experiences_.learning() ? "true" : "false", rep.live, rep.records, rep.damaged,
+                 static_cast<unsigned long long>(rep.torn_bytes), rep.created ? "true" : "false", rep.moved_stale ? "true" : "false");
+}
+
+void RouteRepeat::leave() noexcept {
+  if (with_experiences_) {
+    const std::uint32_t pass_learned = experiences_.learned();
+    experiences_.end_pass();
+    (void)repeater_.attach_experiences(nullptr, nullptr);
+    if (ctx_.log && experiences_.learning())
+      std::fprintf(ctx_.log, "{\"event\":\"route_learned\",\"file\":\"%s\",\"experiences\":%u}\n", experiences_.path(), pass_learned);
+    with_experiences_ = false;
+  }
+  reader_.close();
 }
 
 bool RouteRepeat::step(const pipeline::RouteTile& t, std::uint32_t tile_seq, bool dvl_lost, route::LocaliserStep& out) noexcept {
@@ -84,6 +128,15 @@ bool RouteRepeat::step(const pipeline::RouteTile& t, std::uint32_t tile_seq, boo
   }
   const bool first = t.tile_index == 0;
   const Status s = repeater_.step(t.node, first ? 0.0 : t.nav_step_m, out);
+  if (s && with_experiences_) {
+    bool learned = false;
+    const Status ls = experiences_.on_step(t.node, first ? 0.0 : t.nav_step_m, out, &learned);
+    if (learned) ++learned_;
+    if (!ls) {
+      ++experience_errors_;
+      if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"error\",\"what\":\"route experiences: %s: %s\"}\n", experiences_.path(), ls.message());
+    }
+  }
   if (!s) {
     ++step_errors_;
     out = route::LocaliserStep{};

@@ -9,8 +9,15 @@
 //   route's node metadata (for route fixes); route_damaged() for FaultRouteDamaged.
 // DVL lost at a tile's last ping: the filter runs the paper's eq. 5 motion model until it returns.
 // Leaving or changing a repeat clears what was said about the old route (forget()).
-// Memory: the localiser's arena (the table's "localiser" buffer) and the node metadata (reserved for
-// route.max_nodes: the table's "route_meta"). Time: one filter update per tile (route_update budget).
+// Experiences (issue 29; pipeline::RouteExperiences, as `qnav route repeat` uses it): the route's
+// companion ROUTE.exp, when there is one, is read at enter() and every tile is registered against the
+// taught node and its experiences; with route.learn the pass appends its confirmed tiles to it
+// (durably, one record per learnt tile, on this thread). A companion that cannot be used (damaged,
+// of another teach) is logged and the repeat goes on without it.
+// Memory: the localiser's arena (the table's "localiser" buffer), the node metadata (reserved for
+// route.max_nodes: the table's "route_meta") and the experience index and learner (the table's
+// "route_experiences", allocated in init()). Time: one filter update per tile (route_update budget;
+// with experiences at most 16 more registrations), plus a ~10 KB durable append when a tile is learnt.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +25,7 @@
 
 #include "drivers/qnavcan/publisher.hpp"
 #include "drivers/route_store/route_file.hpp"
+#include "firmware/pipeline/route_experiences.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/qnavd/components/component.hpp"
@@ -27,13 +35,13 @@ namespace qnav::daemon {
 
 class RouteRepeat {
  public:
-  RouteRepeat(const NavContext& ctx, hal::FileStore& store) noexcept : ctx_(ctx), reader_(store), store_(store) {}
+  RouteRepeat(const NavContext& ctx, hal::FileStore& store) noexcept : ctx_(ctx), reader_(store), store_(store), experiences_(store) {}
   Status init(StaticMemory* mem, drivers::qnavcan::QnavCanPublisher& publisher);
 
   // Refused before the current mode is left when the route is not there at all.
   ModeReject probe(std::uint16_t route_id) noexcept;
   ModeReject enter(std::uint16_t route_id, bool reverse) noexcept;
-  void leave() noexcept { reader_.close(); }
+  void leave() noexcept;
   // One finished tile: a filter step, the guidance set on the publisher. dvl_lost: judged at the
   // tile's last ping (sample time), so the same data gives the same answer. Returns the eq. 5 state.
   bool step(const pipeline::RouteTile& t, std::uint32_t tile_seq, bool dvl_lost, route::LocaliserStep& out) noexcept;
@@ -48,6 +56,9 @@ class RouteRepeat {
   const std::vector<route::NodeMeta>& meta() const noexcept { return meta_; }
   std::size_t meta_bytes() const noexcept { return meta_.capacity() * sizeof(route::NodeMeta); }
   std::uint32_t step_errors() const noexcept { return step_errors_; }
+  // Experiences learnt since start; appends or companions that failed (logged).
+  std::uint32_t learned() const noexcept { return learned_; }
+  std::uint32_t experience_errors() const noexcept { return experience_errors_; }
 
  private:
   const NavContext& ctx_;  // the worker's: its log is set in NavWorker::init
@@ -55,6 +66,8 @@ class RouteRepeat {
   hal::FileStore& store_;
   std::vector<route::NodeMeta> meta_;
   pipeline::RouteRepeater repeater_;
+  pipeline::RouteExperiences experiences_;
+  bool with_experiences_ = false;  // this repeat's localiser has the companion attached
   StageArena arena_;
   drivers::qnavcan::QnavCanPublisher* publisher_ = nullptr;
   drivers::qnavcan::RouteStatus route_status_{};
@@ -62,7 +75,8 @@ class RouteRepeat {
   bool reverse_ = false;
   bool eq5_ = false;
   bool route_damaged_ = false;
-  std::uint32_t step_errors_ = 0;
+  std::uint32_t step_errors_ = 0, learned_ = 0, experience_errors_ = 0;
+  void open_experiences(const char* path) noexcept;
 };
 
 }  // namespace qnav::daemon

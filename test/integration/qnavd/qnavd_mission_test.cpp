@@ -6,6 +6,7 @@
 //  - a stop request while teaching: run() returns 0 within the shutdown bound and every node taught
 //    is readable; a damaged route is refused by name and the daemon carries on.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <array>
 #include <atomic>
@@ -160,8 +161,9 @@ std::vector<double> taught_nodes(const Recorder& rec) {
 struct NodeScore {
   std::uint32_t repeat_tiles = 0, eq5_tiles = 0, scored = 0, within1 = 0;
 };
-NodeScore score_nodes(const Recorder& rec) {
-  const std::vector<double> node_along = taught_nodes(rec);
+// taught: the recorder of the run that taught the route (default: the same run).
+NodeScore score_nodes(const Recorder& rec, const Recorder* taught = nullptr) {
+  const std::vector<double> node_along = taught_nodes(taught != nullptr ? *taught : rec);
   NodeScore out;
   const std::uint32_t n = std::min<std::uint32_t>(rec.n.load(), kMaxTiles);
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -293,6 +295,44 @@ void run_with_stall(const char* sensor, double start_s, double length_s, StallRu
   std::printf("stall %s %.0f s from %.0f s: %u repeat tiles (%u on the eq. 5 model), node +/-1 on %u of %u, faults seen 0x%x, %u hold-course frames\n",
               sensor, length_s, start_s, out.score.repeat_tiles, out.score.eq5_tiles, out.score.within1, out.score.scored,
               out.rec->faults_seen.load(), out.rec->hold_frames.load());
+}
+
+// route.learn (issue 29): a repeat appends its confirmed tiles to the route's companion ROUTE.exp,
+// durably; the next repeat reads them; without the key nothing is written.
+TEST(QnavdMission, ARepeatWithRouteLearnAddsExperiencesTheNextRepeatReads) {
+  SoftwareFaults::reset_for_tests();
+  const std::string dir = temp_dir();
+  DaemonConfig c = sim_config(dir, 1200.0);
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kTeach, 0.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));  // route.learn off: reads none, writes none
+  auto taught = std::make_unique<Recorder>();
+  {
+    Daemon d(c);
+    fly(d, *taught, "teach + repeat without route.learn");
+    if (HasFatalFailure()) return;
+    EXPECT_EQ(d.nav().experiences_learned(), 0u);
+    EXPECT_EQ(d.nav().experience_errors(), 0u);
+  }
+  const std::string exp_path = dir + "/route_1.qroute.exp";
+  struct stat st {};
+  EXPECT_NE(::stat(exp_path.c_str(), &st), 0) << "a repeat without route.learn wrote " << exp_path;
+  // Learning: two repeats of the taught route; the second reads what the first learnt.
+  c.sim_mission.clear();
+  c.route_learn = true;
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 10.0, false)));
+  ASSERT_TRUE(c.sim_mission.push_back(sim_pass(qc::Mode::kRepeat, 15.0, false)));
+  Daemon d(c);
+  auto rec = std::make_unique<Recorder>();
+  fly(d, *rec, "two repeats with route.learn");
+  if (HasFatalFailure()) return;
+  const NodeScore score = score_nodes(*rec, taught.get());
+  std::printf("route.learn: %u experiences learnt, %u errors; node +/-1 on %u of %u repeat tiles\n", d.nav().experiences_learned(),
+              d.nav().experience_errors(), score.within1, score.scored);
+  EXPECT_GT(d.nav().experiences_learned(), 5u) << "a confident repeat at 10 % learns its tiles";
+  EXPECT_EQ(d.nav().experience_errors(), 0u);
+  ASSERT_EQ(::stat(exp_path.c_str(), &st), 0) << exp_path;
+  EXPECT_GT(st.st_size, 10000) << "each experience is a record of its keypoints";
+  EXPECT_GE(score.within1 * 100, score.scored * 95) << "the repeats localise with and after learning";
 }
 
 TEST(QnavdMission, DvlLossFallsBackToTheEq5ModelAndRecovers) {
