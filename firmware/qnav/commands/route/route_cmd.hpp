@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <random>
@@ -47,7 +48,9 @@ struct RouteOptions {
   std::string eval_out = "route_eval";
   double length_m = 2000.0, offset_pct = 0.0, heading_offset_deg = 0.0;
   double camera_length_m = 12.0;
-  long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
+  double framing_length_m = 1000.0;
+  long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 0, stride = 0;
+  double tile_length_m = 0.0, tile_stride_m = 0.0;  // recorded passes: 0 = from the swath (route_defaults)
   bool sim = false, force = false, reverse = false, json = false, quick = false;
 };
 extern RouteOptions g_opt;
@@ -70,12 +73,13 @@ bool finish_route(tools::RouteFileWriter& w, const char* cmd, const char* out, S
 bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std::vector<route::NodeMeta>& meta);
 // The repeat CSV (--csv): header, one row per tile, close with a check.
 FILE* open_repeat_csv();
-void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side);
+void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side, long ping_first, long ping_last);
 bool close_csv(FILE* f);
 int true_node(const std::vector<double>& node_truth_along, double along);
 route::RouteSide expected_side(double lateral_m, bool reverse, double deadband);
 
 int cmd_eval();                       // route/eval.cpp
+int cmd_framing();                    // route/eval.cpp: tiles in metres at several ping rates and speeds
 int cmd_xtf();                        // route/recorded.cpp
 int cmd_train_file(const char* path);
 int cmd_repeat_file(const char* path);
