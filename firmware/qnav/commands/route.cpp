@@ -466,6 +466,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*e, "--seabeds", g_opt.seabeds, "simulated seabeds", "", 1, 20)
       ->description("simulated seabeds (default 3, 1 with --quick; 1..20)");
   add_flag(*e, "--quick", g_opt.quick, "fewer passes and one seabed (a smoke run)");
+  add_flag(*e, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
   run.on(e, cmd_eval);
 
   CLI::App* fr = cmd.add_subcommand("framing", "tiles in metres: the simulator at 2, 5 and 15 pings/s and 1.5 / 3 m/s with the default tiles,\n"
@@ -473,6 +474,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*fr, "--json", g_opt.json, "one JSON summary on stdout (the log on stderr)");
   add_number(*fr, "--length-m", g_opt.framing_length_m, "length of each simulated route", "m", 400, 20000);
   add_flag(*fr, "--quick", g_opt.quick, "one offset (20 %) instead of 0, 20 and 40 % (a smoke run)");
+  add_flag(*fr, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
   run.on(fr, cmd_framing);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");

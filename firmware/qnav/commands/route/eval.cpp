@@ -94,7 +94,7 @@ Status fly_localised(pipeline::RouteTilePipeline& pipe, const pipeline::SimSurve
     route::LocaliserStep st;
     step_status = localise_tile(loc, t, tiles.size() - 1, node_along, pct, reverse, lateral, deadband, records, ps, nullptr, nullptr, &st);
     if (!step_status) return false;
-    pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, meta, dir, pipe.config().tiles.tile_stride_m));
+    if (!g_opt.no_align) pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, meta, dir, pipe.config().tiles.tile_stride_m));
     return true;
   }));
   if (ps.tiles) ps.mean_entropy /= ps.tiles;

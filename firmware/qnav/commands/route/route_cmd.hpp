@@ -51,7 +51,7 @@ struct RouteOptions {
   double framing_length_m = 1000.0;
   long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 0, stride = 0;
   double tile_length_m = 0.0, tile_stride_m = 0.0;  // recorded passes: 0 = from the swath (route_defaults)
-  bool sim = false, force = false, reverse = false, json = false, quick = false;
+  bool sim = false, force = false, reverse = false, json = false, quick = false, no_align = false;
 };
 extern RouteOptions g_opt;
 constexpr int kWarmupTiles = 2;  // tiles before scoring (uniform start; the paper's first tile copies eq. 9)
