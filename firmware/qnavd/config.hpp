@@ -98,8 +98,8 @@ struct DaemonConfig {
   route::LocaliserConfig localiser = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
   //   route.tile_length_m [0, 5000]         -> tiles.tiles.tile_length_m (0: tiles by ping count)
   //   route.tile_stride_m [0.1, tile_length_m] -> tiles.tiles.tile_stride_m
-  //   route.scanlines_per_tile [20, 20000]  -> tiles.tiles.scanlines_per_tile (by distance: the most pings a tile holds)
-  //   route.scanline_stride [1, scanlines_per_tile], with tile_length_m = 0 only -> tiles.tiles.scanline_stride
+  //   route.scanlines_per_tile [20, 4000]   -> tiles.tiles.scanlines_per_tile (by distance: the most pings a tile holds)
+  //   route.scanline_stride [1, scanlines_per_tile] -> tiles.tiles.scanline_stride (used with tile_length_m = 0)
   //   route.resolution_m [0.01, 5]          -> tiles.tiles.resolution_m
   //   route.tile_px [64, 2048]              -> tiles.tiles.tile_width_px/height_px, tiles.features.max_width/height
   //   route.ground_bins_per_side [16, 4096] -> tiles.corrector.ground_bins_per_side, tiles.tiles.max_bins_per_side
