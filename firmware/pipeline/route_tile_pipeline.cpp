@@ -7,7 +7,8 @@ namespace qnav::pipeline {
 double route_aligned_stride_m(const route::LocaliserStep& st, Span<const route::NodeMeta> meta, route::RouteDirection direction,
                               double stride_m) noexcept {
   const route::GuidanceOutput& g = st.guidance;
-  if (!(stride_m > 0.0) || g.status != route::GuidanceStatus::kTracking || g.offsets != route::OffsetSource::kRegistration) return 0.0;
+  // Offsets from a registration guidance trusts: tracking, or (not yet confident) a strong one.
+  if (!(stride_m > 0.0) || g.offsets != route::OffsetSource::kRegistration) return 0.0;
   const std::size_t n = g.node;
   const bool fwd = direction == route::RouteDirection::kForward;
   if (n >= meta.size() || (fwd && n + 1 >= meta.size()) || (!fwd && n == 0)) return 0.0;
@@ -15,7 +16,7 @@ double route_aligned_stride_m(const route::LocaliserStep& st, Span<const route::
   const double gap = std::abs(meta[next].along_m - meta[n].along_m);
   const double want = gap - g.along_track_m;
   if (!std::isfinite(want)) return 0.0;
-  return std::min(1.5 * stride_m, std::max(0.5 * stride_m, want));
+  return std::min(1.25 * stride_m, std::max(0.75 * stride_m, want));
 }
 
 std::size_t RouteTilePipeline::arena_bytes(const RouteTileConfig& config) noexcept {
