@@ -59,9 +59,10 @@ struct PingTruth {
 // travel, from the localiser's along-track offset to its estimated node (the tile centre is
 // along_track_m past node n, node n+1 lies |along_m(n+1) - along_m(n)| further: the next tile ends
 // that gap minus along_track_m later). A reverse pass started anywhere, which would otherwise be framed
-// up to half a stride out of step with the taught tiles, is brought into step at its first tracked tile.
-// 0 (keep the configured stride) unless the step is tracking on a registration; clamped to
-// [0.5, 1.5] x stride_m. O(1).
+// up to half a stride out of step with the taught tiles, is brought into step at its first registered
+// tile. 0 (keep the configured stride) unless guidance took its offsets from a registration (tracking,
+// or a strong one before the filter is confident); clamped to [0.75, 1.25] x stride_m (wider, one bad
+// offset moves a tile too far: `qnav route eval`, docs/route.md). O(1).
 double route_aligned_stride_m(const route::LocaliserStep& step, Span<const route::NodeMeta> meta, route::RouteDirection direction,
                               double stride_m) noexcept;
 
