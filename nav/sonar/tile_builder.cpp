@@ -12,6 +12,9 @@ int side_sign(int side) noexcept { return side == 0 ? -1 : 1; }  // 0 = port (-s
 double lerp_angle(double a, double b, double t) noexcept { return a + t * wrap_angle_rad(b - a); }
 // floor(v) as an int, clamped to +/-2^30 (NaN to the low end): a pose far outside the tile (absurd
 // navigation in a damaged file) lands outside the raster instead of overflowing the conversion.
+// A pose step below this fraction of the mean step is "no odometry" (a DVL loss freezes the dead
+// reckoning; the AHRS still turns its 1 s extrapolation by millimetres).
+constexpr double kFrozenStepFraction = 0.05;
 int floor_to_int_clamped(double v) noexcept {
   constexpr double kLimit = 1073741824.0;
   if (!(v > -kLimit)) return -1073741824;
@@ -78,6 +81,7 @@ void TileBuilder::reset() noexcept {
   head_ = count_ = since_tile_ = 0;
   have_prev_pose_ = false;
   dist_m_ = 0.0;
+  mean_step_m_ = 0.0;
   framing_started_ = false;
   next_end_m_ = last_end_m_ = 0.0;
   overflow_ = false;
@@ -114,10 +118,19 @@ Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose)
     }
   }
   const int N = cfg_.scanlines_per_tile;
-  if (have_prev_pose_) dist_m_ += std::hypot(pose.x_m - prev_pose_.x_m, pose.y_m - prev_pose_.y_m);
+  const bool by_dist = by_distance();
+  if (have_prev_pose_) {
+    const double step = std::hypot(pose.x_m - prev_pose_.x_m, pose.y_m - prev_pose_.y_m);
+    if (by_dist && mean_step_m_ > 0.0 && step < kFrozenStepFraction * mean_step_m_) {
+      dist_m_ += mean_step_m_;  // no odometry: the pose is (all but) frozen, the pings go on
+      counters_.increment(TileCounter::kFrozenPose);
+    } else if (step > 0.0) {
+      dist_m_ += step;
+      if (step <= cfg_.max_gap_m) mean_step_m_ = mean_step_m_ > 0.0 ? 0.9 * mean_step_m_ + 0.1 * step : step;
+    }
+  }
   prev_pose_ = pose;
   have_prev_pose_ = true;
-  const bool by_dist = by_distance();
   if (by_dist && !framing_started_) {
     framing_started_ = true;
     next_end_m_ = dist_m_ + cfg_.tile_length_m;

@@ -11,7 +11,11 @@
 //    capacity, the most pings a tile can hold (size it for the highest ping rate and lowest speed
 //    allowed); when a faster ping rate or a slower vehicle would need more, the oldest pings of the
 //    tile are dropped (the tile is shorter than tile_length_m) and counted once per tile as
-//    tile_overflow. A stationary vehicle emits no tile.
+//    tile_overflow. A nav pose that (all but) stops from one ping to the next, a step under 5 % of
+//    the mean step (dead reckoning without odometry: a DVL loss freezes it; a vehicle that stops dead
+//    looks the same) is framed at the mean step of the pings that moved (counted as frozen_pose), so
+//    tiles keep coming at the last ping spacing, as they did by ping count; a vehicle that never
+//    moved emits no tile.
 //  - by ping count (tile_length_m = 0): when scanlines_per_tile scanlines are buffered, then every
 //    scanline_stride.
 // How a tile is made:
@@ -93,9 +97,10 @@ enum class TileCounter : std::uint8_t {
   kClippedSplat,
   kNavJump,
   kTileOverflow,  // by distance: a tile needed more pings than scanlines_per_tile (it was cut short)
+  kFrozenPose,    // by distance: a ping whose nav pose had not moved, framed at the mean ping step
   kCount
 };
-inline constexpr const char* kTileCounterNames[] = {"bad_pose", "bad_scanline", "clipped_splat", "nav_jump", "tile_overflow"};
+inline constexpr const char* kTileCounterNames[] = {"bad_pose", "bad_scanline", "clipped_splat", "nav_jump", "tile_overflow", "frozen_pose"};
 
 class TileBuilder {
  public:
@@ -118,7 +123,8 @@ class TileBuilder {
   // tile_stride_m), e.g. to put its centre on a taught node. Ignored before the first tile, by ping
   // count, and unless 0 < stride_m <= 4 x tile_stride_m. O(1).
   void set_next_stride_m(double stride_m) noexcept;
-  // Along-track distance travelled since the pass began (sum of the pose steps), metres.
+  // Along-track distance the framing counts since the pass began (sum of the pose steps; a frozen
+  // pose adds the mean step), metres.
   double travelled_m() const noexcept { return dist_m_; }
   bool by_distance() const noexcept { return cfg_.tile_length_m > 0.0; }
 
@@ -169,7 +175,8 @@ class TileBuilder {
   // Framing by distance.
   bool have_prev_pose_ = false;
   Pose2 prev_pose_{};
-  double dist_m_ = 0.0;        // travelled since the pass began
+  double dist_m_ = 0.0;        // travelled since the pass began (framing distance)
+  double mean_step_m_ = 0.0;   // mean pose step of the pings that moved (0: none yet)
   bool framing_started_ = false;
   double next_end_m_ = 0.0;    // the next tile ends at the first scanline at or past this distance
   double last_end_m_ = 0.0;    // where the last tile ended

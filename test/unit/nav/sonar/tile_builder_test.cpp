@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -343,6 +344,27 @@ TEST(TileBuilder, ByDistanceBadLengthsAreNamedErrors) {
   TileBuilder tb;
   const Status s = tb.init(c, arena);
   EXPECT_NE(std::string(s.message()).find("tile_stride_m"), std::string::npos);
+}
+
+TEST(TileBuilder, ByDistanceAFrozenPoseIsFramedAtTheLastPingSpacing) {
+  // Dead reckoning without odometry (a DVL loss) freezes the pose: the pings go on, so do the tiles.
+  const TileBuilderConfig cfg = distance_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  src.bins = 60;
+  std::vector<std::uint32_t> last_pings;
+  for (int k = 0; k < 400; ++k) {
+    const Pose2 pose{std::min(k, 150) * 0.1, 0.0, 0.0};  // moves 15 m, then frozen
+    const Result<bool> r = tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose);
+    ASSERT_TRUE(r.is_ok());
+    if (r.value()) last_pings.push_back(tb.tile().last_ping);
+  }
+  // Tiles end at pings 100, 160, 220, 280, 340, 400 (every 60 pings of 0.1 m, frozen or not).
+  ASSERT_EQ(last_pings.size(), 5u);
+  for (std::size_t i = 0; i < last_pings.size(); ++i) EXPECT_NEAR(static_cast<double>(last_pings[i]), 100.0 + 60.0 * static_cast<double>(i), 1.0);
+  EXPECT_EQ(tb.counters().get(TileCounter::kFrozenPose), 249u);
 }
 
 TEST(TileBuilder, ByDistanceAStationaryVehicleMakesNoTile) {
