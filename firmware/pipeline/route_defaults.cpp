@@ -1,8 +1,32 @@
 #include "firmware/pipeline/route_defaults.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace qnav::pipeline {
+
+std::size_t keypoint_budget(double length_m, double swath_m, double feature_pixel_m) {
+  if (!(length_m > 0.0 && swath_m > 0.0 && feature_pixel_m > 0.0)) return kMinKeypointBudget;
+  const double k = std::floor(length_m * swath_m / (feature_pixel_m * feature_pixel_m) / kFeaturePixelsPerKeypoint);
+  if (!(k >= static_cast<double>(kMinKeypointBudget))) return kMinKeypointBudget;
+  return k >= static_cast<double>(route::kMaxKeypointsPerNode) ? route::kMaxKeypointsPerNode : static_cast<std::size_t>(k);
+}
+
+void frame_tiles_by_distance(RouteTileConfig& c, double swath_m, double min_ping_spacing_m, double length_m, double stride_m) {
+  const double len = length_m > 0.0 ? length_m : kTileLengthSwaths * swath_m;
+  const double str = stride_m > 0.0 ? stride_m : kTileStrideSwaths * swath_m;
+  c.tiles.tile_length_m = len;
+  c.tiles.tile_stride_m = str;
+  const double pings = std::ceil(len / std::max(1e-3, min_ping_spacing_m)) + 2.0;
+  c.tiles.scanlines_per_tile = static_cast<int>(std::min(20000.0, std::max(20.0, pings)));
+  c.tiles.scanline_stride = c.tiles.scanlines_per_tile;  // unused by distance
+  c.features.max_keypoints = keypoint_budget(len, swath_m, c.tiles.resolution_m * c.features.downsample);
+}
+
+double tile_stride_m(const RouteTileConfig& c, double speed_mps, double ping_rate_hz) {
+  if (c.tiles.tile_length_m > 0.0) return c.tiles.tile_stride_m;
+  return c.tiles.scanline_stride * speed_mps / ping_rate_hz;
+}
 
 RouteTileConfig default_route_tile_config() {
   RouteTileConfig c;
@@ -13,8 +37,6 @@ RouteTileConfig default_route_tile_config() {
   c.tiles.resolution_m = 0.2;
   c.tiles.tile_width_px = 704;
   c.tiles.tile_height_px = 704;
-  c.tiles.scanlines_per_tile = 300;  // 90 m of track: tiles overlap their neighbours by half a node
-  c.tiles.scanline_stride = 200;
   c.tiles.max_bins_per_side = 256;
   c.features.max_width = 704;
   c.features.max_height = 704;
@@ -25,25 +47,38 @@ RouteTileConfig default_route_tile_config() {
   c.features.harris_block_radius = 1;
   c.features.harris_nms_radius = 3;
   c.features.harris_norm_cell_px = 16;
+  // The simulator's sonar: 50 m slant range, swath 2 x 50 m -> tiles of 90 m every 60 m, 128 keypoints.
+  frame_tiles_by_distance(c, 2.0 * static_cast<double>(default_route_sonar_config().slant_range_m), kMinPingSpacingM);
   return c;
 }
 
-RouteTileConfig file_route_tile_config(double range, int lines, int stride) {
+RouteTileConfig file_route_tile_config(double range, double ping_spacing_m, double length_m, double stride_m, int lines, int stride) {
   const double bin = std::max(0.02, range / 300.0);
+  const double swath = 2.0 * range;
   RouteTileConfig tc = default_route_tile_config();
   tc.corrector.ground_bins_per_side = 300;
   tc.corrector.ground_bin_m = static_cast<float>(bin);
   tc.corrector.nadir_gap_m = static_cast<float>(std::max(0.5, range / 30.0));
   tc.tiles.resolution_m = bin;
-  tc.tiles.tile_width_px = 800;
-  tc.tiles.tile_height_px = 800;
   tc.tiles.max_bins_per_side = 300;
-  tc.tiles.scanlines_per_tile = lines;
-  tc.tiles.scanline_stride = stride;
-  tc.features.max_width = 800;
-  tc.features.max_height = 800;
   tc.features.downsample = 3;
   tc.features.blur_radius_px = 1;
+  int px = 800;
+  if (lines > 0) {
+    tc.tiles.tile_length_m = 0.0;
+    tc.tiles.scanlines_per_tile = lines;
+    tc.tiles.scanline_stride = stride > 0 ? stride : lines;
+    tc.features.max_keypoints = route::kMaxKeypointsPerNode;
+  } else {
+    frame_tiles_by_distance(tc, swath, 0.5 * ping_spacing_m, length_m, stride_m);
+    // The raster holds the tile turned by 45 degrees (a turn inside the tile), at least 800 px.
+    const double side_m = 1.45 * std::max(tc.tiles.tile_length_m, swath);
+    px = std::max(800, std::min(2048, 32 * static_cast<int>(std::ceil(side_m / bin / 32.0))));
+  }
+  tc.tiles.tile_width_px = px;
+  tc.tiles.tile_height_px = px;
+  tc.features.max_width = px;
+  tc.features.max_height = px;
   return tc;
 }
 
@@ -105,7 +140,7 @@ route::RouteParams side_scan_route_params(const RouteTileConfig& c, double spaci
   p.sensor = route::SensorKind::kSideScan;
   p.depth_m = 0.0f;
   p.node_spacing_m = static_cast<float>(spacing_m);
-  p.tile_length_m = static_cast<float>(spacing_m);
+  p.tile_length_m = static_cast<float>(c.tiles.tile_length_m > 0.0 ? c.tiles.tile_length_m : spacing_m);
   p.tile_width_m = static_cast<float>(swath_m);
   p.pixel_m = static_cast<float>(c.tiles.resolution_m);
   p.max_keypoints = static_cast<std::uint16_t>(c.features.max_keypoints);

@@ -22,13 +22,36 @@ struct RouteTileConfig {
   route::TileFeatureConfig features;
 };
 
-// Tiles for the simulator at 5 Hz / 1.5 m/s: 0.2 m raster 704 x 704 (141 m square), 300 scanlines per
-// tile (90 m of track) every 200 scanlines (60 m node spacing), so a sensed tile never overlaps its
-// nearest node by less than two thirds along track; ground bins 0.2 m x 256.
+// Tiles are framed by along-track distance (the dead-reckoned distance between pings), sized by the
+// swath (2 x slant range): a tile covers kTileLengthSwaths x the swath of track, a new one (a route
+// node) every kTileStrideSwaths x the swath, so a sensed tile overlaps its nearest node by at least
+// two thirds along track whatever the ping rate and speed. The tile buffers hold a full tile down to
+// kMinPingSpacingM between pings (e.g. 15 pings/s at 0.75 m/s; more pings are counted as
+// tile_overflow). The keypoint budget follows the tile's area in feature pixels: one keypoint per
+// kFeaturePixelsPerKeypoint (downsample x resolution)^2, within [kMinKeypointBudget, kMaxKeypointsPerNode].
+inline constexpr double kTileLengthSwaths = 0.9;
+inline constexpr double kTileStrideSwaths = 0.6;
+inline constexpr double kMinPingSpacingM = 0.05;
+inline constexpr double kFeaturePixelsPerKeypoint = 190.0;
+inline constexpr std::size_t kMinKeypointBudget = 16;
+// The keypoint budget of a tile length_m x swath_m seen in feature pixels of feature_pixel_m.
+std::size_t keypoint_budget(double length_m, double swath_m, double feature_pixel_m);
+// Frames c's tiles by distance: length_m / stride_m (0: from the swath as above), the tile ring sized
+// for min_ping_spacing_m, the keypoint budget from the tile's area.
+void frame_tiles_by_distance(RouteTileConfig& c, double swath_m, double min_ping_spacing_m, double length_m = 0.0, double stride_m = 0.0);
+// The nominal node spacing of tiles so framed (by ping count: stride pings x speed / ping rate).
+double tile_stride_m(const RouteTileConfig& c, double speed_mps, double ping_rate_hz);
+
+// Tiles for the simulator's sonar (50 m slant range, swath 100 m): 0.2 m raster 704 x 704 (141 m
+// square), tiles of 90 m of track every 60 m (the node spacing), 128 keypoints; ground bins 0.2 m x 256.
 RouteTileConfig default_route_tile_config();
-// Tiles for a recorded pass whose median slant range is range_m: 300 ground bins per side (0.1 m for
-// the Iver2's 30 m), 800 x 800 px rasters at the bin size, `lines` pings per tile every `stride`.
-RouteTileConfig file_route_tile_config(double range_m, int lines, int stride);
+// Tiles for a recorded pass whose median slant range is range_m and median ping spacing
+// ping_spacing_m: 300 ground bins per side (0.1 m for the Iver2's 30 m), rasters at the bin size
+// large enough for the tile, tiles by distance (length_m / stride_m; 0: from the swath), the ring
+// holding a tile down to half the median ping spacing. lines > 0: frame by ping count instead
+// (`lines` pings per tile every `stride`).
+RouteTileConfig file_route_tile_config(double range_m, double ping_spacing_m, double length_m = 0.0, double stride_m = 0.0, int lines = 0,
+                                       int stride = 0);
 
 sidescan::SideScanSimConfig default_route_sonar_config();
 sidescan::SeabedConfig default_route_seabed_config(std::uint64_t seed);

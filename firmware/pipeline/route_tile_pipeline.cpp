@@ -4,6 +4,21 @@
 
 namespace qnav::pipeline {
 
+double route_aligned_stride_m(const route::LocaliserStep& st, Span<const route::NodeMeta> meta, route::RouteDirection direction,
+                              double stride_m) noexcept {
+  const route::GuidanceOutput& g = st.guidance;
+  // Offsets from a registration guidance trusts: tracking, or (not yet confident) a strong one.
+  if (!(stride_m > 0.0) || g.offsets != route::OffsetSource::kRegistration) return 0.0;
+  const std::size_t n = g.node;
+  const bool fwd = direction == route::RouteDirection::kForward;
+  if (n >= meta.size() || (fwd && n + 1 >= meta.size()) || (!fwd && n == 0)) return 0.0;
+  const std::size_t next = fwd ? n + 1 : n - 1;
+  const double gap = std::abs(meta[next].along_m - meta[n].along_m);
+  const double want = gap - g.along_track_m;
+  if (!std::isfinite(want)) return 0.0;
+  return std::min(1.25 * stride_m, std::max(0.75 * stride_m, want));
+}
+
 std::size_t RouteTilePipeline::arena_bytes(const RouteTileConfig& config) noexcept {
   return sonar::ScanlineCorrector::arena_bytes(config.corrector) + sonar::TileBuilder::arena_bytes(config.tiles) +
          route::TileFeatureExtractor::arena_bytes(config.features) + 4096;
@@ -65,6 +80,8 @@ Status RouteTilePipeline::emit(const RouteTileSink& sink, bool* stop) {
   out.truth_pose = out.has_truth_pose ? pose_rec->truth_pose : Pose2{};
   out.coverage_fraction = t.coverage_fraction;
   out.tile_index = t.index;
+  out.ping_first = t.first_ping;
+  out.ping_last = t.last_ping;
   if (!sink(out) && stop != nullptr) *stop = true;
   return Status::ok();
 }
@@ -105,7 +122,7 @@ Status RouteTilePipeline::push(const sonar::SonarPing& ping, const Pose2& nav, c
 }
 
 Status RouteTilePipeline::flush(const RouteTileSink& sink) {
-  Result<bool> built = builder_->flush(builder_->config().scanlines_per_tile / 2);
+  Result<bool> built = builder_->flush(builder_->by_distance() ? 2 : builder_->config().scanlines_per_tile / 2);
   if (built && *built) return emit(sink, nullptr);
   return Status::ok();
 }

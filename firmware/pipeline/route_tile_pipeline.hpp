@@ -3,7 +3,8 @@
 // nav pose) -> TileFeatureExtractor -> a route node (keypoints in the tile frame, tile pose in the
 // pass's dead-reckoned frame), plus the ground truth when the pass is simulated.
 // Memory: one arena sized by init() from the config (corrector + builder + features) and a ring of
-// per-ping records (2 x scanlines_per_tile, rounded up to a power of two); nothing grows with the
+// per-ping records (2 x scanlines_per_tile, the most pings a tile holds, rounded up to a power of
+// two); nothing grows with the
 // length of a pass, and push_ping() allocates nothing (run_sim_pass() allocates its simulator).
 // Time: one ping is O(samples); a finished tile adds one feature extraction (docs/budgets.md).
 // Sinks are called synchronously; a sink that is a std::function built once allocates nothing.
@@ -22,6 +23,7 @@
 #include "drivers/sidescan/sim_trajectory.hpp"
 #include "nav/core/arena.hpp"
 #include "nav/core/status.hpp"
+#include "nav/route/route_localiser.hpp"
 #include "nav/route/route_types.hpp"
 #include "nav/route/tile_features.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
@@ -39,6 +41,8 @@ struct RouteTile {
   bool has_truth_pose = false;
   float coverage_fraction = 0.0f;
   std::uint32_t tile_index = 0;
+  std::uint32_t ping_first = 0;    // the pings (SonarPing::ping_number) the tile was built from, first ...
+  std::uint32_t ping_last = 0;     // ... and last
 };
 
 using RouteTileSink = std::function<bool(const RouteTile&)>;  // return false to stop the pass
@@ -49,6 +53,18 @@ struct PingTruth {
   Pose2 pose{};
   double lateral_m = 0.0;
 };
+
+// Framing a repeat pass on the taught nodes: the distance to frame the next tile with
+// (RouteTilePipeline::set_next_stride_m) so that its centre falls on the next node in the direction of
+// travel, from the localiser's along-track offset to its estimated node (the tile centre is
+// along_track_m past node n, node n+1 lies |along_m(n+1) - along_m(n)| further: the next tile ends
+// that gap minus along_track_m later). A reverse pass started anywhere, which would otherwise be framed
+// up to half a stride out of step with the taught tiles, is brought into step at its first registered
+// tile. 0 (keep the configured stride) unless guidance took its offsets from a registration (tracking,
+// or a strong one before the filter is confident); clamped to [0.75, 1.25] x stride_m (wider, one bad
+// offset moves a tile too far: `qnav route eval`, docs/route.md). O(1).
+double route_aligned_stride_m(const route::LocaliserStep& step, Span<const route::NodeMeta> meta, route::RouteDirection direction,
+                              double stride_m) noexcept;
 
 class RouteTilePipeline {
  public:
@@ -72,6 +88,9 @@ class RouteTilePipeline {
   Status push_ping(const sonar::SonarPing& ping, const Pose2& nav_pose, const PingTruth& truth, const RouteTileSink& sink, bool* stop);
   Status flush(const RouteTileSink& sink);
   void reset_pass();
+  // Tiles by distance: the next tile ends stride_m of travel after the last one (see
+  // TileBuilder::set_next_stride_m); call from the sink to frame the next tile on the route.
+  void set_next_stride_m(double stride_m) noexcept { builder_->set_next_stride_m(stride_m); }
   const RouteTileConfig& config() const noexcept { return cfg_; }
   const sonar::TileBuilder& builder() const noexcept { return *builder_; }
   // Pings the corrector refused (its counters: damaged range, samples, altitude; no bottom found).

@@ -605,12 +605,20 @@ std::vector<KeySpec> build_key_table() {
                             c.max_nodes = static_cast<std::size_t>(v.i);
                             c.localiser.filter.max_nodes = static_cast<std::size_t>(v.i);
                           }));
+  t.push_back(float_key(
+      "route.tile_length_m", [](auto& c) -> auto& { return c.tiles.tiles.tile_length_m; }, 0.0, 5000.0, "m",
+      "Along-track length of a sonar tile (dead-reckoned travel); 0 frames tiles by ping count (route.scanlines_per_tile)"));
+  t.push_back(with_rule(float_key(
+                            "route.tile_stride_m", [](auto& c) -> auto& { return c.tiles.tiles.tile_stride_m; }, 0.1,
+                            5000.0, "m", "A tile (a route node when teaching) every this much travel"),
+                        "<= route.tile_length_m"));
   t.push_back(int_key(
       "route.scanlines_per_tile", [](auto& c) -> auto& { return c.tiles.tiles.scanlines_per_tile; }, 20, 4000, "pings",
-      "Pings in one sonar tile"));
+      "Most pings a tile holds (by distance: more are counted as tile_overflow; default: route.tile_length_m at 0.05 m per "
+      "ping); with route.tile_length_m = 0, the pings per tile"));
   t.push_back(with_rule(int_key(
                             "route.scanline_stride", [](auto& c) -> auto& { return c.tiles.tiles.scanline_stride; }, 1,
-                            4000, "pings", "A tile every this many pings (sets the node spacing with the speed)"),
+                            4000, "pings", "With route.tile_length_m = 0: a tile every this many pings (unused by distance)"),
                         "<= route.scanlines_per_tile"));
   t.push_back(float_key(
       "route.resolution_m", [](auto& c) -> auto& { return c.tiles.tiles.resolution_m; }, 0.01, 5.0, "m",
@@ -1102,10 +1110,30 @@ void apply_vo_preset(const Reader& r, DaemonConfig& c) {
 void check_across_keys(Reader& r, DaemonConfig& c) {
   const auto at = [&r](const char* key, const char* other) { return r.line(key) > 0 ? r.line(key) : r.line(other); };
   apply_vo_preset(r, c);
-  if (c.tiles.tiles.scanline_stride > c.tiles.tiles.scanlines_per_tile) {
+  sonar::TileBuilderConfig& tiles = c.tiles.tiles;
+  if (tiles.tile_length_m > 0.0) {
+    if (tiles.tile_stride_m > tiles.tile_length_m) {
+      return r.error("route.tile_stride_m", at("route.tile_stride_m", "route.tile_length_m"),
+                     "must be <= route.tile_length_m (" + format_number(tiles.tile_length_m, false) + "), got " +
+                         format_number(tiles.tile_stride_m, false));
+    }
+    // A tile length of its own: the ring and the keypoint budget follow it unless given too.
+    const double swath_m = 2.0 * c.tiles.corrector.ground_bins_per_side * static_cast<double>(c.tiles.corrector.ground_bin_m);
+    if (r.line("route.scanlines_per_tile") == 0)
+      tiles.scanlines_per_tile = static_cast<int>(std::min(4000.0, std::ceil(tiles.tile_length_m / pipeline::kMinPingSpacingM) + 2.0));
+    if (r.line("route.max_keypoints") == 0)
+      c.tiles.features.max_keypoints = pipeline::keypoint_budget(tiles.tile_length_m, swath_m, tiles.resolution_m * c.tiles.features.downsample);
+    if (r.line("route.scanline_stride") == 0) tiles.scanline_stride = tiles.scanlines_per_tile;  // unused by distance
+  } else if (r.line("route.scanlines_per_tile") == 0) {
+    return r.error("route.tile_length_m", r.line("route.tile_length_m"),
+                   "0 frames tiles by ping count: give route.scanlines_per_tile (and route.scanline_stride) with it");
+  } else if (r.line("route.scanline_stride") == 0) {
+    tiles.scanline_stride = std::max(1, 2 * tiles.scanlines_per_tile / 3);  // by ping count, a node every 2/3 of a tile
+  }
+  if (tiles.scanline_stride > tiles.scanlines_per_tile) {
     return r.error("route.scanline_stride", at("route.scanline_stride", "route.scanlines_per_tile"),
-                   "must be <= route.scanlines_per_tile (" + std::to_string(c.tiles.tiles.scanlines_per_tile) +
-                       "), got " + std::to_string(c.tiles.tiles.scanline_stride));
+                   "must be <= route.scanlines_per_tile (" + std::to_string(tiles.scanlines_per_tile) +
+                       "), got " + std::to_string(tiles.scanline_stride));
   }
   if (c.localiser.filter.searching_registrations < c.localiser.filter.belief_registrations) {
     return r.error("route.searching_registrations", at("route.searching_registrations", "route.belief_registrations"),

@@ -102,8 +102,10 @@ struct DaemonConfig {
   std::uint16_t max_experiences = 4;         // route.max_experiences [1, 8]: experiences per node (fixed memory)
   pipeline::RouteTileConfig tiles = pipeline::default_route_tile_config();
   route::LocaliserConfig localiser = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
-  //   route.scanlines_per_tile [20, 4000]   -> tiles.tiles.scanlines_per_tile
-  //   route.scanline_stride [1, scanlines_per_tile] -> tiles.tiles.scanline_stride
+  //   route.tile_length_m [0, 5000]         -> tiles.tiles.tile_length_m (0: tiles by ping count)
+  //   route.tile_stride_m [0.1, tile_length_m] -> tiles.tiles.tile_stride_m
+  //   route.scanlines_per_tile [20, 4000]   -> tiles.tiles.scanlines_per_tile (by distance: the most pings a tile holds)
+  //   route.scanline_stride [1, scanlines_per_tile] -> tiles.tiles.scanline_stride (used with tile_length_m = 0)
   //   route.resolution_m [0.01, 5]          -> tiles.tiles.resolution_m
   //   route.tile_px [64, 2048]              -> tiles.tiles.tile_width_px/height_px, tiles.features.max_width/height
   //   route.ground_bins_per_side [16, 4096] -> tiles.corrector.ground_bins_per_side, tiles.tiles.max_bins_per_side

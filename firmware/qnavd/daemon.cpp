@@ -366,13 +366,13 @@ Status Daemon::init_pipeline() {
     if (sim->recorded_geometry(range_m, route_spacing_m_)) {
       // Recorded passes: tiles and registration as `qnav route train|repeat --sonar` sets them for
       // the file (pipeline/route_defaults), the route header's spacing and swath from the file.
-      cfg_.tiles = pipeline::file_route_tile_config(range_m, cfg_.sim_replay_lines, cfg_.sim_replay_stride);
+      cfg_.tiles = pipeline::file_route_tile_config(range_m, 0.0, 0.0, 0.0, cfg_.sim_replay_lines, cfg_.sim_replay_stride);
       cfg_.tiles.corrector.max_samples_per_side = cfg_.max_samples_per_side;
       cfg_.localiser = pipeline::file_localiser_config(route::RouteDirection::kForward, cfg_.max_nodes, 8, route_spacing_m_);
       cfg_.localiser.window_slots = std::max<std::size_t>(cfg_.localiser.window_slots, cfg_.localiser.filter.max_registrations() + 1u);
       route_swath_m_ = 2.0 * range_m;
     } else {
-      route_spacing_m_ = sim->node_spacing_m(cfg_.tiles.tiles.scanline_stride);
+      route_spacing_m_ = cfg_.tiles.tiles.tile_length_m > 0.0 ? cfg_.tiles.tiles.tile_stride_m : sim->node_spacing_m(cfg_.tiles.tiles.scanline_stride);
       route_swath_m_ = sim->swath_m();
     }
   }

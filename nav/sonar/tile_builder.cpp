@@ -12,6 +12,9 @@ int side_sign(int side) noexcept { return side == 0 ? -1 : 1; }  // 0 = port (-s
 double lerp_angle(double a, double b, double t) noexcept { return a + t * wrap_angle_rad(b - a); }
 // floor(v) as an int, clamped to +/-2^30 (NaN to the low end): a pose far outside the tile (absurd
 // navigation in a damaged file) lands outside the raster instead of overflowing the conversion.
+// A pose step below this fraction of the mean step is "no odometry" (a DVL loss freezes the dead
+// reckoning; the AHRS still turns its 1 s extrapolation by millimetres).
+constexpr double kFrozenStepFraction = 0.05;
 int floor_to_int_clamped(double v) noexcept {
   constexpr double kLimit = 1073741824.0;
   if (!(v > -kLimit)) return -1073741824;
@@ -37,8 +40,14 @@ Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
     return Status(StatusCode::kInvalidArgument, "tile size outside [8, 16384]");
   if (c.scanlines_per_tile < 2 || c.scanlines_per_tile > 100000)
     return Status(StatusCode::kInvalidArgument, "scanlines_per_tile outside [2, 100000]");
-  if (c.scanline_stride < 1 || c.scanline_stride > c.scanlines_per_tile)
+  if (c.tile_length_m != 0.0) {  // by distance (NaN lands here too)
+    if (!(std::isfinite(c.tile_length_m) && c.tile_length_m > 0.0 && c.tile_length_m <= 100000.0))
+      return Status(StatusCode::kInvalidArgument, "tile_length_m outside [0, 100000]");
+    if (!(std::isfinite(c.tile_stride_m) && c.tile_stride_m > 0.0 && c.tile_stride_m <= 100000.0))
+      return Status(StatusCode::kInvalidArgument, "tile_stride_m outside (0, 100000] (tiles by distance)");
+  } else if (c.scanline_stride < 1 || c.scanline_stride > c.scanlines_per_tile) {
     return Status(StatusCode::kInvalidArgument, "scanline_stride outside [1, scanlines_per_tile]");
+  }
   if (c.max_bins_per_side < 1 || c.max_bins_per_side > 65536) return Status(StatusCode::kInvalidArgument, "max_bins_per_side outside [1, 65536]");
   if (c.max_substeps < 1 || c.max_substeps > 1024) return Status(StatusCode::kInvalidArgument, "max_substeps outside [1, 1024]");
   if (!(c.max_gap_m > 0.0)) return Status(StatusCode::kInvalidArgument, "max_gap_m must be > 0");
@@ -59,7 +68,7 @@ Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
       coverage_.empty() || u8_.empty())
     return Status(StatusCode::kCapacityExceeded, "arena too small for TileBuilder");
   cfg_ = c;
-  head_ = count_ = since_tile_ = 0;
+  reset();
   prev_x0_ = prev_y0_ = 0;
   prev_x1_ = prev_y1_ = -1;
   tiles_built_ = 0;
@@ -70,6 +79,24 @@ Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
 
 void TileBuilder::reset() noexcept {
   head_ = count_ = since_tile_ = 0;
+  have_prev_pose_ = false;
+  dist_m_ = 0.0;
+  mean_step_m_ = 0.0;
+  framing_started_ = false;
+  next_end_m_ = last_end_m_ = 0.0;
+  overflow_ = false;
+}
+
+void TileBuilder::set_next_stride_m(double stride_m) noexcept {
+  if (!by_distance() || !framing_started_ || tiles_built_ == 0) return;
+  if (!(std::isfinite(stride_m) && stride_m > 0.0 && stride_m <= 4.0 * cfg_.tile_stride_m)) return;
+  next_end_m_ = last_end_m_ + stride_m;
+}
+
+int TileBuilder::first_in_tile(double start_m) const noexcept {
+  int first = 0;
+  while (first < count_ - 1 && slots_[ring(first)].dist_m < start_m) ++first;
+  return first;
 }
 
 Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose) noexcept {
@@ -91,7 +118,26 @@ Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose)
     }
   }
   const int N = cfg_.scanlines_per_tile;
+  const bool by_dist = by_distance();
+  if (have_prev_pose_) {
+    const double step = std::hypot(pose.x_m - prev_pose_.x_m, pose.y_m - prev_pose_.y_m);
+    if (by_dist && mean_step_m_ > 0.0 && step < kFrozenStepFraction * mean_step_m_) {
+      dist_m_ += mean_step_m_;  // no odometry: the pose is (all but) frozen, the pings go on
+      counters_.increment(TileCounter::kFrozenPose);
+    } else if (step > 0.0) {
+      dist_m_ += step;
+      if (step <= cfg_.max_gap_m) mean_step_m_ = mean_step_m_ > 0.0 ? 0.9 * mean_step_m_ + 0.1 * step : step;
+    }
+  }
+  prev_pose_ = pose;
+  have_prev_pose_ = true;
+  if (by_dist && !framing_started_) {
+    framing_started_ = true;
+    next_end_m_ = dist_m_ + cfg_.tile_length_m;
+  }
   if (count_ == N) {
+    // The oldest scanline leaves the ring; by distance, the next tile may still have needed it.
+    if (by_dist && slots_[ring(0)].dist_m >= next_end_m_ - cfg_.tile_length_m) overflow_ = true;
     head_ = (head_ + 1) % N;
     --count_;
   }
@@ -100,6 +146,7 @@ Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose)
   s.pose = pose;
   s.stamp_ns = line.stamp_ns;
   s.ping = line.ping_number;
+  s.dist_m = dist_m_;
   s.bin_m = line.bin_m;
   s.bins = static_cast<int>(bins);
   float* vp = values(i, 0);
@@ -113,6 +160,19 @@ Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose)
     ks[k] = line.stbd_valid[k] ? 1 : 0;
   }
   ++since_tile_;
+  if (by_dist) {
+    if (dist_m_ < next_end_m_) return false;
+    const int first = first_in_tile(dist_m_ - cfg_.tile_length_m);
+    last_end_m_ = dist_m_;
+    next_end_m_ += cfg_.tile_stride_m;
+    if (next_end_m_ <= dist_m_) next_end_m_ = dist_m_ + cfg_.tile_stride_m;  // a jump past several boundaries: one tile
+    if (count_ - first < 2) return false;  // one scanline after a jump: no tile
+    if (overflow_) counters_.increment(TileCounter::kTileOverflow);
+    overflow_ = false;
+    QNAV_RETURN_IF_ERROR(build(first, count_ - first));
+    since_tile_ = 0;
+    return true;
+  }
   if (count_ == N && (tiles_built_ == 0 ? since_tile_ >= N : since_tile_ >= cfg_.scanline_stride)) {
     QNAV_RETURN_IF_ERROR(build(0, N));
     since_tile_ = 0;
@@ -124,6 +184,16 @@ Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose)
 Result<bool> TileBuilder::flush(int min_scanlines) noexcept {
   if (!ready_) return Status(StatusCode::kNotReady, "TileBuilder not initialised");
   if (since_tile_ <= 0) return false;
+  if (by_distance()) {
+    // The last tile_length_m of travel, when at least half a stride was travelled since the last tile.
+    if (tiles_built_ > 0 && dist_m_ - last_end_m_ < 0.5 * cfg_.tile_stride_m) return false;
+    const int first = first_in_tile(dist_m_ - cfg_.tile_length_m);
+    if (count_ - first < min_scanlines || count_ - first < 2) return false;
+    last_end_m_ = dist_m_;
+    QNAV_RETURN_IF_ERROR(build(first, count_ - first));
+    since_tile_ = 0;
+    return true;
+  }
   int n = since_tile_ + (cfg_.scanlines_per_tile - cfg_.scanline_stride);
   if (tiles_built_ == 0) n = since_tile_;
   if (n > count_) n = count_;

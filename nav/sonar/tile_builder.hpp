@@ -3,7 +3,22 @@
 // Raster: row 0 is the NORTH edge, columns grow EAST; pixel (c, r) covers north in
 // (origin_north_m - (r+1)*res, origin_north_m - r*res], east in [origin_east_m + c*res, origin_east_m + (c+1)*res).
 // The origin is snapped to a multiple of the resolution, so tiles from any pass share one world grid.
-// How a tile is made (when scanlines_per_tile scanlines are buffered, then every scanline_stride):
+// Framing, two modes:
+//  - by distance (tile_length_m > 0, what every route default uses): a tile holds the scanlines of the
+//    last tile_length_m of along-track travel (the dead-reckoned distance between the scanlines'
+//    poses), the first when tile_length_m has been travelled, then one every tile_stride_m (or the
+//    distance set_next_stride_m() gives for the next one). scanlines_per_tile is then the ring's
+//    capacity, the most pings a tile can hold (size it for the highest ping rate and lowest speed
+//    allowed); when a faster ping rate or a slower vehicle would need more, the oldest pings of the
+//    tile are dropped (the tile is shorter than tile_length_m) and counted once per tile as
+//    tile_overflow. A nav pose that (all but) stops from one ping to the next, a step under 5 % of
+//    the mean step (dead reckoning without odometry: a DVL loss freezes it; a vehicle that stops dead
+//    looks the same) is framed at the mean step of the pings that moved (counted as frozen_pose), so
+//    tiles keep coming at the last ping spacing, as they did by ping count; a vehicle that never
+//    moved emits no tile.
+//  - by ping count (tile_length_m = 0): when scanlines_per_tile scanlines are buffered, then every
+//    scanline_stride.
+// How a tile is made:
 //  - the tile is centred on the bounding box of the buffered swath (valid bins only) and clipped to
 //    the configured raster size (clipped splats are counted);
 //  - between consecutive scanlines, poses and bin values are interpolated in sub-steps of at most
@@ -36,8 +51,10 @@ struct TileBuilderConfig {
   double resolution_m = 0.1;        // pixel size
   int tile_width_px = 1024;         // raster size (east)
   int tile_height_px = 1024;        // raster size (north)
-  int scanlines_per_tile = 500;     // N scanlines in a tile
-  int scanline_stride = 500;        // emit a tile every stride scanlines once N are buffered (<= N)
+  int scanlines_per_tile = 500;     // N scanlines in a tile (by distance: the most a tile can hold)
+  int scanline_stride = 500;        // by ping count: a tile every stride scanlines once N are buffered (<= N)
+  double tile_length_m = 0.0;       // > 0: tiles by along-track distance, this long (0: by ping count)
+  double tile_stride_m = 0.0;       // by distance: a tile every this much travel (> 0 when tile_length_m > 0)
   int max_bins_per_side = 512;      // largest CorrectedScanline accepted
   int max_substeps = 16;            // cap on interpolation sub-steps between two scanlines
   double max_gap_m = 5.0;           // no interpolation between poses farther apart (nav jump, gap)
@@ -79,9 +96,11 @@ enum class TileCounter : std::uint8_t {
   kBadScanline,
   kClippedSplat,
   kNavJump,
+  kTileOverflow,  // by distance: a tile needed more pings than scanlines_per_tile (it was cut short)
+  kFrozenPose,    // by distance: a ping whose nav pose had not moved, framed at the mean ping step
   kCount
 };
-inline constexpr const char* kTileCounterNames[] = {"bad_pose", "bad_scanline", "clipped_splat", "nav_jump"};
+inline constexpr const char* kTileCounterNames[] = {"bad_pose", "bad_scanline", "clipped_splat", "nav_jump", "tile_overflow", "frozen_pose"};
 
 class TileBuilder {
  public:
@@ -100,6 +119,14 @@ class TileBuilder {
   Result<bool> flush(int min_scanlines = 2) noexcept;
   // Drops buffered scanlines (new survey line); the tile index keeps counting.
   void reset() noexcept;
+  // By distance: the next tile ends stride_m of travel after the last one ended (instead of
+  // tile_stride_m), e.g. to put its centre on a taught node. Ignored before the first tile, by ping
+  // count, and unless 0 < stride_m <= 4 x tile_stride_m. O(1).
+  void set_next_stride_m(double stride_m) noexcept;
+  // Along-track distance the framing counts since the pass began (sum of the pose steps; a frozen
+  // pose adds the mean step), metres.
+  double travelled_m() const noexcept { return dist_m_; }
+  bool by_distance() const noexcept { return cfg_.tile_length_m > 0.0; }
 
   const SonarTile& tile() const noexcept { return tile_; }
   std::uint32_t tiles_built() const noexcept { return tiles_built_; }
@@ -112,6 +139,7 @@ class TileBuilder {
     Pose2 pose;
     std::uint64_t stamp_ns;
     std::uint32_t ping;
+    double dist_m;  // along-track distance travelled at this scanline
     float bin_m;
     int bins;
   };
@@ -144,6 +172,16 @@ class TileBuilder {
   int since_tile_ = 0;          // scanlines pushed since the last tile
   std::uint32_t tiles_built_ = 0;
   std::uint32_t clipped_ = 0;
+  // Framing by distance.
+  bool have_prev_pose_ = false;
+  Pose2 prev_pose_{};
+  double dist_m_ = 0.0;        // travelled since the pass began (framing distance)
+  double mean_step_m_ = 0.0;   // mean pose step of the pings that moved (0: none yet)
+  bool framing_started_ = false;
+  double next_end_m_ = 0.0;    // the next tile ends at the first scanline at or past this distance
+  double last_end_m_ = 0.0;    // where the last tile ended
+  bool overflow_ = false;      // a ping the next tile needed was dropped
+  int first_in_tile(double start_m) const noexcept;
   int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
   int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};

@@ -33,7 +33,7 @@ inline int run_sonar_chain(const std::uint8_t* data, std::size_t size, bool jsf)
   tools::collect_slant_ranges(fd, ranges);
   double range_m = 0.0;
   if (!tools::median_slant_range(ranges, range_m)) return 0;
-  pipeline::RouteTileConfig tc = pipeline::file_route_tile_config(range_m, lines, lines / 2);
+  pipeline::RouteTileConfig tc = pipeline::file_route_tile_config(range_m, 0.0, 0.0, 0.0, lines, lines / 2);  // by ping count
   // Smaller tiles (the full 800 px ones cost seconds per input under ASan), set as qnavd's [route]
   // keys set them (firmware/qnavd/config.cpp): ground_bins_per_side = 64, ground_bin_m = resolution_m
   // = range / 64, tile_px = 160.

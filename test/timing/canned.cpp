@@ -322,8 +322,18 @@ std::uint64_t CannedVo::vo_step(int step) {
 
 // ---- Sonar -------------------------------------------------------------------------------------------
 
+// The default tiles (90 m every 60 m), framed by ping count at the canned 0.3 m per ping: a tile is
+// exactly 300 pushes, so tile_prepare() / tile_build() time the push that builds one.
+pipeline::RouteTileConfig canned_tile_config() {
+  pipeline::RouteTileConfig c = pipeline::default_route_tile_config();
+  c.tiles.tile_length_m = 0.0;
+  c.tiles.scanlines_per_tile = 300;
+  c.tiles.scanline_stride = 200;
+  return c;
+}
+
 struct CannedSonar::Impl {
-  pipeline::RouteTileConfig config = pipeline::default_route_tile_config();
+  pipeline::RouteTileConfig config = canned_tile_config();
   sidescan::SideScanSimConfig sim_config = pipeline::default_route_sonar_config();
   sidescan::Seabed seabed;
   sidescan::SideScanSimulator sim;

@@ -5,6 +5,7 @@
 //                     torn tail, every damaged node
 //   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]
 //   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--seabeds 3] [--quick] -> Table I, Fig. 5/7/9/10 data
+//   qnav route framing [--json] [--length-m 1000] [--quick]               -> tiles in metres at 2, 5, 15 pings/s, 2 speeds
 //   qnav route xtf    --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]  -> real data: teach on pings A..B,
 //                     repeat on the shifted window C..D of the same pass
 //   qnav route train|repeat --sonar FILE ...                            -> routes from recorded XTF / JSF passes
@@ -177,7 +178,7 @@ int cmd_train() {
     return 1;
   }
   const auto& tc = pipe.config();
-  const double spacing = tc.tiles.scanline_stride * w.route.speed_mps / w.route.ping_rate_hz;
+  const double spacing = pipeline::tile_stride_m(tc, w.route.speed_mps, w.route.ping_rate_hz);
   tools::RouteFileWriter writer;
   if (!begin_route(writer, "train", out, pipeline::side_scan_route_params(tc, spacing, w.swath_m), g_opt.force)) return 1;
   const auto t0 = Clock::now();
@@ -261,16 +262,17 @@ FILE* open_repeat_csv() {
     return nullptr;
   }
   std::fprintf(f, "tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,along_track_m,heading_error_rad,"
-                 "waypoint_bearing_rad,cross_track_sigma_m,offsets\n");
+                 "waypoint_bearing_rad,cross_track_sigma_m,offsets,ping_first,ping_last\n");
   return f;
 }
 
-// One row of that CSV (true_node -1 and true_side "unknown" when there is no truth).
-void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side) {
+// One row of that CSV (true_node -1 and true_side "unknown" when there is no truth); ping_first /
+// ping_last: the recorded pings (file index, or the simulated pass's ping number) the tile was built from.
+void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side, long ping_first, long ping_last) {
   const route::GuidanceOutput& g = st.guidance;
-  std::fprintf(f, "%ld,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%.2f,%.4f,%.4f,%.2f,%s\n", tile, true_node, st.estimate, static_cast<double>(st.probability),
+  std::fprintf(f, "%ld,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%.2f,%.4f,%.4f,%.2f,%s,%ld,%ld\n", tile, true_node, st.estimate, static_cast<double>(st.probability),
                st.entropy, st.confident ? 1 : 0, st.best_inliers, route::to_string(g.status), route::to_string(g.side), true_side, g.cross_track_m,
-               g.along_track_m, g.heading_error_rad, g.waypoint_bearing_rad, g.cross_track_sigma_m, route::to_string(g.offsets));
+               g.along_track_m, g.heading_error_rad, g.waypoint_bearing_rad, g.cross_track_sigma_m, route::to_string(g.offsets), ping_first, ping_last);
 }
 
 // false (reported) if the data did not reach the file (disk full, I/O error).
@@ -385,7 +387,9 @@ int cmd_repeat() {
     const double along_fwd = t.truth_along_m;
     const int tn = true_node(node_along, along_fwd);
     ok1 += std::abs(static_cast<int>(st.estimate) - tn) <= 1;
-    write_repeat_row(f, tiles, tn, st, route::to_string(expected_side(lateral, reverse, lc.guidance.side_deadband_m)));
+    write_repeat_row(f, tiles, tn, st, route::to_string(expected_side(lateral, reverse, lc.guidance.side_deadband_m)), t.ping_first, t.ping_last);
+    pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, Span<const route::NodeMeta>(meta.data(), meta.size()), lc.filter.direction,
+                                                            pipe.config().tiles.tile_stride_m));
     ++tiles;
     return true;
   });
@@ -411,8 +415,13 @@ using namespace route_cmd;
 // The options a recorded pass (--sonar / --xtf FILE) is cut into tiles with (open_file_pass).
 void add_file_pass_options(CLI::App& c) {
   qnav::cli::add_text(c, "--nav", g_opt.nav, "navigation of a recorded pass: the position fixes, or dead reckoning", {"fix", "dr"});
-  qnav::cli::add_number(c, "--lines", g_opt.lines, "pings per tile of a recorded pass", "pings", 10, 2000);
-  qnav::cli::add_number(c, "--stride", g_opt.stride, "a tile every N pings of a recorded pass (<= --lines)", "pings", 1, 2000);
+  qnav::cli::add_number(c, "--tile-length-m", g_opt.tile_length_m, "along-track length of a tile of a recorded pass (0: 0.9 x the swath)", "m", 0,
+                        5000);
+  qnav::cli::add_number(c, "--tile-stride-m", g_opt.tile_stride_m, "a tile every this much travel on a recorded pass (0: 0.6 x the swath)", "m", 0,
+                        5000);
+  qnav::cli::add_number(c, "--lines", g_opt.lines, "frame tiles by ping count instead: pings per tile of a recorded pass (0: by distance)", "pings", 0,
+                        2000);
+  qnav::cli::add_number(c, "--stride", g_opt.stride, "with --lines: a tile every N pings (<= --lines; 0: --lines / 2)", "pings", 0, 2000);
   qnav::cli::add_number(c, "--heading-offset-deg", g_opt.heading_offset_deg, "added to the recorded compass heading", "deg", -360, 360);
 }
 
@@ -469,7 +478,16 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*e, "--changed-seabed", g_opt.changed_seabed, "the seabed changed since the teach (20/40/60 %): repeats at 20 % without, then after learning one repeat");
   add_number(*e, "--learn-min-inliers", g_opt.learn_min_inliers, "with --multi-pass: a tile is learnt only when registered with this many inliers", "", 5, 128);
   add_flag(*e, "--backfill", g_opt.backfill, "with --multi-pass / --changed-seabed: learning passes also learn the tiles before their first confirmed fix");
+  add_flag(*e, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
   run.on(e, cmd_eval);
+
+  CLI::App* fr = cmd.add_subcommand("framing", "tiles in metres: the simulator at 2, 5 and 15 pings/s and 1.5 / 3 m/s with the default tiles,\n"
+                                               "node +/-1 and side against 5 pings/s at 1.5 m/s");
+  add_flag(*fr, "--json", g_opt.json, "one JSON summary on stdout (the log on stderr)");
+  add_number(*fr, "--length-m", g_opt.framing_length_m, "length of each simulated route", "m", 400, 20000);
+  add_flag(*fr, "--quick", g_opt.quick, "one offset (20 %) instead of 0, 20 and 40 % (a smoke run)");
+  add_flag(*fr, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
+  run.on(fr, cmd_framing);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");
   add_text(*x, "--xtf", g_opt.xtf, "the recorded pass (XTF or JSF)")->required()->type_name("FILE");
@@ -489,4 +507,4 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
 }
 }  // namespace
 
-QNAV_CLI_COMMAND("route", "route teach and repeat: train, info, repeat, eval, xtf, camera, follow (route-following paper)", setup_route);
+QNAV_CLI_COMMAND("route", "route teach and repeat: train, info, repeat, eval, framing, xtf, camera, follow (route-following paper)", setup_route);

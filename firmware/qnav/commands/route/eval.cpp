@@ -35,42 +35,70 @@ struct PassStats {
 };
 
 
-Status run_localiser(pipeline::RouteRepeater& loc, const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along,
-                     int pct, bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps,
-                     std::vector<double>* step_ms, std::vector<double>* step_cpu_ms = nullptr) {
+// One localiser update on tile k of a pass, scored against the simulator's truth into ps (and records).
+Status localise_tile(pipeline::RouteRepeater& loc, const pipeline::RouteTile& tile, std::size_t k, const std::vector<double>& node_along, int pct,
+                     bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps, std::vector<double>* step_ms,
+                     std::vector<double>* step_cpu_ms, route::LocaliserStep* step_out = nullptr) {
   ps.pct = pct;
   ps.reverse = reverse;
   ps.lateral_m = lateral;
-  for (std::size_t k = 0; k < tiles.size(); ++k) {
-    TileRecord r;
-    r.pct = pct;
-    r.reverse = reverse;
-    r.tile = static_cast<int>(k);
-    const auto t0 = Clock::now();
-    const double c0 = cpu_ms();
-    QNAV_RETURN_IF_ERROR(loc.step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, r.st));
-    if (step_cpu_ms) step_cpu_ms->push_back(cpu_ms() - c0);
-    if (step_ms) step_ms->push_back(ms_since(t0));
-    r.truth = true_node(node_along, tiles[k].truth_along_m);
-    r.want = expected_side(lateral, reverse, deadband);
-    r.true_cross_track_m = reverse ? -lateral : lateral;
-    ++ps.tiles;
-    ps.mean_entropy += r.st.entropy;
-    if (static_cast<int>(k) >= kWarmupTiles) {
-      ++ps.scored;
-      ps.within1 += std::abs(static_cast<int>(r.st.estimate) - r.truth) <= 1;
-      ps.off_route += r.want != route::RouteSide::kOnRoute;
-      ps.tracking += r.st.guidance.status == route::GuidanceStatus::kTracking;
-      ps.dead_reckoned += r.st.guidance.status == route::GuidanceStatus::kDeadReckoned;
-      if (r.want != route::RouteSide::kOnRoute && r.st.guidance.side != route::RouteSide::kUnknown) {  // a side was given
-        ++ps.side_n;
-        ps.side_ok += r.st.guidance.side == r.want;
-      }
+  TileRecord r;
+  r.pct = pct;
+  r.reverse = reverse;
+  r.tile = static_cast<int>(k);
+  const auto t0 = Clock::now();
+  const double c0 = cpu_ms();
+  QNAV_RETURN_IF_ERROR(loc.step(tile.node, k == 0 ? 0.0 : tile.nav_step_m, r.st));
+  if (step_cpu_ms) step_cpu_ms->push_back(cpu_ms() - c0);
+  if (step_ms) step_ms->push_back(ms_since(t0));
+  r.truth = true_node(node_along, tile.truth_along_m);
+  r.want = expected_side(lateral, reverse, deadband);
+  r.true_cross_track_m = reverse ? -lateral : lateral;
+  ++ps.tiles;
+  ps.mean_entropy += r.st.entropy;
+  if (static_cast<int>(k) >= kWarmupTiles) {
+    ++ps.scored;
+    ps.within1 += std::abs(static_cast<int>(r.st.estimate) - r.truth) <= 1;
+    ps.off_route += r.want != route::RouteSide::kOnRoute;
+    ps.tracking += r.st.guidance.status == route::GuidanceStatus::kTracking;
+    ps.dead_reckoned += r.st.guidance.status == route::GuidanceStatus::kDeadReckoned;
+    if (r.want != route::RouteSide::kOnRoute && r.st.guidance.side != route::RouteSide::kUnknown) {  // a side was given
+      ++ps.side_n;
+      ps.side_ok += r.st.guidance.side == r.want;
     }
-    if (records) records->push_back(r);
   }
+  if (step_out) *step_out = r.st;
+  if (records) records->push_back(r);
+  return Status::ok();
+}
+
+Status run_localiser(pipeline::RouteRepeater& loc, const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along,
+                     int pct, bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps,
+                     std::vector<double>* step_ms, std::vector<double>* step_cpu_ms = nullptr) {
+  for (std::size_t k = 0; k < tiles.size(); ++k)
+    QNAV_RETURN_IF_ERROR(localise_tile(loc, tiles[k], k, node_along, pct, reverse, lateral, deadband, records, ps, step_ms, step_cpu_ms));
   if (ps.tiles) ps.mean_entropy /= ps.tiles;
   return Status::ok();
+}
+
+// Flies a pass and localises each tile as it is built, framing the next tile on the route
+// (pipeline::route_aligned_stride_m), as qnavd and `route repeat` do.
+Status fly_localised(pipeline::RouteTilePipeline& pipe, const pipeline::SimSurvey& w, const sidescan::TrajectoryConfig& traj,
+                     pipeline::RouteRepeater& loc, Span<const route::NodeMeta> meta, const std::vector<double>& node_along, int pct, bool reverse,
+                     double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps, std::vector<pipeline::RouteTile>& tiles) {
+  tiles.clear();
+  Status step_status;
+  const route::RouteDirection dir = reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward;
+  QNAV_RETURN_IF_ERROR(pipe.run_sim_pass(w.seabed, w.sonar_for(traj.seed), traj, [&](const pipeline::RouteTile& t) {
+    tiles.push_back(t);
+    route::LocaliserStep st;
+    step_status = localise_tile(loc, t, tiles.size() - 1, node_along, pct, reverse, lateral, deadband, records, ps, nullptr, nullptr, &st);
+    if (!step_status) return false;
+    if (!g_opt.no_align) pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, meta, dir, pipe.config().tiles.tile_stride_m));
+    return true;
+  }));
+  if (ps.tiles) ps.mean_entropy /= ps.tiles;
+  return step_status;
 }
 
 // Registration alone, without the filter: each tile against its true node and against a node three
@@ -137,7 +165,6 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
     for (bool rev : {false, true}) {
       const double lateral = pct / 100.0 * in.world->swath_m;
       const auto t0 = Clock::now();
-      QNAV_RETURN_IF_ERROR(fly(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), tiles));
       route::LocaliserConfig lc = pipeline::default_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
       auto loc = std::make_unique<pipeline::RouteRepeater>();
       QNAV_RETURN_IF_ERROR(loc->init(lc));
@@ -145,7 +172,8 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
       PassStats ps;
       ps.seabed = in.seabed;
       std::vector<TileRecord> rec;
-      QNAV_RETURN_IF_ERROR(run_localiser(*loc, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, &rec, ps, nullptr));
+      QNAV_RETURN_IF_ERROR(fly_localised(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), *loc, in.meta,
+                                         *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, &rec, ps, tiles));
       for (TileRecord& r : rec) {
         r.seabed = in.seabed;
         records.push_back(r);
@@ -535,6 +563,115 @@ int cmd_eval() {
     std::printf("node within +/-1: %.1f%% of %d tiles; side correct %.1f%% of %d decided tiles (tracking %.1f%%); re-localised after %d tiles; "
                 "update %.2f ms wall / %.2f ms CPU (10,000 nodes); predict %.3f ms wall / %.3f ms CPU (100,000 nodes); eq. 5 model at 20%%: %.1f%%; %.1f s\n",
                 within_pct, scored, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_cpu_mean, pred_ms, pred_cpu_ms, eq5_within, ms_since(t_all) / 1000.0);
+  }
+  return 0;
+}
+
+// qnav route framing: tiles framed in metres, measured. The sonar simulator's survey flown at 2, 5 and
+// 15 pings/s and at two speeds with the default tile settings (no flag changed): teach a route, then
+// repeat it forwards and in reverse at lateral offsets; node within +/-1 and side correct per
+// configuration, against 5 pings/s at 1.5 m/s (the rate and speed the ping-count defaults were tuned
+// on, where tiles by distance are the same 90 m every 60 m).
+int cmd_framing() {
+  const double length_m = g_opt.framing_length_m;
+  if (!(length_m >= 400.0 && length_m <= 20000.0)) return usage("framing", "--length-m: framing needs 400..20000 m");
+  const bool json = g_opt.json;
+  FILE* log = json ? stderr : stdout;
+  const auto t_all = Clock::now();
+  const double rates[] = {2.0, 5.0, 15.0};
+  const double speeds[] = {1.5, 3.0};
+  const std::vector<int> pcts = g_opt.quick ? std::vector<int>{20} : std::vector<int>{0, 20, 40};
+  struct Row {
+    double rate_hz, speed_mps, spacing_m, kp;
+    std::size_t nodes;
+    int scored, within, side_n, side_ok, rev_scored, rev_within;
+    std::uint32_t overflow;
+  };
+  std::vector<Row> rows;
+  pipeline::RouteTilePipeline pipe;
+  Status s = pipe.init(pipeline::default_route_tile_config());
+  for (double rate : rates)
+    for (double speed : speeds) {
+      if (!s) break;
+      pipeline::SimSurvey w;
+      s = w.init(length_m, 1);
+      if (!s) break;
+      w.route.ping_rate_hz = rate;
+      w.route.speed_mps = speed;
+      std::vector<pipeline::RouteTile> train;
+      s = fly(pipe, w, w.pass(0.0, false, 11), train);
+      if (!s || train.size() < 2) {
+        if (s) s = Status(StatusCode::kInvalidArgument, "fewer than 2 tiles taught");
+        break;
+      }
+      const double sp = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+      const route::RouteParams params = pipeline::side_scan_route_params(pipe.config(), sp, w.swath_m);
+      std::vector<route::NodeMeta> meta;
+      std::vector<double> along;
+      double kp = 0.0;
+      for (std::size_t i = 0; i < train.size(); ++i) {
+        meta.push_back(train[i].node.meta);
+        meta.back().index = static_cast<std::uint32_t>(i);
+        along.push_back(train[i].truth_along_m);
+        kp += static_cast<double>(train[i].node.keypoints.size());
+      }
+      TileSource src(&train);
+      std::fprintf(log, "%.0f pings/s at %.1f m/s (%.2f m between pings): taught %zu nodes (spacing %.1f m, %.1f keypoints/node)\n", rate, speed,
+                   speed / rate, train.size(), sp, kp / static_cast<double>(train.size()));
+      SweepInputs in{&pipe, &w, &train, &src, &params, Span<const route::NodeMeta>(meta.data(), meta.size()), &along, &pcts, 1, log};
+      std::vector<TileRecord> records;
+      std::vector<PassStats> stats;
+      int pass_seed = 100;
+      s = offset_sweep(in, pass_seed, records, stats, nullptr, nullptr);
+      if (!s) break;
+      Row r{rate, speed, sp, kp / static_cast<double>(train.size()), train.size(), 0, 0, 0, 0, 0, 0,
+            pipe.builder().counters().get(sonar::TileCounter::kTileOverflow)};
+      for (const PassStats& p : stats) {
+        r.scored += p.scored;
+        r.within += p.within1;
+        if (p.reverse) {
+          r.rev_scored += p.scored;
+          r.rev_within += p.within1;
+        }
+        if (p.pct > 5) {
+          r.side_n += p.side_n;
+          r.side_ok += p.side_ok;
+        }
+      }
+      rows.push_back(r);
+    }
+  if (!s) {
+    std::fprintf(stderr, "qnav route framing: %s\n", s.message());
+    return 1;
+  }
+  auto pct = [](int a, int b) { return b > 0 ? 100.0 * a / b : 0.0; };
+  const Row* ref = nullptr;
+  for (const Row& r : rows)
+    if (r.rate_hz == 5.0 && r.speed_mps == 1.5) ref = &r;
+  std::fprintf(log, "\npings/s  speed m/s  m/ping  nodes  spacing m  keypoints  node +/-1 %%  (reverse)  side correct %%  vs 5 pings/s 1.5 m/s  tile_overflow\n");
+  bool all_within = true;
+  for (const Row& r : rows) {
+    const double dn = pct(r.within, r.scored) - pct(ref->within, ref->scored), ds = pct(r.side_ok, r.side_n) - pct(ref->side_ok, ref->side_n);
+    all_within = all_within && std::abs(dn) <= 2.0 && std::abs(ds) <= 2.0;
+    std::fprintf(log, "%7.0f  %9.1f  %6.2f  %5zu  %9.1f  %9.1f  %6.1f (%d)  %9.1f  %8.1f (%d)  %+5.1f / %+5.1f points  %u\n", r.rate_hz, r.speed_mps,
+                 r.speed_mps / r.rate_hz, r.nodes, r.spacing_m, r.kp, pct(r.within, r.scored), r.scored, pct(r.rev_within, r.rev_scored),
+                 pct(r.side_ok, r.side_n), r.side_n, dn, ds, r.overflow);
+  }
+  std::fprintf(log, "every configuration within 2 points of 5 pings/s at 1.5 m/s (node +/-1 and side): %s (%.0f s)\n", all_within ? "yes" : "NO",
+               ms_since(t_all) / 1000.0);
+  if (json) {
+    std::printf("{\"length_m\": %.0f, \"offsets_pct\": [", length_m);
+    for (std::size_t i = 0; i < pcts.size(); ++i) std::printf("%s%d", i ? ", " : "", pcts[i]);
+    std::printf("], \"configurations\": [");
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      std::printf("%s{\"ping_rate_hz\": %.0f, \"speed_mps\": %.1f, \"nodes\": %zu, \"spacing_m\": %.2f, \"keypoints_per_node\": %.1f, "
+                  "\"node_within_1_pct\": %.2f, \"scored\": %d, \"reverse_node_within_1_pct\": %.2f, \"side_correct_pct\": %.2f, \"side_decided\": %d, "
+                  "\"tile_overflow\": %u}",
+                  i ? ", " : "", r.rate_hz, r.speed_mps, r.nodes, r.spacing_m, r.kp, pct(r.within, r.scored), r.scored, pct(r.rev_within, r.rev_scored),
+                  pct(r.side_ok, r.side_n), r.side_n, r.overflow);
+    }
+    std::printf("], \"all_within_2_points\": %s}\n", all_within ? "true" : "false");
   }
   return 0;
 }

@@ -17,16 +17,28 @@ struct FilePass {
   tools::NavTrack track;
   pipeline::RouteTileConfig tiles;
   double swath_m = 0.0;
+  double ping_spacing_m = 0.0;  // median along-track distance between consecutive pings with navigation
 };
 
-// Loads a file and derives its tile geometry from the median slant range: 300 ground bins per side
-// (0.1 m for the Iver2's 30 m), 800 x 800 px rasters at the bin size, --lines pings per tile every
-// --stride pings (defaults 100 / 50). Navigation from the fixes (--nav fix) or dead reckoning
-// (--nav dr), --heading-offset-deg added to the compass; the bottom is detected in each ping.
-int open_file_pass(const char* path, FilePass& out) {
+// Loads a file and derives its tile geometry from the median slant range and ping spacing
+// (pipeline::file_route_tile_config): 300 ground bins per side (0.1 m for the Iver2's 30 m), tiles
+// by along-track distance, 0.9 x the swath long every 0.6 x the swath (--tile-length-m /
+// --tile-stride-m override), or --lines pings per tile every --stride pings (default --lines / 2)
+// when --lines is given. default_length_m / default_stride_m: the command's own default (xtf), 0 =
+// from the swath. Navigation from the fixes (--nav fix) or dead reckoning (--nav dr),
+// --heading-offset-deg added to the compass; the bottom is detected in each ping.
+int open_file_pass(const char* path, FilePass& out, double default_length_m = 0.0, double default_stride_m = 0.0) {
   const double hoff_deg = g_opt.heading_offset_deg;
-  const long lines = g_opt.lines, stride = g_opt.stride;
+  const long lines = g_opt.lines, stride = g_opt.lines > 0 && g_opt.stride == 0 ? std::max(1L, g_opt.lines / 2) : g_opt.stride;
   const char* nav = g_opt.nav.c_str();
+  if (lines == 0 && stride > 0) {
+    std::fprintf(stderr, "qnav route: --stride %ld needs --lines (tiles by ping count); by distance use --tile-stride-m\n", stride);
+    return 2;
+  }
+  if (lines > 0 && (g_opt.tile_length_m > 0.0 || g_opt.tile_stride_m > 0.0)) {
+    std::fprintf(stderr, "qnav route: --lines (tiles by ping count) and --tile-length-m / --tile-stride-m (by distance) exclude each other\n");
+    return 2;
+  }
   if (stride > lines) {
     std::fprintf(stderr, "qnav route: --stride %ld is more than --lines %ld (a tile every --stride pings of --lines pings)\n", stride, lines);
     return 2;
@@ -45,28 +57,56 @@ int open_file_pass(const char* path, FilePass& out) {
     std::fprintf(stderr, "qnav route: %s: no ping with a slant range\n", path);
     return 1;
   }
-  out.tiles = pipeline::file_route_tile_config(range, static_cast<int>(lines), static_cast<int>(stride));
+  std::vector<double> steps;
+  for (std::size_t k = 1; k < out.track.pose.size(); ++k)
+    if (out.track.ok[k] && out.track.ok[k - 1])
+      steps.push_back(std::hypot(out.track.pose[k].x_m - out.track.pose[k - 1].x_m, out.track.pose[k].y_m - out.track.pose[k - 1].y_m));
+  if (steps.empty()) {
+    std::fprintf(stderr, "qnav route: %s: no two consecutive pings with navigation\n", path);
+    return 1;
+  }
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  out.ping_spacing_m = std::max(1e-3, steps[steps.size() / 2]);
+  const double len = g_opt.tile_length_m > 0.0 ? g_opt.tile_length_m : default_length_m;
+  const double str = g_opt.tile_stride_m > 0.0 ? g_opt.tile_stride_m : default_stride_m;
+  out.tiles = pipeline::file_route_tile_config(range, out.ping_spacing_m, len, str, static_cast<int>(lines), static_cast<int>(stride));
+  if (out.tiles.tiles.tile_length_m > 0.0 && out.tiles.tiles.tile_stride_m > out.tiles.tiles.tile_length_m) {
+    std::fprintf(stderr, "qnav route: tile stride %.1f m is more than the tile length %.1f m (the seabed between tiles would be skipped)\n",
+                 out.tiles.tiles.tile_stride_m, out.tiles.tiles.tile_length_m);
+    return 2;
+  }
   out.swath_m = 2.0 * range;
+  if (out.tiles.tiles.tile_length_m > 0.0)
+    std::fprintf(stderr, "qnav route: %s: swath %.1f m, %.2f m between pings: tiles of %.1f m every %.1f m (up to %d pings), %zu keypoints\n", path,
+                 out.swath_m, out.ping_spacing_m, out.tiles.tiles.tile_length_m, out.tiles.tiles.tile_stride_m, out.tiles.tiles.scanlines_per_tile,
+                 out.tiles.features.max_keypoints);
   return 0;
 }
 
-// Tiles of pings [a, b) of a file. centre_ping (optional) receives each tile's centre ping index.
+// The pings of one tile stride (for telling a repeat tile "beyond" the taught pings).
+double stride_pings(const FilePass& fp) {
+  const sonar::TileBuilderConfig& t = fp.tiles.tiles;
+  return t.tile_length_m > 0.0 ? t.tile_stride_m / fp.ping_spacing_m : static_cast<double>(t.scanline_stride);
+}
+
+// Tiles of pings [a, b) of a file (ping_first / ping_last: file ping indices). centre_ping (optional)
+// receives each tile's centre ping index. on_tile (optional) sees each tile as it is built (a repeat
+// localises it there and frames the next tile on the route); false stops.
 Status file_tiles(pipeline::RouteTilePipeline& pipe, const FilePass& fp, long a, long b, std::vector<pipeline::RouteTile>& out,
-                  std::vector<double>* centre_ping) {
+                  std::vector<double>* centre_ping, const std::function<bool(const pipeline::RouteTile&)>& on_tile = nullptr) {
   pipe.reset_pass();
   out.clear();
   if (centre_ping) centre_ping->clear();
   bool stop = false;
-  const double half = 0.5 * (fp.tiles.tiles.scanlines_per_tile - 1);
   for (long i = a; i < b && !stop; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
     if (!fp.track.ok[k]) continue;
     sonar::SonarPing ping = tools::as_ping(fp.fd.pings[k], false);
-    ping.ping_number = static_cast<std::uint32_t>(i - a);
+    ping.ping_number = static_cast<std::uint32_t>(i);
     QNAV_RETURN_IF_ERROR(pipe.push_ping(ping, fp.track.pose[k], [&](const pipeline::RouteTile& t) {
       out.push_back(t);
-      if (centre_ping) centre_ping->push_back(static_cast<double>(i) - half);  // the tile is the last scanlines_per_tile pings
-      return true;
+      if (centre_ping) centre_ping->push_back(0.5 * (static_cast<double>(t.ping_first) + static_cast<double>(t.ping_last)));
+      return on_tile ? on_tile(t) : true;
     }, &stop));
   }
   return Status::ok();
@@ -90,7 +130,8 @@ int cmd_xtf() {
   if (!parse_range(opt_or_null(g_opt.train), ta, tb)) return usage("xtf", "--train: give A:B, pings A to B-1 with 0 <= A < B");
   if (!parse_range(opt_or_null(g_opt.repeat), ra, rb)) return usage("xtf", "--repeat: give C:D, pings C to D-1 with 0 <= C < D");
   FilePass fp;
-  if (const int rc = open_file_pass(path, fp); rc != 0) return rc;
+  // The Iver2 pass is 55 m long, shorter than one swath-sized tile: xtf frames 12 m tiles every 6 m.
+  if (const int rc = open_file_pass(path, fp, 12.0, 6.0); rc != 0) return rc;
   const long n = static_cast<long>(fp.fd.pings.size());
   if (n < 100) {
     std::fprintf(stderr, "qnav route xtf: %s: only %ld pings\n", path, n);
@@ -161,7 +202,7 @@ int cmd_xtf() {
     int truth = 0;
     for (std::size_t i = 1; i < train_c.size(); ++i)
       if (std::abs(train_c[i] - rep_c[k]) < std::abs(train_c[static_cast<std::size_t>(truth)] - rep_c[k])) truth = static_cast<int>(i);
-    const bool near = std::abs(train_c[static_cast<std::size_t>(truth)] - rep_c[k]) <= tc.tiles.scanline_stride;
+    const bool near = std::abs(train_c[static_cast<std::size_t>(truth)] - rep_c[k]) <= stride_pings(fp);
     ok += near && std::abs(static_cast<int>(st.estimate) - truth) <= 1;
     exact += near && static_cast<int>(st.estimate) == truth;
     std::printf("  %4zu  %11.0f  %9s  %8u  %.3f  %7.3f  %7u  %-11s  %13.2f  %13.2f\n", k, rep_c[k], near ? std::to_string(truth).c_str() : "beyond",
@@ -238,12 +279,9 @@ int cmd_repeat_file(const char* path) {
   auto loc = std::make_unique<pipeline::RouteRepeater>();
   pipeline::RouteTilePipeline pipe;
   std::vector<pipeline::RouteTile> tiles;
-  std::vector<double> centre;
   Status s = loc->init(lc);
   if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
   if (s) s = pipe.init(fp.tiles);
-  if (s) s = file_tiles(pipe, fp, a, b, tiles, &centre);
-  if (s && tiles.empty()) s = Status(StatusCode::kInvalidArgument, "no complete tile in the ping range");
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
@@ -252,13 +290,20 @@ int cmd_repeat_file(const char* path) {
   if (f == nullptr) return 1;
   const bool csv = f != stdout;
   int tracking = 0;
-  for (std::size_t k = 0; k < tiles.size() && s; ++k) {
+  Status step_status;
+  // Each tile is localised as it is built and the next one framed on the taught nodes.
+  s = file_tiles(pipe, fp, a, b, tiles, nullptr, [&](const pipeline::RouteTile& t) {
     route::LocaliserStep st;
-    s = loc->step(tiles[k].node, k == 0 ? 0.0 : tiles[k].nav_step_m, st);
-    if (!s) break;
+    step_status = loc->step(t.node, tiles.size() == 1 ? 0.0 : t.nav_step_m, st);
+    if (!step_status) return false;
     tracking += st.guidance.status == route::GuidanceStatus::kTracking;
-    write_repeat_row(f, static_cast<long>(k), -1, st, "unknown");
-  }
+    write_repeat_row(f, static_cast<long>(tiles.size() - 1), -1, st, "unknown", t.ping_first, t.ping_last);
+    pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, Span<const route::NodeMeta>(meta.data(), meta.size()), lc.filter.direction,
+                                                            fp.tiles.tiles.tile_stride_m));
+    return true;
+  });
+  if (s && !step_status) s = step_status;
+  if (s && tiles.empty()) s = Status(StatusCode::kInvalidArgument, "no complete tile in the ping range");
   const bool written = close_csv(f);
   if (s && !written) return 1;
   if (!s) {

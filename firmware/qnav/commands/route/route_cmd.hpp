@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <random>
@@ -48,8 +49,10 @@ struct RouteOptions {
   std::string eval_out = "route_eval";
   double length_m = 2000.0, offset_pct = 0.0, heading_offset_deg = 0.0;
   double camera_length_m = 12.0;
-  long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 100, stride = 50;
-  bool sim = false, force = false, reverse = false, json = false, quick = false;
+  double framing_length_m = 1000.0;
+  long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 0, stride = 0;
+  double tile_length_m = 0.0, tile_stride_m = 0.0;  // recorded passes: 0 = from the swath (route_defaults)
+  bool sim = false, force = false, reverse = false, json = false, quick = false, no_align = false;
   // Experiences (issue 29, route/experiences.cpp).
   bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false, backfill = false;
   long max_experiences = 4, learn_min_inliers = 8;
@@ -74,12 +77,13 @@ bool finish_route(tools::RouteFileWriter& w, const char* cmd, const char* out, S
 bool open_route_for_repeat(const char* path, tools::RouteFileReader& reader, std::vector<route::NodeMeta>& meta);
 // The repeat CSV (--csv): header, one row per tile, close with a check.
 FILE* open_repeat_csv();
-void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side);
+void write_repeat_row(FILE* f, long tile, int true_node, const route::LocaliserStep& st, const char* true_side, long ping_first, long ping_last);
 bool close_csv(FILE* f);
 int true_node(const std::vector<double>& node_truth_along, double along);
 route::RouteSide expected_side(double lateral_m, bool reverse, double deadband);
 
 int cmd_eval();                       // route/eval.cpp
+int cmd_framing();                    // route/eval.cpp: tiles in metres at several ping rates and speeds
 int cmd_xtf();                        // route/recorded.cpp
 int cmd_train_file(const char* path);
 int cmd_repeat_file(const char* path);

@@ -64,7 +64,7 @@ help "$Q" route train --help
 err 2 "unknown command 'rout'.*'route'" "$Q" rout
 err 2 "unknown command 'nosuch'" "$Q" help nosuch
 err 2 "give a command" "$Q"
-err 2 "give a subcommand: train info repeat eval xtf camera" "$Q" route
+err 2 "give a subcommand: train info repeat eval framing xtf camera" "$Q" route
 err 2 "unexpected argument 'trian'.*'train'" "$Q" route trian
 for c in can dvl map route sonar stereo version vo xtf; do ok "$c" "$Q" --help; done
 for c in can dvl map route sonar stereo version vo xtf; do help "$Q" help "$c"; help "$Q" "$c" --help; done

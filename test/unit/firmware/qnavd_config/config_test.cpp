@@ -84,6 +84,8 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(route_learn),
       QNAV_FIELD(max_experiences),
       QNAV_FIELD(localiser.filter.max_nodes),
+      QNAV_FIELD(tiles.tiles.tile_length_m),
+      QNAV_FIELD(tiles.tiles.tile_stride_m),
       QNAV_FIELD(tiles.tiles.scanlines_per_tile),
       QNAV_FIELD(tiles.tiles.scanline_stride),
       QNAV_FIELD(tiles.tiles.resolution_m),
@@ -501,6 +503,8 @@ id = 7
 max_nodes = 20000
 learn = true
 max_experiences = 2
+tile_length_m = 0
+tile_stride_m = 30.0
 scanlines_per_tile = 500
 scanline_stride = 250
 resolution_m = 0.1
@@ -729,10 +733,15 @@ const BadConfig kBadConfigs[] = {
     {"interface_too_long", "[can]\ninterface = \"a_very_long_can_name\"\n", "can.interface", 2, "1 to 15 characters"},
     {"address_without_port", "[sonar]\naddress = \"192.168.1.20\"\n", "sonar.address", 2, "must be HOST:PORT"},
     {"port_out_of_range", "[sonar]\naddress = \"host:70000\"\n", "sonar.address", 2, "must be HOST:PORT"},
-    {"stride_beyond_tile", "[route]\nscanlines_per_tile = 100\nscanline_stride = 150\n" + std::string(kOnePass),
-     "route.scanline_stride", 3, "must be <= route.scanlines_per_tile (100), got 150"},
-    {"stride_beyond_default_tile", "[route]\nscanline_stride = 400\n" + std::string(kOnePass), "route.scanline_stride",
-     2, "must be <= route.scanlines_per_tile (300), got 400"},
+    {"stride_beyond_tile", "[route]\ntile_length_m = 0\nscanlines_per_tile = 100\nscanline_stride = 150\n" + std::string(kOnePass),
+     "route.scanline_stride", 4, "must be <= route.scanlines_per_tile (100), got 150"},
+    {"ping_stride_beyond_tile_by_distance", "[route]\nscanline_stride = 2000\n" + std::string(kOnePass), "route.scanline_stride", 2,
+     "must be <= route.scanlines_per_tile (1802), got 2000"},
+    {"by_ping_count_without_pings", "[route]\ntile_length_m = 0\n" + std::string(kOnePass), "route.tile_length_m", 2,
+     "0 frames tiles by ping count: give route.scanlines_per_tile"},
+    {"tile_stride_beyond_length", "[route]\ntile_length_m = 40.0\ntile_stride_m = 50.0\n" + std::string(kOnePass), "route.tile_stride_m", 3,
+     "must be <= route.tile_length_m (40), got 50"},
+    {"negative_tile_length", "[route]\ntile_length_m = -5.0\n", "route.tile_length_m", 2, "must be in [0, 5000]"},
     {"searching_below_belief",
      "[route]\nbelief_registrations = 8\nsearching_registrations = 6\n" + std::string(kOnePass),
      "route.searching_registrations", 3, "must be >= route.belief_registrations (8), got 6"},

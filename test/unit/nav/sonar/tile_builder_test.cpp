@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "test/support/alloc_guard.hpp"
@@ -248,6 +250,129 @@ TEST(TileBuilder, PushAndBuildMakeNoHeapAllocation) {
     if (r.is_ok() && r.value()) ++built;
   });
   EXPECT_EQ(built, 1);
+}
+
+
+// Tiles by distance: a straight run at `step_m` per ping; returns (first ping, last ping, centre
+// distance) of every tile. stride_at (optional): set_next_stride_m() after that tile.
+struct DistanceTile {
+  std::uint32_t first, last;
+  double start_m, end_m;
+};
+std::vector<DistanceTile> run_by_distance(TileBuilder& tb, double step_m, int pings, int stride_after = -1, double stride_m = 0.0) {
+  LineSource src;
+  src.bins = 60;
+  std::vector<DistanceTile> out;
+  for (int k = 0; k < pings; ++k) {
+    const Pose2 pose{k * step_m, 0.0, 0.0};
+    const Result<bool> r = tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose);
+    EXPECT_TRUE(r.is_ok());
+    if (r.is_ok() && r.value()) {
+      const SonarTile& t = tb.tile();
+      out.push_back({t.first_ping, t.last_ping, t.first_pose.x_m, t.last_pose.x_m});
+      if (static_cast<int>(out.size()) - 1 == stride_after) tb.set_next_stride_m(stride_m);
+    }
+  }
+  return out;
+}
+
+TileBuilderConfig distance_config() {
+  TileBuilderConfig c = small_config();
+  c.tile_length_m = 10.0;
+  c.tile_stride_m = 6.0;
+  c.scanlines_per_tile = 210;  // a full 10 m tile down to 0.05 m between pings
+  return c;
+}
+
+TEST(TileBuilder, ByDistanceTilesHaveTheirLengthAtAnyPingSpacing) {
+  for (double step : {0.05, 0.1, 0.3, 0.7}) {
+    const TileBuilderConfig cfg = distance_config();
+    ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+    TileBuilder tb;
+    ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+    const std::vector<DistanceTile> tiles = run_by_distance(tb, step, static_cast<int>(std::ceil(40.0 / step)) + 2);
+    // Tiles end at 10, 16, 22, 28, 34, 40 m (the first ping at or past each), each 10 m long.
+    ASSERT_EQ(tiles.size(), 6u) << "step " << step;
+    for (std::size_t i = 0; i < tiles.size(); ++i) {
+      EXPECT_NEAR(tiles[i].end_m, 10.0 + 6.0 * static_cast<double>(i), step + 1e-9) << "step " << step;
+      EXPECT_NEAR(tiles[i].end_m - tiles[i].start_m, 10.0, step + 1e-9) << "step " << step;
+    }
+    EXPECT_EQ(tb.counters().get(TileCounter::kTileOverflow), 0u);
+  }
+}
+
+TEST(TileBuilder, ByDistanceTooManyPingsAreCountedNotACrash) {
+  const TileBuilderConfig cfg = distance_config();  // holds 210 pings
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  const std::vector<DistanceTile> tiles = run_by_distance(tb, 0.02, 1201);  // 500 pings per 10 m
+  ASSERT_EQ(tiles.size(), 3u);  // ends at 10, 16, 22 m
+  for (const DistanceTile& t : tiles) {
+    EXPECT_EQ(t.last - t.first + 1, 210u);  // cut short to the ring's capacity
+    EXPECT_NEAR(t.end_m - t.start_m, 209 * 0.02, 1e-9);
+  }
+  EXPECT_EQ(tb.counters().get(TileCounter::kTileOverflow), 3u);
+}
+
+TEST(TileBuilder, ByDistanceNextStrideMovesTheNextTileOnly) {
+  const TileBuilderConfig cfg = distance_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  const std::vector<DistanceTile> tiles = run_by_distance(tb, 0.1, 401, 0, 9.0);  // after tile 0: next in 9 m
+  ASSERT_GE(tiles.size(), 4u);
+  EXPECT_NEAR(tiles[0].end_m, 10.0, 1e-6);
+  EXPECT_NEAR(tiles[1].end_m, 19.0, 0.1 + 1e-6);
+  EXPECT_NEAR(tiles[2].end_m, 25.0, 0.1 + 1e-6);  // back to the 6 m stride
+  EXPECT_NEAR(tiles[3].end_m, 31.0, 0.1 + 1e-6);
+}
+
+TEST(TileBuilder, ByDistanceBadLengthsAreNamedErrors) {
+  for (double len : {-1.0, std::nan(""), 1e9}) {
+    TileBuilderConfig c = distance_config();
+    c.tile_length_m = len;
+    ArenaStorage arena(TileBuilder::arena_bytes(c));
+    TileBuilder tb;
+    const Status s = tb.init(c, arena);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(std::string(s.message()).find("tile_length_m"), std::string::npos);
+  }
+  TileBuilderConfig c = distance_config();
+  c.tile_stride_m = 0.0;
+  ArenaStorage arena(TileBuilder::arena_bytes(c));
+  TileBuilder tb;
+  const Status s = tb.init(c, arena);
+  EXPECT_NE(std::string(s.message()).find("tile_stride_m"), std::string::npos);
+}
+
+TEST(TileBuilder, ByDistanceAFrozenPoseIsFramedAtTheLastPingSpacing) {
+  // Dead reckoning without odometry (a DVL loss) freezes the pose: the pings go on, so do the tiles.
+  const TileBuilderConfig cfg = distance_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  LineSource src;
+  src.bins = 60;
+  std::vector<std::uint32_t> last_pings;
+  for (int k = 0; k < 400; ++k) {
+    const Pose2 pose{std::min(k, 150) * 0.1, 0.0, 0.0};  // moves 15 m, then frozen
+    const Result<bool> r = tb.push(src.make(pose, static_cast<std::uint32_t>(k)), pose);
+    ASSERT_TRUE(r.is_ok());
+    if (r.value()) last_pings.push_back(tb.tile().last_ping);
+  }
+  // Tiles end at pings 100, 160, 220, 280, 340, 400 (every 60 pings of 0.1 m, frozen or not).
+  ASSERT_EQ(last_pings.size(), 5u);
+  for (std::size_t i = 0; i < last_pings.size(); ++i) EXPECT_NEAR(static_cast<double>(last_pings[i]), 100.0 + 60.0 * static_cast<double>(i), 1.0);
+  EXPECT_EQ(tb.counters().get(TileCounter::kFrozenPose), 249u);
+}
+
+TEST(TileBuilder, ByDistanceAStationaryVehicleMakesNoTile) {
+  const TileBuilderConfig cfg = distance_config();
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  EXPECT_TRUE(run_by_distance(tb, 0.0, 1000).empty());
 }
 
 }  // namespace
