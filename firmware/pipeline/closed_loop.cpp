@@ -60,8 +60,7 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
   const RouteTileConfig& tc = pipe->config();
   out.spacing_m = tile_stride_m(tc, out.survey.route.speed_mps, out.survey.route.ping_rate_hz);
   out.params = side_scan_route_params(tc, out.spacing_m, out.survey.swath_m);
-  out.tile_age_s = tc.tiles.tile_length_m > 0.0 ? 0.5 * tc.tiles.tile_length_m / out.survey.route.speed_mps
-                                               : 0.5 * tc.tiles.scanlines_per_tile / out.survey.route.ping_rate_hz;
+  out.tile_age_s = tile_age_s(tc, out.survey.route.speed_mps, out.survey.route.ping_rate_hz);
   const sidescan::TrajectoryConfig t0 = out.survey.pass(0.0, false, teach_pass_seed(seed));
   out.tiles.clear();
   QNAV_RETURN_IF_ERROR(

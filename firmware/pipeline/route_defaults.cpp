@@ -23,6 +23,10 @@ void frame_tiles_by_distance(RouteTileConfig& c, double swath_m, double min_ping
   c.features.max_keypoints = keypoint_budget(len, swath_m, c.tiles.resolution_m * c.features.downsample);
 }
 
+double tile_age_s(const RouteTileConfig& c, double speed_mps, double ping_rate_hz) {
+  return c.tiles.tile_length_m > 0.0 ? 0.5 * c.tiles.tile_length_m / speed_mps : 0.5 * c.tiles.scanlines_per_tile / ping_rate_hz;
+}
+
 double tile_stride_m(const RouteTileConfig& c, double speed_mps, double ping_rate_hz) {
   if (c.tiles.tile_length_m > 0.0) return c.tiles.tile_stride_m;
   return c.tiles.scanline_stride * speed_mps / ping_rate_hz;

@@ -41,6 +41,9 @@ std::size_t keypoint_budget(double length_m, double swath_m, double feature_pixe
 void frame_tiles_by_distance(RouteTileConfig& c, double swath_m, double min_ping_spacing_m, double length_m = 0.0, double stride_m = 0.0);
 // The nominal node spacing of tiles so framed (by ping count: stride pings x speed / ping rate).
 double tile_stride_m(const RouteTileConfig& c, double speed_mps, double ping_rate_hz);
+// How old a tile's pose is when the tile is finished (half a tile of travel), at this speed and ping
+// rate: what a closed loop's autopilot allows for when it steers on the tile's guidance.
+double tile_age_s(const RouteTileConfig& c, double speed_mps, double ping_rate_hz);
 
 // Tiles for the simulator's sonar (50 m slant range, swath 100 m): 0.2 m raster 704 x 704 (141 m
 // square), tiles of 90 m of track every 60 m (the node spacing), 128 keypoints; ground bins 0.2 m x 256.

@@ -84,7 +84,7 @@ Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
   sc.pass_seed = pass_seed;
   c.dt_s = 1.0 / survey_->route.ping_rate_hz;
   c.max_travel_m = sc.max_travel_factor * c.length_m;
-  const double age_s = 0.5 * cfg_.tiles.tiles.scanlines_per_tile / survey_->route.ping_rate_hz;
+  const double age_s = pipeline::tile_age_s(cfg_.tiles, survey_->route.speed_mps, survey_->route.ping_rate_hz);
   const Span<const Pose2> track(c.track.data(), c.track.size());
   const Span<const std::uint32_t> node_at(c.node_at.data(), c.node_at.size());
   // The first ping one ping period after the last sample between passes (sample times strictly increase).

@@ -65,11 +65,25 @@ int open_file_pass(const char* path, FilePass& out, double default_length_m = 0.
     std::fprintf(stderr, "qnav route: %s: no two consecutive pings with navigation\n", path);
     return 1;
   }
+  double pass_m = 0.0;  // along-track length of the pass (the consecutive pings with navigation)
+  for (double d : steps) pass_m += d;
   std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
   out.ping_spacing_m = std::max(1e-3, steps[steps.size() / 2]);
   const double len = g_opt.tile_length_m > 0.0 ? g_opt.tile_length_m : default_length_m;
   const double str = g_opt.tile_stride_m > 0.0 ? g_opt.tile_stride_m : default_stride_m;
   out.tiles = pipeline::file_route_tile_config(range, out.ping_spacing_m, len, str, static_cast<int>(lines), static_cast<int>(stride));
+  // A pass too short for three tiles of the default length (a short recorded line, a test file): the
+  // default tiles shrink to fit three (same length to stride ratio, at least 4 m), so a pass a new user
+  // records works without tuning flags. Given lengths (--tile-length-m, --lines) are kept as given.
+  const sonar::TileBuilderConfig& dt = out.tiles.tiles;
+  if (g_opt.tile_length_m <= 0.0 && g_opt.tile_stride_m <= 0.0 && lines == 0 && dt.tile_length_m > 0.0 && dt.tile_stride_m > 0.0 &&
+      pass_m < dt.tile_length_m + 2.0 * dt.tile_stride_m) {
+    const double ratio = dt.tile_stride_m / dt.tile_length_m;
+    const double fit_len = std::max(4.0, pass_m / (1.0 + 2.0 * ratio) * 0.95);
+    std::fprintf(stderr, "qnav route: %s: the pass is %.1f m long: tiles of %.1f m would not give three; %.1f m tiles instead\n", path, pass_m,
+                 dt.tile_length_m, fit_len);
+    out.tiles = pipeline::file_route_tile_config(range, out.ping_spacing_m, fit_len, fit_len * ratio, 0, 0);
+  }
   if (out.tiles.tiles.tile_length_m > 0.0 && out.tiles.tiles.tile_stride_m > out.tiles.tiles.tile_length_m) {
     std::fprintf(stderr, "qnav route: tile stride %.1f m is more than the tile length %.1f m (the seabed between tiles would be skipped)\n",
                  out.tiles.tiles.tile_stride_m, out.tiles.tiles.tile_length_m);
