@@ -16,11 +16,13 @@ tail -n 4 "$out/repeat_fwd.csv" | cut -d, -f1-11
 cp "$out/demo.qroute" "$out/damaged.qroute"
 printf '\x5a' | dd of="$out/damaged.qroute" bs=1 seek=$((64 + 5 * (48 + 128 * 76 + 4) + 100)) conv=notrunc status=none
 if "$QNAV" route info "$out/damaged.qroute"; then echo "ERROR: damage not detected"; exit 1; fi
-# Real data: teach on the Iver2 pass (pings 0-300) and repeat on a shifted window of the same pass.
+# Real data: teach on the Iver2 pass (pings 0-300, 33 m) and repeat on a shifted window of the same
+# pass, with the 12 m tiles every 6 m `qnav route xtf` uses for this short pass (the default tiles,
+# sized from the swath and the file's length, would give one tile in 33 m).
 X="$SHARED/data/sidescan/cidco-scotsman-iver2/scotsman-iver2.xtf"
 if [ -f "$X" ]; then
-  "$QNAV" route train --sonar "$X" --pings 0:301 --out "$out/iver2.qroute" --force
-  "$QNAV" route repeat --route "$out/iver2.qroute" --sonar "$X" --pings 90:461 --csv "$out/iver2_repeat.csv"
+  "$QNAV" route train --sonar "$X" --pings 0:301 --tile-length-m 12 --tile-stride-m 6 --out "$out/iver2.qroute" --force
+  "$QNAV" route repeat --route "$out/iver2.qroute" --sonar "$X" --pings 90:461 --tile-length-m 12 --tile-stride-m 6 --csv "$out/iver2_repeat.csv"
   cut -d, -f1,3-9,11 "$out/iver2_repeat.csv"
 else
   echo "(no $X: real-data step skipped)"

@@ -244,7 +244,9 @@ int cmd_train_file(const char* path) {
   std::vector<pipeline::RouteTile> tiles;
   Status s = pipe.init(fp.tiles);
   if (s) s = file_tiles(pipe, fp, a, b, tiles, nullptr);
-  if (s && tiles.size() < 2) s = Status(StatusCode::kInvalidArgument, "fewer than 2 tiles in the ping range: a route needs 2 nodes");
+  if (s && tiles.size() < 2)
+    s = Status(StatusCode::kInvalidArgument,
+               "fewer than 2 tiles in the ping range: a route needs 2 nodes (a longer --pings range, or shorter tiles: --tile-length-m / --tile-stride-m)");
   // A node with fewer keypoints than a registration's minimum consensus can never be recognised:
   // a route made only of such nodes (a featureless pass, or pings whose navigation was unusable) is
   // refused rather than written; some of them are reported.
