@@ -239,6 +239,34 @@ Status time_updates(const route::RouteParams& params, ReplicatedRoute& route_nod
 
 }  // namespace
 
+// One seabed's taught route for an experiment: the teach pass flown on seabed sb, written durably
+// to route_path and opened again; node_along: each node's true along-track distance. Returns the
+// command's exit code when the route file could not be written (reported), else 0 with s the status
+// of the rest (a route of fewer than 2 nodes leaves train short).
+struct EvalRoute {
+  pipeline::SimSurvey w;
+  std::vector<pipeline::RouteTile> train;
+  tools::RouteFileReader reader;
+  std::vector<route::NodeMeta> meta;
+  std::vector<double> node_along;
+};
+int teach_eval_route(pipeline::RouteTilePipeline& pipe, long sb, double length_m, const std::string& route_path, EvalRoute& r, Status& s) {
+  s = r.w.init(length_m, static_cast<std::uint64_t>(sb));
+  if (s) s = fly(pipe, r.w, r.w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), r.train);
+  if (!s || r.train.size() < 2) return 0;
+  const double spacing = (r.train.back().node.meta.along_m - r.train.front().node.meta.along_m) / static_cast<double>(r.train.size() - 1);
+  tools::RouteFileWriter writer;
+  if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, r.w.swath_m), true)) return 1;
+  for (const pipeline::RouteTile& t : r.train)
+    if (s) s = writer.append(t.node);
+  if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
+  std::uint32_t bad = 0;
+  s = r.reader.open(route_path.c_str());
+  if (s) s = r.reader.read_all_meta(r.meta, &bad);
+  for (const pipeline::RouteTile& t : r.train) r.node_along.push_back(t.truth_along_m);
+  return 0;
+}
+
 int cmd_eval_multi_pass() {
   const double length_m = g_opt.length_m;
   const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
@@ -260,28 +288,17 @@ int cmd_eval_multi_pass() {
                     "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
                g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
   for (long sb = 1; s && sb <= seabeds; ++sb) {
-    pipeline::SimSurvey w;
-    std::vector<pipeline::RouteTile> train;
-    s = w.init(length_m, static_cast<std::uint64_t>(sb));
-    if (s) s = fly(pipe, w, w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), train);
-    if (!s || train.size() < 2) break;
-    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+    EvalRoute er;
     const std::string route_path = out_dir + "/route_multipass_" + std::to_string(sb) + ".qroute";
-    const std::string exp_path = route_path + ".exp";
-    std::remove(exp_path.c_str());  // a fresh experiment
-    tools::RouteFileWriter writer;
-    if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
-    for (const pipeline::RouteTile& t : train)
-      if (s) s = writer.append(t.node);
-    if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
-    tools::RouteFileReader reader;
-    std::vector<route::NodeMeta> meta;
-    std::uint32_t bad = 0;
-    s = reader.open(route_path.c_str());
-    if (s) s = reader.read_all_meta(meta, &bad);
-    if (!s) break;
-    std::vector<double> node_along;
-    for (const pipeline::RouteTile& t : train) node_along.push_back(t.truth_along_m);
+    std::remove((route_path + ".exp").c_str());  // a fresh experiment
+    if (const int rc = teach_eval_route(pipe, sb, length_m, route_path, er, s); rc != 0) return rc;
+    if (!s || er.train.size() < 2) break;
+    pipeline::SimSurvey& w = er.w;
+    const std::vector<route::NodeMeta>& meta = er.meta;
+    tools::RouteFileReader& reader = er.reader;
+    const std::vector<double>& node_along = er.node_along;
+    std::vector<pipeline::RouteTile>& train = er.train;
+    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
     const auto rev = route::RouteDirection::kReverse;
     std::uint64_t seed = 50000 + 1000 * static_cast<std::uint64_t>(sb);
     // The test passes, flown once, localised without experiences now and with them after learning.
@@ -423,26 +440,14 @@ int cmd_eval_changed_seabed() {
                     "flipped (a rock gone or new); repeats at 20%% forwards and reverse without experiences, then after learning one forward repeat at 0%% "
                     "over the changed seabed\n");
   for (long sb = 1; s && sb <= seabeds; ++sb) {
-    pipeline::SimSurvey w;
-    std::vector<pipeline::RouteTile> train;
-    s = w.init(length_m, static_cast<std::uint64_t>(sb));
-    if (s) s = fly(pipe, w, w.pass(0.0, false, sb == 1 ? 11 : 11 + 1000 * static_cast<std::uint64_t>(sb)), train);
-    if (!s || train.size() < 2) break;
-    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+    EvalRoute er;
     const std::string route_path = out_dir + "/route_changed_" + std::to_string(sb) + ".qroute";
-    tools::RouteFileWriter writer;
-    if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
-    for (const pipeline::RouteTile& t : train)
-      if (s) s = writer.append(t.node);
-    if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
-    tools::RouteFileReader reader;
-    std::vector<route::NodeMeta> meta;
-    std::uint32_t bad = 0;
-    s = reader.open(route_path.c_str());
-    if (s) s = reader.read_all_meta(meta, &bad);
-    if (!s) break;
-    std::vector<double> node_along;
-    for (const pipeline::RouteTile& t : train) node_along.push_back(t.truth_along_m);
+    if (const int rc = teach_eval_route(pipe, sb, length_m, route_path, er, s); rc != 0) return rc;
+    if (!s || er.train.size() < 2) break;
+    pipeline::SimSurvey& w = er.w;
+    const std::vector<route::NodeMeta>& meta = er.meta;
+    tools::RouteFileReader& reader = er.reader;
+    const std::vector<double>& node_along = er.node_along;
     std::uint64_t seed = 70000 + 1000 * static_cast<std::uint64_t>(sb);
     for (std::size_t di = 0; s && di < degrees.size(); ++di) {
       const float f = static_cast<float>(degrees[di]) / 100.0f;
