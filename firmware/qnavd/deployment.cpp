@@ -112,7 +112,7 @@ Deployment make_deployment(const DaemonConfig& c) {
     add(d, "map", "nav: TopoMapper", BufferKind::kStatic, pipeline::TopoMapper::arena_bytes(map_mapper_config(c)),
         "mapper arena for map.width x map.height, map.max_nodes");
   if (map_runs(c) && c.mavlink_enabled)
-    add(d, "map_fixes", "nav: NavSource", BufferKind::kStatic, c.map_max_nodes * sizeof(Vec2d),
+    add(d, "map_fixes", "nav: NavSource", BufferKind::kStatic, c.map_max_nodes * 2 * sizeof(double),
         "the published position where each map node was created (map.max_nodes): a revisit's fix");
   // Owned: allocated by their components at start-up with exactly these bytes.
   add(d, "route_meta", "nav: route reader", BufferKind::kOwned, c.max_nodes * sizeof(route::NodeMeta), "per-node metadata of the loaded route (route.max_nodes)");

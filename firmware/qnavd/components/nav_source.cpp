@@ -1,5 +1,6 @@
 #include "firmware/qnavd/components/nav_source.hpp"
 
+#include <cmath>
 #include <limits>
 #include <new>
 
@@ -16,13 +17,13 @@ Status NavSource::init(SpscRing<MavBytes>* rx, SpscRing<MavBytes>* tx, StaticMem
   if (map_runs(*ctx_.cfg)) {
     const std::size_t n = ctx_.cfg->map_max_nodes;
     if (mem != nullptr) {
-      Result<Span<Vec2d>> r = mem->take_array<Vec2d>("map_fixes", n);
+      Result<Span<KeptPosition>> r = mem->take_array<KeptPosition>("map_fixes", n);
       if (!r) return r.status();
       map_fixes_ = r.value();
     } else {
-      own_map_fixes_.reset(new (std::nothrow) Vec2d[n]);
+      own_map_fixes_.reset(new (std::nothrow) KeptPosition[n]);
       if (!own_map_fixes_) return Status(StatusCode::kCapacityExceeded, "nav worker: cannot allocate the map fixes");
-      map_fixes_ = Span<Vec2d>(own_map_fixes_.get(), n);
+      map_fixes_ = Span<KeptPosition>(own_map_fixes_.get(), n);
     }
     map_start();
   }
@@ -30,20 +31,21 @@ Status NavSource::init(SpscRing<MavBytes>* rx, SpscRing<MavBytes>* tx, StaticMem
 }
 
 void NavSource::map_start() noexcept {
-  for (Vec2d& p : map_fixes_) p = Vec2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (KeptPosition& p : map_fixes_) p = KeptPosition{nan, nan};
 }
 
 void NavSource::map_step(const topo::ObserveResult& place, const pipeline::DeadReckoner& dr) noexcept {
   if (place.node == topo::kNoNode || place.node >= map_fixes_.size()) return;
-  Vec2d& kept = map_fixes_[place.node];
+  KeptPosition& kept = map_fixes_[place.node];
   const Pose2 dr_now = dr.pose_at(ctx_.clock->now_ns);
   est_.track(dr_now);  // the estimate up to this frame's instant
   if (place.kind == topo::ObserveKind::kCreated) {
-    kept = Vec2d(est_.north_m(), est_.east_m());
+    kept = KeptPosition{est_.north_m(), est_.east_m()};
     return;
   }
-  if (place.kind != topo::ObserveKind::kMatched || !place.revisit || !kept.allFinite()) return;
-  est_.apply_fix(kept.x(), kept.y());
+  if (place.kind != topo::ObserveKind::kMatched || !place.revisit || !std::isfinite(kept.north_m) || !std::isfinite(kept.east_m)) return;
+  est_.apply_fix(kept.north_m, kept.east_m);
   est_.rebase();
   est_.track(dr_now);
 }

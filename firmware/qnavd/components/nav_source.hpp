@@ -35,6 +35,12 @@
 
 namespace qnav::daemon {
 
+// A map node's kept position (north, east metres in the published frame; NaN: none). Plain doubles:
+// the static block hands out max_align_t-aligned buffers, and an Eigen vector wants 16 bytes on armhf.
+struct KeptPosition {
+  double north_m, east_m;
+};
+
 class NavSource {
  public:
   explicit NavSource(const NavContext& ctx) noexcept : ctx_(ctx) {}
@@ -74,8 +80,8 @@ class NavSource {
   bool route_fix_ = false;     // a route fix placed the estimate in this repeat's route frame
   Vec2d waypoint_ne_ = Vec2d::Zero();
   bool guidance_valid_ = false;
-  Span<Vec2d> map_fixes_;                   // per map node: the published position at its creation (NaN: none)
-  std::unique_ptr<Vec2d[]> own_map_fixes_;  // a worker built without a static block
+  Span<KeptPosition> map_fixes_;                   // per map node: the published position at its creation
+  std::unique_ptr<KeptPosition[]> own_map_fixes_;  // a worker built without a static block
 };
 
 }  // namespace qnav::daemon

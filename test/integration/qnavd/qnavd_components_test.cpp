@@ -89,7 +89,7 @@ TEST(NavSource, TheMapFixesAreATableEntryOnlyWhenTheMapAndMavlinkRun) {
   cfg.mavlink_enabled = true;
   const Deployment d = make_deployment(cfg);
   ASSERT_NE(d.buffer("map_fixes"), nullptr);
-  EXPECT_GE(d.buffer("map_fixes")->bytes, cfg.map_max_nodes * sizeof(Vec2d));
+  EXPECT_GE(d.buffer("map_fixes")->bytes, cfg.map_max_nodes * sizeof(KeptPosition));
 }
 
 }  // namespace
