@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "drivers/route_store/experience_file.hpp"
+#include "firmware/pipeline/route_repeater.hpp"
 #include "nav/core/arena.hpp"
 #include "nav/route/experience.hpp"
 #include "nav/route/experience_learner.hpp"
@@ -109,6 +110,17 @@ class RouteExperiences {
   const drivers::route_store::ExperienceFile& file() const noexcept { return file_; }
   const char* path() const noexcept { return path_; }
 
+  // The repeater's localiser reads these experiences from now on and (learning) this pass begins:
+  // attach_experiences + begin_pass, as qnavd's Repeat and the tool's repeats run it.
+  Status attach(RouteRepeater& rep, Span<const route::NodeMeta> meta, bool reverse) {
+    QNAV_RETURN_IF_ERROR(rep.attach_experiences(index(), source()));
+    return begin_pass(meta, rep.localiser().node_spacing_m(), reverse);
+  }
+  // The pass ends (end_pass) and the repeater forgets these experiences.
+  void detach(RouteRepeater& rep) {
+    end_pass();
+    (void)rep.attach_experiences(nullptr, nullptr);
+  }
   Status begin_pass(Span<const route::NodeMeta> meta, double spacing_m, bool reverse) {
     learned_ = 0;
     backfilled_ = 0;

@@ -90,13 +90,11 @@ void RouteRepeat::open_experiences(const char* path) noexcept {
     return;
   }
   if (!experiences_.has_experiences()) return;  // no companion, not learning
-  Status a = repeater_.attach_experiences(experiences_.index(), experiences_.source());
-  if (a) a = experiences_.begin_pass(Span<const route::NodeMeta>(meta_.data(), meta_.size()), repeater_.localiser().node_spacing_m(), reverse_);
+  const Status a = experiences_.attach(repeater_, Span<const route::NodeMeta>(meta_.data(), meta_.size()), reverse_);
   if (!a) {
     ++experience_errors_;
     if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_experiences_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", experiences_.path(), a.message());
-    experiences_.end_pass();
-    (void)repeater_.attach_experiences(nullptr, nullptr);
+    experiences_.detach(repeater_);
     return;
   }
   with_experiences_ = true;
@@ -111,8 +109,7 @@ void RouteRepeat::open_experiences(const char* path) noexcept {
 void RouteRepeat::leave() noexcept {
   if (with_experiences_) {
     const std::uint32_t pass_learned = experiences_.learned();
-    experiences_.end_pass();
-    (void)repeater_.attach_experiences(nullptr, nullptr);
+    experiences_.detach(repeater_);
     if (ctx_.log && experiences_.learning())
       std::fprintf(ctx_.log, "{\"event\":\"route_learned\",\"file\":\"%s\",\"experiences\":%u}\n", experiences_.path(), pass_learned);
     with_experiences_ = false;

@@ -586,14 +586,21 @@ TEST(QnavdMavlink, InModeVoTheEstimateFollowsTheVisualOdometry) {
 
 // The io thread's links alone: a UDP server on mavlink.udp_listen_port hears a ground station and
 // answers it; a full rx queue drops and counts.
-TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
-  hal::UdpPort probe;  // find a free port: bind 0, read it, close
-  ASSERT_TRUE(probe.open_server(0, "127.0.0.1"));
-  const std::uint16_t port = probe.local_port();
+// A free UDP port (bind 0, read it, close) and a configuration serving MAVLink on it.
+DaemonConfig server_config(std::uint16_t& port) {
+  hal::UdpPort probe;
+  EXPECT_TRUE(probe.open_server(0, "127.0.0.1"));
+  port = probe.local_port();
   probe.close();
   DaemonConfig c;
   c.mavlink_enabled = true;
   c.mavlink_udp_listen_port = port;
+  return c;
+}
+
+TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
+  std::uint16_t port = 0;
+  const DaemonConfig c = server_config(port);
   hal::MonotonicClock clock;
   MavlinkIo io_links(c, clock, nullptr);
   ASSERT_TRUE(io_links.open());
@@ -646,13 +653,8 @@ TEST(QnavdMavlinkIo, TheServerPortHearsAGroundStationAndAnswersIt) {
 // The server's peer is a sender of valid frames, and it stays the peer while it is alive: junk from
 // another address, even a stream of it, does not take qnavd's frames away from the ground station.
 TEST(QnavdMavlinkIo, AFloodOfJunkDoesNotTakeTheServersRepliesFromTheGroundStation) {
-  hal::UdpPort probe;
-  ASSERT_TRUE(probe.open_server(0, "127.0.0.1"));
-  const std::uint16_t port = probe.local_port();
-  probe.close();
-  DaemonConfig c;
-  c.mavlink_enabled = true;
-  c.mavlink_udp_listen_port = port;
+  std::uint16_t port = 0;
+  const DaemonConfig c = server_config(port);
   hal::MonotonicClock clock;
   MavlinkIo io_links(c, clock, nullptr);
   ASSERT_TRUE(io_links.open());

@@ -42,8 +42,7 @@ bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& rea
                  r.first_damaged);
   std::fprintf(stderr, "qnav route repeat: %u experiences of %zu nodes from %s%s\n", r.live, meta.size(), exps.path(),
                g_opt.learn ? "; learning this pass" : "");
-  s = rep.attach_experiences(exps.index(), exps.source());
-  if (s) s = exps.begin_pass(Span<const route::NodeMeta>(meta.data(), meta.size()), rep.localiser().node_spacing_m(), reverse);
+  s = exps.attach(rep, Span<const route::NodeMeta>(meta.data(), meta.size()), reverse);
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: experiences: %s\n", s.message());
     return false;
@@ -128,9 +127,7 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
                                    g_opt.backfill ? &lc.registration : nullptr));
     QNAV_RETURN_IF_ERROR(exps.open(route_path, params, nodes, learn));
     if (exps.has_experiences()) {
-      QNAV_RETURN_IF_ERROR(rep->attach_experiences(exps.index(), exps.source()));
-      QNAV_RETURN_IF_ERROR(exps.begin_pass(Span<const route::NodeMeta>(meta.data(), meta.size()), rep->localiser().node_spacing_m(),
-                                           told == route::RouteDirection::kReverse));
+      QNAV_RETURN_IF_ERROR(exps.attach(*rep, Span<const route::NodeMeta>(meta.data(), meta.size()), told == route::RouteDirection::kReverse));
     }
   }
   (void)reverse;
