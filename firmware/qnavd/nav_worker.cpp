@@ -307,9 +307,7 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
     r.eq5_motion = repeat_.step(t, r.seq, dvl_lost, r.step);
     state_.step = r.step;
     // The next tile framed on the taught nodes (a reverse pass brought into step with them), as the tool does.
-    const Span<const route::NodeMeta> meta(repeat_.meta().data(), repeat_.meta().size());
-    tiles_.set_next_stride_m(pipeline::route_aligned_stride_m(
-        r.step, meta, reverse_ ? route::RouteDirection::kReverse : route::RouteDirection::kForward, cfg_.tiles.tiles.tile_stride_m));
+    tiles_.set_next_stride_m(repeat_.next_stride_m(r.step));
     if (source_.enabled()) {
       const std::uint32_t n = r.step.guidance.node;
       source_.route_fix(t, r.step, n < repeat_.meta().size() ? &repeat_.meta()[n] : nullptr, reverse_, dr);

@@ -323,17 +323,16 @@ int cmd_repeat() {
   pipeline::RouteTilePipeline pipe;
   Status s = w.init(length_m, static_cast<std::uint64_t>(seed));
   if (s) s = pipe.init(pipeline::default_route_tile_config());
-  route::LocaliserConfig lc = pipeline::default_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
-  configure_experiences(lc);
-  auto loc = std::make_unique<pipeline::RouteRepeater>();
-  if (s) s = loc->init(lc);
-  if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
+  const route::LocaliserConfig lc =
+      pipeline::default_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8);
+  pipeline::RouteRepeatSession session(hal::host_file_store());
+  if (s) s = session.init(repeat_session_config(lc, meta.size()));
+  if (s) s = session.start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader, reverse);
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
     return 1;
   }
-  pipeline::RouteExperiences exps(hal::host_file_store());
-  if (!open_repeat_experiences(path, reader, meta, *loc, exps, reverse)) return 1;
+  if (!open_repeat_experiences(path, session)) return 1;
   // Node truth: trained on the route at zero offset, node i's tile centre is at along_m (nav) ~ truth.
   std::vector<double> node_along;
   for (const route::NodeMeta& m : meta) node_along.push_back(m.along_m);
@@ -380,21 +379,20 @@ int cmd_repeat() {
     }
     route::LocaliserStep st;
     const auto t0 = Clock::now();
-    step_status = loc->step(t.node, tiles == 0 ? 0.0 : t.nav_step_m, st);
+    const pipeline::RepeatTileResult r = session.step(t, false, st);
     worst_ms = std::max(worst_ms, ms_since(t0));
-    if (step_status) step_status = exps.on_step(t.node, tiles == 0 ? 0.0 : t.nav_step_m, st);
+    step_status = r.step ? r.learn : r.step;
     if (!step_status) return false;  // reported below: the pass stops, the command fails
     const double along_fwd = t.truth_along_m;
     const int tn = true_node(node_along, along_fwd);
     ok1 += std::abs(static_cast<int>(st.estimate) - tn) <= 1;
     write_repeat_row(f, tiles, tn, st, route::to_string(expected_side(lateral, reverse, lc.guidance.side_deadband_m)), t.ping_first, t.ping_last);
-    pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, Span<const route::NodeMeta>(meta.data(), meta.size()), lc.filter.direction,
-                                                            pipe.config().tiles.tile_stride_m));
+    pipe.set_next_stride_m(session.next_stride_m(st, pipe.config().tiles.tile_stride_m));
     ++tiles;
     return true;
   });
   const bool written = close_csv(f);
-  exps.end_pass();
+  session.end();
   if (s && !step_status) s = step_status;
   if (s && !written) return 1;
   if (!s) {
@@ -403,7 +401,7 @@ int cmd_repeat() {
   }
   std::fprintf(csv ? stdout : stderr, "repeat %s offset %.0f%% of swath (%.1f m)%s: %d tiles, estimate within +/-1 node on %d (%.1f%%), worst update %.1f ms\n",
                path, offset_pct, lateral, reverse ? " reverse" : "", tiles, ok1, tiles ? 100.0 * ok1 / tiles : 0.0, worst_ms);
-  report_learned(csv ? stdout : stderr, exps);
+  report_learned(csv ? stdout : stderr, session.experiences());
   return 0;
 }
 

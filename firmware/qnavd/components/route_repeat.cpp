@@ -10,11 +10,13 @@ namespace qc = drivers::qnavcan;
 
 Status RouteRepeat::init(StaticMemory* mem, qc::QnavCanPublisher& publisher) {
   publisher_ = &publisher;
-  const route::LocaliserConfig lc = repeat_localiser_config(*ctx_.cfg);
-  Result<Arena*> a = arena_.take(mem, "localiser", route::RouteLocaliser::arena_bytes(lc));
+  pipeline::RepeatSessionConfig sc;
+  sc.localiser = repeat_localiser_config(*ctx_.cfg);
+  sc.max_nodes = ctx_.cfg->max_nodes;
+  sc.experiences_per_node = ctx_.cfg->max_experiences;
+  Result<Arena*> a = arena_.take(mem, "localiser", route::RouteLocaliser::arena_bytes(sc.localiser));
   if (!a) return a.status();
-  QNAV_RETURN_IF_ERROR(repeater_.init(lc, *a.value()));
-  QNAV_RETURN_IF_ERROR(experiences_.init(ctx_.cfg->max_nodes, ctx_.cfg->max_experiences, route::ExperienceLearnConfig{}));
+  QNAV_RETURN_IF_ERROR(session_.init(sc, a.value()));
   meta_.reserve(ctx_.cfg->max_nodes);
   reader_.reserve(route::record_bytes(route::kMaxKeypointsPerNode));
   return Status::ok();
@@ -63,89 +65,60 @@ ModeReject RouteRepeat::enter(std::uint16_t route_id, bool reverse) noexcept {
   if (prefix_only && log)
     std::fprintf(log, "{\"event\":\"route_damaged\",\"file\":\"%s\",\"first_bad_node\":%u,\"why\":\"%s\",\"repeating_nodes\":%u,\"nodes_unused\":%u}\n",
                  path, r.first_bad_node, r.why.message(), r.nodes_used, r.file_nodes - r.nodes_used);
-  repeater_.set_motion(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, route::MotionModel::kOdometry);
-  const Status s = repeater_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_);
+  const Status s = session_.start(reader_.params(), Span<const route::NodeMeta>(meta_.data(), meta_.size()), reader_, reverse);
   if (!s) {
     // e.g. a route taught with another sensor or tile geometry than this configuration's
     if (log) std::fprintf(log, "{\"event\":\"route_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", path, s.message());
     reader_.close();
     return ModeReject::kRouteMismatch;
   }
-  reverse_ = reverse;
   open_experiences(path);
   route_damaged_ = prefix_only;  // a good route clears the fault
-  eq5_ = false;
   return ModeReject::kNone;
 }
 
 // The route's experiences for this repeat (read, or with route.learn opened for appending).
 void RouteRepeat::open_experiences(const char* path) noexcept {
-  with_experiences_ = false;
-  drivers::route_store::ExperienceOpenReport rep;
-  const Status s = experiences_.open(path, reader_.params(), reader_, ctx_.cfg->route_learn, &rep);
-  if (!s) {
+  const pipeline::ExperiencesOpened o = session_.open_experiences(path, ctx_.cfg->route_learn);
+  const pipeline::RouteExperiences& e = session_.experiences();
+  if (!o.ok()) {
     ++experience_errors_;
-    if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_experiences_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", experiences_.path(), s.message());
-    (void)repeater_.attach_experiences(nullptr, nullptr);
+    if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_experiences_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", e.path(), o.status.message());
     return;
   }
-  if (!experiences_.has_experiences()) return;  // no companion, not learning
-  const Status a = experiences_.attach(repeater_, Span<const route::NodeMeta>(meta_.data(), meta_.size()), reverse_);
-  if (!a) {
-    ++experience_errors_;
-    if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"route_experiences_refused\",\"file\":\"%s\",\"why\":\"%s\"}\n", experiences_.path(), a.message());
-    experiences_.detach(repeater_);
-    return;
-  }
-  with_experiences_ = true;
+  if (!session_.with_experiences()) return;  // no companion, not learning
+  const drivers::route_store::ExperienceOpenReport& rep = o.report;
   if (ctx_.log)
     std::fprintf(ctx_.log,
                  "{\"event\":\"route_experiences\",\"file\":\"%s\",\"learn\":%s,\"live\":%u,\"records\":%u,\"damaged\":%u,"
                  "\"torn_bytes\":%llu,\"created\":%s,\"moved_stale\":%s}\n",
-                 experiences_.path(), experiences_.learning() ? "true" : "false", rep.live, rep.records, rep.damaged,
-                 static_cast<unsigned long long>(rep.torn_bytes), rep.created ? "true" : "false", rep.moved_stale ? "true" : "false");
+                 e.path(), e.learning() ? "true" : "false", rep.live, rep.records, rep.damaged, static_cast<unsigned long long>(rep.torn_bytes),
+                 rep.created ? "true" : "false", rep.moved_stale ? "true" : "false");
 }
 
 void RouteRepeat::leave() noexcept {
-  if (with_experiences_) {
-    const std::uint32_t pass_learned = experiences_.learned();
-    experiences_.detach(repeater_);
-    if (ctx_.log && experiences_.learning())
-      std::fprintf(ctx_.log, "{\"event\":\"route_learned\",\"file\":\"%s\",\"experiences\":%u}\n", experiences_.path(), pass_learned);
-    with_experiences_ = false;
-  }
+  const bool learning = session_.with_experiences() && session_.experiences().learning();
+  const std::uint32_t pass_learned = session_.end();
+  if (ctx_.log && learning)
+    std::fprintf(ctx_.log, "{\"event\":\"route_learned\",\"file\":\"%s\",\"experiences\":%u}\n", session_.experiences().path(), pass_learned);
   reader_.close();
 }
 
 bool RouteRepeat::step(const pipeline::RouteTile& t, std::uint32_t tile_seq, bool dvl_lost, route::LocaliserStep& out) noexcept {
-  if (dvl_lost != eq5_) {
-    eq5_ = dvl_lost;
-    repeater_.set_motion(reverse_ ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
-                         eq5_ ? route::MotionModel::kPaperEq5 : route::MotionModel::kOdometry);
+  const pipeline::RepeatTileResult r = session_.step(t, dvl_lost, out);
+  if (r.learned) ++learned_;
+  if (!r.learn) {
+    ++experience_errors_;
+    if (ctx_.log)
+      std::fprintf(ctx_.log, "{\"event\":\"error\",\"what\":\"route experiences: %s: %s\"}\n", session_.experiences().path(), r.learn.message());
   }
-  const bool first = t.tile_index == 0;
-  const Status s = repeater_.step(t.node, first ? 0.0 : t.nav_step_m, out);
-  if (s && with_experiences_) {
-    bool learned = false;
-    const Status ls = experiences_.on_step(t.node, first ? 0.0 : t.nav_step_m, out, &learned);
-    if (learned) ++learned_;
-    if (!ls) {
-      ++experience_errors_;
-      if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"error\",\"what\":\"route experiences: %s: %s\"}\n", experiences_.path(), ls.message());
-    }
-  }
-  if (!s) {
-    ++step_errors_;
-    out = route::LocaliserStep{};
-    out.guidance.status = route::GuidanceStatus::kHoldCourse;
-    out.guidance.side = route::RouteSide::kUnknown;
-  }
+  if (!r.step) ++step_errors_;
   // The next node in the direction of travel is one spacing ahead of the node the offsets refer to
   // (the taught nodes' own spacing, as the localiser's motion model uses it); values in the DBC ranges.
-  pipeline::route_can_messages(out, repeater_.localiser().node_spacing_m(), tile_seq, guidance_, route_status_);
+  pipeline::route_can_messages(out, session_.repeater().localiser().node_spacing_m(), tile_seq, guidance_, route_status_);
   publisher_->set(guidance_);
   publisher_->set(route_status_);
-  return eq5_;
+  return r.eq5;
 }
 
 void RouteRepeat::hold(bool in_repeat, bool no_fix_possible, std::uint32_t tile_seq) noexcept {

@@ -1,7 +1,9 @@
 // RouteRepeat: Mode = Repeat. The taught route opened by the one route-open policy
 // (drivers/route_store/route_open.hpp, as `qnav route repeat` applies it: a damaged node with a good
-// prefix before it repeats the prefix and keeps FaultRouteDamaged raised), then one Bayes filter step
-// (pipeline::RouteRepeater, the paper's eqs. 1-5) per finished tile.
+// prefix before it repeats the prefix and keeps FaultRouteDamaged raised), then the repeat component
+// (pipeline::RouteRepeatSession, the same one `qnav route repeat` runs: one Bayes filter step, the
+// paper's eqs. 1-5, per finished tile, experiences, the framing stride). This is qnavd's side of it:
+// the route files by id, the CAN outputs and the JSON events.
 // Consumes: enter(route id, reverse) when the mode is entered; step(tile, tile seq, DVL lost) per
 //   finished tile; hold(sonar or attitude lost) every loop; leave() when the mode is left.
 // Produces: QNAV_ROUTE_GUIDANCE and QNAV_ROUTE_STATUS on the publisher (values in the DBC ranges,
@@ -25,8 +27,7 @@
 
 #include "drivers/qnavcan/publisher.hpp"
 #include "drivers/route_store/route_file.hpp"
-#include "firmware/pipeline/route_experiences.hpp"
-#include "firmware/pipeline/route_repeater.hpp"
+#include "firmware/pipeline/route_repeat_session.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/qnavd/components/component.hpp"
 #include "hal/core/file_store.hpp"
@@ -35,7 +36,7 @@ namespace qnav::daemon {
 
 class RouteRepeat {
  public:
-  RouteRepeat(const NavContext& ctx, hal::FileStore& store) noexcept : ctx_(ctx), reader_(store), store_(store), experiences_(store) {}
+  RouteRepeat(const NavContext& ctx, hal::FileStore& store) noexcept : ctx_(ctx), reader_(store), store_(store), session_(store) {}
   Status init(StaticMemory* mem, drivers::qnavcan::QnavCanPublisher& publisher);
 
   // Refused before the current mode is left when the route is not there at all.
@@ -52,8 +53,10 @@ class RouteRepeat {
   void forget(std::uint32_t tile_seq) noexcept;
 
   bool route_damaged() const noexcept { return route_damaged_; }
-  bool reverse() const noexcept { return reverse_; }
+  bool reverse() const noexcept { return session_.reverse(); }
   const std::vector<route::NodeMeta>& meta() const noexcept { return meta_; }
+  // The stride that frames the next tile on the taught nodes (the tool's framing too).
+  double next_stride_m(const route::LocaliserStep& step) const noexcept { return session_.next_stride_m(step, ctx_.cfg->tiles.tiles.tile_stride_m); }
   std::size_t meta_bytes() const noexcept { return meta_.capacity() * sizeof(route::NodeMeta); }
   std::uint32_t step_errors() const noexcept { return step_errors_; }
   // Experiences learnt since start; appends or companions that failed (logged).
@@ -65,15 +68,11 @@ class RouteRepeat {
   drivers::route_store::RouteFileReader reader_;
   hal::FileStore& store_;
   std::vector<route::NodeMeta> meta_;
-  pipeline::RouteRepeater repeater_;
-  pipeline::RouteExperiences experiences_;
-  bool with_experiences_ = false;  // this repeat's localiser has the companion attached
+  pipeline::RouteRepeatSession session_;
   StageArena arena_;
   drivers::qnavcan::QnavCanPublisher* publisher_ = nullptr;
   drivers::qnavcan::RouteStatus route_status_{};
   drivers::qnavcan::RouteGuidance guidance_{};
-  bool reverse_ = false;
-  bool eq5_ = false;
   bool route_damaged_ = false;
   std::uint32_t step_errors_ = 0, learned_ = 0, experience_errors_ = 0;
   void open_experiences(const char* path) noexcept;

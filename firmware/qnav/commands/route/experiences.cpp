@@ -18,20 +18,34 @@ void configure_experiences(route::LocaliserConfig& lc) {
   if (!g_opt.no_experiences) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
 }
 
-bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& reader, const std::vector<route::NodeMeta>& meta,
-                             pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse) {
+pipeline::RepeatSessionConfig repeat_session_config(route::LocaliserConfig lc, std::size_t nodes) {
+  configure_experiences(lc);
+  pipeline::RepeatSessionConfig c;
+  c.localiser = lc;
+  c.max_nodes = nodes;
+  c.experiences_per_node = g_opt.no_experiences ? 0 : static_cast<std::uint16_t>(g_opt.max_experiences);
+  c.learn = learn_config();
+  c.backfill = g_opt.backfill;
+  return c;
+}
+
+bool open_repeat_experiences(const char* route_path, pipeline::RouteRepeatSession& session) {
   if (g_opt.no_experiences) return true;
-  const auto per_node = static_cast<std::uint16_t>(g_opt.max_experiences);
-  Status s = exps.init(meta.size(), per_node, learn_config(), g_opt.backfill ? &rep.config().registration : nullptr);
-  drivers::route_store::ExperienceOpenReport r;
-  if (s) s = exps.open(route_path, reader.params(), reader, g_opt.learn, &r);
-  if (!s) {
-    std::fprintf(stderr, "qnav route repeat: %s%s: %s\n", route_path, ".exp", s.message());
+  const pipeline::ExperiencesOpened o = session.open_experiences(route_path, g_opt.learn);
+  const pipeline::RouteExperiences& exps = session.experiences();
+  if (!o.ok() && o.at_attach) {
+    std::fprintf(stderr, "qnav route repeat: experiences: %s\n", o.status.message());
+    return false;
+  }
+  if (!o.ok()) {
+    std::fprintf(stderr, "qnav route repeat: %s%s: %s\n", route_path, ".exp", o.status.message());
     if (g_opt.learn) return false;
     std::fprintf(stderr, "qnav route repeat: WARNING: repeating without experiences\n");
     return true;
   }
-  if (!exps.has_experiences()) return true;
+  if (!session.with_experiences()) return true;
+  const drivers::route_store::ExperienceOpenReport& r = o.report;
+  const unsigned per_node = session.config().experiences_per_node;
   if (r.moved_stale) std::fprintf(stderr, "qnav route repeat: %s belonged to an earlier teach of this route: kept as %s.stale\n", exps.path(), exps.path());
   if (r.created) std::fprintf(stderr, "qnav route repeat: %s created (up to %u experiences per node)\n", exps.path(), per_node);
   if (r.torn_bytes > 0)
@@ -40,13 +54,8 @@ bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& rea
   if (r.damaged > 0)
     std::fprintf(stderr, "qnav route repeat: WARNING: %s: %u damaged experience records skipped (the first: record %u)\n", exps.path(), r.damaged,
                  r.first_damaged);
-  std::fprintf(stderr, "qnav route repeat: %u experiences of %zu nodes from %s%s\n", r.live, meta.size(), exps.path(),
+  std::fprintf(stderr, "qnav route repeat: %u experiences of %zu nodes from %s%s\n", r.live, session.config().max_nodes, exps.path(),
                g_opt.learn ? "; learning this pass" : "");
-  s = exps.attach(rep, Span<const route::NodeMeta>(meta.data(), meta.size()), reverse);
-  if (!s) {
-    std::fprintf(stderr, "qnav route repeat: experiences: %s\n", s.message());
-    return false;
-  }
   return true;
 }
 

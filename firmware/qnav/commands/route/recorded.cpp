@@ -292,11 +292,14 @@ int cmd_repeat_file(const char* path) {
   const bool reverse = g_opt.reverse;
   route::LocaliserConfig lc = pipeline::file_localiser_config(reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward, meta.size() + 8,
                                                     meta.size(), static_cast<double>(reader.params().node_spacing_m));
-  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  pipeline::RouteRepeatSession session(hal::host_file_store());
+  pipeline::RepeatSessionConfig sc;  // recorded passes: no experiences yet (--learn is refused with --sonar)
+  sc.localiser = lc;
+  sc.max_nodes = meta.size();
   pipeline::RouteTilePipeline pipe;
   std::vector<pipeline::RouteTile> tiles;
-  Status s = loc->init(lc);
-  if (s) s = loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader);
+  Status s = session.init(sc);
+  if (s) s = session.start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader, reverse);
   if (s) s = pipe.init(fp.tiles);
   if (!s) {
     std::fprintf(stderr, "qnav route repeat: %s\n", s.message());
@@ -310,12 +313,11 @@ int cmd_repeat_file(const char* path) {
   // Each tile is localised as it is built and the next one framed on the taught nodes.
   s = file_tiles(pipe, fp, a, b, tiles, nullptr, [&](const pipeline::RouteTile& t) {
     route::LocaliserStep st;
-    step_status = loc->step(t.node, tiles.size() == 1 ? 0.0 : t.nav_step_m, st);
+    step_status = session.step(t, false, st).step;
     if (!step_status) return false;
     tracking += st.guidance.status == route::GuidanceStatus::kTracking;
     write_repeat_row(f, static_cast<long>(tiles.size() - 1), -1, st, "unknown", t.ping_first, t.ping_last);
-    pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, Span<const route::NodeMeta>(meta.data(), meta.size()), lc.filter.direction,
-                                                            fp.tiles.tiles.tile_stride_m));
+    pipe.set_next_stride_m(session.next_stride_m(st, fp.tiles.tiles.tile_stride_m));
     return true;
   });
   if (s && !step_status) s = step_status;

@@ -27,6 +27,7 @@
 #include "firmware/pipeline/route_defaults.hpp"
 #include "firmware/pipeline/route_experiences.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
+#include "firmware/pipeline/route_repeat_session.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/pipeline/sim_survey.hpp"
 #include "firmware/pipeline/vector_node_source.hpp"
@@ -89,10 +90,14 @@ int cmd_train_file(const char* path);
 int cmd_repeat_file(const char* path);
 int cmd_camera();                     // route/camera.cpp
 // route/experiences.cpp: the route's experiences for a repeat (ROUTE.exp; --learn appends to it,
-// --no-experiences ignores it): opened, reported on stderr and attached to the repeater. false
-// (reported) when learning was asked for and cannot be done.
-bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& reader, const std::vector<route::NodeMeta>& meta,
-                             pipeline::RouteRepeater& rep, pipeline::RouteExperiences& exps, bool reverse);
+// --no-experiences ignores it).
+// The repeat component's settings for a pass of the tool (--no-experiences, --max-experiences,
+// --learn-min-inliers, --backfill) on a route of `nodes` nodes.
+pipeline::RepeatSessionConfig repeat_session_config(route::LocaliserConfig lc, std::size_t nodes);
+// Opens the route's experiences for the session (--learn: for appending) and reports what was read;
+// false (reported) when the pass cannot go on: learning without a usable companion, or a companion
+// the localiser refuses.
+bool open_repeat_experiences(const char* route_path, pipeline::RouteRepeatSession& session);
 // The localiser configuration with experiences enabled when the repeat may use them.
 void configure_experiences(route::LocaliserConfig& lc);
 void report_learned(FILE* f, const pipeline::RouteExperiences& exps);
