@@ -15,6 +15,7 @@ NavWorker::NavWorker(const DaemonConfig& config, const hal::Clock& sample_clock,
       cpu_clock_(cpu_clock),
       ctx_{&config, nullptr, &clock_},
       inputs_(ctx_),
+      tiles_(ctx_),
       teach_(ctx_, store),
       repeat_(ctx_, store),
       vo_(ctx_),
@@ -28,7 +29,6 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   q_ = q;
   observer_ = observer;
   observer_ctx_ = observer_ctx;
-  log_ = log;
   ctx_.log = log;
   if (!q.pings || !q.free_slots || !q.can_rx || !q.can_tx || !q.dvl || !q.ping_pool || !q.io)
     return Status(StatusCode::kInvalidArgument, "nav worker: queues missing");
@@ -37,15 +37,13 @@ Status NavWorker::init(const NavQueues& q, TileObserver observer, void* observer
   tx_bus_ = std::make_unique<QueueCanBus>(q.can_tx);
   QNAV_RETURN_IF_ERROR(source_.init(q.mav_rx, q.mav_tx, mem));
   publisher_ = std::make_unique<qc::QnavCanPublisher>(*tx_bus_);
-  Result<Arena*> a = tiles_arena_.take(mem, "tile_pipeline", pipeline::RouteTilePipeline::arena_bytes(cfg_.tiles));
-  if (!a) return a.status();
-  QNAV_RETURN_IF_ERROR(tiles_.init(cfg_.tiles, *a.value()));
+  QNAV_RETURN_IF_ERROR(tiles_.init(mem));
   QNAV_RETURN_IF_ERROR(repeat_.init(mem, *publisher_));
   teach_.init();
   tile_sink_ = [this](const pipeline::RouteTile& t) { return on_tile(t); };
   QNAV_RETURN_IF_ERROR(map_.init(mem, *publisher_));
   QNAV_RETURN_IF_ERROR(vo_.init(mem, *publisher_));
-  const NavParts parts{&inputs_, &teach_, &repeat_, &vo_, &map_, &source_, &tiles_, q.io, &counters_, &state_};
+  const NavParts parts{&inputs_, &teach_, &repeat_, &vo_, &map_, &source_, &tiles_.pipeline(), q.io, &counters_, &state_};
   health_.init(parts, *publisher_, cpu_clock_.now_ns());
   initialised_ = true;
   return Status::ok();
@@ -122,12 +120,7 @@ void NavWorker::drain_inputs(std::int64_t until_ns, std::int64_t until_arrival_n
   for (;;) {
     const hal::CanRxFrame* cf = q_.can_rx->front();
     const drivers::dvl::DvlVelocity* dv = q_.dvl->front();
-    if (!have_sample) {  // after the input fronts: a ping queued before them is seen
-      const PingMsg* np = q_.pings->front();
-      const FrameMsg* nf = q_.frames != nullptr ? q_.frames->front() : nullptr;
-      if (np != nullptr) until_ns = std::min(until_ns, np->stamp.sample_ns), until_arrival_ns = std::min(until_arrival_ns, np->stamp.arrival_ns);
-      if (nf != nullptr) until_ns = std::min(until_ns, nf->stamp.sample_ns), until_arrival_ns = std::min(until_arrival_ns, nf->stamp.arrival_ns);
-    }
+    if (!have_sample) q_.bound_by_queued_samples(until_ns, until_arrival_ns);  // after the input fronts: a ping queued before them is seen
     const bool can_due = cf != nullptr && cf->stamp.sample_ns <= until_ns && cf->stamp.arrival_ns <= until_arrival_ns;
     const bool dvl_due = dv != nullptr && dv->stamp.sample_ns <= until_ns && dv->stamp.arrival_ns <= until_arrival_ns;
     if (!can_due && !dvl_due) break;
@@ -189,8 +182,8 @@ void NavWorker::handle_mode(const qc::ModeCmd& cmd) noexcept {
   if (why == ModeReject::kNone && change) why = enter_mode(cmd, id);
   state_.last_reject = why;
   if (why != ModeReject::kNone) ++counters_.mode_refused;
-  if (log_ && cfg_.log != LogFormat::kOff)
-    std::fprintf(log_, "{\"event\":\"mode\",\"t_s\":%.3f,\"cmd\":\"%s\",\"reverse\":%s,\"route_id\":%u,\"state\":\"%s\",\"refused\":%s%s%s}\n",
+  if (ctx_.events())
+    std::fprintf(ctx_.log, "{\"event\":\"mode\",\"t_s\":%.3f,\"cmd\":\"%s\",\"reverse\":%s,\"route_id\":%u,\"state\":\"%s\",\"refused\":%s%s%s}\n",
                  clock_.t_s(), qc::mode_name(cmd.mode), cmd.reverse ? "true" : "false", id, qc::mode_name(state_.mode),
                  why == ModeReject::kNone ? "false" : "\"", why == ModeReject::kNone ? "" : to_string(why), why == ModeReject::kNone ? "" : "\"");
   stage_time(Stage::kModes, t0);
@@ -232,14 +225,13 @@ void NavWorker::leave_mode() noexcept {
     const Status fs = tiles_.flush(tile_sink_);
     if (!fs) {
       teach_.count_error();
-      if (log_) std::fprintf(log_, "{\"event\":\"error\",\"what\":\"teach: the node in progress was lost: %s\"}\n", fs.message());
+      if (ctx_.log) std::fprintf(ctx_.log, "{\"event\":\"error\",\"what\":\"teach: the node in progress was lost: %s\"}\n", fs.message());
     }
     teach_.close();
   }
   if (state_.mode == qc::Mode::kRepeat) repeat_.leave();
   if (state_.mode == qc::Mode::kMap) map_.leave(route_id_);
   tiles_.reset_pass();
-  pass_ping_ = 0;
   // Nothing said about the previous route may reach the autopilot as if it held for the next one.
   report_.step = route::LocaliserStep{};
   state_.step = route::LocaliserStep{};
@@ -267,19 +259,11 @@ void NavWorker::handle_ping(const PingMsg& p) noexcept {
   }
   const std::size_t half = q_.ping_pool_stride / 2;
   if (!QNAVD_CHECK(p.port_samples <= half && p.stbd_samples <= half, "ping larger than its pool slot")) return;
-  const float* base = q_.ping_pool + static_cast<std::size_t>(p.slot) * q_.ping_pool_stride;
-  sonar::SonarPing ping;
-  ping.stamp_ns = static_cast<std::uint64_t>(p.stamp.sample_ns);
-  ping.ping_number = pass_ping_++;
-  ping.port = Span<const float>(base, p.port_samples);
-  ping.stbd = Span<const float>(base + half, p.stbd_samples);
-  ping.slant_range_m = p.slant_range_m;
-  ping.altitude_m = p.altitude_m;
   const Pose2 nav = dr.pose_at(p.stamp.sample_ns);
   ping_rx_cpu_ns_ = t0;
   report_.truth_along_m = -1.0;
   const std::uint32_t tiles_before = counters_.tiles;
-  Status s = p.has_truth ? tiles_.push_ping(ping, nav, p.truth, tile_sink_, nullptr) : tiles_.push_ping(ping, nav, tile_sink_, nullptr);
+  const Status s = tiles_.push(p, q_.ping_pool, q_.ping_pool_stride, nav, tile_sink_);
   QNAVD_CHECK(s.is_ok(), "tile pipeline refused a ping (its rejections are counted, not returned)");
   // The ping that completes a tile runs the whole tile stage (raster, features, teach append or
   // repeat update): it is timed against the tile budget, every other ping against the ping budget.
@@ -314,29 +298,9 @@ bool NavWorker::on_tile(const pipeline::RouteTile& t) noexcept {
     }
   }
   r.latency_ms = static_cast<double>(cpu_clock_.now_ns() - ping_rx_cpu_ns_) * 1e-6;
-  log_tile(r);
+  tiles_.log(r);
   if (observer_) observer_(observer_ctx_, r);
   return true;
-}
-
-void NavWorker::log_tile(const TileReport& r) noexcept {
-  const route::LocaliserStep& st = r.step;
-  if (ctx_.json()) {
-    const bool repeat = r.mode == qc::Mode::kRepeat;
-    std::fprintf(log_,
-                 "{\"event\":\"tile\",\"seq\":%u,\"t_s\":%.1f,\"mode\":\"%s\",\"route_id\":%u,\"node_written\":%d,\"estimate\":%u,\"p\":%.3f,"
-                 "\"entropy\":%.3f,\"inliers\":%u,\"status\":\"%s\",\"side\":\"%s\",\"cross_track_m\":%.2f,\"sigma_m\":%.2f,\"eq5\":%s,"
-                 "\"reverse\":%s,\"truth_along_m\":%.1f,\"truth_lateral_m\":%.2f,\"latency_ms\":%.2f}\n",
-                 r.seq, clock_.t_s(), qc::mode_name(r.mode), r.route_id, r.mode == qc::Mode::kTeach ? static_cast<int>(r.node_written) : -1,
-                 st.estimate, static_cast<double>(st.probability), st.entropy, st.best_inliers,
-                 repeat ? route::to_string(st.guidance.status) : "-", repeat ? route::to_string(st.guidance.side) : "-",
-                 st.guidance.cross_track_m, st.guidance.cross_track_sigma_m, r.eq5_motion ? "true" : "false", r.reverse ? "true" : "false",
-                 r.truth_along_m, r.truth_lateral_m, r.latency_ms);
-  } else if (ctx_.key_value()) {
-    std::fprintf(log_, "tile seq=%u mode=%s estimate=%u status=%s side=%s cross_track_m=%.2f sigma_m=%.2f\n", r.seq, qc::mode_name(r.mode),
-                 st.estimate, route::to_string(st.guidance.status), route::to_string(st.guidance.side), st.guidance.cross_track_m,
-                 st.guidance.cross_track_sigma_m);
-  }
 }
 
 void NavWorker::handle_pair(const FrameMsg& f) noexcept {
@@ -352,7 +316,7 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
     if (state_.mode != qc::Mode::kMap || !map_.ready()) return;
     if (!QNAVD_CHECK(f.width == cfg_.map_width && f.height == cfg_.map_height, "downward frame of another size than map.width x map.height"))
       return;
-    map_.on_frame(f, frame_slot(f.slot));
+    map_.on_frame(f, q_.frame_slot(f.slot, 2 * static_cast<std::size_t>(cfg_.vo.max_width) * static_cast<std::size_t>(cfg_.vo.max_height)));
     if (source_.enabled() && map_.step().observed) source_.map_step(map_.step().place, inputs_.dr());
     stage_time(Stage::kMap, t0);
     map_.log_frame(f, static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6);
@@ -361,7 +325,7 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
   if (state_.mode != qc::Mode::kVo || !vo_.ready()) return;
   const int W = cfg_.vo.max_width, H = cfg_.vo.max_height;
   if (!QNAVD_CHECK(f.width == W && f.height == H, "stereo pair of another size than its pool slot")) return;
-  const std::uint8_t* left = frame_slot(f.slot);
+  const std::uint8_t* left = q_.frame_slot(f.slot, 2 * static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
   // The newest attitude at or before the pair (inputs are taken up to its time), if not stale.
   Mat3d world_R_body = Mat3d::Identity();
   const bool has_attitude = inputs_.attitude_at(f.stamp.sample_ns, &world_R_body);
@@ -370,13 +334,6 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
   r.latency_ms = static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6;
   vo_.log_pair(r);
   if (frame_observer_) frame_observer_(frame_ctx_, r);
-}
-
-const std::uint8_t* NavWorker::frame_slot(std::uint32_t slot) const noexcept {
-  const std::size_t bytes = q_.frame_slot_bytes != 0
-                                ? q_.frame_slot_bytes
-                                : 2 * static_cast<std::size_t>(cfg_.vo.max_width) * static_cast<std::size_t>(cfg_.vo.max_height);
-  return q_.frame_pool + static_cast<std::size_t>(slot) * bytes;
 }
 
 void NavWorker::shutdown() noexcept {

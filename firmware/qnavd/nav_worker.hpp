@@ -8,8 +8,8 @@
 //                 hold, vo, map (refused with UnsupportedMode unless map_runs(): map.enabled, and on the
 //                 linux backend a downward camera map.device). A refused transition keeps the current
 //                 mode and reports why (NAV_STATUS ModeReject, log).
-//   ping -> tile (pipeline::RouteTilePipeline) -> RouteTeach (durable node append)
-//                                              -> RouteRepeat (filter step -> guidance)
+//   ping -> SonarTiles (pipeline::RouteTilePipeline) -> RouteTeach (durable node append)
+//                                                    -> RouteRepeat (filter step -> guidance)
 //   stereo pair (Mode = Vo) -> VoComponent (VO_STEP increments)
 //   downward frame (Mode = Map) -> MapComponent (map pose, map file)
 //   NavSource     (mavlink.enabled) the MAVLink endpoint and the estimate it publishes
@@ -25,13 +25,13 @@
 // most the queue depths of CAN frames and samples.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
 
 #include "drivers/qnavcan/publisher.hpp"
-#include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/qnavd/components/component.hpp"
 #include "firmware/qnavd/components/map_component.hpp"
 #include "firmware/qnavd/components/nav_health.hpp"
@@ -39,6 +39,7 @@
 #include "firmware/qnavd/components/nav_source.hpp"
 #include "firmware/qnavd/components/route_repeat.hpp"
 #include "firmware/qnavd/components/route_teach.hpp"
+#include "firmware/qnavd/components/sonar_tiles.hpp"
 #include "firmware/qnavd/components/vo_component.hpp"
 #include "firmware/qnavd/config.hpp"
 #include "firmware/qnavd/messages.hpp"
@@ -49,21 +50,6 @@
 
 namespace qnav::daemon {
 
-// One sensed tile as the nav worker reported it (log line, tests).
-struct TileReport {
-  std::uint32_t seq = 0;
-  drivers::qnavcan::Mode mode = drivers::qnavcan::Mode::kIdle;
-  bool reverse = false;
-  std::uint16_t route_id = 0;
-  std::uint32_t node_written = 0;         // teach: index of the node appended
-  route::LocaliserStep step;              // repeat
-  double nav_step_m = 0.0;
-  bool eq5_motion = false;                // DVL lost: the paper's motion model
-  double truth_along_m = -1.0;            // sim backend only
-  double truth_lateral_m = 0.0;
-  std::int64_t stamp_ns = 0;
-  double latency_ms = 0.0;                // last ping of the tile received -> outputs queued
-};
 using TileObserver = void (*)(void* ctx, const TileReport& r);
 
 using FrameObserver = void (*)(void* ctx, const FrameReport& r);
@@ -83,6 +69,18 @@ struct NavQueues {
   IoCounters* io = nullptr;
   SpscRing<MavBytes>* mav_rx = nullptr;   // null when mavlink.enabled = false
   SpscRing<MavBytes>* mav_tx = nullptr;
+
+  // Frame slot s of the pool (pair_bytes: a stereo pair's size, used when frame_slot_bytes is 0).
+  const std::uint8_t* frame_slot(std::uint32_t slot, std::size_t pair_bytes) const noexcept {
+    return frame_pool + static_cast<std::size_t>(slot) * (frame_slot_bytes != 0 ? frame_slot_bytes : pair_bytes);
+  }
+  // Bounds (until_ns, until_arrival_ns) by the first ping and frame queued now, if any.
+  void bound_by_queued_samples(std::int64_t& until_ns, std::int64_t& until_arrival_ns) const noexcept {
+    const PingMsg* np = pings->front();
+    const FrameMsg* nf = frames != nullptr ? frames->front() : nullptr;
+    if (np != nullptr) until_ns = std::min(until_ns, np->stamp.sample_ns), until_arrival_ns = std::min(until_arrival_ns, np->stamp.arrival_ns);
+    if (nf != nullptr) until_ns = std::min(until_ns, nf->stamp.sample_ns), until_arrival_ns = std::min(until_arrival_ns, nf->stamp.arrival_ns);
+  }
 };
 
 // The can_tx queue as a CanBus for the publisher (send = push; a full queue is "busy").
@@ -127,19 +125,9 @@ class NavWorker {
   // stamped at or before the previous one (dropped).
   std::uint32_t pings_rejected() const noexcept { return health_.pings_rejected(); }
   std::uint32_t pings_out_of_order() const noexcept { return counters_.pings_out_of_order; }
-  // Stereo pairs taken off the queue; of those processed by the VO; without attitude; out of order.
+  // Stereo pairs taken off the queue; out of order.
   std::uint32_t frames() const noexcept { return counters_.frames; }
-  std::uint32_t vo_frames() const noexcept { return vo_.frames(); }
-  std::uint32_t vo_visual() const noexcept { return vo_.visual_steps(); }
-  std::uint32_t vo_no_attitude() const noexcept { return vo_.no_attitude(); }
   std::uint32_t frames_out_of_order() const noexcept { return counters_.frames_out_of_order; }
-  // Mode = Map: downward frames given to the mapper; of those refused (flagged, map untouched); map
-  // file rewrites and failed ones.
-  std::uint32_t map_frames() const noexcept { return map_.frames(); }
-  std::uint32_t map_bad_frames() const noexcept { return map_.bad_frames(); }
-  std::uint32_t map_saves() const noexcept { return map_.saves(); }
-  std::uint32_t map_save_errors() const noexcept { return map_.save_errors(); }
-  const pipeline::TopoMapper& mapper() const noexcept { return map_.mapper(); }
   // qnav CAN frames refused by the receiver (format, length, range, invalid, stale, error frames).
   std::uint32_t can_rejected() const noexcept { return inputs_.can_rejected(); }
   std::uint32_t can_error_frames() const noexcept { return inputs_.receiver().counters().get(drivers::qnavcan::RxCounter::kErrorFrame); }
@@ -147,11 +135,12 @@ class NavWorker {
   std::uint32_t writer_errors() const noexcept { return teach_.errors() + map_.save_errors(); }
   // The last teach could not be committed (the route stays under .new; the exit code says so).
   bool commit_failed() const noexcept { return teach_.commit_failed(); }
-  // The bytes its "route_meta" buffer holds (the deployment test compares them with the table).
-  std::size_t route_meta_bytes() const noexcept { return repeat_.meta_bytes(); }
-  // Route experiences (route.learn): learnt in Repeat since start; companions or appends that failed.
-  std::uint32_t experiences_learned() const noexcept { return repeat_.learned(); }
-  std::uint32_t experience_errors() const noexcept { return repeat_.experience_errors(); }
+  // The components, read-only, for their counters (each header lists them): the repeat (experiences
+  // learnt and failed, its "route_meta" bytes), VO (frames, visual steps, without attitude), the map
+  // (frames, refused frames, map file saves and failures, the mapper).
+  const RouteRepeat& repeat() const noexcept { return repeat_; }
+  const VoComponent& vo() const noexcept { return vo_; }
+  const MapComponent& map() const noexcept { return map_; }
   // MAVLink (mavlink.enabled): the endpoint (nullptr when off) and the estimate it publishes.
   const MavlinkEndpoint* mavlink() const noexcept { return source_.endpoint(); }
   const pipeline::NavEstimate& estimate() const noexcept { return source_.estimate(); }
@@ -164,9 +153,7 @@ class NavWorker {
   void leave_mode() noexcept;
   void handle_ping(const PingMsg& p) noexcept;
   void handle_pair(const FrameMsg& f) noexcept;
-  const std::uint8_t* frame_slot(std::uint32_t slot) const noexcept;
   bool on_tile(const pipeline::RouteTile& t) noexcept;
-  void log_tile(const TileReport& r) noexcept;
   void outputs() noexcept;
   void stage_time(Stage s, std::int64_t t0_ns) noexcept { health_.stage_time(s, t0_ns, cpu_clock_.now_ns()); }
 
@@ -176,7 +163,6 @@ class NavWorker {
   NavQueues q_{};
   TileObserver observer_ = nullptr;
   void* observer_ctx_ = nullptr;
-  FILE* log_ = nullptr;
   FrameObserver frame_observer_ = nullptr;
   void* frame_ctx_ = nullptr;
   double spacing_m_ = 60.0, swath_m_ = 100.0;
@@ -189,8 +175,7 @@ class NavWorker {
   std::unique_ptr<QueueCanBus> tx_bus_;
   std::unique_ptr<drivers::qnavcan::QnavCanPublisher> publisher_;
   NavInputs inputs_;
-  pipeline::RouteTilePipeline tiles_;
-  StageArena tiles_arena_;
+  SonarTiles tiles_;
   pipeline::RouteTileSink tile_sink_;
   RouteTeach teach_;
   RouteRepeat repeat_;
@@ -203,7 +188,6 @@ class NavWorker {
   std::uint16_t route_id_ = 0;
   SampleOrder ping_order_;
   std::int64_t ping_rx_cpu_ns_ = 0;
-  std::uint32_t pass_ping_ = 0;
   std::int64_t mode_ns_ = 0;  // time spent in handle_mode during this loop's input drain
   bool started_ns_set_ = false;
   std::int64_t next_health_ns_ = 0;

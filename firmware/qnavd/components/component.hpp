@@ -5,8 +5,8 @@
 // drains the queues and connects them:
 //
 //   [can_rx] [dvl] [mav_rx] -> NavInputs (attitude, dead reckoning, depth)  -- ModeCmd --> NavWorker modes
-//   [pings] -> RouteTilePipeline -> RouteTile -> RouteTeach   (Mode = Teach: durable node append)
-//                                             -> RouteRepeat  (Mode = Repeat: filter step, guidance)
+//   [pings] -> SonarTiles (RouteTilePipeline) -> RouteTile -> RouteTeach   (Mode = Teach: durable node append)
+//                                                          -> RouteRepeat  (Mode = Repeat: pipeline::RouteRepeatSession)
 //   [frames] stereo pair -> VoComponent   (Mode = Vo: VO_STEP increments)
 //            downward    -> MapComponent  (Mode = Map: map pose, map file)
 //   all of them -> NavHealth (faults, NAV_STATUS, HEALTH, HEARTBEAT, stage times, health log)

@@ -70,7 +70,7 @@ void expect_table_builds_daemon(const DaemonConfig& c, const char* what) {
   EXPECT_EQ(make_deployment(d.config()).total_static_bytes(), table.total_static_bytes());
   // Owned buffers: the component holds the table's bytes.
   ASSERT_NE(table.buffer("route_meta"), nullptr);
-  EXPECT_EQ(d.nav().route_meta_bytes(), table.buffer("route_meta")->bytes);
+  EXPECT_EQ(d.nav().repeat().meta_bytes(), table.buffer("route_meta")->bytes);
   // The printed table states the totals it was built with.
   const std::string text = deployment_text(table);
   EXPECT_NE(text.find("static " + std::to_string(table.total_static_bytes()) + " B (one block)"), std::string::npos) << text;

@@ -120,23 +120,23 @@ TEST(QnavdMap, SyntheticLoopMapsWithinTwoPercentOfPathWithoutHeap) {
   EXPECT_TRUE(d.mission_done());
   EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
   const NavWorker& nav = d.nav();
-  EXPECT_EQ(nav.map_frames(), static_cast<std::uint32_t>(kFrames));
-  EXPECT_EQ(nav.map_bad_frames(), 0u);
-  EXPECT_EQ(nav.map_save_errors(), 0u);
+  EXPECT_EQ(nav.map().frames(), static_cast<std::uint32_t>(kFrames));
+  EXPECT_EQ(nav.map().bad_frames(), 0u);
+  EXPECT_EQ(nav.map().save_errors(), 0u);
 
   // The last frame's pose against the truth, in frame 0's camera axes (as `qnav map eval` scores it).
   const dw::CameraPose p0 = dw::loop_pose(0, 90), pk = dw::loop_pose(kFrames - 1, 90);
   const double cs = std::cos(p0.yaw_rad), sn = std::sin(p0.yaw_rad);
   const Vec2d dt(pk.x_m - p0.x_m, pk.y_m - p0.y_m);
   const Vec2d truth(cs * dt.x() + sn * dt.y(), -sn * dt.x() + cs * dt.y());
-  const topo::ChainPose& pose = nav.mapper().chain().pose();
+  const topo::ChainPose& pose = nav.map().mapper().chain().pose();
   ASSERT_TRUE(pose.metric);
   const double path = 2.0 * 3.14159265358979323846 * 0.8 * (kFrames - 1) / 90.0;
   const double err = (pose.position_m - truth).norm();
-  const topo::TopoMap& map = nav.mapper().map();
+  const topo::TopoMap& map = nav.map().mapper().map();
   std::printf("qnavd map: %u frames, path %.2f m, end error %.4f m (%.3f %% of path); map %zu nodes, %zu edges, %u revisits; %u saves; "
               "%llu heap allocations after start; %u deadline misses\n",
-              nav.map_frames(), path, err, 100.0 * err / path, map.node_count(), map.edge_count(), map.revisits(), nav.map_saves(),
+              nav.map().frames(), path, err, 100.0 * err / path, map.node_count(), map.edge_count(), map.revisits(), nav.map().saves(),
               static_cast<unsigned long long>(allocs), nav.deadline_misses());
   EXPECT_LT(err, 0.02 * path);
   EXPECT_GE(map.node_count(), 15u);  // ~5.6 m at 0.2 m spacing, a loop closed: 20-30 nodes
@@ -319,9 +319,9 @@ TEST(QnavdMap, ABadFrameIsCountedAndTheMapWrittenWhenTheModeIsLeft) {
   EXPECT_EQ(st.frame_seq, 0u);
   EXPECT_EQ(pose.x, 0.0);
   EXPECT_EQ(pose.y, 0.0);
-  EXPECT_EQ(w.nav->map_frames(), 1u);
-  EXPECT_EQ(w.nav->map_bad_frames(), 1u);
-  EXPECT_EQ(w.nav->mapper().map().node_count(), 0u);
+  EXPECT_EQ(w.nav->map().frames(), 1u);
+  EXPECT_EQ(w.nav->map().bad_frames(), 1u);
+  EXPECT_EQ(w.nav->map().mapper().map().node_count(), 0u);
   EXPECT_FALSE(w.store.exists("r/map_1.qmap"));  // nothing learnt yet, nothing written
   w.flat_frame(255);
   ASSERT_EQ(w.take_map_frames(pose, st), 2);
@@ -333,12 +333,12 @@ TEST(QnavdMap, ABadFrameIsCountedAndTheMapWrittenWhenTheModeIsLeft) {
   EXPECT_TRUE(st.textureless);
   EXPECT_FALSE(st.black || st.saturated || st.registered || st.lost);
   EXPECT_EQ(st.node_id, qc::kMapNoNode);
-  EXPECT_EQ(w.nav->map_bad_frames(), 3u);
+  EXPECT_EQ(w.nav->map().bad_frames(), 3u);
   w.command(qc::Mode::kIdle);
   EXPECT_EQ(w.nav->mode(), qc::Mode::kIdle);
   EXPECT_TRUE(w.store.exists("r/map_1.qmap"));   // written (empty) when the mode was left
-  EXPECT_EQ(w.nav->map_saves(), 1u);
-  EXPECT_EQ(w.nav->map_save_errors(), 0u);
+  EXPECT_EQ(w.nav->map().saves(), 1u);
+  EXPECT_EQ(w.nav->map().save_errors(), 0u);
   EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
 }
 
@@ -458,8 +458,8 @@ TEST(QnavdMap, LinuxDownwardCameraOnVividFeedsTheMapMode) {
   EXPECT_EQ(w.io.device_errors.load(), 0u);
   EXPECT_EQ(statuses, kFrames);
   EXPECT_EQ(SoftwareFaults::count(), 0u) << (SoftwareFaults::first().what ? SoftwareFaults::first().what : "");
-  EXPECT_GE(w.nav->map_frames(), static_cast<std::uint32_t>(kFrames));
-  std::printf("vivid %s: %d map frames, %u bad (vivid's test pattern), format %s\n", dev.c_str(), statuses, w.nav->map_bad_frames(),
+  EXPECT_GE(w.nav->map().frames(), static_cast<std::uint32_t>(kFrames));
+  std::printf("vivid %s: %d map frames, %u bad (vivid's test pattern), format %s\n", dev.c_str(), statuses, w.nav->map().bad_frames(),
               src.format() == hal::PixelFormat::kGrey ? "GREY" : "YUYV");
 }
 

@@ -310,8 +310,8 @@ TEST(QnavdMission, ARepeatWithRouteLearnAddsExperiencesTheNextRepeatReads) {
     Daemon d(c);
     fly(d, *taught, "teach + repeat without route.learn");
     if (HasFatalFailure()) return;
-    EXPECT_EQ(d.nav().experiences_learned(), 0u);
-    EXPECT_EQ(d.nav().experience_errors(), 0u);
+    EXPECT_EQ(d.nav().repeat().learned(), 0u);
+    EXPECT_EQ(d.nav().repeat().experience_errors(), 0u);
   }
   const std::string exp_path = dir + "/route_1.qroute.exp";
   struct stat st {};
@@ -326,10 +326,10 @@ TEST(QnavdMission, ARepeatWithRouteLearnAddsExperiencesTheNextRepeatReads) {
   fly(d, *rec, "two repeats with route.learn");
   if (HasFatalFailure()) return;
   const NodeScore score = score_nodes(*rec, taught.get());
-  std::printf("route.learn: %u experiences learnt, %u errors; node +/-1 on %u of %u repeat tiles\n", d.nav().experiences_learned(),
-              d.nav().experience_errors(), score.within1, score.scored);
-  EXPECT_GT(d.nav().experiences_learned(), 5u) << "a confident repeat at 10 % learns its tiles";
-  EXPECT_EQ(d.nav().experience_errors(), 0u);
+  std::printf("route.learn: %u experiences learnt, %u errors; node +/-1 on %u of %u repeat tiles\n", d.nav().repeat().learned(),
+              d.nav().repeat().experience_errors(), score.within1, score.scored);
+  EXPECT_GT(d.nav().repeat().learned(), 5u) << "a confident repeat at 10 % learns its tiles";
+  EXPECT_EQ(d.nav().repeat().experience_errors(), 0u);
   ASSERT_EQ(::stat(exp_path.c_str(), &st), 0) << exp_path;
   EXPECT_GT(st.st_size, 10000) << "each experience is a record of its keypoints";
   EXPECT_GE(score.within1 * 100, score.scored * 95) << "the repeats localise with and after learning";

@@ -164,7 +164,7 @@ TEST(QnavdVo, VoStepFramesSumToTheRoversPath) {
   EXPECT_EQ(rec->counter_repeats, 0u) << "an increment is sent once";
   EXPECT_GT(rec->vo_state_frames, 5u);
   EXPECT_EQ(rec->camera_lost_in_vo, 0u);
-  EXPECT_EQ(d.nav().vo_no_attitude(), 0u);
+  EXPECT_EQ(d.nav().vo().no_attitude(), 0u);
   if (test::malloc_counted()) {
     EXPECT_EQ(allocs, 0u) << guard.report();
   }
@@ -184,7 +184,7 @@ TEST(QnavdVo, DroneCanAhrsGivesTheAttitude) {
   const double err = (rec->last_vo.t - rec->last_truth.t).norm();
   std::printf("qnavd vo, DroneCAN AHRS: %u pairs (%u visual), %.2f m path, end error %.4f m\n", rec->pairs, rec->visual,
               rec->last_path_m, err);
-  EXPECT_EQ(d.nav().vo_no_attitude(), 0u);
+  EXPECT_EQ(d.nav().vo().no_attitude(), 0u);
   EXPECT_GE(rec->visual, rec->pairs * 9 / 10);
   EXPECT_LT(err, 0.005 * rec->last_path_m);
 }
