@@ -5,10 +5,13 @@
 namespace qnav::route {
 
 namespace {
+// The planes are the downsampled tile's: max_width / downsample x max_height / downsample.
+int coarse(int side, int downsample) noexcept { return downsample >= 1 ? side / downsample : side; }
+
 vision::HarrisConfig harris_config(const TileFeatureConfig& c) noexcept {
   vision::HarrisConfig h;
-  h.max_width = c.max_width;
-  h.max_height = c.max_height;
+  h.max_width = coarse(c.max_width, c.downsample);
+  h.max_height = coarse(c.max_height, c.downsample);
   h.max_corners = static_cast<int>(c.max_keypoints * 4);
   h.block_radius = c.harris_block_radius;
   h.nms_radius = c.harris_nms_radius;
@@ -21,7 +24,7 @@ vision::HarrisConfig harris_config(const TileFeatureConfig& c) noexcept {
 }  // namespace
 
 std::size_t TileFeatureExtractor::arena_bytes(const TileFeatureConfig& c) noexcept {
-  const std::size_t px = static_cast<std::size_t>(c.max_width) * static_cast<std::size_t>(c.max_height);
+  const std::size_t px = static_cast<std::size_t>(coarse(c.max_width, c.downsample)) * static_cast<std::size_t>(coarse(c.max_height, c.downsample));
   return 2 * px * sizeof(float) + px + c.max_keypoints * 4 * sizeof(vision::Corner) + vision::HarrisDetector::arena_bytes(harris_config(c)) + 256;
 }
 
@@ -32,7 +35,7 @@ Status TileFeatureExtractor::init(const TileFeatureConfig& c, Arena& arena) noex
       c.blur_radius_px > 8)
     return Status(StatusCode::kInvalidArgument, "tile features: bad configuration");
   QNAV_RETURN_IF_ERROR(harris_.init(harris_config(c), arena));
-  const std::size_t px = static_cast<std::size_t>(c.max_width) * static_cast<std::size_t>(c.max_height);
+  const std::size_t px = static_cast<std::size_t>(coarse(c.max_width, c.downsample)) * static_cast<std::size_t>(coarse(c.max_height, c.downsample));
   work_ = arena.allocate<float>(px);
   tmp_ = arena.allocate<float>(px);
   cov_ = arena.allocate<std::uint8_t>(px);

@@ -11,7 +11,9 @@
 // Raster convention (same as nav/sonar's SonarTile): row 0 is the north edge, columns grow east;
 // pixel (c, r) centre is north = origin_north_m - (r + 0.5) res, east = origin_east_m + (c + 0.5) res.
 // Pose2 of a tile: x_m north, y_m east, heading_rad compass (clockwise from north).
-// Memory: two float planes max_width*max_height + the Harris buffers, all from the Arena in init().
+// Memory: two float planes and a coverage plane of (max_width / downsample) x (max_height / downsample)
+// (the downsampled tile the keypoints are found on) + the Harris buffers for that size, all from the
+// Arena in init().
 // Cost: O(W H) copy/blur + Harris (see nav/vision/harris.hpp) + O(K) descriptors. No heap.
 #pragma once
 
