@@ -228,10 +228,13 @@ SimVehicle::StepResult SimVehicle::fly_replay(SpscRing<std::uint32_t>& free_slot
 // A pass in flight: the next sample of its kind (map, recorded, vo, side-scan), or kWaiting.
 SimVehicle::StepResult SimVehicle::fly(SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride, IoCounters& io) noexcept {
   const qc::Mode mode = cfg_.sim_mission[pass_].mode;
-  bool over = false;
-  if (mode == qc::Mode::kMap) return end_of_pass(over, cameras_.fly_downward(pass_, io, over));
+  if (mode == qc::Mode::kMap || (mode == qc::Mode::kVo && !playback_.has_sensors())) {  // the cameras' passes
+    bool over = false;
+    const StepResult r = mode == qc::Mode::kMap ? cameras_.fly_downward(pass_, io, over) : cameras_.fly_rover(io, over);
+    if (over) set_phase(Phase::kEndPass);
+    return r;
+  }
   if (playback_.has_sensors()) return fly_replay(free_slots, pool, stride, io);
-  if (mode == qc::Mode::kVo) return end_of_pass(over, cameras_.fly_rover(io, over));
   if (!has_held_) {
     bool got = false;
     if (playback_.has_pings()) {

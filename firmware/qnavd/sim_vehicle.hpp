@@ -104,10 +104,6 @@ class SimVehicle {
   StepResult emit(const SimSample& s, SpscRing<std::uint32_t>& free_slots, float* pool, std::size_t stride, IoCounters& io) noexcept;
   bool ahrs_tick() noexcept;  // true when it sent one (the step produced)
   void idle_tick() noexcept;
-  StepResult end_of_pass(bool pass_over, StepResult r) noexcept {
-    if (pass_over) set_phase(Phase::kEndPass);
-    return r;
-  }
 
   const DaemonConfig& cfg_;
   SimClock& clock_;
