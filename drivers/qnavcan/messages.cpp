@@ -344,6 +344,19 @@ Status decode(const hal::CanFrame& f, Heartbeat& o) noexcept {
   return Status::ok();
 }
 
+AttitudeIn attitude_from_heading(double heading_rad, double roll_rad, double pitch_rad, std::uint8_t counter) noexcept {
+  constexpr double kTwoPi = 6.283185307179586;
+  double h = std::fmod(heading_rad, kTwoPi);
+  if (h < 0) h += kTwoPi;
+  AttitudeIn a;
+  a.heading_rad = std::fmin(h, 6.2832);
+  a.roll_rad = roll_rad;
+  a.pitch_rad = pitch_rad;
+  a.valid = true;
+  a.counter = counter;
+  return a;
+}
+
 Status encode(const AttitudeIn& m, hal::CanFrame& f) noexcept {
   const double v[] = {m.roll_rad, m.pitch_rad, m.heading_rad, double(m.counter), m.valid ? 1.0 : 0.0};
   return encode_all(f, kIdAttitudeIn, v);

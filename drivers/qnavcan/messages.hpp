@@ -171,6 +171,10 @@ Status decode(const hal::CanFrame& f, Health& out) noexcept;
 Status decode(const hal::CanFrame& f, Heartbeat& out) noexcept;
 
 Status encode(const AttitudeIn& m, hal::CanFrame& f) noexcept;
+// The AHRS report of a compass heading as the simulators send it (qnavd's sim vehicle, the HIL
+// player, `qnav sonar simulate`): the heading wrapped into [0, 2 pi) and held within the DBC's
+// [0, 6.2832], valid, with the given counter.
+AttitudeIn attitude_from_heading(double heading_rad, double roll_rad = 0.0, double pitch_rad = 0.0, std::uint8_t counter = 0) noexcept;
 Status encode(const RatesIn& m, hal::CanFrame& f) noexcept;
 Status encode(const DepthIn& m, hal::CanFrame& f) noexcept;
 Status encode(const ModeCmd& m, hal::CanFrame& f) noexcept;

@@ -1,13 +1,11 @@
-// SimVehicle's closed-loop passes (sim.pass.closed_loop; sim_vehicle.hpp, sim_closed_loop.hpp): the
-// taught track logged in the teach, the repeat flown by pipeline::RouteAutopilot on qnavd's frames,
-// the dead-reckoning twin, and the pass's summary (truth cross-track, as `qnav route follow --sim`).
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "drivers/route_store/route_file.hpp"
 #include "drivers/route_store/route_open.hpp"
-#include "firmware/qnavd/sim_vehicle.hpp"
 #include "firmware/qnavd/sim_closed_loop.hpp"
 #include "firmware/tools/stats.hpp"
 
@@ -20,8 +18,33 @@ double percentile(std::vector<double> v, double q) {
 }
 }  // namespace
 
-void SimVehicle::log_teach_pose(const Pose2& nav) noexcept {
-  ClosedLoopPass& c = *cl_;
+SimClosedLoop::~SimClosedLoop() {
+  if (c_.csv) std::fclose(c_.csv);
+}
+
+Status SimClosedLoop::init() {
+  Pass& c = c_;
+  const std::size_t n = static_cast<std::size_t>(2.0 * cfg_.sim_length_m / kLogStepM) + 64;
+  c.log.reserve(n);
+  c.log_dist_m.reserve(n);
+  if (!cfg_.sim_closed_loop_csv.empty()) {  // opened here: a bad path is a start-up error, not a skipped pass
+    c.csv = std::fopen(cfg_.sim_closed_loop_csv.c_str(), "w");
+    if (c.csv == nullptr) {
+      std::fprintf(stderr, "qnavd: sim.closed_loop_csv %s: %s\n", cfg_.sim_closed_loop_csv.c_str(), std::strerror(errno));
+      return Status(StatusCode::kIoError, "sim: cannot write sim.closed_loop_csv (see the line above)");
+    }
+    std::fprintf(c.csv, "seed,track,t_s,north_m,east_m,cross_track_m,along_m,travelled_m,mode,dvl_lost\n");
+  }
+  return Status::ok();
+}
+
+void SimClosedLoop::begin_pass(bool teach_logging) noexcept {
+  c_.logging = teach_logging;
+  if (c_.logging) c_.have_log = false;
+}
+
+void SimClosedLoop::log_teach_pose(const Pose2& nav) noexcept {
+  Pass& c = c_;
   if (!c.logging) return;
   if (!c.have_log) {
     // qnavd's dead reckoning restarts at the mode command and the pass's first ping moves it by
@@ -38,7 +61,7 @@ void SimVehicle::log_teach_pose(const Pose2& nav) noexcept {
   c.since_m += step;
   c.prev = nav;
   c.last = Pose2{nav.x_m - c.nav0.x_m, nav.y_m - c.nav0.y_m, nav.heading_rad};
-  if (c.log.empty() || c.since_m >= ClosedLoopPass::kLogStepM) {
+  if (c.log.empty() || c.since_m >= kLogStepM) {
     if (c.log.size() < c.log.capacity()) {  // reserved at init: the teach allocates nothing per ping
       c.log.push_back(c.last);
       c.log_dist_m.push_back(c.dist_m);
@@ -47,9 +70,9 @@ void SimVehicle::log_teach_pose(const Pose2& nav) noexcept {
   }
 }
 
-Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
-  ClosedLoopPass& c = *cl_;
-  const SimPass& p = cfg_.sim_mission[pass_];
+Status SimClosedLoop::start(std::uint32_t pass, std::uint64_t pass_seed, const pipeline::SimSurvey& survey, hal::FaultFileStore* store) {
+  Pass& c = c_;
+  const SimPass& p = cfg_.sim_mission[pass];
   if (!c.have_log || c.log.size() < 2)
     return Status(StatusCode::kInvalidArgument, "sim closed loop: no simulated teach pass was flown before this pass");
   // The taught track: the teach log up to the teach's last ping, and the route's node poses.
@@ -59,8 +82,8 @@ Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
   dist.push_back(c.dist_m);
   char path[1024];
   std::snprintf(path, sizeof path, "%s/route_%u.qroute", cfg_.route_dir.c_str(), static_cast<unsigned>(cfg_.route_id));
-  if (store_ == nullptr) return Status(StatusCode::kInvalidArgument, "sim closed loop: no route store");
-  drivers::route_store::RouteFileReader reader(*store_);
+  if (store == nullptr) return Status(StatusCode::kInvalidArgument, "sim closed loop: no route store");
+  drivers::route_store::RouteFileReader reader(*store);
   const drivers::route_store::RepeatOpenReport r = drivers::route_store::open_route_for_repeat(reader, path, c.meta, cfg_.max_nodes);
   if (r.outcome != drivers::route_store::RepeatOpen::kOk && r.outcome != drivers::route_store::RepeatOpen::kGoodPrefix) {
     std::fprintf(stderr, "sim closed loop: %s: %s\n", path, r.why.message());
@@ -71,29 +94,29 @@ Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
   for (std::size_t i = 0; i + 1 < c.meta.size(); ++i)
     c.spacing_m += (c.meta[i + 1].pose.translation() - c.meta[i].pose.translation()).norm() / static_cast<double>(c.meta.size() - 1);
   // The truth: the survey's waypoints in the direction of travel.
-  c.truth_poly.assign(survey_->route.waypoints_ne.begin(), survey_->route.waypoints_ne.end());
+  c.truth_poly.assign(survey.route.waypoints_ne.begin(), survey.route.waypoints_ne.end());
   c.reverse = p.reverse;
   if (c.reverse) std::reverse(c.truth_poly.begin(), c.truth_poly.end());
   c.length_m = 0.0;
   for (std::size_t i = 0; i + 1 < c.truth_poly.size(); ++i) c.length_m += (c.truth_poly[i + 1] - c.truth_poly[i]).norm();
-  c.swath_m = survey_->swath_m;
+  c.swath_m = survey.swath_m;
   c.seed = cfg_.sim_seed;
-  c.pass = pass_;
+  c.pass = pass;
   // The drift of `qnav route follow --sim` for this seed, the start offset of the pass.
   pipeline::ClosedLoopScenario sc = pipeline::follow_scenario(cfg_.sim_seed, p.reverse, p.offset_pct / 100.0 * c.swath_m, pipeline::FollowDrift{});
   sc.pass_seed = pass_seed;
-  c.dt_s = 1.0 / survey_->route.ping_rate_hz;
+  c.dt_s = 1.0 / survey.route.ping_rate_hz;
   c.max_travel_m = sc.max_travel_factor * c.length_m;
-  const double age_s = pipeline::tile_age_s(cfg_.tiles, survey_->route.speed_mps, survey_->route.ping_rate_hz);
+  const double age_s = pipeline::tile_age_s(cfg_.tiles, survey.route.speed_mps, survey.route.ping_rate_hz);
   const Span<const Pose2> track(c.track.data(), c.track.size());
   const Span<const std::uint32_t> node_at(c.node_at.data(), c.node_at.size());
   // The first ping one ping period after the last sample between passes (sample times strictly increase).
   const std::int64_t t0 = clock_.now_ns();
   QNAV_RETURN_IF_ERROR(pipeline::start_closed_loop(track, node_at, c.truth_poly, sc, pipeline::Guide::kQnav, age_s,
-                                                   survey_->route.speed_mps, t0, c.veh, c.ap));
+                                                   survey.route.speed_mps, t0, c.veh, c.ap));
   QNAV_RETURN_IF_ERROR(pipeline::start_closed_loop(track, node_at, c.truth_poly, sc, pipeline::Guide::kDeadReckoning, age_s,
-                                                   survey_->route.speed_mps, t0, c.twin, c.twin_ap));
-  const std::size_t pings = static_cast<std::size_t>(c.max_travel_m / (survey_->route.speed_mps * c.dt_s)) + 16;
+                                                   survey.route.speed_mps, t0, c.twin, c.twin_ap));
+  const std::size_t pings = static_cast<std::size_t>(c.max_travel_m / (survey.route.speed_mps * c.dt_s)) + 16;
   for (std::vector<double>* v : {&c.xt_qnav, &c.xt_dr, &c.flown_qnav, &c.flown_dr}) {
     v->clear();
     v->reserve(pings);
@@ -102,10 +125,10 @@ Status SimVehicle::start_closed_loop_pass(std::uint64_t pass_seed) {
   c.twin_done = false;
   c.active = true;
   if (c.csv) {
-    for (const Vec2d& w : survey_->route.waypoints_ne)
+    for (const Vec2d& w : survey.route.waypoints_ne)
       std::fprintf(c.csv, "%llu,taught,0,%.2f,%.2f,0,0,0,,0\n", static_cast<unsigned long long>(c.seed), w.x(), w.y());
   }
-  std::fprintf(stderr, "sim autopilot: pass %u flies in closed loop on qnavd's guidance: %zu nodes, taught track of %zu poses, %s\n", pass_,
+  std::fprintf(stderr, "sim autopilot: pass %u flies in closed loop on qnavd's guidance: %zu nodes, taught track of %zu poses, %s\n", pass,
                c.meta.size(), c.track.size(), c.reverse ? "reverse" : "forward");
   return Status::ok();
 }
@@ -120,12 +143,12 @@ void csv_row(std::FILE* f, std::uint64_t seed, const char* track, const pipeline
 }
 }  // namespace
 
-bool SimVehicle::next_closed_loop(Sample& out) noexcept {
-  ClosedLoopPass& c = *cl_;
+bool SimClosedLoop::next(SimSample& out, sidescan::TrajectorySample& render, double altitude_m, std::int64_t pass_start_ns) noexcept {
+  Pass& c = c_;
   if (!c.active) return false;
-  const std::int64_t t0 = pass_start_ns_;
+  const std::int64_t t0 = pass_start_ns;
   if (!pipeline::closed_loop_step(c.veh, c.ap, c.dt_s, c.max_travel_m)) {
-    finish_closed_loop();
+    finish(pass_start_ns);
     return false;
   }
   double along = 0.0, cross = 0.0, hdg = 0.0;
@@ -133,7 +156,7 @@ bool SimVehicle::next_closed_loop(Sample& out) noexcept {
   c.along_m = along;
   c.xt_qnav.push_back(std::fabs(cross));
   c.flown_qnav.push_back(c.veh.travelled_m());
-  if (c.index % ClosedLoopPass::kCsvEvery == 0) csv_row(c.csv, c.seed, "qnav", c.veh, cross, along, c.ap.command().mode, t0);
+  if (c.index % kCsvEvery == 0) csv_row(c.csv, c.seed, "qnav", c.veh, cross, along, c.ap.command().mode, t0);
   // The twin on dead reckoning alone, in step with it.
   if (!c.twin_done) {
     c.twin_done = !pipeline::closed_loop_step(c.twin, c.twin_ap, c.dt_s, c.max_travel_m);
@@ -143,7 +166,7 @@ bool SimVehicle::next_closed_loop(Sample& out) noexcept {
       c.twin_along_m = ta;
       c.xt_dr.push_back(std::fabs(tc));
       c.flown_dr.push_back(c.twin.travelled_m());
-      if (c.index % ClosedLoopPass::kCsvEvery == 0)
+      if (c.index % kCsvEvery == 0)
         csv_row(c.csv, c.seed, "dead_reckoning", c.twin, tc, ta, c.twin_ap.command().mode, t0);
     }
   }
@@ -151,22 +174,22 @@ bool SimVehicle::next_closed_loop(Sample& out) noexcept {
   out.nav = c.veh.dr_pose();
   out.ping_number = c.index;
   out.device_stamp_ns = static_cast<std::uint64_t>(out.t_ns);
-  out.altitude_m = static_cast<float>(survey_->route.altitude_m);
+  out.altitude_m = static_cast<float>(altitude_m);
   out.has_truth = true;
   out.truth.pose = c.veh.truth();
   out.truth.along_m = c.reverse ? c.length_m - along : along;  // along the route from its first waypoint
   out.truth.lateral_m = c.reverse ? -cross : cross;             // right of the route's forward direction
   out.recorded = nullptr;
-  // The sonar renders from the true pose (emit()).
-  traj_sample_.truth = c.veh.truth();
-  traj_sample_.altitude_m = out.altitude_m;
-  traj_sample_.index = c.index;
+  // The sonar renders from the true pose (SimSonar::emit_ping).
+  render.truth = c.veh.truth();
+  render.altitude_m = out.altitude_m;
+  render.index = c.index;
   ++c.index;
   return true;
 }
 
-void SimVehicle::finish_closed_loop() noexcept {
-  ClosedLoopPass& c = *cl_;
+void SimClosedLoop::finish(std::int64_t pass_start_ns) noexcept {
+  Pass& c = c_;
   if (!c.active) return;
   c.active = false;
   // The twin flies on to its own end (it needs no pings).
@@ -179,14 +202,14 @@ void SimVehicle::finish_closed_loop() noexcept {
     c.twin_along_m = ta;
     c.xt_dr.push_back(std::fabs(tc));
     c.flown_dr.push_back(c.twin.travelled_m());
-    if (c.xt_dr.size() % ClosedLoopPass::kCsvEvery == 1) csv_row(c.csv, c.seed, "dead_reckoning", c.twin, tc, ta, c.twin_ap.command().mode, pass_start_ns_);
+    if (c.xt_dr.size() % kCsvEvery == 1) csv_row(c.csv, c.seed, "dead_reckoning", c.twin, tc, ta, c.twin_ap.command().mode, pass_start_ns);
   }
   // Each track's last row is where it stopped.
   double fa = 0.0, fc = 0.0;
   pipeline::polyline_offsets(c.truth_poly, c.veh.truth().translation(), fa, fc, hdg);
-  csv_row(c.csv, c.seed, "qnav", c.veh, fc, fa, c.ap.command().mode, pass_start_ns_);
+  csv_row(c.csv, c.seed, "qnav", c.veh, fc, fa, c.ap.command().mode, pass_start_ns);
   pipeline::polyline_offsets(c.truth_poly, c.twin.truth().translation(), fa, fc, hdg);
-  csv_row(c.csv, c.seed, "dead_reckoning", c.twin, fc, fa, c.twin_ap.command().mode, pass_start_ns_);
+  csv_row(c.csv, c.seed, "dead_reckoning", c.twin, fc, fa, c.twin_ap.command().mode, pass_start_ns);
   const Vec2d end = c.truth_poly.back();
   const double q_end = (c.veh.truth().translation() - end).norm(), d_end = (c.twin.truth().translation() - end).norm();
   const bool q_stopped = c.ap.command().mode == pipeline::AutopilotMode::kStopped;

@@ -14,9 +14,20 @@
 #include <atomic>
 #include <cstdint>
 
+#include "firmware/qnavd/messages.hpp"
 #include "hal/core/clock.hpp"
 
 namespace qnav::daemon {
+
+// Mission time for the sim backend (set by the I/O thread, read by every thread).
+class SimClock final : public hal::Clock {
+ public:
+  std::int64_t now_ns() const noexcept override { return t_ns_.load(std::memory_order_acquire); }
+  void set(std::int64_t t) noexcept { t_ns_.store(t, std::memory_order_release); }
+
+ private:
+  std::atomic<std::int64_t> t_ns_{1000000000};
+};
 
 class SimPacer {
  public:
@@ -62,6 +73,28 @@ class SimPacer {
     if (late > kLateToleranceNs) late_steps_.fetch_add(1, std::memory_order_relaxed);
     if (late > max_late_ns_.load(std::memory_order_relaxed)) max_late_ns_.store(late, std::memory_order_relaxed);
     return true;
+  }
+  // The sim vehicle's step at mission time t on `clock`: true when it goes now (and then io's
+  // sim_late_steps / sim_max_late_us are updated, io may be null). While it waits and `follow` is set
+  // (a pass's next sample), mission time follows the wall up to just before t, in steps of the poll
+  // slice, so the daemon's periodic outputs (NAV_STATUS every 100 ms) keep their periods in wall time
+  // too; the samples' own times do not change. Between passes (follow = false) the clock moves only
+  // by the handshake's ticks, whose mission-time lengths the lockstep fixes.
+  bool pace(SimClock& clock, std::int64_t t, bool follow, IoCounters* io) noexcept {
+    if (due(t)) {
+      if (io != nullptr) {
+        io->sim_late_steps.store(late_steps(), std::memory_order_relaxed);
+        io->sim_max_late_us.store(static_cast<std::uint32_t>(std::min<std::int64_t>(max_late_ns() / 1000, UINT32_MAX)),
+                                  std::memory_order_relaxed);
+      }
+      return true;
+    }
+    if (follow) {
+      const std::int64_t step_ns = static_cast<std::int64_t>(static_cast<double>(kPollSliceNs) * speed());
+      const std::int64_t m = std::min(mission_now_ns(), t - 1);
+      if (m >= clock.now_ns() + step_ns) clock.set(m);
+    }
+    return false;
   }
   // A step is waiting for its deadline (the last due() said not yet).
   bool waiting() const noexcept { return pending_deadline_ns_ >= 0; }

@@ -8,7 +8,7 @@
 //    since the epoch), PD6 :TS (YYMMDDHHmmsshh, UTC). Lines before the first report go with it.
 //  - stereo sequence (`sim.pass.images`): a rectified pair per frame, KITTI layout (left/ right/,
 //    calib.txt; 10 Hz: the copy has no times) or EuRoC (cam0/ cam1/ data.csv, their ns stamps).
-// Times are absolute (ns since the epoch) on every source; SimVehicle aligns a pass's sources on the
+// Times are absolute (ns since the epoch) on every source; SimPlayback aligns a pass's sources on the
 // earliest of them. Loaded whole at init (host memory, replay only; a log is refused beyond
 // kMaxLogBytes); images are read from disk when their pair is due.
 #pragma once

@@ -437,11 +437,7 @@ void hover(Vehicle& v, const hal::CanFrame* frame, double rate_hz, double second
 
 // The AHRS frame of a compass heading (rad; qnav's QNAV_ATTITUDE_IN).
 hal::CanFrame attitude_frame(double heading_rad) {
-  double h = std::fmod(heading_rad, 2.0 * kPi);
-  if (h < 0) h += 2.0 * kPi;
-  qc::AttitudeIn a;
-  a.heading_rad = std::fmin(h, 6.2832);
-  a.valid = true;
+  const qc::AttitudeIn a = qc::attitude_from_heading(heading_rad);
   hal::CanFrame f;
   (void)qc::encode(a, f);
   return f;

@@ -308,12 +308,8 @@ class SensorLogs {
   }
   // t_ns: ns since the epoch; nav: the vehicle's navigation (NED metres, heading) at that time.
   void write(std::uint64_t t_ns, const Pose2& nav) {
-    const double h = nav.heading_rad < 0 ? nav.heading_rad + 2 * kPi : nav.heading_rad;
     if (can_ != nullptr) {
-      drivers::qnavcan::AttitudeIn a;
-      a.heading_rad = std::fmin(h, 6.2832);
-      a.valid = true;
-      a.counter = counter_++;
+      const drivers::qnavcan::AttitudeIn a = drivers::qnavcan::attitude_from_heading(nav.heading_rad, 0.0, 0.0, counter_++);
       hal::CanLogRecord r;
       r.has_time = true;
       r.time_us = static_cast<std::int64_t>(t_ns / 1000);
