@@ -37,18 +37,12 @@ struct Pd6Ensemble {
 
 enum class Pd6Result : std::uint8_t { kConsumed, kEnsemble };
 
-class Pd6Parser {
+class Pd6Parser : public DvlLineRejects {
  public:
   // Feeds one line. kEnsemble: `out` holds a finished ensemble. A non-ok Status = line rejected.
   Result<Pd6Result> parse_line(const char* line, std::size_t n, std::int64_t arrival_ns, Pd6Ensemble& out) noexcept;
-  const CounterSet<DvlCounter>& counters() const noexcept { return counters_; }
 
  private:
-  Status reject(DvlCounter c, StatusCode code, const char* msg) noexcept {
-    counters_.increment(c);
-    return Status(code, msg);
-  }
-  CounterSet<DvlCounter> counters_{kDvlCounterNames};
   Pd6Ensemble cur_;
   bool have_bi_ = false;
   bool bi_good_ = false;

@@ -53,18 +53,26 @@ struct WlMessage {
   WlDeadReckoning dead_reckoning;
 };
 
-class WlParser {
+// What both DVL parsers (Water Linked here, RDI PD6 in pd6_parser.hpp) share: one counter per
+// rejected kind, and reject(), which counts a rejected line and returns its named error.
+class DvlLineRejects {
  public:
-  // `arrival_ns`: monotonic time the line's last byte was read. ok = `out` is valid.
-  Status parse_line(const char* line, std::size_t n, std::int64_t arrival_ns, WlMessage& out) noexcept;
   const CounterSet<DvlCounter>& counters() const noexcept { return counters_; }
 
- private:
+ protected:
   Status reject(DvlCounter c, StatusCode code, const char* msg) noexcept {
     counters_.increment(c);
     return Status(code, msg);
   }
   CounterSet<DvlCounter> counters_{kDvlCounterNames};
+};
+
+class WlParser : public DvlLineRejects {
+ public:
+  // `arrival_ns`: monotonic time the line's last byte was read. ok = `out` is valid.
+  Status parse_line(const char* line, std::size_t n, std::int64_t arrival_ns, WlMessage& out) noexcept;
+
+ private:
   bool have_last_ = false;
   std::int64_t last_validity_us_ = 0;
 };

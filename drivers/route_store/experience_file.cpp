@@ -1,4 +1,5 @@
 #include "drivers/route_store/experience_file.hpp"
+#include "drivers/route_store/store_io.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -34,19 +35,16 @@ void ExperienceFile::close() {
 Status ExperienceFile::open_common(const char* path, const RouteIdentity& route, route::ExperienceIndex& index, ExperienceOpenReport* report,
                                    bool write, std::uint64_t& file_size) {
   other_route_ = false;
-  Result<int> h = store_.open(path, write ? hal::FileMode::kReadWrite : hal::FileMode::kRead);
-  if (!h) return h.status();
-  fd_ = *h;
+  std::uint64_t size = 0;
+  QNAV_RETURN_IF_ERROR(open_sized(store_, path, write ? hal::FileMode::kReadWrite : hal::FileMode::kRead, fd_, size));
   auto fail = [this](Status s) {
     store_.close(fd_);
     fd_ = -1;
     return s;
   };
-  Result<std::uint64_t> size = store_.size(fd_);
-  if (!size) return fail(size.status());
-  file_size = *size;
+  file_size = size;
   std::uint8_t hb[route::kExpHeaderBytes];
-  if (*size < route::kExpHeaderBytes) {
+  if (size < route::kExpHeaderBytes) {
     counters_.increment(route::ExperienceFormatCounter::kShortBuffer);
     return fail(Status(StatusCode::kTruncated, "experience file shorter than its header"));
   }
@@ -70,7 +68,7 @@ Status ExperienceFile::open_common(const char* path, const RouteIdentity& route,
   route_nodes_ = route.node_count;
   const std::size_t rec = route::exp_record_bytes(header_.max_keypoints);
   record_.assign(rec, 0);
-  const std::uint64_t body = *size - route::kExpHeaderBytes;
+  const std::uint64_t body = size - route::kExpHeaderBytes;
   if (body / rec > 0xFFFFFFF0ull) return fail(Status(StatusCode::kUnsupported, "experience file: too many records"));
   records_ = static_cast<std::uint32_t>(body / rec);
   const Status rs = index.reset(route.node_count);
@@ -186,9 +184,8 @@ Status ExperienceFile::append(route::Experience& e, route::ExperienceIndex& inde
 }
 
 Status ExperienceFile::read_record(std::uint32_t record) noexcept {
-  if (fd_ < 0) return Status(StatusCode::kNotReady, "experience file: not open");
-  if (record >= records_) return Status(StatusCode::kOutOfRange, "experience file: record beyond the file");
-  return store_.read_at(fd_, record_.data(), record_.size(), route::kExpHeaderBytes + static_cast<std::uint64_t>(record) * record_.size());
+  return read_fixed_record(store_, fd_, Span<std::uint8_t>(record_.data(), record_.size()), route::kExpHeaderBytes, record, records_,
+                           "experience file: not open", "experience file: record beyond the file");
 }
 
 Status ExperienceFile::load(std::uint32_t record, route::RouteNode& out) noexcept {

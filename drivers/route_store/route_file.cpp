@@ -1,4 +1,5 @@
 #include "drivers/route_store/route_file.hpp"
+#include "drivers/route_store/store_io.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -125,18 +126,15 @@ Status RouteFileWriter::open_append(const char* path, RouteAppendReport* report,
   if (fd_ >= 0) return Status(StatusCode::kInvalidArgument, "route writer: already open");
   if (std::strlen(path) >= sizeof path_) return Status(StatusCode::kInvalidArgument, "route writer: path too long");
   if (report != nullptr) *report = RouteAppendReport{};
-  Result<int> h = store_.open(path, hal::FileMode::kReadWrite);
-  if (!h) return h.status();
-  fd_ = *h;
+  std::uint64_t size = 0;
+  QNAV_RETURN_IF_ERROR(open_sized(store_, path, hal::FileMode::kReadWrite, fd_, size));
   auto fail = [this](Status s) {
     store_.close(fd_);
     fd_ = -1;
     return s;
   };
   std::uint8_t header[route::kHeaderBytes];
-  Result<std::uint64_t> size = store_.size(fd_);
-  if (!size) return fail(size.status());
-  if (*size < route::kHeaderBytes) return fail(Status(StatusCode::kTruncated, "route file shorter than its header"));
+  if (size < route::kHeaderBytes) return fail(Status(StatusCode::kTruncated, "route file shorter than its header"));
   Status s = store_.read_at(fd_, header, sizeof header, 0);
   if (!s) return fail(s);
   route::RouteHeaderInfo info;
@@ -144,7 +142,7 @@ Status RouteFileWriter::open_append(const char* path, RouteAppendReport* report,
   if (!p) return fail(p.status());
   const std::size_t rec = route::record_bytes(p->max_keypoints);
   Tail tail;
-  s = read_tail(store_, fd_, *size, rec, tail);
+  s = read_tail(store_, fd_, size, rec, tail);
   if (!s) return fail(s);
   if (tail.nodes > 0xFFFFFFFEull) return fail(Status(StatusCode::kUnsupported, "route writer: too many nodes"));
   const std::uint64_t n = tail.nodes;
@@ -254,17 +252,14 @@ void RouteFileReader::close() {
 
 Status RouteFileReader::open(const char* path) {
   close();
-  Result<int> h = store_.open(path, hal::FileMode::kRead);
-  if (!h) return h.status();
-  fd_ = *h;
+  std::uint64_t size = 0;
+  QNAV_RETURN_IF_ERROR(open_sized(store_, path, hal::FileMode::kRead, fd_, size));
   auto fail = [this](Status s) {
     close();
     return s;
   };
   std::uint8_t header[route::kHeaderBytes];
-  Result<std::uint64_t> size = store_.size(fd_);
-  if (!size) return fail(size.status());
-  if (*size < route::kHeaderBytes) {
+  if (size < route::kHeaderBytes) {
     counters_.increment(route::RouteFormatCounter::kShortBuffer);
     return fail(Status(StatusCode::kTruncated, "route file shorter than its header"));
   }
@@ -276,7 +271,7 @@ Status RouteFileReader::open(const char* path) {
   params_ = *p;
   const std::size_t rec = route::record_bytes(params_.max_keypoints);
   Tail tail;
-  s = read_tail(store_, fd_, *size, rec, tail);
+  s = read_tail(store_, fd_, size, rec, tail);
   if (!s) return fail(s);
   if (tail.nodes > 0xFFFFFFFEull) return fail(Status(StatusCode::kUnsupported, "route reader: too many nodes"));
   file_nodes_ = count_ = static_cast<std::uint32_t>(tail.nodes);
@@ -304,9 +299,8 @@ Status RouteFileReader::limit_nodes(std::uint32_t n) noexcept {
 }
 
 Status RouteFileReader::read_record(std::uint32_t index) noexcept {
-  if (fd_ < 0) return Status(StatusCode::kNotReady, "route reader: not open");
-  if (index >= count_) return Status(StatusCode::kOutOfRange, "route reader: node index beyond the route");
-  return store_.read_at(fd_, record_.data(), record_.size(), route::kHeaderBytes + static_cast<std::uint64_t>(index) * record_.size());
+  return read_fixed_record(store_, fd_, Span<std::uint8_t>(record_.data(), record_.size()), route::kHeaderBytes, index, count_,
+                           "route reader: not open", "route reader: node index beyond the route");
 }
 
 Status RouteFileReader::load(std::uint32_t index, route::RouteNode& out) noexcept {

@@ -47,12 +47,16 @@ struct FileData {
   std::string counters;
 };
 
+// Opens a side-scan file for the loaders below; false (said on stderr) when it cannot be opened.
+inline bool open_sonar_file(FileSource& src, const char* path) {
+  if (src.open(path)) return true;
+  std::fprintf(stderr, "qnav: cannot open %s\n", path);
+  return false;
+}
+
 inline int load_xtf(const char* path, FileData& out) {
   FileSource src;
-  if (!src.open(path)) {
-    std::fprintf(stderr, "qnav: cannot open %s\n", path);
-    return 1;
-  }
+  if (!open_sonar_file(src, path)) return 1;
   XtfReader reader;
   if (!reader.init(XtfReaderConfig{})) return 1;
   const Status o = reader.open(src);
@@ -96,10 +100,7 @@ inline int load_xtf(const char* path, FileData& out) {
 // lat/lon (units 2) or metres (units 1/3) become the same XtfPing fields the XTF path fills.
 inline int load_jsf(const char* path, FileData& out) {
   FileSource src;
-  if (!src.open(path)) {
-    std::fprintf(stderr, "qnav: cannot open %s\n", path);
-    return 1;
-  }
+  if (!open_sonar_file(src, path)) return 1;
   JsfFramer framer;
   JsfPingAssembler pings;
   if (!framer.init(4u << 20) || !pings.init(kMaxSonarSamples)) return 1;

@@ -25,25 +25,33 @@ Status request_error(const char* what, const char* chip) noexcept {
                       e == EBUSY ? "the line is held by another consumer: `gpioinfo CHIP` names it" : gpiochip_open_hint(e));
 }
 int flags_of(const GpioLineConfig& c) noexcept { return c.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0; }
+// The chip and line c names, both open and not yet requested (on failure both null, the error named).
+Status open_line(const GpioLineConfig& c, gpiod_chip*& chip, gpiod_line*& line) noexcept {
+  errno = 0;
+  chip = open_chip(c.chip);
+  if (chip == nullptr) return chip_error(c.chip);
+  line = gpiod_chip_get_line(chip, c.offset);
+  if (line == nullptr) {
+    gpiod_chip_close(chip);
+    chip = nullptr;
+    return Status(StatusCode::kNotFound, "GPIO line offset not on this chip");
+  }
+  return Status::ok();
+}
+// Releases the line (if requested) and closes the chip; both null after.
+void release_line(gpiod_chip*& chip, gpiod_line*& line) noexcept {
+  if (line != nullptr) gpiod_line_release(line);
+  if (chip != nullptr) gpiod_chip_close(chip);
+  line = nullptr;
+  chip = nullptr;
+}
 }  // namespace
 
 GpiodOutputLine::~GpiodOutputLine() { close(); }
-void GpiodOutputLine::close() noexcept {
-  if (line_ != nullptr) gpiod_line_release(line_);
-  if (chip_ != nullptr) gpiod_chip_close(chip_);
-  line_ = nullptr;
-  chip_ = nullptr;
-}
+void GpiodOutputLine::close() noexcept { release_line(chip_, line_); }
 Status GpiodOutputLine::open(const GpioLineConfig& c, bool initial) noexcept {
   close();
-  errno = 0;
-  chip_ = open_chip(c.chip);
-  if (chip_ == nullptr) return chip_error(c.chip);
-  line_ = gpiod_chip_get_line(chip_, c.offset);
-  if (line_ == nullptr) {
-    close();
-    return Status(StatusCode::kNotFound, "GPIO line offset not on this chip");
-  }
+  if (const Status st = open_line(c, chip_, line_); !st) return st;
   if (gpiod_line_request_output_flags(line_, c.consumer, flags_of(c), initial ? 1 : 0) < 0) {
     const Status st = request_error("GPIO output request failed on", c.chip);
     line_ = nullptr;
@@ -59,23 +67,11 @@ Status GpiodOutputLine::set(bool value) noexcept {
 }
 
 GpiodInputLine::~GpiodInputLine() { close(); }
-void GpiodInputLine::close() noexcept {
-  if (line_ != nullptr) gpiod_line_release(line_);
-  if (chip_ != nullptr) gpiod_chip_close(chip_);
-  line_ = nullptr;
-  chip_ = nullptr;
-}
+void GpiodInputLine::close() noexcept { release_line(chip_, line_); }
 int GpiodInputLine::fd() const noexcept { return line_ != nullptr ? gpiod_line_event_get_fd(line_) : -1; }
 Status GpiodInputLine::open(const GpioLineConfig& c, GpioEdge edges) noexcept {
   close();
-  errno = 0;
-  chip_ = open_chip(c.chip);
-  if (chip_ == nullptr) return chip_error(c.chip);
-  line_ = gpiod_chip_get_line(chip_, c.offset);
-  if (line_ == nullptr) {
-    close();
-    return Status(StatusCode::kNotFound, "GPIO line offset not on this chip");
-  }
+  if (const Status st = open_line(c, chip_, line_); !st) return st;
   int r;
   switch (edges) {
     case GpioEdge::kRising: r = gpiod_line_request_rising_edge_events_flags(line_, c.consumer, flags_of(c)); break;

@@ -79,14 +79,13 @@ Result<SerialRead> TcpClientPort::read(Span<std::uint8_t> buf, int timeout_ms) n
   if (fd_ < 0) return Status(StatusCode::kNotReady, "TCP port not open");
   SerialRead r;
   if (buf.empty()) return r;
-  pollfd p{fd_, POLLIN, 0};
-  const int pr = ::poll(&p, 1, timeout_ms < 0 ? 0 : timeout_ms);
-  if (pr < 0) return errno == EINTR ? Result<SerialRead>(r) : Result<SerialRead>(Status(StatusCode::kIoError, "poll failed"));
-  if (pr == 0) return r;
+  const int ready = wait_readable(fd_, timeout_ms);
+  if (ready < 0) return Status(StatusCode::kIoError, "poll failed");
+  if (ready == 0) return r;
   const ssize_t n = ::recv(fd_, buf.data(), buf.size(), MSG_DONTWAIT);
   r.arrival_ns = monotonic_now_ns();
   if (n < 0) {
-    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return SerialRead{};
+    if (would_block(errno)) return SerialRead{};
     ++stats_.rx_errors;
     return Status(StatusCode::kIoError, "TCP recv failed");
   }
@@ -101,7 +100,7 @@ Result<std::size_t> TcpClientPort::write(Span<const std::uint8_t> data) noexcept
   if (data.empty()) return std::size_t{0};
   const ssize_t n = ::send(fd_, data.data(), data.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
   if (n < 0) {
-    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) {
+    if (would_block(errno)) {
       ++stats_.tx_short;
       return std::size_t{0};
     }

@@ -10,11 +10,11 @@
 
 #include <cstdint>
 
-#include "hal/core/serial.hpp"
+#include "hal/linux/fd_serial_port.hpp"
 
 namespace qnav::hal {
 
-class TcpClientPort final : public SerialPort {
+class TcpClientPort final : public FdSerialPort {
  public:
   TcpClientPort() noexcept = default;
   ~TcpClientPort() override;
@@ -26,18 +26,13 @@ class TcpClientPort final : public SerialPort {
   Status poll_connect() noexcept { return finish_connect(0); }
   bool connecting() const noexcept { return pending_ >= 0; }
   void close() noexcept;
-  bool is_open() const noexcept { return fd_ >= 0; }
-  int fd() const noexcept { return fd_; }
 
   Result<SerialRead> read(Span<std::uint8_t> buf, int timeout_ms) noexcept override;
   Result<std::size_t> write(Span<const std::uint8_t> data) noexcept override;
-  SerialStats stats() const noexcept override { return stats_; }
 
  private:
   Status finish_connect(int timeout_ms) noexcept;
-  int fd_ = -1;
   int pending_ = -1;  // a socket whose connect() is in progress
-  SerialStats stats_;
 };
 
 }  // namespace qnav::hal

@@ -8,7 +8,7 @@
 
 #include <termios.h>
 
-#include "hal/core/serial.hpp"
+#include "hal/linux/fd_serial_port.hpp"
 
 namespace qnav::hal {
 
@@ -16,7 +16,7 @@ namespace qnav::hal {
 // zeroed or current termios. Separate so the bits can be checked where a pty ignores them.
 Status build_termios(const SerialConfig& config, termios& t) noexcept;
 
-class TermiosSerialPort final : public SerialPort {
+class TermiosSerialPort final : public FdSerialPort {
  public:
   TermiosSerialPort() noexcept = default;
   ~TermiosSerialPort() override;
@@ -25,16 +25,9 @@ class TermiosSerialPort final : public SerialPort {
 
   Status open(const char* path, const SerialConfig& config) noexcept;
   void close() noexcept;
-  bool is_open() const noexcept { return fd_ >= 0; }
-  int fd() const noexcept { return fd_; }
 
   Result<SerialRead> read(Span<std::uint8_t> buf, int timeout_ms) noexcept override;
   Result<std::size_t> write(Span<const std::uint8_t> data) noexcept override;
-  SerialStats stats() const noexcept override { return stats_; }
-
- private:
-  int fd_ = -1;
-  SerialStats stats_;
 };
 
 }  // namespace qnav::hal

@@ -109,10 +109,9 @@ Result<SerialRead> UdpPort::read(Span<std::uint8_t> buf, int timeout_ms) noexcep
   if (fd_ < 0) return Status(StatusCode::kNotReady, "UDP port not open");
   SerialRead r;
   if (buf.empty()) return r;
-  pollfd p{fd_, POLLIN, 0};
-  const int pr = ::poll(&p, 1, timeout_ms < 0 ? 0 : timeout_ms);
-  if (pr < 0) return errno == EINTR ? Result<SerialRead>(r) : Result<SerialRead>(Status(StatusCode::kIoError, "poll failed"));
-  if (pr == 0) return r;
+  const int ready = wait_readable(fd_, timeout_ms);
+  if (ready < 0) return Status(StatusCode::kIoError, "poll failed");
+  if (ready == 0) return r;
   // Up to a bounded number of datagrams per call: foreign ones are dropped and the next one read.
   for (int tries = 0; tries < 16; ++tries) {
     sockaddr_in from{};
@@ -120,7 +119,7 @@ Result<SerialRead> UdpPort::read(Span<std::uint8_t> buf, int timeout_ms) noexcep
     const ssize_t n = ::recvfrom(fd_, buf.data(), buf.size(), MSG_DONTWAIT | MSG_TRUNC,
                                  reinterpret_cast<sockaddr*>(&from), &from_len);
     if (n < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return SerialRead{};
+      if (would_block(errno)) return SerialRead{};
       if (errno == ECONNREFUSED) {  // ICMP port unreachable for an earlier send: not a read error
         ++udp_.tx_refused;
         continue;
@@ -164,7 +163,7 @@ Result<std::size_t> UdpPort::write(Span<const std::uint8_t> data) noexcept {
                             : ::sendto(fd_, data.data(), data.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
                                        reinterpret_cast<const sockaddr*>(&to), sizeof to);
   if (n < 0) {
-    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR || errno == ENOBUFS) {
+    if (would_block(errno) || errno == ENOBUFS) {
       ++stats_.tx_short;
       return std::size_t{0};
     }

@@ -21,7 +21,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "hal/core/serial.hpp"
+#include "hal/linux/fd_serial_port.hpp"
 
 namespace qnav::hal {
 
@@ -37,7 +37,7 @@ struct UdpStats {
   std::uint32_t tx_refused = 0;    // ICMP port unreachable reported for an earlier send
 };
 
-class UdpPort final : public SerialPort {
+class UdpPort final : public FdSerialPort {
  public:
   UdpPort() noexcept = default;
   ~UdpPort() override;
@@ -47,8 +47,6 @@ class UdpPort final : public SerialPort {
   Status open_client(const char* ipv4, std::uint16_t port, std::uint16_t local_port = 0) noexcept;
   Status open_server(std::uint16_t port, const char* bind_ipv4 = "0.0.0.0") noexcept;
   void close() noexcept;
-  bool is_open() const noexcept { return fd_ >= 0; }
-  int fd() const noexcept { return fd_; }
   // The local port bound (after open_server(0) or open_client: the kernel's choice).
   std::uint16_t local_port() const noexcept;
   // Server: a sender has been seen (write() has somewhere to go). Client: always true when open.
@@ -64,12 +62,10 @@ class UdpPort final : public SerialPort {
 
   Result<SerialRead> read(Span<std::uint8_t> buf, int timeout_ms) noexcept override;
   Result<std::size_t> write(Span<const std::uint8_t> data) noexcept override;
-  SerialStats stats() const noexcept override { return stats_; }
   const UdpStats& udp_stats() const noexcept { return udp_; }
 
  private:
   Status open_socket(const char* bind_ipv4, std::uint16_t bind_port) noexcept;
-  int fd_ = -1;
   bool client_ = false;
   bool has_peer_ = false;
   bool adopt_senders_ = true;
@@ -78,7 +74,6 @@ class UdpPort final : public SerialPort {
   std::uint16_t last_port_ = 0;
   std::uint32_t peer_addr_ = 0;  // network byte order
   std::uint16_t peer_port_ = 0;  // network byte order
-  SerialStats stats_;
   UdpStats udp_;
 };
 

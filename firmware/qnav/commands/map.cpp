@@ -524,8 +524,161 @@ Status render_eval_frame(const sim::downward::Seabed& seabed, const sim::downwar
   return vision::degrade_underwater(clean.view(), d, frame.view());
 }
 
+// The synthetic loop of `map eval`: its geometry and the truth (position of frame k in the frame of
+// frame 0, the chain's origin).
+struct EvalLoop {
+  int frames = 0, lap = 0;
+  double radius = 0.8, altitude = 2.0, spacing = 0.2;
+  double path_m = 0.0;
+  sim::downward::Seabed seabed;
+  sim::downward::Camera cam;
+  sim::downward::CameraPose p0;
+  sim::downward::CameraPose pose(int k) const { return sim::downward::loop_pose(k, lap, radius, altitude); }
+  Vec2d truth(int k) const {
+    const sim::downward::CameraPose pk = pose(k);
+    const double c = std::cos(p0.yaw_rad), sn = std::sin(p0.yaw_rad);
+    const Vec2d d(pk.x_m - p0.x_m, pk.y_m - p0.y_m);
+    return Vec2d(c * d.x() + sn * d.y(), -sn * d.x() + c * d.y());
+  }
+};
+
+// What one run of `map eval` (one filter) measured.
+struct EvalFilterRun {
+  std::vector<FrameRecord> rec;
+  std::vector<double> ms, kps, inl, cpu;
+  double max_err = 0.0, final_err = std::nan("");
+  int ok = 0, second = 0, recognised = 0;
+};
+
+// One frame of a run: rendered (and degraded), mapped, scored against the truth into run and fig3.
+int eval_frame(const EvalLoop& L, int filter, int k, pipeline::TopoMapper& mapper, MapBuilder& builder, ImageU8& clean, ImageU8& frame,
+               std::vector<int>& created_frame, EvalFilterRun& run, Fig3& fig3, std::vector<double>& all_ms, std::vector<double>& all_cpu) {
+  ConstImageViewU8 input;
+  Status s = render_eval_frame(L.seabed, L.cam, L.pose(k), filter, k, clean, frame, input);
+  if (!s) {
+    std::fprintf(stderr, "map eval: degrade: %s\n", s.message());
+    return 1;
+  }
+  FrameRecord r;
+  const auto t0 = Clock::now();
+  const double c0 = cpu_ms();
+  pipeline::MapperStep m;
+  s = mapper.step(input, L.altitude, m);
+  r.take(m);
+  r.chain_cpu_ms = cpu_ms() - c0;
+  r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  if (!s) return 1;
+  run.cpu.push_back(r.chain_cpu_ms);
+  all_cpu.push_back(r.chain_cpu_ms);
+  if (builder.path != nullptr && r.place.kind == topo::ObserveKind::kCreated) builder.save();
+  run.ms.push_back(r.ms);
+  all_ms.push_back(r.ms);
+  run.kps.push_back(r.step.keypoints);
+  fig3.record(static_cast<std::size_t>(filter), static_cast<std::size_t>(k), r.step,
+              [&] { return count_true_matches(mapper.chain(), L.cam, L.pose(k), L.pose(static_cast<int>(r.step.keyframe_index))); });
+  if (r.step.status == topo::StepStatus::kOk) {
+    ++run.ok;
+    if (k > 0) run.inl.push_back(r.step.inliers);
+    const double e = (r.step.pose.position_m - L.truth(k)).norm();
+    run.max_err = std::max(run.max_err, e);
+    run.final_err = e;
+  }
+  if (r.observed && r.place.kind == topo::ObserveKind::kCreated && r.place.node < created_frame.size()) created_frame[r.place.node] = k;
+  if (k >= L.lap + 3) {
+    ++run.second;
+    const topo::TopoMap& map = builder.map();
+    if (r.observed && r.place.kind == topo::ObserveKind::kMatched && map.active(r.place.node) && created_frame[r.place.node] >= 0 &&
+        created_frame[r.place.node] < L.lap && (map.node(r.place.node).position - L.truth(k)).norm() <= map.config().gate)
+      ++run.recognised;
+  }
+  run.rec.push_back(r);
+  return 0;
+}
+
+// What every run adds to the report: the JSON objects (runs, errs), the text lines, the medians.
+struct EvalReport {
+  bool json = false;
+  std::string out, errs;  // per-run objects; traj_error_pct per filter
+  std::vector<double> all_ms, all_cpu;
+  double recognised_none = std::nan("");
+  int worst_rc = 0;
+};
+
+void report_filter_run(const EvalLoop& L, int filter, const EvalFilterRun& run, const MapBuilder& builder, EvalReport& rep) {
+  const char* name[] = {"none", "filter1", "filter2", "filter3", "filter4", "filter5"};
+  const double err_pct = 100.0 * run.max_err / L.path_m, final_pct = 100.0 * run.final_err / L.path_m;
+  const double rec_pct = run.second > 0 ? 100.0 * run.recognised / run.second : std::nan("");
+  if (filter == 0) rep.recognised_none = rec_pct;
+  if (run.ok < L.frames) rep.worst_rc = 1;
+  const topo::TopoCounters& c = builder.map().counters();
+  const std::size_t nodes = builder.map().node_count(), edges = builder.map().edge_count();
+  const unsigned mismatch = c.get(topo::TopoCounter::kMismatch);
+  char buf[768];
+  std::snprintf(buf, sizeof buf,
+                "%s\"%s\": {\"traj_error_pct\": %.4f, \"final_error_pct\": %.4f, \"frames_ok\": %d, \"frames\": %d, "
+                "\"keypoints_median\": %.0f, \"inliers_median\": %.0f, \"nodes\": %zu, \"edges\": %zu, \"mismatch\": %u, "
+                "\"revisits_recognised_pct\": %s, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
+                filter ? ", " : "", name[filter], err_pct, final_pct, run.ok, L.frames, median(run.kps), median(run.inl), nodes, edges, mismatch,
+                json_pct(rec_pct).c_str(), median(run.ms), median(run.cpu));
+  rep.out += buf;
+  std::snprintf(buf, sizeof buf, "%s\"%s\": %.4f", filter ? ", " : "", name[filter], err_pct);
+  rep.errs += buf;
+  if (!rep.json)
+    std::printf("%-8s traj error max %.3f %% (final %.3f %%) of path; %d/%d frames ok; keypoints %.0f, inliers %.0f; map %zu nodes, "
+                "%zu edges, %u mismatches; revisits recognised %.1f %% (%d/%d); frame %.2f ms median (CPU %.2f ms)\n",
+                name[filter], err_pct, final_pct, run.ok, L.frames, median(run.kps), median(run.inl), nodes, edges, mismatch, rec_pct, run.recognised,
+                run.second, median(run.ms), median(run.cpu));
+}
+
+// One run of `map eval`: the loop under one filter (0: clean; the clean run also writes --map-out,
+// the mosaic and the map CSVs). 0, or the command's exit code.
+int eval_filter(const EvalLoop& L, int filter, ImageU8& clean, ImageU8& frame, const char* map_out, const char* out_dir, Fig3& fig3,
+                EvalReport& rep) {
+  const vision::PinholeRadTan pinhole = vision::ideal_pinhole(L.cam.f, L.cam.cx, L.cam.cy, L.cam.width, L.cam.height);
+  const pipeline::TopoMapperConfig config =
+      pipeline::topo_mapper_config(L.cam.width, L.cam.height, true, pinhole, false, true, true, L.spacing, 1024);
+  ArenaStorage arena(pipeline::TopoMapper::arena_bytes(config));
+  pipeline::TopoMapper mapper;
+  MapBuilder builder;
+  builder.mapper = &mapper;
+  Status s = mapper.init(config, arena);
+  if (!s) {
+    std::fprintf(stderr, "map eval: init: %s\n", s.message());
+    return 1;
+  }
+  if (filter == 0) builder.path = map_out;
+  if (filter == 0 && out_dir != nullptr) mkdir(out_dir, 0755);
+  EvalFilterRun run;
+  std::vector<int> created_frame(1024, -1);
+  const double none = std::nan("");
+  for (auto* col : {&fig3.keypoints, &fig3.matches, &fig3.true_matches, &fig3.inliers}) col->emplace_back(L.frames, none);
+  for (int k = 0; k < L.frames; ++k)
+    if (const int rc = eval_frame(L, filter, k, mapper, builder, clean, frame, created_frame, run, fig3, rep.all_ms, rep.all_cpu); rc != 0) return rc;
+  if (builder.path != nullptr) builder.save();
+  if (filter == 0 && out_dir != nullptr) {  // the clean run's mosaic: the frames rendered again
+    const MosaicFrameSource src{[&](std::size_t i, ImageU8& buf) {
+                                  sim::downward::render(L.seabed, L.cam, L.pose(static_cast<int>(i)), buf.view());
+                                  return true;
+                                },
+                                L.cam.width, L.cam.height};
+    (void)write_map_mosaic(std::string(out_dir) + "/map_mosaic.png", src, run.rec, &builder.map(), true, mapper.chain().metres_per_px(),
+                           "qnav map eval (synthetic loop, no filter)");
+  }
+  if (filter == 0 && out_dir != nullptr && !builder.write_csv(out_dir, L.altitude / L.cam.f)) {
+    std::fprintf(stderr, "map eval: writing the map CSVs in %s failed\n", out_dir);
+    return 1;
+  }
+  if (!builder.status) {
+    std::fprintf(stderr, "map eval: writing %s: %s\n", map_out, builder.status.message());
+    return 1;
+  }
+  report_filter_run(L, filter, run, builder, rep);
+  return 0;
+}
+
 int run_eval() {
-  const bool json = g_opt.json;
+  EvalReport rep;
+  rep.json = g_opt.json;
   const double laps = g_opt.laps;
   const long per_lap = g_opt.per_lap, filters = g_opt.filters;
   const char* map_out = opt_or_null(g_opt.map_out);
@@ -538,143 +691,27 @@ int run_eval() {
       return 1;
     }
   }
-  const int frames = static_cast<int>(std::lround(laps * static_cast<double>(per_lap)));
-  const int lap = static_cast<int>(per_lap);
-  const double radius = 0.8, altitude = 2.0, spacing = 0.2;
-  const sim::downward::Seabed seabed;
-  const sim::downward::Camera cam;
-  const sim::downward::CameraPose p0 = sim::downward::loop_pose(0, lap, radius, altitude);
-  auto truth = [&](int k) {
-    const sim::downward::CameraPose pk = sim::downward::loop_pose(k, lap, radius, altitude);
-    const double c = std::cos(p0.yaw_rad), sn = std::sin(p0.yaw_rad);
-    const Vec2d d(pk.x_m - p0.x_m, pk.y_m - p0.y_m);
-    return Vec2d(c * d.x() + sn * d.y(), -sn * d.x() + c * d.y());
-  };
-  const double path_m = 2.0 * 3.14159265358979323846 * radius * frames / lap;
-  Result<ImageU8> clean = ImageU8::allocate(cam.width, cam.height);
-  Result<ImageU8> frame = ImageU8::allocate(cam.width, cam.height);
+  EvalLoop L;
+  L.frames = static_cast<int>(std::lround(laps * static_cast<double>(per_lap)));
+  L.lap = static_cast<int>(per_lap);
+  L.p0 = L.pose(0);
+  L.path_m = 2.0 * 3.14159265358979323846 * L.radius * L.frames / L.lap;
+  Result<ImageU8> clean = ImageU8::allocate(L.cam.width, L.cam.height);
+  Result<ImageU8> frame = ImageU8::allocate(L.cam.width, L.cam.height);
   if (!clean || !frame) return 1;
-  std::string out, errs;  // per-run objects; traj_error_pct per filter
-  if (!json) std::printf("synthetic loop: %d frames (%.2f laps of r = %.1f m), path %.2f m, node spacing %.2f m\n", frames, laps, radius, path_m, spacing);
-  std::vector<double> all_ms, all_cpu;
-  double recognised_none = std::nan("");
-  int worst_rc = 0;
-  for (int filter = 0; filter <= static_cast<int>(filters); ++filter) {
-    const vision::PinholeRadTan pinhole = vision::ideal_pinhole(cam.f, cam.cx, cam.cy, cam.width, cam.height);
-    const pipeline::TopoMapperConfig config =
-        pipeline::topo_mapper_config(cam.width, cam.height, true, pinhole, false, true, true, spacing, 1024);
-    ArenaStorage arena(pipeline::TopoMapper::arena_bytes(config));
-    pipeline::TopoMapper mapper;
-    MapBuilder builder;
-    builder.mapper = &mapper;
-    Status s = mapper.init(config, arena);
-    if (!s) {
-      std::fprintf(stderr, "map eval: init: %s\n", s.message());
-      return 1;
-    }
-    if (filter == 0) builder.path = map_out;
-    if (filter == 0 && out_dir != nullptr) mkdir(out_dir, 0755);
-    std::vector<FrameRecord> rec;
-    std::vector<int> created_frame(1024, -1);
-    std::vector<double> ms, kps, inl, cpu;
-    const double none = std::nan("");
-    for (auto* col : {&fig3.keypoints, &fig3.matches, &fig3.true_matches, &fig3.inliers}) col->emplace_back(frames, none);
-    double max_err = 0.0, final_err = std::nan("");
-    int ok = 0, second = 0, recognised = 0;
-    for (int k = 0; k < frames; ++k) {
-      ConstImageViewU8 input;
-      s = render_eval_frame(seabed, cam, sim::downward::loop_pose(k, lap, radius, altitude), filter, k, *clean, *frame, input);
-      if (!s) {
-        std::fprintf(stderr, "map eval: degrade: %s\n", s.message());
-        return 1;
-      }
-      FrameRecord r;
-      const auto t0 = Clock::now();
-      const double c0 = cpu_ms();
-      pipeline::MapperStep m;
-      s = mapper.step(input, altitude, m);
-      r.take(m);
-      r.chain_cpu_ms = cpu_ms() - c0;
-      r.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      if (!s) return 1;
-      cpu.push_back(r.chain_cpu_ms);
-      all_cpu.push_back(r.chain_cpu_ms);
-      if (builder.path != nullptr && r.place.kind == topo::ObserveKind::kCreated) builder.save();
-      ms.push_back(r.ms);
-      all_ms.push_back(r.ms);
-      kps.push_back(r.step.keypoints);
-      fig3.record(static_cast<std::size_t>(filter), static_cast<std::size_t>(k), r.step, [&] {
-        return count_true_matches(mapper.chain(), cam, sim::downward::loop_pose(k, lap, radius, altitude),
-                                  sim::downward::loop_pose(static_cast<int>(r.step.keyframe_index), lap, radius, altitude));
-      });
-      if (r.step.status == topo::StepStatus::kOk) {
-        ++ok;
-        if (k > 0) inl.push_back(r.step.inliers);
-        const double e = (r.step.pose.position_m - truth(k)).norm();
-        max_err = std::max(max_err, e);
-        final_err = e;
-      }
-      if (r.observed && r.place.kind == topo::ObserveKind::kCreated && r.place.node < created_frame.size())
-        created_frame[r.place.node] = k;
-      if (k >= lap + 3) {
-        ++second;
-        const topo::TopoMap& map = builder.map();
-        if (r.observed && r.place.kind == topo::ObserveKind::kMatched && map.active(r.place.node) &&
-            created_frame[r.place.node] >= 0 && created_frame[r.place.node] < lap &&
-            (map.node(r.place.node).position - truth(k)).norm() <= map.config().gate)
-          ++recognised;
-      }
-      rec.push_back(r);
-    }
-    if (builder.path != nullptr) builder.save();
-    if (filter == 0 && out_dir != nullptr) {  // the clean run's mosaic: the frames rendered again
-      const MosaicFrameSource src{[&](std::size_t i, ImageU8& buf) {
-                                    sim::downward::render(seabed, cam, sim::downward::loop_pose(static_cast<int>(i), lap, radius, altitude), buf.view());
-                                    return true;
-                                  },
-                                  cam.width, cam.height};
-      (void)write_map_mosaic(std::string(out_dir) + "/map_mosaic.png", src, rec, &builder.map(), true, mapper.chain().metres_per_px(),
-                             "qnav map eval (synthetic loop, no filter)");
-    }
-    if (filter == 0 && out_dir != nullptr && !builder.write_csv(out_dir, altitude / cam.f)) {
-      std::fprintf(stderr, "map eval: writing the map CSVs in %s failed\n", out_dir);
-      return 1;
-    }
-    if (!builder.status) {
-      std::fprintf(stderr, "map eval: writing %s: %s\n", map_out, builder.status.message());
-      return 1;
-    }
-    const char* name[] = {"none", "filter1", "filter2", "filter3", "filter4", "filter5"};
-    const double err_pct = 100.0 * max_err / path_m, final_pct = 100.0 * final_err / path_m;
-    const double rec_pct = second > 0 ? 100.0 * recognised / second : std::nan("");
-    if (filter == 0) recognised_none = rec_pct;
-    if (ok < frames) worst_rc = 1;
-    const topo::TopoCounters& c = builder.map().counters();
-    char buf[768];
-    std::snprintf(buf, sizeof buf,
-                  "%s\"%s\": {\"traj_error_pct\": %.4f, \"final_error_pct\": %.4f, \"frames_ok\": %d, \"frames\": %d, "
-                  "\"keypoints_median\": %.0f, \"inliers_median\": %.0f, \"nodes\": %zu, \"edges\": %zu, \"mismatch\": %u, "
-                  "\"revisits_recognised_pct\": %s, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
-                  filter ? ", " : "", name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map().node_count(),
-                  builder.map().edge_count(), c.get(topo::TopoCounter::kMismatch), json_pct(rec_pct).c_str(), median(ms), median(cpu));
-    out += buf;
-    std::snprintf(buf, sizeof buf, "%s\"%s\": %.4f", filter ? ", " : "", name[filter], err_pct);
-    errs += buf;
-    if (!json)
-      std::printf("%-8s traj error max %.3f %% (final %.3f %%) of path; %d/%d frames ok; keypoints %.0f, inliers %.0f; map %zu nodes, "
-                  "%zu edges, %u mismatches; revisits recognised %.1f %% (%d/%d); frame %.2f ms median (CPU %.2f ms)\n",
-                  name[filter], err_pct, final_pct, ok, frames, median(kps), median(inl), builder.map().node_count(), builder.map().edge_count(),
-                  c.get(topo::TopoCounter::kMismatch), rec_pct, recognised, second, median(ms), median(cpu));
-  }
+  if (!rep.json)
+    std::printf("synthetic loop: %d frames (%.2f laps of r = %.1f m), path %.2f m, node spacing %.2f m\n", L.frames, laps, L.radius, L.path_m, L.spacing);
+  for (int filter = 0; filter <= static_cast<int>(filters); ++filter)
+    if (const int rc = eval_filter(L, filter, *clean, *frame, map_out, out_dir, fig3, rep); rc != 0) return rc;
   if (fig3_path != nullptr && !write_fig3_csv(fig3_path, fig3, static_cast<int>(filters) + 1)) {
     std::fprintf(stderr, "map eval: writing %s failed: %s\n", fig3_path, std::strerror(errno));
     return 1;
   }
   char tail[256];
   std::snprintf(tail, sizeof tail, ", \"path_m\": %.4f, \"node_spacing_m\": %.2f, \"revisits_recognised_pct\": %s, \"frame_ms_median\": %.3f, \"frame_cpu_ms_median\": %.3f}",
-                path_m, spacing, json_pct(recognised_none).c_str(), median(all_ms), median(all_cpu));
-  if (json) std::printf("{\"traj_error_pct\": {%s}, \"runs\": {%s}%s\n", errs.c_str(), out.c_str(), tail);
-  return worst_rc;
+                L.path_m, L.spacing, json_pct(rep.recognised_none).c_str(), median(rep.all_ms), median(rep.all_cpu));
+  if (rep.json) std::printf("{\"traj_error_pct\": {%s}, \"runs\": {%s}%s\n", rep.errs.c_str(), rep.out.c_str(), tail);
+  return rep.worst_rc;
 }
 
 // What run_map's parts share: the inputs the options name, the mapper's configuration, the frames.

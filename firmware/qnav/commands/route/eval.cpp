@@ -207,104 +207,92 @@ bool ensure_dir(const std::string& d) {
   return ::mkdir(d.c_str(), 0755) == 0;
 }
 
-}  // namespace
-
-int cmd_eval() {
-  if (g_opt.multi_pass) return cmd_eval_multi_pass();  // route/experiences.cpp
-  if (g_opt.changed_seabed) return cmd_eval_changed_seabed();
-  const double length_m = g_opt.length_m;
-  if (!(length_m >= 400.0 && length_m <= 20000.0)) return usage("eval", "--length-m: eval needs 400..20000 m");
-  const bool json = g_opt.json;
-  const bool quick = g_opt.quick;
-  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : quick ? 1 : 3;
-  const std::string out_dir = g_opt.eval_out;
-  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty() || !ensure_dir(out_dir)) {
-    std::fprintf(stderr, "qnav route eval: %s\n", e.empty() ? ("cannot create " + out_dir).c_str() : e.c_str());
-    return 1;
-  }
-  FILE* log = json ? stderr : stdout;
-  const auto t_all = Clock::now();
+// What the steps of `route eval` share: the survey, the tile pipeline, the route taught on it (written
+// to the route file and read back: its reader is the repeats' node source) and where to report.
+struct EvalRun {
+  double length_m = 0.0;
+  std::string out_dir;
+  FILE* log = stdout;
   pipeline::SimSurvey w;
   pipeline::RouteTilePipeline pipe;
-  Status s = w.init(length_m, 1);
-  if (s) s = pipe.init(pipeline::default_route_tile_config());
-  if (!s) {
-    std::fprintf(stderr, "qnav route eval: %s\n", s.message());
-    return 1;
-  }
-  // 1. Teach: a forward pass on the route, written durably node by node.
   std::vector<pipeline::RouteTile> train;
+  tools::RouteFileReader reader;
+  std::vector<route::NodeMeta> meta;
+  std::vector<double> node_along;  // each node's true along-track distance
+  double spacing = 0.0;
+  Span<const route::NodeMeta> meta_span() const { return Span<const route::NodeMeta>(meta.data(), meta.size()); }
+};
+
+// 1. Teach: a forward pass on the route, written durably node by node, then opened again. Returns
+//    the command's exit code (0: taught).
+int teach_eval(EvalRun& e) {
   auto t0 = Clock::now();
-  s = fly(pipe, w, w.pass(0.0, false, 11), train);
-  if (!s || train.size() < 2) {
+  Status s = fly(e.pipe, e.w, e.w.pass(0.0, false, 11), e.train);
+  if (!s || e.train.size() < 2) {
     std::fprintf(stderr, "qnav route eval: training pass failed: %s\n", s ? "fewer than 2 tiles" : s.message());
     return 1;
   }
+  const std::vector<pipeline::RouteTile>& train = e.train;
   const double fly_ms = ms_since(t0);
-  const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
-  const std::string route_path = out_dir + "/route_eval.qroute";
+  e.spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+  const std::string route_path = e.out_dir + "/route_eval.qroute";
   tools::RouteFileWriter writer;
-  if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true)) return 1;
+  if (!begin_route(writer, "eval", route_path.c_str(), pipeline::side_scan_route_params(e.pipe.config(), e.spacing, e.w.swath_m), true)) return 1;
   t0 = Clock::now();
   for (const pipeline::RouteTile& t : train)
     if (s) s = writer.append(t.node);
   const double append_ms = ms_since(t0) / static_cast<double>(train.size());
   if (!finish_route(writer, "eval", route_path.c_str(), s)) return 1;
-  tools::RouteFileReader reader;
-  s = reader.open(route_path.c_str());
-  std::vector<route::NodeMeta> meta;
+  s = e.reader.open(route_path.c_str());
   std::uint32_t bad = 0;
-  if (s) s = reader.read_all_meta(meta, &bad);
+  if (s) s = e.reader.read_all_meta(e.meta, &bad);
   if (!s) {
     std::fprintf(stderr, "qnav route eval: route file: %s\n", s.message());
     return 1;
   }
-  std::vector<double> node_along;
   double kp_mean = 0.0;
   for (const pipeline::RouteTile& t : train) {
-    node_along.push_back(t.truth_along_m);
+    e.node_along.push_back(t.truth_along_m);
     kp_mean += static_cast<double>(t.node.keypoints.size());
   }
   kp_mean /= static_cast<double>(train.size());
-  std::fprintf(log, "taught: %zu nodes over %.0f m (spacing %.1f m, swath %.1f m, %.1f keypoints/node), pass %.1f s, append+fdatasync %.2f ms/node\n",
-               train.size(), length_m, spacing, w.swath_m, kp_mean, fly_ms / 1000.0, append_ms);
+  std::fprintf(e.log, "taught: %zu nodes over %.0f m (spacing %.1f m, swath %.1f m, %.1f keypoints/node), pass %.1f s, append+fdatasync %.2f ms/node\n",
+               train.size(), e.length_m, e.spacing, e.w.swath_m, kp_mean, fly_ms / 1000.0, append_ms);
+  return 0;
+}
 
-  // 2. Repeat passes at lateral offsets, forwards and reverse: on this seabed (nodes read from the
-  //    route file), then on further seabeds (each taught afresh, nodes in memory).
-  std::vector<int> pcts = quick ? std::vector<int>{0, 20, 40} : std::vector<int>{0, 10, 20, 30, 40, 50};
-  std::vector<TileRecord> records;
-  std::vector<PassStats> stats;
-  std::vector<pipeline::RouteTile> kidnap_src;
-  const std::size_t nodes = meta.size();
-  double eq5_within = -1.0;
-  int pass_seed = 100;
-  SweepInputs in{&pipe, &w, &train, &reader, &reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), &node_along, &pcts, 1, log};
-  s = offset_sweep(in, pass_seed, records, stats, &kidnap_src, &eq5_within);
-  std::vector<double> seed_within;
-  for (long sb = 2; s && sb <= seabeds; ++sb) {
-    pipeline::SimSurvey w2;
-    std::vector<pipeline::RouteTile> train2;
-    s = w2.init(length_m, static_cast<std::uint64_t>(sb));
-    if (s) s = fly(pipe, w2, w2.pass(0.0, false, 11 + 1000 * static_cast<std::uint64_t>(sb)), train2);
-    if (!s || train2.size() < 2) break;
-    const double sp2 = (train2.back().node.meta.along_m - train2.front().node.meta.along_m) / static_cast<double>(train2.size() - 1);
-    const route::RouteParams p2 = pipeline::side_scan_route_params(pipe.config(), sp2, w2.swath_m);
-    std::vector<route::NodeMeta> meta2;
-    std::vector<double> along2;
-    for (std::size_t i = 0; i < train2.size(); ++i) {
-      meta2.push_back(train2[i].node.meta);
-      meta2.back().index = static_cast<std::uint32_t>(i);
-      along2.push_back(train2[i].truth_along_m);
-    }
-    TileSource src2(&train2);
-    std::fprintf(log, "seabed %ld: taught %zu nodes (spacing %.1f m)\n", sb, train2.size(), sp2);
-    SweepInputs in2{&pipe, &w2, &train2, &src2, &p2, Span<const route::NodeMeta>(meta2.data(), meta2.size()), &along2, &pcts, static_cast<int>(sb), log};
-    s = offset_sweep(in2, pass_seed, records, stats, nullptr, nullptr);
+// 2. (further seabeds) Seabed sb taught afresh, nodes in memory, and swept like the first.
+Status sweep_seabed(EvalRun& e, long sb, const std::vector<int>& pcts, int& pass_seed, std::vector<TileRecord>& records,
+                    std::vector<PassStats>& stats, bool& taught) {
+  pipeline::SimSurvey w2;
+  std::vector<pipeline::RouteTile> train2;
+  taught = false;
+  Status s = w2.init(e.length_m, static_cast<std::uint64_t>(sb));
+  if (s) s = fly(e.pipe, w2, w2.pass(0.0, false, 11 + 1000 * static_cast<std::uint64_t>(sb)), train2);
+  if (!s || train2.size() < 2) return s;
+  taught = true;
+  const double sp2 = (train2.back().node.meta.along_m - train2.front().node.meta.along_m) / static_cast<double>(train2.size() - 1);
+  const route::RouteParams p2 = pipeline::side_scan_route_params(e.pipe.config(), sp2, w2.swath_m);
+  std::vector<route::NodeMeta> meta2;
+  std::vector<double> along2;
+  for (std::size_t i = 0; i < train2.size(); ++i) {
+    meta2.push_back(train2[i].node.meta);
+    meta2.back().index = static_cast<std::uint32_t>(i);
+    along2.push_back(train2[i].truth_along_m);
   }
-  if (!s) {
-    std::fprintf(stderr, "qnav route eval: repeat pass failed: %s\n", s.message());
-    return 1;
-  }
+  TileSource src2(&train2);
+  std::fprintf(e.log, "seabed %ld: taught %zu nodes (spacing %.1f m)\n", sb, train2.size(), sp2);
+  SweepInputs in2{&e.pipe, &w2, &train2, &src2, &p2, Span<const route::NodeMeta>(meta2.data(), meta2.size()), &along2, &pcts, static_cast<int>(sb), e.log};
+  return offset_sweep(in2, pass_seed, records, stats, nullptr, nullptr);
+}
+
+// The sweep's totals over every pass (side counts only on passes off the route, > 5 %).
+struct SweepTotals {
+  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0, off_route = 0, dead_reckoned = 0;
+  std::vector<double> seed_within;  // node +/-1 per seabed
+};
+SweepTotals sum_sweep(const std::vector<PassStats>& stats, long seabeds) {
+  SweepTotals t;
   for (long sb = 1; sb <= seabeds; ++sb) {
     int sc = 0, wi = 0;
     for (const PassStats& p : stats)
@@ -312,237 +300,265 @@ int cmd_eval() {
         sc += p.scored;
         wi += p.within1;
       }
-    seed_within.push_back(sc ? 100.0 * wi / sc : 0.0);
+    t.seed_within.push_back(sc ? 100.0 * wi / sc : 0.0);
   }
-  int scored = 0, within = 0, side_n = 0, side_ok = 0, tracking = 0, off_route = 0, dead_reckoned = 0;
   for (const PassStats& p : stats) {
-    scored += p.scored;
-    within += p.within1;
-    tracking += p.tracking;
-    dead_reckoned += p.dead_reckoned;
+    t.scored += p.scored;
+    t.within += p.within1;
+    t.tracking += p.tracking;
+    t.dead_reckoned += p.dead_reckoned;
     if (p.pct > 5) {
-      side_n += p.side_n;
-      side_ok += p.side_ok;
-      off_route += p.off_route;
+      t.side_n += p.side_n;
+      t.side_ok += p.side_ok;
+      t.off_route += p.off_route;
     }
   }
+  return t;
+}
 
-  // 3. Kidnapped vehicle: after 8 tiles the vehicle is moved a third of the route ahead; odometry
-  //    does not know. Tiles until the estimate is within +/-1 and stays there for 3 tiles.
+// 3. Kidnapped vehicle: after 8 tiles the vehicle is moved a third of the route ahead; odometry
+//    does not know. Tiles until the estimate is within +/-1 and stays there for 3 tiles (-1: never).
+int kidnapped(EvalRun& e, const std::vector<pipeline::RouteTile>& kidnap_src) {
   int relocalised = -1;
-  {
-    const std::size_t jump_from = 8, jump_to = 8 + kidnap_src.size() / 3;
-    std::vector<pipeline::RouteTile> seq(kidnap_src.begin(), kidnap_src.begin() + static_cast<long>(std::min(jump_from, kidnap_src.size())));
-    for (std::size_t i = jump_to; i < kidnap_src.size(); ++i) seq.push_back(kidnap_src[i]);
-    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, nodes);
-    auto loc = std::make_unique<pipeline::RouteRepeater>();
-    PassStats ps;
-    std::vector<TileRecord> rec;
-    if (loc->init(lc) && loc->start(reader.params(), Span<const route::NodeMeta>(meta.data(), meta.size()), reader) &&
-        run_localiser(*loc, seq, node_along, 20, false, 0.2 * w.swath_m, lc.guidance.side_deadband_m, &rec, ps, nullptr)) {
-      if (std::getenv("QNAV_ROUTE_DIAG"))
-        for (const TileRecord& r : rec)
-          std::fprintf(stderr, "kidnap tile %d truth %d est %u p %.2f inliers %u conf %d\n", r.tile, r.truth, r.st.estimate,
-                       static_cast<double>(r.st.probability), r.st.best_inliers, r.st.confident ? 1 : 0);
-      for (std::size_t k = jump_from; k + 2 < rec.size(); ++k) {
-        bool ok = true;
-        for (std::size_t j = k; j < k + 3; ++j) ok = ok && std::abs(static_cast<int>(rec[j].st.estimate) - rec[j].truth) <= 1;
-        if (ok) {
-          relocalised = static_cast<int>(k - jump_from) + 1;
-          break;
+  const std::size_t jump_from = 8, jump_to = 8 + kidnap_src.size() / 3;
+  std::vector<pipeline::RouteTile> seq(kidnap_src.begin(), kidnap_src.begin() + static_cast<long>(std::min(jump_from, kidnap_src.size())));
+  for (std::size_t i = jump_to; i < kidnap_src.size(); ++i) seq.push_back(kidnap_src[i]);
+  route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, e.meta.size());
+  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  PassStats ps;
+  std::vector<TileRecord> rec;
+  if (loc->init(lc) && loc->start(e.reader.params(), e.meta_span(), e.reader) &&
+      run_localiser(*loc, seq, e.node_along, 20, false, 0.2 * e.w.swath_m, lc.guidance.side_deadband_m, &rec, ps, nullptr)) {
+    if (std::getenv("QNAV_ROUTE_DIAG"))
+      for (const TileRecord& r : rec)
+        std::fprintf(stderr, "kidnap tile %d truth %d est %u p %.2f inliers %u conf %d\n", r.tile, r.truth, r.st.estimate,
+                     static_cast<double>(r.st.probability), r.st.best_inliers, r.st.confident ? 1 : 0);
+    for (std::size_t k = jump_from; k + 2 < rec.size(); ++k) {
+      bool ok = true;
+      for (std::size_t j = k; j < k + 3; ++j) ok = ok && std::abs(static_cast<int>(rec[j].st.estimate) - rec[j].truth) <= 1;
+      if (ok) {
+        relocalised = static_cast<int>(k - jump_from) + 1;
+        break;
+      }
+    }
+  }
+  std::fprintf(e.log, "kidnapped after tile %zu (moved %zu tiles ahead): re-localised after %d tiles\n", jump_from, jump_to - jump_from, relocalised);
+  return relocalised;
+}
+
+// 4. Speed on a 10,000-node route read from a file through the node window (-1: not measured).
+struct UpdateSpeed {
+  double mean = -1, p95 = -1, max = -1, cpu_mean = -1, cpu_max = -1;
+};
+UpdateSpeed speed_10000(EvalRun& e, const std::vector<pipeline::RouteTile>& tiles) {
+  UpdateSpeed u;
+  const std::vector<pipeline::RouteTile>& train = e.train;
+  const std::string big = e.out_dir + "/route_10000.qroute";
+  tools::RouteFileWriter bw;
+  tools::RouteWriterOptions o;
+  o.sync_each_node = false;
+  Status bs = begin_route(bw, "eval", big.c_str(), pipeline::side_scan_route_params(e.pipe.config(), e.spacing, e.w.swath_m), true, o)
+                  ? Status::ok()
+                  : Status(StatusCode::kIoError, "cannot create the 10,000-node route");
+  const double block_m = e.node_along.back() + e.spacing;
+  for (std::uint32_t i = 0; i < 10000 && bs; ++i) {
+    route::RouteNode n = train[i % train.size()].node;
+    const double shift = block_m * static_cast<double>(i / train.size());
+    n.meta.pose.x_m += shift;
+    n.meta.along_m += shift;
+    bs = bw.append(n);
+  }
+  if (!finish_route(bw, "eval", big.c_str(), bs) && bs) bs = Status(StatusCode::kIoError, "10,000-node route not committed");
+  tools::RouteFileReader br;
+  std::vector<route::NodeMeta> bmeta;
+  if (bs) bs = br.open(big.c_str());
+  if (bs) bs = br.read_all_meta(bmeta, nullptr);
+  route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
+  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  const double window_mb = static_cast<double>(route::RouteLocaliser::arena_bytes(lc)) / 1e6;
+  if (bs) bs = loc->init(lc);
+  if (bs) bs = loc->start(br.params(), Span<const route::NodeMeta>(bmeta.data(), bmeta.size()), br);
+  std::vector<double> ms, cms;
+  PassStats ps;
+  std::vector<double> along_big;  // truth unknown on the replicated route: scoring not used
+  along_big.push_back(0.0);
+  if (bs) bs = run_localiser(*loc, tiles, along_big, 20, false, 0.0, 1.0, nullptr, ps, &ms, &cms);
+  if (bs && !ms.empty()) {
+    std::sort(ms.begin(), ms.end());
+    double sum = 0;
+    for (double v : ms) sum += v;
+    u.mean = sum / static_cast<double>(ms.size());
+    u.p95 = ms[static_cast<std::size_t>(0.95 * static_cast<double>(ms.size() - 1))];
+    u.max = ms.back();
+    double cs = 0;
+    for (double v : cms) cs += v;
+    u.cpu_mean = cs / static_cast<double>(cms.size());
+    u.cpu_max = *std::max_element(cms.begin(), cms.end());
+  }
+  std::remove(big.c_str());
+  std::fprintf(e.log, "10,000-node route (file, %zu-node window): update wall mean %.2f ms, p95 %.2f ms, max %.2f ms; thread CPU mean %.2f ms, max %.2f ms over %zu tiles; localiser memory %.1f MB\n",
+               lc.window_slots, u.mean, u.p95, u.max, u.cpu_mean, u.cpu_max, ms.size(), window_mb);
+  return u;
+}
+
+// 5. Prediction alone on 100,000 nodes: wall and thread CPU ms per predict (-1: not measured).
+void predict_100000(double spacing, FILE* log, double& pred_ms, double& pred_cpu_ms) {
+  pred_ms = -1;
+  pred_cpu_ms = -1;
+  route::RouteFilterConfig fc;
+  fc.max_nodes = 100000;
+  ArenaStorage arena(route::RouteFilter::arena_bytes(fc));
+  route::RouteFilter f;
+  if (f.init(fc, arena) && f.reset(100000, spacing)) {
+    const int reps = 200;
+    const auto t0 = Clock::now();
+    const double c0 = cpu_ms();
+    for (int i = 0; i < reps; ++i) f.predict(spacing).ignore();
+    pred_cpu_ms = (cpu_ms() - c0) / reps;
+    pred_ms = ms_since(t0) / reps;
+  }
+  std::fprintf(log, "prediction alone, 100,000 nodes: wall %.3f ms, thread CPU %.3f ms\n", pred_ms, pred_cpu_ms);
+}
+
+// 6. One sensed tile of the paper-shaped run: a row of Table I (t1), Fig. 5 (f5: measurement
+//    probability per node), Fig. 7 (f7: belief per node) and Fig. 9 (f9: positions), scored.
+struct PaperFiles {
+  FILE *t1, *f5, *f7, *f9;
+};
+Status paper_tile(EvalRun& e, pipeline::RouteRepeater& loc, const pipeline::RouteTile& sensed, std::size_t k, double lateral, double deadband,
+                  const std::vector<double>& sub_along, const sidescan::Trajectory& tr, const PaperFiles& out, std::vector<float>& mp, int& localised,
+                  int& side) {
+  route::LocaliserStep st;
+  QNAV_RETURN_IF_ERROR(loc.step(sensed.node, k == 0 ? 0.0 : sensed.nav_step_m, st));
+  const int truth = true_node(sub_along, sensed.truth_along_m);
+  const route::RouteSide want = expected_side(lateral, false, deadband);
+  localised += std::abs(static_cast<int>(st.estimate) - truth) <= 0 ? 1 : 0;
+  side += st.guidance.side == want;
+  std::fprintf(out.t1, "%zu,%u,%d,%.3f,%s,%s,%u\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
+               route::to_string(want), st.best_inliers);
+  std::fprintf(e.log, "  %6zu  %8u  %5d  %7.2f  %-9s  %s\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
+               route::to_string(want));
+  loc.localiser().filter().measurement_probability(Span<float>(mp.data(), mp.size())).ignore();
+  for (std::size_t i = 0; i < sub_along.size(); ++i) {
+    std::fprintf(out.f5, "%s%.5f", i ? "," : "", static_cast<double>(mp[i]));
+    std::fprintf(out.f7, "%s%.5f", i ? "," : "", static_cast<double>(loc.localiser().filter().belief()[i]));
+  }
+  std::fprintf(out.f5, "\n");
+  std::fprintf(out.f7, "\n");
+  Vec2d tp, np;
+  double th, nh;
+  tr.route_at(sensed.truth_along_m, tp, th);
+  tr.route_at(sub_along[st.estimate], np, nh);
+  tp += lateral * sonar::starboard_unit(th);
+  std::fprintf(out.f9, "%zu,%.2f,%.2f,%.2f,%.2f,%.2f,%s,%s,%.3f,%s\n", k + 1, tp.x(), tp.y(), np.x(), np.y(), st.guidance.cross_track_m,
+               route::to_string(st.guidance.side), route::to_string(want), st.entropy, route::to_string(st.guidance.status));
+  return Status::ok();
+}
+
+// 6. The paper's experiment shape: 15 training nodes, 8 sensed tiles (offset 25% of swath), every
+//    node registered each step (the paper's eq. 8 over the whole database). Table I, Fig. 5, 7, 9, 10.
+void paper_run(EvalRun& e, int& paper_localised, int& paper_side) {
+  paper_localised = 0;
+  paper_side = 0;
+  const std::vector<pipeline::RouteTile>& train = e.train;
+  const std::size_t a = train.size() / 3;
+  const std::size_t n15 = std::min<std::size_t>(15, train.size() - a);
+  std::vector<pipeline::RouteTile> sub(train.begin() + static_cast<long>(a), train.begin() + static_cast<long>(a + n15));
+  std::vector<route::NodeMeta> sub_meta;
+  std::vector<double> sub_along;
+  for (std::size_t i = 0; i < sub.size(); ++i) {
+    route::NodeMeta m = sub[i].node.meta;
+    m.index = static_cast<std::uint32_t>(i);
+    sub_meta.push_back(m);
+    sub_along.push_back(sub[i].truth_along_m);
+  }
+  const double lateral = 0.25 * e.w.swath_m;
+  std::vector<pipeline::RouteTile> pass;
+  Status s = fly(e.pipe, e.w, e.w.pass(lateral, false, 999), pass);
+  std::vector<pipeline::RouteTile> sensed;
+  for (const pipeline::RouteTile& t : pass)
+    if (t.truth_along_m >= sub_along[std::min<std::size_t>(5, sub_along.size() - 1)] - 0.5 * e.spacing && sensed.size() < 8) sensed.push_back(t);
+  TileSource src(&sub);
+  route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 64);
+  lc.filter.belief_registrations = static_cast<std::uint32_t>(sub.size());
+  lc.filter.wide_search_registrations = 0;
+  auto loc = std::make_unique<pipeline::RouteRepeater>();
+  const PaperFiles out{std::fopen((e.out_dir + "/route_table1.csv").c_str(), "w"), std::fopen((e.out_dir + "/route_fig5.csv").c_str(), "w"),
+                       std::fopen((e.out_dir + "/route_fig7.csv").c_str(), "w"), std::fopen((e.out_dir + "/route_fig9.csv").c_str(), "w")};
+  if (s && out.t1 && out.f5 && out.f7 && out.f9 && loc->init(lc) &&
+      loc->start(e.reader.params(), Span<const route::NodeMeta>(sub_meta.data(), sub_meta.size()), src)) {
+    std::fprintf(out.t1, "sensed,estimate,truth,entropy,side,true_side,inliers\n");
+    std::fprintf(out.f9, "sensed,true_north,true_east,node_north,node_east,cross_track_m,side,true_side,entropy,status\n");
+    std::fprintf(e.log, "paper-shaped run (15 nodes, 8 sensed tiles, offset 25%% = %.1f m):\n  sensed  estimate  truth  entropy  side       true side\n", lateral);
+    std::vector<float> mp(sub.size());
+    sidescan::Trajectory tr;
+    s = tr.init(e.w.route);
+    for (std::size_t k = 0; k < sensed.size() && s; ++k)
+      s = paper_tile(e, *loc, sensed[k], k, lateral, lc.guidance.side_deadband_m, sub_along, tr, out, mp, paper_localised, paper_side);
+    std::fprintf(e.log, "  localised (exact node) %d/8, side correct %d/8 (paper: 7/8 and 6/8)\n", paper_localised, paper_side);
+  }
+  for (FILE* f : {out.t1, out.f5, out.f7, out.f9})
+    if (f) std::fclose(f);
+}
+
+// CSV outputs for the plots: one row per offset and direction, summed over the seabeds.
+void write_offsets_csv(const std::string& out_dir, const std::vector<int>& pcts, const std::vector<PassStats>& stats) {
+  FILE* f = std::fopen((out_dir + "/route_eval_offsets.csv").c_str(), "w");
+  if (f == nullptr) return;
+  std::fprintf(f, "offset_pct,lateral_m,direction,tiles,scored,within1_pct,side_correct,side_n,tracking_pct,mean_entropy,seabeds,registered_on_true_node_pct\n");
+  for (int pct : pcts)
+    for (bool rev : {false, true}) {
+      PassStats a;
+      int n = 0, reg = 0;
+      for (const PassStats& p : stats)
+        if (p.pct == pct && p.reverse == rev) {
+          a.lateral_m = p.lateral_m;
+          a.tiles += p.tiles;
+          a.scored += p.scored;
+          a.within1 += p.within1;
+          a.side_ok += p.side_ok;
+          a.side_n += p.side_n;
+          a.tracking += p.tracking;
+          a.mean_entropy += p.mean_entropy;
+          reg += p.reg_true_ok;
+          ++n;
         }
-      }
+      if (n == 0) continue;
+      std::fprintf(f, "%d,%.2f,%s,%d,%d,%.2f,%d,%d,%.2f,%.4f,%d,%.2f\n", pct, a.lateral_m, rev ? "reverse" : "forward", a.tiles, a.scored,
+                   a.scored ? 100.0 * a.within1 / a.scored : 0.0, a.side_ok, a.side_n, a.scored ? 100.0 * a.tracking / a.scored : 0.0,
+                   a.mean_entropy / n, n, a.tiles ? 100.0 * reg / a.tiles : 0.0);
     }
-    std::fprintf(log, "kidnapped after tile %zu (moved %zu tiles ahead): re-localised after %d tiles\n", jump_from, jump_to - jump_from, relocalised);
-  }
+  std::fclose(f);
+}
 
-  // 4. Speed on a 10,000-node route read from a file through the node window.
-  double upd_mean = -1, upd_p95 = -1, upd_max = -1, upd_cpu_mean = -1, upd_cpu_max = -1, window_mb = 0.0;
-  {
-    const std::string big = out_dir + "/route_10000.qroute";
-    tools::RouteFileWriter bw;
-    tools::RouteWriterOptions o;
-    o.sync_each_node = false;
-    Status bs = begin_route(bw, "eval", big.c_str(), pipeline::side_scan_route_params(pipe.config(), spacing, w.swath_m), true, o)
-                    ? Status::ok()
-                    : Status(StatusCode::kIoError, "cannot create the 10,000-node route");
-    const double block_m = node_along.back() + spacing;
-    for (std::uint32_t i = 0; i < 10000 && bs; ++i) {
-      route::RouteNode n = train[i % train.size()].node;
-      const double shift = block_m * static_cast<double>(i / train.size());
-      n.meta.pose.x_m += shift;
-      n.meta.along_m += shift;
-      bs = bw.append(n);
-    }
-    if (!finish_route(bw, "eval", big.c_str(), bs) && bs) bs = Status(StatusCode::kIoError, "10,000-node route not committed");
-    tools::RouteFileReader br;
-    std::vector<route::NodeMeta> bmeta;
-    if (bs) bs = br.open(big.c_str());
-    if (bs) bs = br.read_all_meta(bmeta, nullptr);
-    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
-    auto loc = std::make_unique<pipeline::RouteRepeater>();
-    window_mb = static_cast<double>(route::RouteLocaliser::arena_bytes(lc)) / 1e6;
-    if (bs) bs = loc->init(lc);
-    if (bs) bs = loc->start(br.params(), Span<const route::NodeMeta>(bmeta.data(), bmeta.size()), br);
-    std::vector<double> ms, cms;
-    PassStats ps;
-    std::vector<double> along_big;  // truth unknown on the replicated route: scoring not used
-    along_big.push_back(0.0);
-    if (bs) bs = run_localiser(*loc, kidnap_src, along_big, 20, false, 0.0, 1.0, nullptr, ps, &ms, &cms);
-    if (bs && !ms.empty()) {
-      std::sort(ms.begin(), ms.end());
-      double sum = 0;
-      for (double v : ms) sum += v;
-      upd_mean = sum / static_cast<double>(ms.size());
-      upd_p95 = ms[static_cast<std::size_t>(0.95 * static_cast<double>(ms.size() - 1))];
-      upd_max = ms.back();
-      double cs = 0;
-      for (double v : cms) cs += v;
-      upd_cpu_mean = cs / static_cast<double>(cms.size());
-      upd_cpu_max = *std::max_element(cms.begin(), cms.end());
-    }
-    std::remove(big.c_str());
-    std::fprintf(log, "10,000-node route (file, %zu-node window): update wall mean %.2f ms, p95 %.2f ms, max %.2f ms; thread CPU mean %.2f ms, max %.2f ms over %zu tiles; localiser memory %.1f MB\n",
-                 lc.window_slots, upd_mean, upd_p95, upd_max, upd_cpu_mean, upd_cpu_max, ms.size(), window_mb);
-  }
-  // 5. Prediction alone on 100,000 nodes.
-  double pred_ms = -1, pred_cpu_ms = -1;
-  {
-    route::RouteFilterConfig fc;
-    fc.max_nodes = 100000;
-    ArenaStorage arena(route::RouteFilter::arena_bytes(fc));
-    route::RouteFilter f;
-    if (f.init(fc, arena) && f.reset(100000, spacing)) {
-      const int reps = 200;
-      t0 = Clock::now();
-      const double c0 = cpu_ms();
-      for (int i = 0; i < reps; ++i) f.predict(spacing).ignore();
-      pred_cpu_ms = (cpu_ms() - c0) / reps;
-      pred_ms = ms_since(t0) / reps;
-    }
-    std::fprintf(log, "prediction alone, 100,000 nodes: wall %.3f ms, thread CPU %.3f ms\n", pred_ms, pred_cpu_ms);
-  }
-
-  // 6. The paper's experiment shape: 15 training nodes, 8 sensed tiles (offset 25% of swath), every
-  //    node registered each step (the paper's eq. 8 over the whole database). Table I, Fig. 5, 7, 9, 10.
-  int paper_localised = 0, paper_side = 0;
-  {
-    const std::size_t a = train.size() / 3;
-    const std::size_t n15 = std::min<std::size_t>(15, train.size() - a);
-    std::vector<pipeline::RouteTile> sub(train.begin() + static_cast<long>(a), train.begin() + static_cast<long>(a + n15));
-    std::vector<route::NodeMeta> sub_meta;
-    std::vector<double> sub_along;
-    for (std::size_t i = 0; i < sub.size(); ++i) {
-      route::NodeMeta m = sub[i].node.meta;
-      m.index = static_cast<std::uint32_t>(i);
-      sub_meta.push_back(m);
-      sub_along.push_back(sub[i].truth_along_m);
-    }
-    const double lateral = 0.25 * w.swath_m;
-    std::vector<pipeline::RouteTile> pass;
-    s = fly(pipe, w, w.pass(lateral, false, 999), pass);
-    std::vector<pipeline::RouteTile> sensed;
-    for (const pipeline::RouteTile& t : pass)
-      if (t.truth_along_m >= sub_along[std::min<std::size_t>(5, sub_along.size() - 1)] - 0.5 * spacing && sensed.size() < 8) sensed.push_back(t);
-    TileSource src(&sub);
-    route::LocaliserConfig lc = pipeline::default_localiser_config(route::RouteDirection::kForward, 64);
-    lc.filter.belief_registrations = static_cast<std::uint32_t>(sub.size());
-    lc.filter.wide_search_registrations = 0;
-    auto loc = std::make_unique<pipeline::RouteRepeater>();
-    FILE* t1 = std::fopen((out_dir + "/route_table1.csv").c_str(), "w");
-    FILE* f5 = std::fopen((out_dir + "/route_fig5.csv").c_str(), "w");
-    FILE* f7 = std::fopen((out_dir + "/route_fig7.csv").c_str(), "w");
-    FILE* f9 = std::fopen((out_dir + "/route_fig9.csv").c_str(), "w");
-    if (s && t1 && f5 && f7 && f9 && loc->init(lc) &&
-        loc->start(reader.params(), Span<const route::NodeMeta>(sub_meta.data(), sub_meta.size()), src)) {
-      std::fprintf(t1, "sensed,estimate,truth,entropy,side,true_side,inliers\n");
-      std::fprintf(f9, "sensed,true_north,true_east,node_north,node_east,cross_track_m,side,true_side,entropy,status\n");
-      std::fprintf(log, "paper-shaped run (15 nodes, 8 sensed tiles, offset 25%% = %.1f m):\n  sensed  estimate  truth  entropy  side       true side\n", lateral);
-      std::vector<float> mp(sub.size());
-      sidescan::Trajectory tr;
-      s = tr.init(w.route);
-      for (std::size_t k = 0; k < sensed.size() && s; ++k) {
-        route::LocaliserStep st;
-        s = loc->step(sensed[k].node, k == 0 ? 0.0 : sensed[k].nav_step_m, st);
-        if (!s) break;
-        const int truth = true_node(sub_along, sensed[k].truth_along_m);
-        const route::RouteSide want = expected_side(lateral, false, lc.guidance.side_deadband_m);
-        paper_localised += std::abs(static_cast<int>(st.estimate) - truth) <= 0 ? 1 : 0;
-        paper_side += st.guidance.side == want;
-        std::fprintf(t1, "%zu,%u,%d,%.3f,%s,%s,%u\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
-                     route::to_string(want), st.best_inliers);
-        std::fprintf(log, "  %6zu  %8u  %5d  %7.2f  %-9s  %s\n", k + 1, st.estimate + 1, truth + 1, st.entropy, route::to_string(st.guidance.side),
-                     route::to_string(want));
-        loc->localiser().filter().measurement_probability(Span<float>(mp.data(), mp.size())).ignore();
-        for (std::size_t i = 0; i < sub.size(); ++i) {
-          std::fprintf(f5, "%s%.5f", i ? "," : "", static_cast<double>(mp[i]));
-          std::fprintf(f7, "%s%.5f", i ? "," : "", static_cast<double>(loc->localiser().filter().belief()[i]));
-        }
-        std::fprintf(f5, "\n");
-        std::fprintf(f7, "\n");
-        Vec2d tp, np;
-        double th, nh;
-        tr.route_at(sensed[k].truth_along_m, tp, th);
-        tr.route_at(sub_along[st.estimate], np, nh);
-        tp += lateral * sonar::starboard_unit(th);
-        std::fprintf(f9, "%zu,%.2f,%.2f,%.2f,%.2f,%.2f,%s,%s,%.3f,%s\n", k + 1, tp.x(), tp.y(), np.x(), np.y(), st.guidance.cross_track_m,
-                     route::to_string(st.guidance.side), route::to_string(want), st.entropy, route::to_string(st.guidance.status));
-      }
-      std::fprintf(log, "  localised (exact node) %d/8, side correct %d/8 (paper: 7/8 and 6/8)\n", paper_localised, paper_side);
-    }
-    for (FILE* f : {t1, f5, f7, f9})
-      if (f) std::fclose(f);
-  }
-
-  // CSV outputs for the plots.
-  if (FILE* f = std::fopen((out_dir + "/route_eval_offsets.csv").c_str(), "w")) {
-    // One row per offset and direction, summed over the seabeds.
-    std::fprintf(f, "offset_pct,lateral_m,direction,tiles,scored,within1_pct,side_correct,side_n,tracking_pct,mean_entropy,seabeds,registered_on_true_node_pct\n");
-    for (int pct : pcts)
-      for (bool rev : {false, true}) {
-        PassStats a;
-        int n = 0, reg = 0;
-        for (const PassStats& p : stats)
-          if (p.pct == pct && p.reverse == rev) {
-            a.lateral_m = p.lateral_m;
-            a.tiles += p.tiles;
-            a.scored += p.scored;
-            a.within1 += p.within1;
-            a.side_ok += p.side_ok;
-            a.side_n += p.side_n;
-            a.tracking += p.tracking;
-            a.mean_entropy += p.mean_entropy;
-            reg += p.reg_true_ok;
-            ++n;
-          }
-        if (n == 0) continue;
-        std::fprintf(f, "%d,%.2f,%s,%d,%d,%.2f,%d,%d,%.2f,%.4f,%d,%.2f\n", pct, a.lateral_m, rev ? "reverse" : "forward", a.tiles, a.scored,
-                     a.scored ? 100.0 * a.within1 / a.scored : 0.0, a.side_ok, a.side_n, a.scored ? 100.0 * a.tracking / a.scored : 0.0,
-                     a.mean_entropy / n, n, a.tiles ? 100.0 * reg / a.tiles : 0.0);
-      }
-    std::fclose(f);
-  }
-  if (FILE* f = std::fopen((out_dir + "/route_eval_tiles.csv").c_str(), "w")) {
-    std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,seabed,"
-                    "cross_track_sigma_m,offsets,true_cross_track_m\n");
-    for (const TileRecord& r : records)
-      std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%d,%.2f,%s,%.2f\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth,
-                   r.st.estimate, static_cast<double>(r.st.probability), r.st.entropy, r.st.confident ? 1 : 0, r.st.best_inliers,
-                   route::to_string(r.st.guidance.status), route::to_string(r.st.guidance.side), route::to_string(r.want), r.st.guidance.cross_track_m,
-                   r.seabed, r.st.guidance.cross_track_sigma_m, route::to_string(r.st.guidance.offsets), r.true_cross_track_m);
-    std::fclose(f);
-  }
-  // Is the dead-reckoned cross-track sigma honest? Off-route scored tiles whose offsets came from
-  // dead reckoning: the share within 2 sigma of the pass's offset (~95% if sigma is right).
-  int dr_n = 0, dr_in = 0;
+void write_tiles_csv(const std::string& out_dir, const std::vector<TileRecord>& records) {
+  FILE* f = std::fopen((out_dir + "/route_eval_tiles.csv").c_str(), "w");
+  if (f == nullptr) return;
+  std::fprintf(f, "offset_pct,direction,tile,true_node,estimate,probability,entropy,confident,inliers,status,side,true_side,cross_track_m,seabed,"
+                  "cross_track_sigma_m,offsets,true_cross_track_m\n");
   for (const TileRecord& r : records)
-    if (r.tile >= kWarmupTiles && r.pct > 5 && r.st.guidance.offsets == route::OffsetSource::kDeadReckoning) {
-      ++dr_n;
-      dr_in += std::abs(r.st.guidance.cross_track_m - r.true_cross_track_m) <= 2.0 * r.st.guidance.cross_track_sigma_m;
-    }
-  const double within_pct = scored ? 100.0 * within / scored : 0.0;
-  const double side_pct = side_n ? 100.0 * side_ok / side_n : 0.0;
-  const double tracking_pct = scored ? 100.0 * tracking / scored : 0.0;
+    std::fprintf(f, "%d,%s,%d,%d,%u,%.4f,%.4f,%d,%u,%s,%s,%s,%.2f,%d,%.2f,%s,%.2f\n", r.pct, r.reverse ? "reverse" : "forward", r.tile, r.truth,
+                 r.st.estimate, static_cast<double>(r.st.probability), r.st.entropy, r.st.confident ? 1 : 0, r.st.best_inliers,
+                 route::to_string(r.st.guidance.status), route::to_string(r.st.guidance.side), route::to_string(r.want), r.st.guidance.cross_track_m,
+                 r.seabed, r.st.guidance.cross_track_sigma_m, route::to_string(r.st.guidance.offsets), r.true_cross_track_m);
+  std::fclose(f);
+}
+
+// What `route eval` prints last (one JSON object with --json, else one line).
+struct EvalSummary {
+  SweepTotals t;
+  std::vector<int> pcts;
+  long seabeds = 0;
+  int relocalised = -1, paper_localised = 0, paper_side = 0;
+  double eq5_within = -1.0, pred_ms = -1, pred_cpu_ms = -1;
+  UpdateSpeed upd;
+  int dr_n = 0, dr_in = 0;  // off-route scored tiles with offsets from dead reckoning; of them within 2 sigma
+};
+void print_eval_summary(const EvalRun& e, const EvalSummary& m, bool json, Clock::time_point t_all) {
+  const SweepTotals& t = m.t;
+  const double within_pct = t.scored ? 100.0 * t.within / t.scored : 0.0;
+  const double side_pct = t.side_n ? 100.0 * t.side_ok / t.side_n : 0.0;
+  const double tracking_pct = t.scored ? 100.0 * t.tracking / t.scored : 0.0;
   if (json) {
     std::printf("{\"node_within_1_pct\": %.2f, \"side_correct_pct\": %.2f, \"side_decided_tiles\": %d, \"tracking_pct\": %.2f, "
                 "\"relocalised_within_tiles\": %d, \"update_ms_10000_nodes\": %.3f, \"update_ms_10000_nodes_p95\": %.3f, "
@@ -550,20 +566,83 @@ int cmd_eval() {
                 "\"predict_ms_100000_nodes\": %.4f, \"predict_cpu_ms_100000_nodes\": %.4f, \"eq5_node_within_1_pct_at_20pct\": %.2f, "
                 "\"paper_table_localised\": %d, \"paper_table_side_correct\": %d, \"scored_tiles\": %d, \"route_nodes\": %zu, "
                 "\"route_length_m\": %.0f, \"node_spacing_m\": %.2f, \"swath_m\": %.2f, \"offsets_pct\": [",
-                within_pct, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_p95, upd_max, upd_cpu_mean, upd_cpu_max, pred_ms, pred_cpu_ms, eq5_within, paper_localised,
-                paper_side, scored, nodes, length_m, spacing, w.swath_m);
-    for (std::size_t i = 0; i < pcts.size(); ++i) std::printf("%s%d", i ? ", " : "", pcts[i]);
+                within_pct, side_pct, t.side_n, tracking_pct, m.relocalised, m.upd.mean, m.upd.p95, m.upd.max, m.upd.cpu_mean, m.upd.cpu_max, m.pred_ms,
+                m.pred_cpu_ms, m.eq5_within, m.paper_localised, m.paper_side, t.scored, e.meta.size(), e.length_m, e.spacing, e.w.swath_m);
+    for (std::size_t i = 0; i < m.pcts.size(); ++i) std::printf("%s%d", i ? ", " : "", m.pcts[i]);
     std::printf("], \"side_correct_pct_of_offset_tiles\": %.2f, \"offset_tiles\": %d, \"dead_reckoned_pct\": %.2f, \"seabeds\": %ld, "
                 "\"node_within_1_pct_per_seabed\": [",
-                off_route ? 100.0 * side_ok / off_route : 0.0, off_route, scored ? 100.0 * dead_reckoned / scored : 0.0, seabeds);
-    for (std::size_t i = 0; i < seed_within.size(); ++i) std::printf("%s%.2f", i ? ", " : "", seed_within[i]);
+                t.off_route ? 100.0 * t.side_ok / t.off_route : 0.0, t.off_route, t.scored ? 100.0 * t.dead_reckoned / t.scored : 0.0, m.seabeds);
+    for (std::size_t i = 0; i < t.seed_within.size(); ++i) std::printf("%s%.2f", i ? ", " : "", t.seed_within[i]);
     std::printf("], \"dead_reckoned_offset_tiles\": %d, \"dead_reckoned_cross_track_within_2sigma_pct\": %.2f, \"warmup_tiles\": %d, \"seconds\": %.1f}\n",
-                dr_n, dr_n ? 100.0 * dr_in / dr_n : 0.0, kWarmupTiles, ms_since(t_all) / 1000.0);
+                m.dr_n, m.dr_n ? 100.0 * m.dr_in / m.dr_n : 0.0, kWarmupTiles, ms_since(t_all) / 1000.0);
   } else {
     std::printf("node within +/-1: %.1f%% of %d tiles; side correct %.1f%% of %d decided tiles (tracking %.1f%%); re-localised after %d tiles; "
                 "update %.2f ms wall / %.2f ms CPU (10,000 nodes); predict %.3f ms wall / %.3f ms CPU (100,000 nodes); eq. 5 model at 20%%: %.1f%%; %.1f s\n",
-                within_pct, scored, side_pct, side_n, tracking_pct, relocalised, upd_mean, upd_cpu_mean, pred_ms, pred_cpu_ms, eq5_within, ms_since(t_all) / 1000.0);
+                within_pct, t.scored, side_pct, t.side_n, tracking_pct, m.relocalised, m.upd.mean, m.upd.cpu_mean, m.pred_ms, m.pred_cpu_ms, m.eq5_within,
+                ms_since(t_all) / 1000.0);
   }
+}
+
+}  // namespace
+
+int cmd_eval() {
+  if (g_opt.multi_pass) return cmd_eval_multi_pass();  // route/experiences.cpp
+  if (g_opt.changed_seabed) return cmd_eval_changed_seabed();
+  auto e = std::make_unique<EvalRun>();
+  e->length_m = g_opt.length_m;
+  if (!(e->length_m >= 400.0 && e->length_m <= 20000.0)) return usage("eval", "--length-m: eval needs 400..20000 m");
+  const bool json = g_opt.json;
+  const bool quick = g_opt.quick;
+  EvalSummary m;
+  m.seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : quick ? 1 : 3;
+  e->out_dir = g_opt.eval_out;
+  if (const std::string err = qnav::cli::make_dirs(e->out_dir); !err.empty() || !ensure_dir(e->out_dir)) {
+    std::fprintf(stderr, "qnav route eval: %s\n", err.empty() ? ("cannot create " + e->out_dir).c_str() : err.c_str());
+    return 1;
+  }
+  e->log = json ? stderr : stdout;
+  const auto t_all = Clock::now();
+  Status s = e->w.init(e->length_m, 1);
+  if (s) s = e->pipe.init(pipeline::default_route_tile_config());
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval: %s\n", s.message());
+    return 1;
+  }
+  if (const int rc = teach_eval(*e); rc != 0) return rc;
+
+  // 2. Repeat passes at lateral offsets, forwards and reverse: on this seabed (nodes read from the
+  //    route file), then on further seabeds (each taught afresh, nodes in memory).
+  m.pcts = quick ? std::vector<int>{0, 20, 40} : std::vector<int>{0, 10, 20, 30, 40, 50};
+  std::vector<TileRecord> records;
+  std::vector<PassStats> stats;
+  std::vector<pipeline::RouteTile> kidnap_src;
+  int pass_seed = 100;
+  SweepInputs in{&e->pipe, &e->w, &e->train, &e->reader, &e->reader.params(), e->meta_span(), &e->node_along, &m.pcts, 1, e->log};
+  s = offset_sweep(in, pass_seed, records, stats, &kidnap_src, &m.eq5_within);
+  for (long sb = 2; s && sb <= m.seabeds; ++sb) {
+    bool taught = false;
+    s = sweep_seabed(*e, sb, m.pcts, pass_seed, records, stats, taught);
+    if (!taught) break;
+  }
+  if (!s) {
+    std::fprintf(stderr, "qnav route eval: repeat pass failed: %s\n", s.message());
+    return 1;
+  }
+  m.t = sum_sweep(stats, m.seabeds);
+  m.relocalised = kidnapped(*e, kidnap_src);                // 3.
+  m.upd = speed_10000(*e, kidnap_src);                      // 4.
+  predict_100000(e->spacing, e->log, m.pred_ms, m.pred_cpu_ms);  // 5.
+  paper_run(*e, m.paper_localised, m.paper_side);           // 6.
+  write_offsets_csv(e->out_dir, m.pcts, stats);
+  write_tiles_csv(e->out_dir, records);
+  // Is the dead-reckoned cross-track sigma honest? Off-route scored tiles whose offsets came from
+  // dead reckoning: the share within 2 sigma of the pass's offset (~95% if sigma is right).
+  for (const TileRecord& r : records)
+    if (r.tile >= kWarmupTiles && r.pct > 5 && r.st.guidance.offsets == route::OffsetSource::kDeadReckoning) {
+      ++m.dr_n;
+      m.dr_in += std::abs(r.st.guidance.cross_track_m - r.true_cross_track_m) <= 2.0 * r.st.guidance.cross_track_sigma_m;
+    }
+  print_eval_summary(*e, m, json, t_all);
   return 0;
 }
 

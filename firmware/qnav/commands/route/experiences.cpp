@@ -273,153 +273,197 @@ int teach_eval_route(pipeline::RouteTilePipeline& pipe, long sb, double length_m
   return 0;
 }
 
-int cmd_eval_multi_pass() {
-  const double length_m = g_opt.length_m;
-  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
-  const std::string out_dir = g_opt.eval_out;
-  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
-    std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
-    return 1;
-  }
+namespace {
+
+// What the experiments of eval --multi-pass and --changed-seabed share: the options, the tile
+// pipeline, where to report, the clock. begin(): 0, or the command's exit code.
+struct Experiment {
+  double length_m = g_opt.length_m;
+  long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
+  std::string out_dir = g_opt.eval_out;
   FILE* log = g_opt.json ? stderr : stdout;
+  pipeline::RouteTilePipeline pipe;
+  Status s;
+  Clock::time_point t_all;
+  int begin() {
+    if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
+      std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
+      return 1;
+    }
+    s = pipe.init(pipeline::default_route_tile_config());
+    t_all = Clock::now();
+    return 0;
+  }
+  // Seabed sb's route taught into er, its file OUT/route_NAME_sb.qroute (fresh: its experiences
+  // removed first). 0: taught; -1: stop (s says why, or the route is shorter than 2 nodes); else the
+  // command's exit code (the route file could not be written, reported).
+  int teach(long sb, const char* name, bool fresh, EvalRoute& er, std::string& route_path) {
+    route_path = out_dir + "/route_" + name + "_" + std::to_string(sb) + ".qroute";
+    if (fresh) std::remove((route_path + ".exp").c_str());  // a fresh experiment
+    if (const int rc = teach_eval_route(pipe, sb, length_m, route_path, er, s); rc != 0) return rc;
+    return !s || er.train.size() < 2 ? -1 : 0;
+  }
+};
+
+// eval --multi-pass: the sums over every seabed.
+struct MpTotals {
+  int scored = 0, before = 0, after = 0, learned = 0, poison_learned = 0, poison_passes = 0, learn_scored = 0, learn_within = 0;
+  int reg_before = 0, reg_after = 0, learned_wrong = 0;
+  double cost_with = -1.0, cost_with_max = -1.0, cost_without = -1.0;
+};
+
+// Cost: a 10,000-node route (the taught block repeated: ambiguous, so every update runs at the
+// searching budget), every node holding --max-experiences experiences, against the same route
+// without: thread CPU per update over the 60 % pass's tiles, both from memory.
+Status mp_cost(FILE* log, EvalRoute& er, const std::string& route_path, const std::vector<std::vector<pipeline::RouteTile>>& tests, MpTotals& t) {
+  const std::vector<pipeline::RouteTile>& train = er.train;
+  const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
+  const double block_m = er.node_along.back() + spacing;
+  ReplicatedRoute big(&er.train, 10000, block_m);
+  std::vector<route::NodeMeta> bmeta;
+  for (std::uint32_t i = 0; i < 10000; ++i) bmeta.push_back(big.meta(i));
+  auto filled = std::make_unique<FilledExperiences>();
+  filled->per_node = static_cast<std::uint32_t>(g_opt.max_experiences);
+  filled->nodes = 10000;
+  filled->block = static_cast<std::uint32_t>(train.size());
+  Status s;
+  {
+    pipeline::RouteExperiences e(hal::host_file_store());
+    s = e.init(er.meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config());
+    if (s) s = e.open(route_path.c_str(), er.reader.params(), er.reader, false);
+    for (std::uint32_t r = 0; s && e.has_experiences() && r < e.file().records(); ++r) {
+      route::RouteNode n;
+      if (!e.source()->load(r, n)) continue;
+      filled->block_node.push_back(n.meta.index);
+      filled->learnt.push_back(n);
+    }
+  }
+  ArenaStorage ia(route::ExperienceIndex::arena_bytes(10000, filled->per_node));
+  route::ExperienceIndex bindex;
+  if (s) s = bindex.init(10000, filled->per_node, ia);
+  if (s) s = bindex.reset(10000);
+  for (std::uint32_t n = 0; s && n < 10000; ++n)
+    for (std::uint16_t k = 0; k < filled->per_node; ++k) {
+      route::ExperienceMeta m;
+      m.record = n * filled->per_node + k;
+      m.node = n;
+      m.slot = k;
+      m.pass_id = 1 + k;
+      s = bindex.set(m);
+    }
+  UpdateCost without, with;
+  const std::vector<pipeline::RouteTile>& tt = tests[tests.size() > 1 ? 1 : 0];
+  if (s && !filled->learnt.empty()) s = time_updates(er.reader.params(), big, bmeta, nullptr, nullptr, tt, without);
+  if (s && !filled->learnt.empty()) s = time_updates(er.reader.params(), big, bmeta, filled.get(), &bindex, tt, with);
+  std::fprintf(log, "  cost, 10,000 nodes (memory), %u experiences on every node: update thread CPU mean %.2f ms, max %.2f ms, <= %u registrations; "
+                    "without experiences %.2f ms, max %.2f ms, <= %u registrations (%zu updates each)\n",
+               filled->per_node, with.cpu_mean, with.cpu_max, with.max_registrations, without.cpu_mean, without.cpu_max, without.max_registrations,
+               tt.size());
+  t.cost_with = with.cpu_mean;
+  t.cost_with_max = with.cpu_max;
+  t.cost_without = without.cpu_mean;
+  return s;
+}
+
+// One seabed of eval --multi-pass, its route taught: the test passes without experiences, the
+// poisoning passes, the learning passes, the test passes again with what was learnt (and on seabed 1
+// the cost on 10,000 nodes).
+Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route_path, const std::vector<int>& learn_pcts,
+                 const std::vector<int>& test_pcts, MpTotals& t) {
+  Status s;
+  pipeline::RouteTilePipeline& pipe = x.pipe;
+  pipeline::SimSurvey& w = er.w;
+  const std::vector<route::NodeMeta>& meta = er.meta;
+  tools::RouteFileReader& reader = er.reader;
+  const std::vector<double>& node_along = er.node_along;
+  const auto rev = route::RouteDirection::kReverse;
+  std::uint64_t seed = 50000 + 1000 * static_cast<std::uint64_t>(sb);
+  // The test passes, flown once, localised without experiences now and with them after learning.
+  std::vector<std::vector<pipeline::RouteTile>> tests(test_pcts.size());
+  std::vector<MpPass> before(test_pcts.size()), after(test_pcts.size());
+  for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+    s = fly(pipe, w, w.pass(test_pcts[i] / 100.0 * w.swath_m, true, ++seed), tests[i]);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, false, before[i], rev);
+  }
+  // Poisoning, before anything is learnt: a pass over another seabed (the wrong route) and a pass
+  // flown forwards while the localiser is told it runs in reverse (its odometry contradicts every
+  // registration), both with --learn.
+  MpPass wrong, forced;
+  std::vector<pipeline::RouteTile> tiles;
+  if (s) {
+    pipeline::SimSurvey other;
+    s = other.init(x.length_m, 900 + static_cast<std::uint64_t>(sb));
+    if (s) s = fly(pipe, other, other.pass(0.3 * other.swath_m, true, ++seed), tiles);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, wrong, rev);
+  }
+  if (s) s = fly(pipe, w, w.pass(0.3 * w.swath_m, false, ++seed), tiles);
+  if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, forced, rev);
+  t.poison_learned += wrong.learned + forced.learned;
+  t.poison_passes += 2;
+  // Learning passes.
+  int learned = 0, learned_wrong = 0;
+  for (int lp : learn_pcts) {
+    MpPass l;
+    if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, l, rev);
+    learned += l.learned;
+    learned_wrong += l.learned_wrong;
+    t.learn_scored += l.scored;
+    t.learn_within += l.within1;
+    std::fprintf(x.log, "  seabed %ld learn reverse %d%%: node +/-1 %5.1f%% (%d tiles), learned %d (%d on a node > 1 from the truth)\n", sb, lp,
+                 pct(l.within1, l.scored), l.scored, l.learned, l.learned_wrong);
+  }
+  t.learned += learned;
+  t.learned_wrong += learned_wrong;
+  for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+    s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, true, false, after[i], rev);
+    t.scored += before[i].scored;
+    t.before += before[i].within1;
+    t.after += after[i].within1;
+    t.reg_before += before[i].registered;
+    t.reg_after += after[i].registered;
+    std::fprintf(x.log, "  seabed %ld reverse %d%% (%5.1f m): node +/-1 without %5.1f%%, with experiences %5.1f%% (%d tiles); registered (> 5 inliers) %d -> %d\n", sb,
+                 test_pcts[i], test_pcts[i] / 100.0 * w.swath_m, pct(before[i].within1, before[i].scored), pct(after[i].within1, after[i].scored),
+                 before[i].scored, before[i].registered, after[i].registered);
+  }
+  std::fprintf(x.log, "  seabed %ld: %zu nodes, %d experiences learnt; poisoning: wrong route learned %d, forced mislocalisation learned %d\n", sb,
+               er.train.size(), learned, wrong.learned, forced.learned);
+  if (sb == 1 && s && !tests.empty()) s = mp_cost(x.log, er, route_path, tests, t);
+  return s;
+}
+
+}  // namespace
+
+int cmd_eval_multi_pass() {
+  Experiment x;
+  if (const int rc = x.begin(); rc != 0) return rc;
   const std::vector<int> learn_pcts{30, 40};
   const std::vector<int> test_pcts = g_opt.quick ? std::vector<int>{60} : std::vector<int>{55, 60, 65};
-  pipeline::RouteTilePipeline pipe;
-  Status s = pipe.init(pipeline::default_route_tile_config());
-  const auto t_all = Clock::now();
-  int tot_scored = 0, tot_before = 0, tot_after = 0, tot_learned = 0, poison_learned = 0, poison_passes = 0, learn_scored = 0, learn_within = 0;
-  int reg_before = 0, reg_after = 0, tot_learned_wrong = 0;
-  double cost_with = -1.0, cost_with_max = -1.0, cost_without = -1.0;
-  std::fprintf(log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
-                    "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
+  MpTotals t;
+  std::fprintf(x.log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
+                      "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
                g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
-  for (long sb = 1; s && sb <= seabeds; ++sb) {
+  for (long sb = 1; x.s && sb <= x.seabeds; ++sb) {
     EvalRoute er;
-    const std::string route_path = out_dir + "/route_multipass_" + std::to_string(sb) + ".qroute";
-    std::remove((route_path + ".exp").c_str());  // a fresh experiment
-    if (const int rc = teach_eval_route(pipe, sb, length_m, route_path, er, s); rc != 0) return rc;
-    if (!s || er.train.size() < 2) break;
-    pipeline::SimSurvey& w = er.w;
-    const std::vector<route::NodeMeta>& meta = er.meta;
-    tools::RouteFileReader& reader = er.reader;
-    const std::vector<double>& node_along = er.node_along;
-    std::vector<pipeline::RouteTile>& train = er.train;
-    const double spacing = (train.back().node.meta.along_m - train.front().node.meta.along_m) / static_cast<double>(train.size() - 1);
-    const auto rev = route::RouteDirection::kReverse;
-    std::uint64_t seed = 50000 + 1000 * static_cast<std::uint64_t>(sb);
-    // The test passes, flown once, localised without experiences now and with them after learning.
-    std::vector<std::vector<pipeline::RouteTile>> tests(test_pcts.size());
-    std::vector<MpPass> before(test_pcts.size()), after(test_pcts.size());
-    for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
-      s = fly(pipe, w, w.pass(test_pcts[i] / 100.0 * w.swath_m, true, ++seed), tests[i]);
-      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, false, before[i], rev);
-    }
-    // Poisoning, before anything is learnt: a pass over another seabed (the wrong route) and a pass
-    // flown forwards while the localiser is told it runs in reverse (its odometry contradicts every
-    // registration), both with --learn.
-    MpPass wrong, forced;
-    std::vector<pipeline::RouteTile> tiles;
-    if (s) {
-      pipeline::SimSurvey other;
-      s = other.init(length_m, 900 + static_cast<std::uint64_t>(sb));
-      if (s) s = fly(pipe, other, other.pass(0.3 * other.swath_m, true, ++seed), tiles);
-      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, wrong, rev);
-    }
-    if (s) s = fly(pipe, w, w.pass(0.3 * w.swath_m, false, ++seed), tiles);
-    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, forced, rev);
-    poison_learned += wrong.learned + forced.learned;
-    poison_passes += 2;
-    // Learning passes.
-    int learned = 0, learned_wrong = 0;
-    for (int lp : learn_pcts) {
-      MpPass l;
-      if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
-      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, l, rev);
-      learned += l.learned;
-      learned_wrong += l.learned_wrong;
-      learn_scored += l.scored;
-      learn_within += l.within1;
-      std::fprintf(log, "  seabed %ld learn reverse %d%%: node +/-1 %5.1f%% (%d tiles), learned %d (%d on a node > 1 from the truth)\n", sb, lp,
-                   pct(l.within1, l.scored), l.scored, l.learned, l.learned_wrong);
-    }
-    tot_learned += learned;
-    tot_learned_wrong += learned_wrong;
-    for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
-      s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, true, false, after[i], rev);
-      tot_scored += before[i].scored;
-      tot_before += before[i].within1;
-      tot_after += after[i].within1;
-      reg_before += before[i].registered;
-      reg_after += after[i].registered;
-      std::fprintf(log, "  seabed %ld reverse %d%% (%5.1f m): node +/-1 without %5.1f%%, with experiences %5.1f%% (%d tiles); registered (> 5 inliers) %d -> %d\n", sb,
-                   test_pcts[i], test_pcts[i] / 100.0 * w.swath_m, pct(before[i].within1, before[i].scored), pct(after[i].within1, after[i].scored),
-                   before[i].scored, before[i].registered, after[i].registered);
-    }
-    std::fprintf(log, "  seabed %ld: %zu nodes, %d experiences learnt; poisoning: wrong route learned %d, forced mislocalisation learned %d\n", sb,
-                 train.size(), learned, wrong.learned, forced.learned);
-    if (sb == 1 && s && !tests.empty()) {
-      // Cost: a 10,000-node route (the taught block repeated: ambiguous, so every update runs at the
-      // searching budget), every node holding --max-experiences experiences, against the same route
-      // without: thread CPU per update over the 60 % pass's tiles, both from memory.
-      const double block_m = node_along.back() + spacing;
-      ReplicatedRoute big(&train, 10000, block_m);
-      std::vector<route::NodeMeta> bmeta;
-      for (std::uint32_t i = 0; i < 10000; ++i) bmeta.push_back(big.meta(i));
-      auto filled = std::make_unique<FilledExperiences>();
-      filled->per_node = static_cast<std::uint32_t>(g_opt.max_experiences);
-      filled->nodes = 10000;
-      filled->block = static_cast<std::uint32_t>(train.size());
-      {
-        pipeline::RouteExperiences e(hal::host_file_store());
-        s = e.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config());
-        if (s) s = e.open(route_path.c_str(), reader.params(), reader, false);
-        for (std::uint32_t r = 0; s && e.has_experiences() && r < e.file().records(); ++r) {
-          route::RouteNode n;
-          if (!e.source()->load(r, n)) continue;
-          filled->block_node.push_back(n.meta.index);
-          filled->learnt.push_back(n);
-        }
-      }
-      ArenaStorage ia(route::ExperienceIndex::arena_bytes(10000, filled->per_node));
-      route::ExperienceIndex bindex;
-      if (s) s = bindex.init(10000, filled->per_node, ia);
-      if (s) s = bindex.reset(10000);
-      for (std::uint32_t n = 0; s && n < 10000; ++n)
-        for (std::uint16_t k = 0; k < filled->per_node; ++k) {
-          route::ExperienceMeta m;
-          m.record = n * filled->per_node + k;
-          m.node = n;
-          m.slot = k;
-          m.pass_id = 1 + k;
-          s = bindex.set(m);
-        }
-      UpdateCost without, with;
-      const std::vector<pipeline::RouteTile>& tt = tests[tests.size() > 1 ? 1 : 0];
-      if (s && !filled->learnt.empty()) s = time_updates(reader.params(), big, bmeta, nullptr, nullptr, tt, without);
-      if (s && !filled->learnt.empty()) s = time_updates(reader.params(), big, bmeta, filled.get(), &bindex, tt, with);
-      std::fprintf(log, "  cost, 10,000 nodes (memory), %u experiences on every node: update thread CPU mean %.2f ms, max %.2f ms, <= %u registrations; "
-                        "without experiences %.2f ms, max %.2f ms, <= %u registrations (%zu updates each)\n",
-                   filled->per_node, with.cpu_mean, with.cpu_max, with.max_registrations, without.cpu_mean, without.cpu_max, without.max_registrations,
-                   tt.size());
-      cost_with = with.cpu_mean;
-      cost_with_max = with.cpu_max;
-      cost_without = without.cpu_mean;
-    }
+    std::string route_path;
+    if (const int rc = x.teach(sb, "multipass", true, er, route_path); rc > 0) return rc;
+    else if (rc < 0) break;
+    x.s = mp_seabed(x, sb, er, route_path, learn_pcts, test_pcts, t);
   }
-  if (!s) {
-    std::fprintf(stderr, "qnav route eval --multi-pass: %s\n", s.message());
+  if (!x.s) {
+    std::fprintf(stderr, "qnav route eval --multi-pass: %s\n", x.s.message());
     return 1;
   }
-  std::fprintf(log, "multi-pass, %ld seabeds: reverse at %s%%: node +/-1 without experiences %.2f%%, after learning 30%% + 40%% %.2f%% (%d tiles); "
-                    "registered %d -> %d; learnt %d experiences (%d on a node > 1 from the truth); poisoning passes learned %d (of %d passes); %.1f s\n",
-               seabeds, g_opt.quick ? "60" : "55-65", pct(tot_before, tot_scored), pct(tot_after, tot_scored), tot_scored, reg_before, reg_after, tot_learned,
-               tot_learned_wrong, poison_learned, poison_passes, ms_since(t_all) / 1000.0);
+  std::fprintf(x.log, "multi-pass, %ld seabeds: reverse at %s%%: node +/-1 without experiences %.2f%%, after learning 30%% + 40%% %.2f%% (%d tiles); "
+                      "registered %d -> %d; learnt %d experiences (%d on a node > 1 from the truth); poisoning passes learned %d (of %d passes); %.1f s\n",
+               x.seabeds, g_opt.quick ? "60" : "55-65", pct(t.before, t.scored), pct(t.after, t.scored), t.scored, t.reg_before, t.reg_after, t.learned,
+               t.learned_wrong, t.poison_learned, t.poison_passes, ms_since(x.t_all) / 1000.0);
   if (g_opt.json)
     std::printf("{\"seabeds\": %ld, \"tiles\": %d, \"node_within_1_pct_without\": %.2f, \"node_within_1_pct_with\": %.2f, \"registered_without\": %d, "
                 "\"registered_with\": %d, \"learned\": %d, \"learned_wrong_node\": %d, \"learn_pass_node_within_1_pct\": %.2f, \"poisoning_learned\": %d, \"max_experiences\": %ld, "
                 "\"update_cpu_ms_10000_nodes_with\": %.2f, \"update_cpu_ms_10000_nodes_with_max\": %.2f, \"update_cpu_ms_10000_nodes_without\": %.2f}\n",
-                seabeds, tot_scored, pct(tot_before, tot_scored), pct(tot_after, tot_scored), reg_before, reg_after, tot_learned, tot_learned_wrong,
-                pct(learn_within, learn_scored), poison_learned, g_opt.max_experiences, cost_with, cost_with_max, cost_without);
+                x.seabeds, t.scored, pct(t.before, t.scored), pct(t.after, t.scored), t.reg_before, t.reg_after, t.learned, t.learned_wrong,
+                pct(t.learn_within, t.learn_scored), t.poison_learned, g_opt.max_experiences, t.cost_with, t.cost_with_max, t.cost_without);
   return 0;
 }
 
@@ -429,27 +473,24 @@ int cmd_eval_multi_pass() {
 // and in reverse, localised without experiences, then again after one forward repeat at 0 % over the
 // changed seabed was learnt.
 int cmd_eval_changed_seabed() {
-  const double length_m = g_opt.length_m;
-  const long seabeds = g_opt.seabeds > 0 ? g_opt.seabeds : 3;
-  const std::string out_dir = g_opt.eval_out;
-  if (const std::string e = qnav::cli::make_dirs(out_dir); !e.empty()) {
-    std::fprintf(stderr, "qnav route eval: %s\n", e.c_str());
-    return 1;
-  }
-  FILE* log = g_opt.json ? stderr : stdout;
+  Experiment x;
+  if (const int rc = x.begin(); rc != 0) return rc;
+  const double length_m = x.length_m;
+  const long seabeds = x.seabeds;
+  FILE* log = x.log;
   const std::vector<int> degrees{20, 40, 60};
-  pipeline::RouteTilePipeline pipe;
-  Status s = pipe.init(pipeline::default_route_tile_config());
-  const auto t_all = Clock::now();
+  pipeline::RouteTilePipeline& pipe = x.pipe;
+  Status& s = x.s;
+  const auto t_all = x.t_all;
   std::vector<int> scored(degrees.size(), 0), before(degrees.size(), 0), after(degrees.size(), 0), learnt(degrees.size(), 0);
   std::fprintf(log, "changed seabed: per seabed and degree d: ripples moved by d%% x 2 wavelengths, d%% of 12 m cells with reflectivity +/-0.3, d%% of rock cells "
                     "flipped (a rock gone or new); repeats at 20%% forwards and reverse without experiences, then after learning one forward repeat at 0%% "
                     "over the changed seabed\n");
   for (long sb = 1; s && sb <= seabeds; ++sb) {
     EvalRoute er;
-    const std::string route_path = out_dir + "/route_changed_" + std::to_string(sb) + ".qroute";
-    if (const int rc = teach_eval_route(pipe, sb, length_m, route_path, er, s); rc != 0) return rc;
-    if (!s || er.train.size() < 2) break;
+    std::string route_path;
+    if (const int rc = x.teach(sb, "changed", false, er, route_path); rc > 0) return rc;
+    else if (rc < 0) break;
     pipeline::SimSurvey& w = er.w;
     const std::vector<route::NodeMeta>& meta = er.meta;
     tools::RouteFileReader& reader = er.reader;
