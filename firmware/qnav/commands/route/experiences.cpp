@@ -37,6 +37,10 @@ bool open_repeat_experiences(const char* route_path, tools::RouteFileReader& rea
   if (r.torn_bytes > 0)
     std::fprintf(stderr, "qnav route repeat: WARNING: %s: torn tail: %llu bytes after record %u (a partial experience, %s)\n", exps.path(),
                  static_cast<unsigned long long>(r.torn_bytes), r.records, g_opt.learn ? "cut" : "ignored");
+  if (r.compacted) std::fprintf(stderr, "qnav route repeat: compacted %s: %u replaced records dropped, %u kept\n", exps.path(), r.dropped, r.records);
+  if (r.compact_failed)
+    std::fprintf(stderr, "qnav route repeat: WARNING: %s: compaction failed (%s): learning goes on in the uncompacted file\n", exps.path(),
+                 r.compact_status.message());
   if (r.damaged > 0)
     std::fprintf(stderr, "qnav route repeat: WARNING: %s: %u damaged experience records skipped (the first: record %u)\n", exps.path(), r.damaged,
                  r.first_damaged);
