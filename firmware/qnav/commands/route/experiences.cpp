@@ -60,7 +60,7 @@ void report_learned(FILE* f, const pipeline::RouteExperiences& exps) {
   std::string why;
   for (std::size_t i = 1; i < c.size(); ++i)
     if (c.count_at(i) > 0) why += std::string(why.empty() ? "" : " ") + c.name_at(i) + "=" + std::to_string(c.count_at(i));
-  std::fprintf(f, "learned %u experiences (pass %u) into %s (%u of them tiles before the pass's first confirmed fix); tiles not learned: %s\n",
+  std::fprintf(f, "learned %u experiences (pass %u) into %s (%u of them backfilled: tiles before a confirmed fix); tiles not learned: %s\n",
                exps.learned(), exps.pass_id() - 1, exps.path(), exps.backfilled(), why.empty() ? "none" : why.c_str());
 }
 
