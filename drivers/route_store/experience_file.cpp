@@ -164,6 +164,60 @@ Status ExperienceFile::open_append(const char* path, const RouteIdentity& route,
       return s;
     }
   }
+  const std::uint32_t live = static_cast<std::uint32_t>(index.live());
+  const std::uint32_t dead = records_ - live;
+  if (dead > 0 && dead >= live && dead >= compact_min_dead_) {
+    ExperienceOpenReport local;
+    ExperienceOpenReport& r = report != nullptr ? *report : local;
+    const Status cs = compact(path, route, index, r);
+    if (!cs) {
+      if (fd_ < 0) return cs;  // neither file could be opened again
+      r.compact_failed = true;
+      r.compact_status = cs;
+    }
+  }
+  return Status::ok();
+}
+
+Status ExperienceFile::compact(const char* path, const RouteIdentity& route, route::ExperienceIndex& index, ExperienceOpenReport& report) {
+  char tmp[kExperiencePathBytes + 8];
+  if (std::snprintf(tmp, sizeof tmp, "%s.new", path) >= static_cast<int>(sizeof tmp))
+    return Status(StatusCode::kInvalidArgument, "experience file: path too long");
+  Result<int> h = store_.open(tmp, hal::FileMode::kCreateOrTruncate);
+  if (!h) return h.status();
+  const int out = *h;
+  std::uint8_t hb[route::kExpHeaderBytes];
+  Status s = store_.read_at(fd_, hb, sizeof hb, 0);
+  if (s) s = store_.write_at(out, hb, sizeof hb, 0);
+  std::uint32_t kept = 0;
+  const Span<std::uint8_t> rec(record_.data(), record_.size());
+  for (std::uint32_t i = 0; s && i < records_; ++i) {
+    route::ExperienceMeta m;
+    if (!read_record(i)) continue;
+    if (!route::decode_experience(params_, header_, route_nodes_, Span<const std::uint8_t>(rec.data(), rec.size()), i, m, nullptr, nullptr))
+      continue;  // damaged: dropped (it was never in the index)
+    const Span<const route::ExperienceSlot> slots = index.slots(m.node);
+    if (m.slot >= slots.size() || slots[m.slot].record != i) continue;  // replaced by a later record
+    s = route::renumber_experience(header_, rec, kept);
+    if (s) s = store_.write_at(out, rec.data(), rec.size(), route::kExpHeaderBytes + static_cast<std::uint64_t>(kept) * rec.size());
+    ++kept;
+  }
+  if (s) s = store_.sync(out);
+  store_.close(out);
+  if (!s) return s;  // ROUTE.exp untouched and still open
+  const std::uint32_t before = records_;
+  const std::uint64_t torn = report.torn_bytes;
+  store_.close(fd_);
+  fd_ = -1;
+  records_ = 0;
+  const Status rs = store_.rename(tmp, path);  // atomic: the old file or the compacted one
+  std::uint64_t size = 0;
+  const Status os = open_common(path, route, index, &report, true, size);  // keeps created / moved_stale
+  report.torn_bytes = torn;
+  if (!os) return os;
+  if (!rs) return rs;
+  report.compacted = true;
+  report.dropped = before - records_;
   return Status::ok();
 }
 

@@ -12,6 +12,17 @@
 //    file and directory fsync'ed); one shorter than its header (a power cut while creating it: no
 //    record can be in it) is rewritten; one bound to another route is moved aside to ROUTE.exp.stale
 //    (replacing an older .stale) and a new one is created (report->moved_stale).
+//  - Compaction (open_append, before the first append): records are never rewritten in place, so a
+//    slot that is replaced (the keep rule, ExperienceIndex::choose_slot) leaves its old record dead
+//    in the file. Rule: when the dead records (replaced, or damaged) are at least as many as the live
+//    ones and at least compact_min_dead() (default kCompactMinDead = 16), the file is rewritten with
+//    the live records only, in their order, renumbered 0.. (the keep rule's "oldest" is unchanged):
+//    written to ROUTE.exp.new (created or truncated), fsync'ed, then renamed over ROUTE.exp (the
+//    rename makes the name durable). A power cut at any moment leaves at ROUTE.exp either the old
+//    file or the compacted one, whole; a leftover ROUTE.exp.new is never read and is overwritten by
+//    the next compaction. A compaction that fails (disk full) leaves the old file in use and is
+//    reported (compact_failed); learning goes on appending to it. So the file holds at most
+//    max(2 x live, live + 16) records plus what the passes since the last open appended.
 //  - append(): one record at header + record * record_bytes, fdatasync'ed before it returns, then
 //    entered in the index (later records replace earlier ones in the same slot). A power cut loses
 //    at most the experience in progress; every fully written one is read back.
@@ -56,6 +67,10 @@ struct ExperienceOpenReport {
   std::uint32_t first_damaged = 0;
   std::uint64_t torn_bytes = 0;  // partial record after the last complete one (ignored; cut by open_append)
   std::uint32_t live = 0;      // experiences in the index afterwards
+  bool compacted = false;      // open_append rewrote the file with its live records (records: afterwards)
+  bool compact_failed = false; // it tried and could not (the old file is used; compact_status says why)
+  std::uint32_t dropped = 0;   // records the compaction dropped (replaced or damaged)
+  Status compact_status;
 };
 
 class ExperienceFile final : public route::NodeSource {
@@ -75,6 +90,10 @@ class ExperienceFile final : public route::NodeSource {
   Status append(route::Experience& e, route::ExperienceIndex& index);
   void close();
   void reserve(std::size_t bytes) { record_.reserve(bytes); }
+  static constexpr std::uint32_t kCompactMinDead = 16;
+  // The compaction rule's minimum of dead records (0xFFFFFFFF: never compact).
+  void set_compact_min_dead(std::uint32_t n) noexcept { compact_min_dead_ = n; }
+  std::uint32_t compact_min_dead() const noexcept { return compact_min_dead_; }
 
   std::uint32_t node_count() const noexcept override { return records_; }  // records (the NodeSource's index space)
   Status load(std::uint32_t record, route::RouteNode& out) noexcept override;
@@ -88,9 +107,11 @@ class ExperienceFile final : public route::NodeSource {
   Status open_common(const char* path, const RouteIdentity& route, route::ExperienceIndex& index, ExperienceOpenReport* report, bool write,
                      std::uint64_t& file_size);
   Status read_record(std::uint32_t record) noexcept;
+  Status compact(const char* path, const RouteIdentity& route, route::ExperienceIndex& index, ExperienceOpenReport& report);
   hal::FileStore& store_;
   int fd_ = -1;
   bool sync_each_ = true;
+  std::uint32_t compact_min_dead_ = kCompactMinDead;
   bool other_route_ = false;  // the last open_common refused the file as another route's
   route::RouteParams params_{};
   std::uint32_t route_nodes_ = 0;

@@ -48,10 +48,12 @@ class RouteExperiences {
  public:
   explicit RouteExperiences(hal::FileStore& store) : file_(store) {}
 
-  // backfill: the registration settings of the repeat's localiser; with them, when a learning pass
-  // first becomes confident, the up to kBackfillTiles tiles before (the pass's start, never confident:
-  // a reverse pass's entry) are registered against the node the odometry puts them at from that
-  // confirmed fix (+/- 1) and learnt when that registration is as strong as the learner requires.
+  // backfill: the registration settings of the repeat's localiser; with them, at every confirmed fix
+  // of a learning pass, the up to kBackfillTiles tiles since the previous one that were not learnt
+  // (the pass's start, never confident: a reverse pass's entry; and any stretch where the belief was
+  // not confident) are registered against the node the odometry puts them at from that confirmed fix
+  // (+/- 1) and learnt when that registration is as strong as the learner requires. A pass that
+  // never has a confirmed fix backfills nothing.
   Status init(std::size_t max_nodes, std::uint16_t per_node, const route::ExperienceLearnConfig& learn,
               const route::RegistrationConfig* backfill = nullptr) {
     if (per_node == 0 || per_node > route::kMaxExperiencesPerNode) return Status(StatusCode::kInvalidArgument, "route experiences: per node must be 1..8");
@@ -127,7 +129,6 @@ class RouteExperiences {
     if (!learn_) return Status::ok();
     pass_open_ = true;
     ring_n_ = 0;
-    backfill_done_ = false;
     spacing_m_ = spacing_m;
     reverse_ = reverse;
     meta_ = meta;
@@ -143,14 +144,15 @@ class RouteExperiences {
       ++learned_;
       last_node_ = out_->meta.node;
       if (learned != nullptr) *learned = true;
-      // The first confirmed fix of the pass: the tiles before it (in the ring, the newest being the
-      // confirmed tile itself) are placed by the odometry from it.
-      if (backfill_ && !backfill_done_) {
-        backfill_done_ = true;
+      // A confirmed fix: the tiles since the previous one (in the ring, the newest being the
+      // confirmed tile itself; at the pass's first fix, its first tiles) are placed by the odometry
+      // from it, then the ring starts again.
+      if (backfill_) {
         QNAV_RETURN_IF_ERROR(backfill(out_->meta.node));
+        ring_n_ = 0;
       }
     }
-    if (backfill_ && !backfill_done_) {  // keep the pass's tiles until its first confirmed fix
+    if (backfill_) {  // keep the tiles since the last confirmed fix (the newest kBackfillTiles)
       if (ring_n_ == kBackfillTiles) {
         for (std::size_t i = 1; i < kBackfillTiles; ++i) {
           ring_[i - 1] = ring_[i];
@@ -255,7 +257,7 @@ class RouteExperiences {
   std::uint32_t next_pass_ = 1, learned_ = 0, last_node_ = 0;
   // Backfill.
   route::ExperienceLearnConfig learn_cfg_{};
-  bool backfill_ = false, backfill_done_ = false, reverse_ = false;
+  bool backfill_ = false, reverse_ = false;
   std::unique_ptr<route::Registrar> registrar_;
   std::unique_ptr<route::RouteNode[]> ring_;
   double ring_dist_[kBackfillTiles] = {};

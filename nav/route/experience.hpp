@@ -23,7 +23,9 @@
 //    The binding (route_header_crc = CRC-32 of the route header as this code encodes it,
 //    route_node0_crc = node 0's record CRC as encoded) ties the companion to one teach: a route
 //    taught again (same parameters, other nodes) does not take the old route's experiences.
-//    Records are only appended: a later record for the same (node, slot) replaces the earlier one.
+//    Records are only appended: a later record for the same (node, slot) replaces the earlier one;
+//    compaction rewrites the file with the live records only, renumbered in their order (so
+//    "smaller record = learned earlier" still holds).
 //  - ExperienceIndex: per node, up to max_per_node slots (record number, pass id, direction, offset);
 //    fixed memory nodes x max_per_node x sizeof(ExperienceSlot) from an Arena. Replacement rule
 //    (choose_slot): an empty slot first; when all are full, the oldest experience (smallest record)
@@ -260,6 +262,16 @@ inline Status decode_experience(const RouteParams& p, const ExperienceHeader& h,
       std::memcpy(kp->descriptor, k + 12, kDescriptorBytes);
     }
   }
+  return Status::ok();
+}
+
+// Gives a valid encoded record (decode_experience accepted it) a new record number, its CRC
+// recomputed: compaction (drivers/route_store ExperienceFile) moves live records to the front.
+inline Status renumber_experience(const ExperienceHeader& h, Span<std::uint8_t> rec, std::uint32_t record) noexcept {
+  const std::size_t n = exp_record_bytes(h.max_keypoints);
+  if (rec.size() < n) return Status(StatusCode::kCapacityExceeded, "experience record buffer too small");
+  store_le_u32(rec.data() + 4, record);
+  store_le_u32(rec.data() + n - 4, crc32(rec.data(), n - 4));
   return Status::ok();
 }
 

@@ -10,11 +10,13 @@
 #include "drivers/sidescan/xtf_writer.hpp"
 #include "drivers/stereo_sim/mars_yard.hpp"
 #include "firmware/pipeline/route_defaults.hpp"
+#include "firmware/pipeline/route_experiences.hpp"
 #include "firmware/pipeline/vo_defaults.hpp"
 #include "nav/core/arena.hpp"
 #include "nav/match/geometric_match.hpp"
 #include "nav/motion/rigid3d.hpp"
 #include "nav/route/camera_tile.hpp"
+#include "nav/route/experience.hpp"
 #include "nav/route/registration.hpp"
 #include "nav/route/route_filter.hpp"
 #include "nav/route/route_localiser.hpp"
@@ -485,6 +487,28 @@ namespace {
 
 constexpr double kSpacingM = 60.0;
 
+// Experience record r: node r / per_node, the seabed under it seen again from 8 m to the side per slot
+// (another pass's view, its own noise and keypoint selection), in the node's frame.
+class RepeatingExperienceSource final : public route::NodeSource {
+ public:
+  RepeatingExperienceSource(const route::testing::SyntheticWorld* w, std::uint32_t nodes, std::uint32_t per_node, double spacing_m)
+      : world_(w), nodes_(nodes), per_node_(per_node), spacing_m_(spacing_m) {}
+  std::uint32_t node_count() const noexcept override { return nodes_ * per_node_; }
+  Status load(std::uint32_t r, route::RouteNode& out) noexcept override {
+    const std::uint32_t node = r / per_node_, slot = r % per_node_;
+    out = world_->observe(Pose2{30.0 + spacing_m_ * (node % 30), 8.0 * (slot + 1), 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 7000 + r, 20);
+    for (route::RouteKeypoint& k : out.keypoints) k.y_m += static_cast<float>(8.0 * (slot + 1));  // into the node's frame
+    out.meta = route::NodeMeta{};
+    out.meta.index = node;
+    return Status::ok();
+  }
+
+ private:
+  const route::testing::SyntheticWorld* world_;
+  std::uint32_t nodes_, per_node_;
+  double spacing_m_;
+};
+
 }  // namespace
 
 struct CannedRoute::Impl {
@@ -503,6 +527,15 @@ struct CannedRoute::Impl {
   route::RouteFilterConfig big_filter_config;
   std::unique_ptr<ArenaStorage> big_filter_arena;
   route::RouteFilter big_filter;
+  route::LocaliserConfig exp_config = with_experiences(config);
+  std::unique_ptr<ArenaStorage> exp_arena;
+  route::RouteLocaliser exp_localiser;
+  route::ExperienceIndex exp_index;
+  RepeatingExperienceSource exp_source{&world, kRouteNodes, kExperiencesPerNode, kSpacingM};
+  static route::LocaliserConfig with_experiences(route::LocaliserConfig c) {
+    pipeline::enable_experiences(c, kExperiencesPerNode);
+    return c;
+  }
   route::CameraTileProjector projector;
   route::CameraTileConfig camera_config;
   ImageU8 camera_image;
@@ -530,6 +563,20 @@ Status CannedRoute::init() {
   Status s = first_error({d.localiser.init(d.config, *d.arena), d.registrar.init(d.config.registration, *d.arena),
                           d.projector.init(d.camera_config), d.big_filter.init(d.big_filter_config, *d.big_filter_arena)});
   if (!s.is_ok()) return s;
+  d.exp_arena = std::make_unique<ArenaStorage>(route::RouteLocaliser::arena_bytes(d.exp_config) +
+                                               route::ExperienceIndex::arena_bytes(kRouteNodes, kExperiencesPerNode));
+  QNAV_RETURN_IF_ERROR(d.exp_localiser.init(d.exp_config, *d.exp_arena));
+  QNAV_RETURN_IF_ERROR(d.exp_index.init(kRouteNodes, kExperiencesPerNode, *d.exp_arena));
+  QNAV_RETURN_IF_ERROR(d.exp_index.reset(kRouteNodes));
+  for (std::uint32_t r = 0; r < kRouteNodes * kExperiencesPerNode; ++r) {
+    route::ExperienceMeta m;
+    m.record = r;
+    m.node = r / kExperiencesPerNode;
+    m.slot = static_cast<std::uint16_t>(r % kExperiencesPerNode);
+    m.pass_id = 1 + m.slot;
+    m.offset_m = static_cast<float>(8.0 * (m.slot + 1));
+    QNAV_RETURN_IF_ERROR(d.exp_index.set(m));
+  }
   for (int k = 0; k < 3; ++k) {
     d.pair_a[k] = d.world.observe(Pose2{300.0 + 200.0 * k, 12.0, 0.02}, 45.0, 49.0, 0.3, 0.8, 128, 1 + 2 * static_cast<std::uint64_t>(k), 20);
     d.pair_b[k] = d.world.observe(Pose2{310.0 + 200.0 * k, 0.0, 0.0}, 45.0, 49.0, 0.3, 0.8, 128, 2 + 2 * static_cast<std::uint64_t>(k), 20);
@@ -570,6 +617,24 @@ std::uint64_t CannedRoute::route_update(int k) {
   if (!d_->localiser.step(d_->sensed[k], kSpacingM, d_->step).is_ok()) return 0;
   h.add(static_cast<std::uint64_t>(d_->step.estimate));
   h.add(static_cast<std::uint64_t>(d_->step.registrations));
+  h.add(static_cast<double>(d_->step.probability));
+  h.add(d_->step.mass_pm1);
+  return h.value();
+}
+
+void CannedRoute::route_restart_exp() {
+  Impl& d = *d_;
+  (void)d.exp_localiser.start(d.params, Span<const route::NodeMeta>(d.meta.data(), d.meta.size()), d.source);
+  (void)d.exp_localiser.attach_experiences(&d.exp_index, &d.exp_source);
+}
+
+std::uint64_t CannedRoute::route_update_exp(int k) {
+  Hash h;
+  if (!d_->exp_localiser.step(d_->sensed[k], kSpacingM, d_->step).is_ok()) return 0;
+  if (d_->step.experience_registrations == 0) return 0;  // the stage is meant to register experiences
+  h.add(static_cast<std::uint64_t>(d_->step.estimate));
+  h.add(static_cast<std::uint64_t>(d_->step.registrations));
+  h.add(static_cast<std::uint64_t>(d_->step.experience_registrations));
   h.add(static_cast<double>(d_->step.probability));
   h.add(d_->step.mass_pm1);
   return h.value();

@@ -80,7 +80,8 @@ class CannedSonar {
 };
 
 // Tile registration, a route-filter update on a 10,000-node route at the searching budget (the
-// daemon's localiser configuration, 16 registrations) and a downward-camera tile projection.
+// daemon's localiser configuration, 16 registrations; and with 4 experiences on every node, up to 32)
+// and a downward-camera tile projection.
 class CannedRoute {
  public:
   static constexpr int kUpdates = 3;
@@ -91,6 +92,11 @@ class CannedRoute {
   std::uint64_t registration(int pair);  // pair 0..2
   void route_restart();                   // localiser back to a uniform belief (not counted)
   std::uint64_t route_update(int k);      // one step with sensed tile k, searching
+  // The same with experiences (issue 29): kExperiencesPerNode on every node (qnavd's default
+  // route.max_experiences, pipeline::enable_experiences: up to 16 extra registrations per update).
+  static constexpr std::uint16_t kExperiencesPerNode = 4;
+  void route_restart_exp();               // (not counted)
+  std::uint64_t route_update_exp(int k);
   void predict_reset();                   // a 100,000-node belief back to uniform (not counted)
   std::uint64_t predict_100k();           // one belief prediction over 100,000 nodes
   std::uint64_t camera_tile(int k);       // k = 0, 1: two headings

@@ -66,6 +66,8 @@ const StageDef kStages[] = {
     {"xtf_decode", CannedSonar::kPings, nothing, [](Canned& c, int k) { return c.sonar.xtf_decode(k); }},
     {"route_predict_100k", 1, [](Canned& c, int) { c.route.predict_reset(); }, [](Canned& c, int) { return c.route.predict_100k(); }},
     {"map", CannedMap::kSteps, [](Canned& c, int k) { if (k == 0) c.map.restart(); }, [](Canned& c, int k) { return c.map.step(k); }},
+    {"route_update_exp", CannedRoute::kUpdates, [](Canned& c, int) { c.route.route_restart_exp(); },
+     [](Canned& c, int k) { return c.route.route_update_exp(k); }},
     {"mav_enc_odometry", kMav, nothing, [](Canned& c, int k) { return c.mav.encode(K::kOdometry, k); }, mav_frame},
     {"mav_parse_odometry", kMav, nothing, [](Canned& c, int k) { return c.mav.parse(K::kOdometry, k); }, mav_fields},
     {"mav_enc_vpd", kMav, nothing, [](Canned& c, int k) { return c.mav.encode(K::kDelta, k); }, mav_frame},

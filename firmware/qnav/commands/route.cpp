@@ -460,7 +460,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*r, "--no-experiences", g_opt.no_experiences, "ignore FILE.exp (register against the taught nodes only)");
   add_number(*r, "--max-experiences", g_opt.max_experiences, "experiences per node (a new FILE.exp is created with it)", "", 1, 8);
   add_number(*r, "--learn-min-inliers", g_opt.learn_min_inliers, "with --learn: a tile is learnt only when registered with this many inliers", "", 5, 128);
-  add_flag(*r, "--backfill", g_opt.backfill, "with --learn: also learn the tiles before the pass's first confirmed fix, placed by odometry from it");
+  add_flag(*r, "--backfill", g_opt.backfill, "with --learn: also learn the tiles before each confirmed fix (since the previous one), placed by odometry from it");
   add_file_pass_options(*r);
   run.on(r, cmd_repeat);
 
@@ -475,7 +475,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*e, "--max-experiences", g_opt.max_experiences, "with --multi-pass: experiences per node", "", 1, 8);
   add_flag(*e, "--changed-seabed", g_opt.changed_seabed, "the seabed changed since the teach (20/40/60 %): repeats at 20 % without, then after learning one repeat");
   add_number(*e, "--learn-min-inliers", g_opt.learn_min_inliers, "with --multi-pass: a tile is learnt only when registered with this many inliers", "", 5, 128);
-  add_flag(*e, "--backfill", g_opt.backfill, "with --multi-pass / --changed-seabed: learning passes also learn the tiles before their first confirmed fix");
+  add_flag(*e, "--backfill", g_opt.backfill, "with --multi-pass / --changed-seabed: learning passes also learn the tiles before each confirmed fix");
   add_flag(*e, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
   run.on(e, cmd_eval);
 

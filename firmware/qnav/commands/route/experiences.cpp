@@ -51,6 +51,10 @@ bool open_repeat_experiences(const char* route_path, pipeline::RouteRepeatSessio
   if (r.torn_bytes > 0)
     std::fprintf(stderr, "qnav route repeat: WARNING: %s: torn tail: %llu bytes after record %u (a partial experience, %s)\n", exps.path(),
                  static_cast<unsigned long long>(r.torn_bytes), r.records, g_opt.learn ? "cut" : "ignored");
+  if (r.compacted) std::fprintf(stderr, "qnav route repeat: compacted %s: %u replaced records dropped, %u kept\n", exps.path(), r.dropped, r.records);
+  if (r.compact_failed)
+    std::fprintf(stderr, "qnav route repeat: WARNING: %s: compaction failed (%s): learning goes on in the uncompacted file\n", exps.path(),
+                 r.compact_status.message());
   if (r.damaged > 0)
     std::fprintf(stderr, "qnav route repeat: WARNING: %s: %u damaged experience records skipped (the first: record %u)\n", exps.path(), r.damaged,
                  r.first_damaged);
@@ -65,7 +69,7 @@ void report_learned(FILE* f, const pipeline::RouteExperiences& exps) {
   std::string why;
   for (std::size_t i = 1; i < c.size(); ++i)
     if (c.count_at(i) > 0) why += std::string(why.empty() ? "" : " ") + c.name_at(i) + "=" + std::to_string(c.count_at(i));
-  std::fprintf(f, "learned %u experiences (pass %u) into %s (%u of them tiles before the pass's first confirmed fix); tiles not learned: %s\n",
+  std::fprintf(f, "learned %u experiences (pass %u) into %s (%u of them backfilled: tiles before a confirmed fix); tiles not learned: %s\n",
                exps.learned(), exps.pass_id() - 1, exps.path(), exps.backfilled(), why.empty() ? "none" : why.c_str());
 }
 

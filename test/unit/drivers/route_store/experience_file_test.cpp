@@ -2,7 +2,9 @@
 // record, read back into the index; a power cut mid-append (torn tail) keeps every fully written
 // experience (reported, cut by open_append); a damaged record is skipped and counted, the rest used;
 // a companion from another teach of the route is refused for reading and moved aside for learning;
-// the route file itself is never touched (route readers see the same bytes).
+// the route file itself is never touched (route readers see the same bytes); compaction drops the
+// replaced records, keeps the live ones in order, and a power cut at any step of it (or a full disk)
+// leaves a readable companion with every live experience.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -223,6 +225,201 @@ TEST(ExperienceFile, ACompanionOfAnotherTeachIsRefusedForRepeatAndMovedAsideForL
   ASSERT_TRUE(one.init(16, 1, a1));
   f.close();
   EXPECT_EQ(f.open_read("a.qroute.exp", second, one).code(), StatusCode::kInvalidArgument);
+}
+
+
+// A FileStore that loses power at its `cut`-th mutating call: that call does nothing (a write_at
+// writes its first half), it and every later call fail. What the base store holds afterwards is the
+// medium after the power cut (every call before it completed and was durable).
+class PowerCutStore final : public hal::FileStore {
+ public:
+  PowerCutStore(hal::FileStore& base, std::uint32_t cut) noexcept : base_(base), cut_(cut) {}
+  std::uint32_t calls() const noexcept { return calls_; }
+  bool cut() const noexcept { return dead_; }
+  Result<int> open(const char* path, hal::FileMode mode) noexcept override {
+    if (mode == hal::FileMode::kCreateNew || mode == hal::FileMode::kCreateOrTruncate)
+      if (!step()) return off();
+    if (dead_) return off();
+    return base_.open(path, mode);
+  }
+  void close(int handle) noexcept override { base_.close(handle); }
+  Status read_at(int handle, std::uint8_t* data, std::size_t n, std::uint64_t offset) noexcept override {
+    if (dead_) return off();
+    return base_.read_at(handle, data, n, offset);
+  }
+  Status write_at(int handle, const std::uint8_t* data, std::size_t n, std::uint64_t offset) noexcept override {
+    if (!step()) {
+      if (calls_ == cut_ + 1) base_.write_at(handle, data, n / 2, offset).ignore();
+      return off();
+    }
+    return base_.write_at(handle, data, n, offset);
+  }
+  Result<std::uint64_t> size(int handle) noexcept override {
+    if (dead_) return off();
+    return base_.size(handle);
+  }
+  Status truncate(int handle, std::uint64_t size) noexcept override { return step() ? base_.truncate(handle, size) : off(); }
+  Status sync_data(int handle) noexcept override { return step() ? base_.sync_data(handle) : off(); }
+  Status sync(int handle) noexcept override { return step() ? base_.sync(handle) : off(); }
+  Status rename(const char* from, const char* to) noexcept override { return step() ? base_.rename(from, to) : off(); }
+  Status sync_name(const char* path) noexcept override { return step() ? base_.sync_name(path) : off(); }
+
+ private:
+  bool step() noexcept {
+    if (++calls_ > cut_) dead_ = true;
+    return !dead_;
+  }
+  static Status off() noexcept { return Status(StatusCode::kIoError, "power cut (test)"); }
+  hal::FileStore& base_;
+  std::uint32_t cut_;
+  std::uint32_t calls_ = 0;
+  bool dead_ = false;
+};
+
+// Three passes over nodes 0..5 in slot 0 (the first two replaced: 12 dead records), then node 1
+// slot 1: 19 records, 7 live.
+void learn_three_passes(Store& s, const RouteIdentity& id) {
+  Index ix;
+  ExperienceFile f(s.fs);
+  f.set_compact_min_dead(0xFFFFFFFFu);
+  ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, ix.index));
+  for (std::uint32_t pass = 1; pass <= 3; ++pass)
+    for (std::uint32_t n = 0; n < 6; ++n) {
+      route::Experience e = experience(n, 0, pass);
+      e.node = test::route_node(n, static_cast<int>(pass + 1));  // pass p: p + 1 keypoints
+      ASSERT_TRUE(f.append(e, ix.index));
+    }
+  route::Experience e = experience(1, 1, 3);
+  ASSERT_TRUE(f.append(e, ix.index));
+  EXPECT_EQ(f.records(), 19u);
+  EXPECT_EQ(ix.index.live(), 7u);
+}
+
+// Every live experience of learn_three_passes is in `index`, read from `f`.
+void expect_the_live_experiences(ExperienceFile& f, const route::ExperienceIndex& index) {
+  EXPECT_EQ(index.live(), 7u);
+  route::RouteNode n;
+  for (std::uint32_t node = 0; node < 6; ++node) {
+    const route::ExperienceSlot& s0 = index.slots(node)[0];
+    ASSERT_NE(s0.record, route::kNoExperience) << node;
+    EXPECT_EQ(s0.pass_id, 3u);
+    ASSERT_TRUE(f.load(s0.record, n));
+    EXPECT_EQ(n.meta.index, node);
+    EXPECT_EQ(n.keypoints.size(), 4u) << "the third pass's keypoints";
+  }
+  EXPECT_EQ(index.slots(1)[1].pass_id, 3u);
+  EXPECT_EQ(index.slots(2)[1].record, route::kNoExperience);
+}
+
+TEST(ExperienceFile, CompactionDropsReplacedRecordsAndKeepsTheLiveOnesInOrder) {
+  auto s = std::make_unique<Store>();
+  const RouteIdentity id = teach(*s, "r.qroute", 6, 1);
+  const std::uint64_t route_bytes = s->size_of("r.qroute");
+  learn_three_passes(*s, id);
+  Index ix;
+  ExperienceFile f(s->fs);
+  ExperienceOpenReport rep;
+  // 12 dead records < kCompactMinDead (16): the default rule leaves the file as it is.
+  ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, ix.index, &rep));
+  EXPECT_FALSE(rep.compacted);
+  EXPECT_EQ(rep.records, 19u);
+  f.close();
+  f.set_compact_min_dead(4);
+  ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, ix.index, &rep));
+  EXPECT_TRUE(rep.compacted);
+  EXPECT_FALSE(rep.compact_failed);
+  EXPECT_EQ(rep.dropped, 12u);
+  EXPECT_EQ(rep.records, 7u);
+  EXPECT_EQ(f.records(), 7u);
+  expect_the_live_experiences(f, ix.index);
+  // Order kept: node 1's slot 1 (learnt last) is the last record; the keep rule's "oldest" stands.
+  EXPECT_EQ(ix.index.slots(1)[1].record, 6u);
+  EXPECT_EQ(ix.index.slots(0)[0].record, 0u);
+  route::Experience e = experience(4, 1, 4);
+  ASSERT_TRUE(f.append(e, ix.index));
+  EXPECT_EQ(e.meta.record, 7u) << "appending goes on after the compacted records";
+  f.close();
+  EXPECT_EQ(s->size_of("r.qroute.exp"), route::kExpHeaderBytes + 8 * kExpRec);
+  EXPECT_EQ(s->size_of("r.qroute"), route_bytes) << "the route file is never touched";
+  // Live records only (dead 0 < live): a further open leaves it alone.
+  ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, ix.index, &rep));
+  EXPECT_FALSE(rep.compacted);
+  EXPECT_EQ(rep.records, 8u);
+}
+
+TEST(ExperienceFile, APowerCutAtAnyStepOfCompactionLeavesEveryLiveExperienceReadable) {
+  std::uint32_t steps = 0;
+  {  // how many mutating calls an uninterrupted compaction makes
+    auto s = std::make_unique<Store>();
+    const RouteIdentity id = teach(*s, "r.qroute", 6, 1);
+    learn_three_passes(*s, id);
+    PowerCutStore never(s->fs, 0xFFFFFFFFu);
+    Index ix;
+    ExperienceFile f(never);
+    f.set_compact_min_dead(4);
+    ExperienceOpenReport rep;
+    ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, ix.index, &rep));
+    ASSERT_TRUE(rep.compacted);
+    steps = never.calls();
+  }
+  ASSERT_GE(steps, 10u);  // create, header, 7 records, fsync, rename
+  std::uint32_t old_seen = 0, compacted_seen = 0;
+  for (std::uint32_t cut = 0; cut <= steps; ++cut) {
+    SCOPED_TRACE(cut);
+    auto s = std::make_unique<Store>();
+    const RouteIdentity id = teach(*s, "r.qroute", 6, 1);
+    learn_three_passes(*s, id);
+    const std::uint64_t route_bytes = s->size_of("r.qroute");
+    {
+      PowerCutStore power(s->fs, cut);
+      Index ix;
+      ExperienceFile f(power);
+      f.set_compact_min_dead(4);
+      (void)f.open_append("r.qroute.exp", id, 2, ix.index);
+    }
+    // After the power cut: the companion reads whole (no damaged record, no torn tail) ...
+    Index back;
+    ExperienceFile f(s->fs);
+    ExperienceOpenReport rep;
+    ASSERT_TRUE(f.open_read("r.qroute.exp", id, back.index, &rep));
+    EXPECT_EQ(rep.damaged, 0u);
+    EXPECT_EQ(rep.torn_bytes, 0u);
+    ASSERT_TRUE(rep.records == 19u || rep.records == 7u) << rep.records;
+    (rep.records == 19u ? old_seen : compacted_seen) += 1;
+    expect_the_live_experiences(f, back.index);
+    f.close();
+    EXPECT_EQ(s->size_of("r.qroute"), route_bytes);
+    // ... and learning goes on (compacting now if the cut came before the rename).
+    f.set_compact_min_dead(4);
+    ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, back.index, &rep));
+    EXPECT_EQ(rep.records, 7u);
+    route::Experience e = experience(5, 1, 4);
+    ASSERT_TRUE(f.append(e, back.index));
+    EXPECT_EQ(e.meta.record, 7u);
+  }
+  EXPECT_EQ(compacted_seen, 1u) << "only the cut after the last step sees the compacted file";
+  EXPECT_EQ(old_seen, steps);
+}
+
+TEST(ExperienceFile, ACompactionThatCannotWriteKeepsTheOldFileAndLearningGoesOn) {
+  auto s = std::make_unique<Store>();
+  const RouteIdentity id = teach(*s, "r.qroute", 6, 1);
+  learn_three_passes(*s, id);
+  s->fs.fail_writes_after(route::kExpHeaderBytes + 2 * kExpRec);  // the medium fails mid-compaction
+  Index ix;
+  ExperienceFile f(s->fs);
+  f.set_compact_min_dead(4);
+  ExperienceOpenReport rep;
+  ASSERT_TRUE(f.open_append("r.qroute.exp", id, 2, ix.index, &rep));
+  EXPECT_FALSE(rep.compacted);
+  EXPECT_TRUE(rep.compact_failed);
+  EXPECT_EQ(rep.compact_status.code(), StatusCode::kIoError);
+  EXPECT_EQ(f.records(), 19u);
+  expect_the_live_experiences(f, ix.index);
+  s->fs.fail_writes_after(static_cast<std::size_t>(-1));
+  route::Experience e = experience(5, 1, 4);
+  ASSERT_TRUE(f.append(e, ix.index));
+  EXPECT_EQ(e.meta.record, 19u);
 }
 
 }  // namespace
