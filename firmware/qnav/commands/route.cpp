@@ -485,6 +485,8 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*fr, "--length-m", g_opt.framing_length_m, "length of each simulated route", "m", 400, 20000);
   add_flag(*fr, "--quick", g_opt.quick, "one offset (20 %) instead of 0, 20 and 40 % (a smoke run)");
   add_flag(*fr, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
+  add_flag(*fr, "--no-speckle", g_opt.no_speckle, "the simulator's pings without speckle (what the sparse ping rates lose)");
+  add_flag(*fr, "--no-ripples", g_opt.no_ripples, "the seabed without sand ripples");
   run.on(fr, cmd_framing);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");

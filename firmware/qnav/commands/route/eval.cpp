@@ -667,14 +667,25 @@ int cmd_framing() {
     std::uint32_t overflow;
   };
   std::vector<Row> rows;
-  pipeline::RouteTilePipeline pipe;
-  Status s = pipe.init(pipeline::default_route_tile_config());
+  Status s;
   for (double rate : rates)
     for (double speed : speeds) {
+      if (!s) break;
+      // A pipeline of its own per configuration: the corrector's gain normalisation (EGN) runs on
+      // from pass to pass, so with one pipeline a configuration's figures depended on the one before.
+      pipeline::RouteTilePipeline pipe;
+      s = pipe.init(pipeline::default_route_tile_config());
       if (!s) break;
       pipeline::SimSurvey w;
       s = w.init(length_m, 1);
       if (!s) break;
+      if (g_opt.no_speckle) w.sonar.speckle = false;
+      if (g_opt.no_ripples) {
+        sidescan::SeabedConfig sc = pipeline::default_route_seabed_config(1);
+        sc.ripple_wavelength_m = 0.0f;
+        s = w.seabed.init(sc);
+        if (!s) break;
+      }
       w.route.ping_rate_hz = rate;
       w.route.speed_mps = speed;
       std::vector<pipeline::RouteTile> train;

@@ -54,6 +54,7 @@ struct RouteOptions {
   long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 0, stride = 0;
   double tile_length_m = 0.0, tile_stride_m = 0.0;  // recorded passes: 0 = from the swath (route_defaults)
   bool sim = false, force = false, reverse = false, json = false, quick = false, no_align = false;
+  bool no_speckle = false, no_ripples = false;  // route framing: the simulator without speckle / sand ripples (diagnosis)
   // Experiences (issue 29, route/experiences.cpp).
   bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false, backfill = false;
   long max_experiences = 4, learn_min_inliers = 8;
