@@ -91,9 +91,10 @@ void RouteRepeat::open_experiences(const char* path) noexcept {
   if (ctx_.log)
     std::fprintf(ctx_.log,
                  "{\"event\":\"route_experiences\",\"file\":\"%s\",\"learn\":%s,\"live\":%u,\"records\":%u,\"damaged\":%u,"
-                 "\"torn_bytes\":%llu,\"created\":%s,\"moved_stale\":%s}\n",
+                 "\"torn_bytes\":%llu,\"created\":%s,\"moved_stale\":%s,\"compacted\":%s,\"dropped\":%u,\"compact_failed\":%s}\n",
                  e.path(), e.learning() ? "true" : "false", rep.live, rep.records, rep.damaged, static_cast<unsigned long long>(rep.torn_bytes),
-                 rep.created ? "true" : "false", rep.moved_stale ? "true" : "false");
+                 rep.created ? "true" : "false", rep.moved_stale ? "true" : "false", rep.compacted ? "true" : "false", rep.dropped,
+                 rep.compact_failed ? "true" : "false");
 }
 
 void RouteRepeat::leave() noexcept {
