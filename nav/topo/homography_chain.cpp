@@ -314,28 +314,37 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     step.status = StepStatus::kFewKeypoints;
     return Status::ok();
   }
-
   if (!have_reference_) {
-    std::swap(key_, cur_);
-    last_ = key_;
-    key_w_ = frame.width();
-    key_h_ = frame.height();
-    have_reference_ = true;
-    key_frame_index_ = step.frame_index;
-    keyframes_ = 1;
-    H_0_key_ = Mat3d::Identity();
-    H_key_last_ = Mat3d::Identity();
-    have_prediction_ = true;
-    pose_ = ChainPose{};
-    update_pose_outputs(pose_, altitude_m);
-    step.reference = true;
-    step.new_keyframe = true;
-    step.keyframe_index = step.frame_index;
-    step.overlap = 1.0;
-    step.pose = pose_;
+    take_reference(frame, altitude_m, step);
     return Status::ok();
   }
+  Mat3d H;
+  if (!match_to_keyframe(step) || !fit_to_keyframe(step, H) || !plausible(H, frame, step)) return Status::ok();
+  chain_pose(H, altitude_m, step);
+  return Status::ok();
+}
 
+void HomographyChain::take_reference(ConstImageViewU8 frame, double altitude_m, ChainStep& step) noexcept {
+  std::swap(key_, cur_);
+  last_ = key_;
+  key_w_ = frame.width();
+  key_h_ = frame.height();
+  have_reference_ = true;
+  key_frame_index_ = step.frame_index;
+  keyframes_ = 1;
+  H_0_key_ = Mat3d::Identity();
+  H_key_last_ = Mat3d::Identity();
+  have_prediction_ = true;
+  pose_ = ChainPose{};
+  update_pose_outputs(pose_, altitude_m);
+  step.reference = true;
+  step.new_keyframe = true;
+  step.keyframe_index = step.frame_index;
+  step.overlap = 1.0;
+  step.pose = pose_;
+}
+
+bool HomographyChain::match_to_keyframe(ChainStep& step) noexcept {
   // Ratio-test matching: query = current frame, train = keyframe.
   const Span<const vision::OrientedDescriptor> query(cur_->data(), cur_->size());
   const Span<const vision::OrientedDescriptor> train(key_->data(), key_->size());
@@ -357,7 +366,7 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
   step.matches = static_cast<std::uint32_t>(matches_.size());
   if (matches_.size() < config_.min_matches) {
     step.status = StepStatus::kFewMatches;
-    return Status::ok();
+    return false;
   }
   const std::size_t n = matches_.size();
   for (std::size_t i = 0; i < n; ++i) {
@@ -367,6 +376,11 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     dst_[i] = Vec2d(t.x, t.y);
   }
   last_matches_ = n;
+  return true;
+}
+
+bool HomographyChain::fit_to_keyframe(ChainStep& step, Mat3d& H) noexcept {
+  const std::size_t n = last_matches_;
   Span<const Vec2d> src(src_.data(), n), dst(dst_.data(), n);
   if (config_.fundamental_filter) {
     Result<match::FundamentalConsensus> f = match::robust_fundamental_both(
@@ -390,22 +404,25 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
                                                                 Span<double>(scratch_.data(), src.size()));
   if (!rh.is_ok()) {
     step.status = rh.status() == StatusCode::kNotFound ? StepStatus::kFewMatches : StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
   step.inliers = rh->inliers;
   step.rms_px = rh->fit.rms_transfer_px;
   if (rh->inliers < config_.min_inliers) {
     step.status = StepStatus::kFewMatches;
-    return Status::ok();
+    return false;
   }
-  Mat3d H = rh->fit.H;
+  H = rh->fit.H;
   if (!H.allFinite() || !(std::abs(H(2, 2)) > 1e-12)) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
   H /= H(2, 2);
   step.H_key_cur = H;
+  return true;
+}
 
+bool HomographyChain::plausible(const Mat3d& H, ConstImageViewU8 frame, ChainStep& step) const noexcept {
   // Plausibility: scale and orientation of the affine part at the principal point, perspective terms
   // with the image half-width as unit.
   const Vec2d c = principal_point();
@@ -422,19 +439,22 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
       !(std::sqrt(J.determinant()) >= config_.min_scale && std::sqrt(J.determinant()) <= config_.max_scale) ||
       !(std::abs(Hn(2, 0)) <= config_.max_perspective && std::abs(Hn(2, 1)) <= config_.max_perspective)) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
   step.overlap = overlap_of(H, frame.width(), frame.height());
   if (step.overlap <= 0.0) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
+  return true;
+}
 
+void HomographyChain::chain_pose(const Mat3d& H, double altitude_m, ChainStep& step) noexcept {
   // Eq. 2: H_0<-cur = H_0<-key H_key<-cur.
   Mat3d H0 = H_0_key_ * H;
   if (!H0.allFinite() || !(std::abs(H0(2, 2)) > 1e-12)) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return;
   }
   H0 /= H0(2, 2);
   pose_.H_0_cur = H0;
@@ -453,7 +473,6 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     step.new_keyframe = true;
   }
   step.pose = pose_;
-  return Status::ok();
 }
 
 }  // namespace qnav::topo

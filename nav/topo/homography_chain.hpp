@@ -161,6 +161,12 @@ class HomographyChain {
  private:
   std::uint8_t check_frame(ConstImageViewU8 frame) const noexcept;
   Status extract(ConstImageViewU8 frame, BoundedVector<vision::OrientedDescriptor>& out) noexcept;
+  // The steps of process() after extract(); each false return has set step.status.
+  void take_reference(ConstImageViewU8 frame, double altitude_m, ChainStep& step) noexcept;
+  bool match_to_keyframe(ChainStep& step) noexcept;              // matches_, src_ / dst_, last_matches_
+  bool fit_to_keyframe(ChainStep& step, Mat3d& H) noexcept;      // H_key<-cur, normalised h22 = 1
+  bool plausible(const Mat3d& H, ConstImageViewU8 frame, ChainStep& step) const noexcept;  // scale, perspective, overlap
+  void chain_pose(const Mat3d& H, double altitude_m, ChainStep& step) noexcept;  // eq. 2, keyframe switch
   void update_pose_outputs(ChainPose& p, double altitude_m) noexcept;
   Vec2d principal_point() const noexcept;
   double overlap_of(const Mat3d& H_key_cur, int w, int h) const noexcept;

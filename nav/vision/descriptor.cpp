@@ -120,22 +120,15 @@ inline void gaussian_table(float d0, float k, int n, float* w) noexcept {
   }
 }
 
-Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
-  out.valid = false;
-  if (img.empty()) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
-  if (!std::isfinite(x) || !std::isfinite(y) || !(scale >= 0.25f) || !(scale <= kOrientedMaxScale))
-    return Status(StatusCode::kInvalidArgument, "descriptor: non-finite position or scale outside [0.25, 4]");
-  const float cell = kOrientedCellScale * scale;
-  const float half_w = 2.0f * cell;  // descriptor window half-width
-  const int radius = static_cast<int>(std::ceil(half_w * 1.41422f)) + 1;
-  const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
-  if (xi - radius < 1 || yi - radius < 1 || xi + radius > img.width() - 2 || yi + radius > img.height() - 2) {
-    return Status(StatusCode::kOutOfRange, "descriptor: support leaves the image");
-  }
-  // Gradient magnitude and angle of the whole support, once (Sobel: robust to pixel noise).
+// The steps of compute_oriented_descriptor, each its own function (not inlined: the caller holds the
+// 40 KB of scratch planes, and a step whose frame stays small reaches its spill and conversion slots
+// with one instruction on SPARC, whose load/store offsets are 13 bits).
+namespace {
+
+// Sobel gradient magnitude and angle of the side x side support centred on (xi, yi).
+[[gnu::noinline]] void support_gradients(ConstImageViewU8 img, int xi, int yi, int radius, float* __restrict mag,
+                                         float* __restrict ang) noexcept {
   const int side = 2 * radius + 1;
-  float mag[kOrientedMaxSide * kOrientedMaxSide];
-  float ang[kOrientedMaxSide * kOrientedMaxSide];
   for (int j = 0; j < side; ++j) {
     const std::uint8_t* a = img.row(yi - radius + j - 1) + (xi - radius);
     const std::uint8_t* b = img.row(yi - radius + j) + (xi - radius);
@@ -157,21 +150,15 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   }
   // The sqrt in a separate scalar pass: libm sqrt keeps its errno path, which does not vectorise.
   for (int k = 0; k < n; ++k) mag[k] = std::sqrt(mag[k]);
-  // Separable Gaussian weights around the sub-pixel position.
-  const float ox = static_cast<float>(xi) - x, oy = static_cast<float>(yi) - y;
-  float wxo[kOrientedMaxSide], wyo[kOrientedMaxSide], wxd[kOrientedMaxSide], wyd[kOrientedMaxSide];
-  const float sigma_o = 4.5f * scale;
-  const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * half_w * half_w);
-  const float d0x = static_cast<float>(-radius) + ox, d0y = static_cast<float>(-radius) + oy;
-  gaussian_table(d0x, inv2so, side, wxo);
-  gaussian_table(d0y, inv2so, side, wyo);
-  gaussian_table(d0x, inv2sd, side, wxd);
-  gaussian_table(d0y, inv2sd, side, wyd);
-  // 1. Dominant orientation: 36-bin histogram of Gaussian-weighted gradients (sigma 4.5 scale,
-  //    inside a circle of radius 2 sigma).
+}
+
+// Dominant orientation: 36-bin histogram of Gaussian-weighted gradients (weights wxo x wyo, inside a
+// circle of radius ro), smoothed, peak interpolated. False when there is no gradient.
+[[gnu::noinline]] bool dominant_orientation(const float* mag, const float* ang, int radius, int ro, const float* wxo,
+                                            const float* wyo, float& ori) noexcept {
   constexpr int kOriBins = 36;
+  const int side = 2 * radius + 1;
   float hist[kOriBins] = {};
-  const int ro = static_cast<int>(std::ceil(2.0f * sigma_o)) < radius ? static_cast<int>(std::ceil(2.0f * sigma_o)) : radius;
   float total = 0.0f;
   for (int dy = -ro; dy <= ro; ++dy) {
     int hx = 0;  // half-width of the circle on this row
@@ -187,7 +174,7 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
       total += wm;
     }
   }
-  if (!(total > 1e-3f)) return Status(StatusCode::kDegenerate, "descriptor: no gradient around the point");
+  if (!(total > 1e-3f)) return false;
   float smooth[kOriBins];
   for (int i = 0; i < kOriBins; ++i)
     smooth[i] = 0.25f * hist[(i + kOriBins - 1) % kOriBins] + 0.5f * hist[i] + 0.25f * hist[(i + 1) % kOriBins];
@@ -197,15 +184,19 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   const float l = smooth[(best + kOriBins - 1) % kOriBins], c0 = smooth[best], r = smooth[(best + 1) % kOriBins];
   const float den = l - 2.0f * c0 + r;
   const float off = den < 0.0f ? 0.5f * (l - r) / den : 0.0f;
-  const float ori = wrap_2pi((static_cast<float>(best) + 0.5f + off) * (kTwoPi / kOriBins));
+  ori = wrap_2pi((static_cast<float>(best) + 0.5f + off) * (kTwoPi / kOriBins));
+  return true;
+}
 
-  // 2. 4 x 4 x 8 histogram in the rotated frame, trilinear binning, Gaussian weight sigma = half_w.
-  //    Accumulated in a 6 x 6 x 8 histogram with a one-cell border (cells -1..4) so the trilinear
-  //    scatter needs no bounds tests; the border (weights of samples beyond the outer cell centres)
-  //    is dropped at the end, as the bounds tests did.
-  //    Even and odd samples of a row go to two copies (summed at the end), which halves the chains of
-  //    read-modify-write updates of the same bins by neighbouring samples.
-  float h6[2 * 6 * 6 * 8] = {};
+// The 4 x 4 x 8 histogram in the frame rotated by ori, trilinear binning, Gaussian weights wxd x wyd,
+// cells of `cell` px, (ox, oy) = support centre - sub-pixel position. Accumulated in a 6 x 6 x 8
+// histogram with a one-cell border (cells -1..4) so the trilinear scatter needs no bounds tests; the
+// border (weights of samples beyond the outer cell centres) is dropped by the caller, as the bounds
+// tests did. Even and odd samples of a row go to two copies (h6[0..287], h6[288..575], summed by the
+// caller), which halves the chains of read-modify-write updates of the same bins by neighbours.
+[[gnu::noinline]] void cell_histograms(const float* mag, const float* ang, int radius, float ox, float oy, float ori,
+                                       float cell, const float* wxd, const float* wyd, float* h6) noexcept {
+  const int side = 2 * radius + 1;
   const float co = std::cos(ori), so = std::sin(ori);
   const float inv_cell = 1.0f / cell;
   const float cx = co * inv_cell, sx = so * inv_cell;
@@ -258,6 +249,11 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
       h[56 + o1] += v11;
     }
   }
+}
+
+// The inner 4 x 4 cells of the two copies summed into out.v, L2-normalised, clipped at 0.2,
+// renormalised. False for an empty histogram.
+bool normalise_descriptor(const float* h6, OrientedDescriptor& out) noexcept {
   for (int cy = 0; cy < 4; ++cy)
     for (int cxi = 0; cxi < 4; ++cxi)
       for (int o = 0; o < 8; ++o) {
@@ -266,7 +262,7 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
       }
   float ss = 0.0f;
   for (float v : out.v) ss += v * v;
-  if (!(ss > 1e-12f)) return Status(StatusCode::kDegenerate, "descriptor: empty histogram");
+  if (!(ss > 1e-12f)) return false;
   float inv = 1.0f / std::sqrt(ss);
   ss = 0.0f;
   for (float& v : out.v) {
@@ -276,6 +272,47 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   }
   inv = 1.0f / std::sqrt(ss);
   for (float& v : out.v) v *= inv;
+  return true;
+}
+
+}  // namespace
+
+Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
+  out.valid = false;
+  if (img.empty()) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
+  if (!std::isfinite(x) || !std::isfinite(y) || !(scale >= 0.25f) || !(scale <= kOrientedMaxScale))
+    return Status(StatusCode::kInvalidArgument, "descriptor: non-finite position or scale outside [0.25, 4]");
+  const float cell = kOrientedCellScale * scale;
+  const float half_w = 2.0f * cell;  // descriptor window half-width
+  const int radius = static_cast<int>(std::ceil(half_w * 1.41422f)) + 1;
+  const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
+  if (xi - radius < 1 || yi - radius < 1 || xi + radius > img.width() - 2 || yi + radius > img.height() - 2) {
+    return Status(StatusCode::kOutOfRange, "descriptor: support leaves the image");
+  }
+  // Gradient magnitude and angle of the whole support, once (Sobel: robust to pixel noise).
+  const int side = 2 * radius + 1;
+  float mag[kOrientedMaxSide * kOrientedMaxSide];
+  float ang[kOrientedMaxSide * kOrientedMaxSide];
+  support_gradients(img, xi, yi, radius, mag, ang);
+  // Separable Gaussian weights around the sub-pixel position.
+  const float ox = static_cast<float>(xi) - x, oy = static_cast<float>(yi) - y;
+  float wxo[kOrientedMaxSide], wyo[kOrientedMaxSide], wxd[kOrientedMaxSide], wyd[kOrientedMaxSide];
+  const float sigma_o = 4.5f * scale;
+  const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * half_w * half_w);
+  const float d0x = static_cast<float>(-radius) + ox, d0y = static_cast<float>(-radius) + oy;
+  gaussian_table(d0x, inv2so, side, wxo);
+  gaussian_table(d0y, inv2so, side, wyo);
+  gaussian_table(d0x, inv2sd, side, wxd);
+  gaussian_table(d0y, inv2sd, side, wyd);
+  // 1. Dominant orientation (sigma 4.5 scale, inside a circle of radius 2 sigma).
+  const int ro = static_cast<int>(std::ceil(2.0f * sigma_o)) < radius ? static_cast<int>(std::ceil(2.0f * sigma_o)) : radius;
+  float ori = 0.0f;
+  if (!dominant_orientation(mag, ang, radius, ro, wxo, wyo, ori))
+    return Status(StatusCode::kDegenerate, "descriptor: no gradient around the point");
+  // 2. 4 x 4 x 8 histogram in the rotated frame, Gaussian weight sigma = half_w.
+  float h6[2 * 6 * 6 * 8] = {};
+  cell_histograms(mag, ang, radius, ox, oy, ori, cell, wxd, wyd, h6);
+  if (!normalise_descriptor(h6, out)) return Status(StatusCode::kDegenerate, "descriptor: empty histogram");
   out.orientation_rad = ori;
   out.valid = true;
   return Status::ok();
