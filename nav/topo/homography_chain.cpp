@@ -67,8 +67,10 @@ static vision::HarrisConfig harris_config(const HomographyChainConfig& c) noexce
 std::size_t HomographyChain::arena_bytes(const HomographyChainConfig& c) noexcept {
   if (c.max_width <= 0 || c.max_height <= 0 || c.pyramid_levels < 1 || c.pyramid_levels > 4) return 0;
   std::size_t total = 4096;
-  for (int l = 0; l < c.pyramid_levels; ++l)
-    total += bytes_of<std::uint8_t>(static_cast<std::size_t>(c.max_width >> l) * static_cast<std::size_t>(c.max_height >> l));
+  for (int l = 0; l < c.pyramid_levels; ++l) {
+    const std::size_t px = static_cast<std::size_t>(c.max_width >> l) * static_cast<std::size_t>(c.max_height >> l);
+    total += bytes_of<std::uint8_t>(px) + 2 * bytes_of<float>(px);  // level, gradient planes
+  }
   total += vision::HarrisDetector::arena_bytes(harris_config(c));
   total += match::RatioMatcher::arena_bytes(ratio_config(c));
   const std::size_t cpl = static_cast<std::size_t>(c.corners_per_level > 0 ? c.corners_per_level : 0);
@@ -113,6 +115,13 @@ Status HomographyChain::init(const HomographyChainConfig& c, Arena& arena) noexc
   QNAV_RETURN_IF_ERROR(pyramid_.init(pc, arena));
   QNAV_RETURN_IF_ERROR(harris_.init(harris_config(c), arena));
   QNAV_RETURN_IF_ERROR(matcher_.init(ratio_config(c), arena));
+  for (int l = 0; l < c.pyramid_levels; ++l) {
+    const std::size_t px = static_cast<std::size_t>(c.max_width >> l) * static_cast<std::size_t>(c.max_height >> l);
+    grad_mag_[l] = arena.allocate<float>(px);
+    grad_ang_[l] = arena.allocate<float>(px);
+    if (grad_mag_[l].empty() || grad_ang_[l].empty())
+      return Status(StatusCode::kCapacityExceeded, "homography chain: arena too small");
+  }
 
   const std::size_t cpl = static_cast<std::size_t>(c.corners_per_level);
   Span<vision::Corner> cs = arena.allocate<vision::Corner>(cpl);
@@ -190,6 +199,7 @@ std::uint8_t HomographyChain::check_frame(ConstImageViewU8 f) const noexcept {
 Status HomographyChain::extract(ConstImageViewU8 frame, BoundedVector<vision::OrientedDescriptor>& out) noexcept {
   out.clear();
   all_corners_.clear();
+  for (vision::GradientPlanes& p : planes_) p = vision::GradientPlanes{};
   QNAV_RETURN_IF_ERROR(pyramid_.build(frame));
   const int levels = std::min(pyramid_.levels_built(), config_.pyramid_levels);
   for (int l = 0; l < levels; ++l) {
@@ -197,6 +207,9 @@ Status HomographyChain::extract(ConstImageViewU8 frame, BoundedVector<vision::Or
     if (img.width() <= 2 * harris_.config().border_px + 2 || img.height() <= 2 * harris_.config().border_px + 2) break;
     const Status s = harris_.detect(img, corners_);
     if (!s) continue;  // e.g. a level too small: the other levels still count
+    if (!corners_.empty() &&
+        !vision::compute_gradient_planes(img, grad_mag_[l], grad_ang_[l], planes_[l]).is_ok())
+      continue;  // planes sized for max_width x max_height: only a frame that lies gets here
     const float sc = vision::ImagePyramid::scale(l);
     for (const vision::Corner& c : corners_) {
       vision::Corner c0 = c;
@@ -234,7 +247,7 @@ Status HomographyChain::extract(ConstImageViewU8 frame, BoundedVector<vision::Or
     const float xl = (c.x + 0.5f) / sc - 0.5f, yl = (c.y + 0.5f) / sc - 0.5f;
     vision::OrientedDescriptor* d = out.emplace_back();
     if (d == nullptr) break;
-    if (!vision::compute_oriented_descriptor(pyramid_.level(l), xl, yl, config_.descriptor_scale, *d)) {
+    if (!vision::compute_oriented_descriptor(planes_[l], xl, yl, config_.descriptor_scale, *d)) {
       (void)out.pop_back();
       continue;
     }

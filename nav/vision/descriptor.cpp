@@ -152,20 +152,37 @@ namespace {
   for (int k = 0; k < n; ++k) mag[k] = std::sqrt(mag[k]);
 }
 
+// Row y (1 .. height-2) of the gradient planes: the values support_gradients computes, pixel by pixel
+// (integer Sobel sums, the magnitude as sqrt of their exact square sum, the angle by fast_angle), for
+// x in 1 .. width-2; the border columns are not written.
+[[gnu::noinline]] void plane_row(ConstImageViewU8 img, int y, float* __restrict mag, float* __restrict ang) noexcept {
+  const std::uint8_t* a = img.row(y - 1);
+  const std::uint8_t* b = img.row(y);
+  const std::uint8_t* c = img.row(y + 1);
+  const int w = img.width();
+  for (int i = 1; i < w - 1; ++i) {
+    const int gx = (a[i + 1] - a[i - 1]) + 2 * (b[i + 1] - b[i - 1]) + (c[i + 1] - c[i - 1]);
+    const int gy = (c[i - 1] + 2 * c[i] + c[i + 1]) - (a[i - 1] + 2 * a[i] + a[i + 1]);
+    mag[i] = static_cast<float>(gx * gx + gy * gy);
+    ang[i] = fast_angle(gy, gx);
+  }
+  // The sqrt in a separate pass: libm sqrt keeps its errno path, which does not vectorise.
+  for (int i = 1; i < w - 1; ++i) mag[i] = std::sqrt(mag[i]);
+}
+
 // Dominant orientation: 36-bin histogram of Gaussian-weighted gradients (weights wxo x wyo, inside a
 // circle of radius ro), smoothed, peak interpolated. False when there is no gradient.
-[[gnu::noinline]] bool dominant_orientation(const float* mag, const float* ang, int radius, int ro, const float* wxo,
-                                            const float* wyo, float& ori) noexcept {
+[[gnu::noinline]] bool dominant_orientation(const float* mag, const float* ang, std::ptrdiff_t stride, int radius, int ro,
+                                            const float* wxo, const float* wyo, float& ori) noexcept {
   constexpr int kOriBins = 36;
-  const int side = 2 * radius + 1;
   float hist[kOriBins] = {};
   float total = 0.0f;
   for (int dy = -ro; dy <= ro; ++dy) {
     int hx = 0;  // half-width of the circle on this row
     while ((hx + 1) * (hx + 1) + dy * dy <= ro * ro) ++hx;
     const float wy = wyo[dy + radius];
-    const float* mrow = mag + (dy + radius) * side + radius;
-    const float* arow = ang + (dy + radius) * side + radius;
+    const float* mrow = mag + (dy + radius) * stride + radius;
+    const float* arow = ang + (dy + radius) * stride + radius;
     for (int dx = -hx; dx <= hx; ++dx) {
       const float wm = mrow[dx] * wxo[dx + radius] * wy;
       int b = static_cast<int>(arow[dx] * (kOriBins / kTwoPi));
@@ -194,8 +211,9 @@ namespace {
 // border (weights of samples beyond the outer cell centres) is dropped by the caller, as the bounds
 // tests did. Even and odd samples of a row go to two copies (h6[0..287], h6[288..575], summed by the
 // caller), which halves the chains of read-modify-write updates of the same bins by neighbours.
-[[gnu::noinline]] void cell_histograms(const float* mag, const float* ang, int radius, float ox, float oy, float ori,
-                                       float cell, const float* wxd, const float* wyd, float* h6) noexcept {
+[[gnu::noinline]] void cell_histograms(const float* mag, const float* ang, std::ptrdiff_t stride, int radius, float ox,
+                                       float oy, float ori, float cell, const float* wxd, const float* wyd,
+                                       float* h6) noexcept {
   const int side = 2 * radius + 1;
   const float co = std::cos(ori), so = std::sin(ori);
   const float inv_cell = 1.0f / cell;
@@ -204,8 +222,8 @@ namespace {
   for (int dy = -radius; dy <= radius; ++dy) {
     const float fy = static_cast<float>(dy) + oy;
     const float wy = wyd[dy + radius];
-    const float* mrow = mag + (dy + radius) * side + radius;
-    const float* arow = ang + (dy + radius) * side + radius;
+    const float* mrow = mag + (dy + radius) * stride + radius;
+    const float* arow = ang + (dy + radius) * stride + radius;
     // Shifted bin coordinates: cell centres at 1..4, the window is 0 < b < 5.
     const float bx0 = sx * fy + 2.5f, by0 = cx * fy + 2.5f;
     // Pass A (vectorised): bin coordinates and weight of every sample of the row; samples outside
@@ -275,30 +293,36 @@ bool normalise_descriptor(const float* h6, OrientedDescriptor& out) noexcept {
   return true;
 }
 
-}  // namespace
-
-Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
-  out.valid = false;
-  if (img.empty()) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
+// Support of a descriptor at (x, y) with `scale`: radius and rounded centre, checked against a width x
+// height image with one pixel of Sobel border.
+struct Support {
+  float cell = 0.0f, half_w = 0.0f;
+  int radius = 0, xi = 0, yi = 0;
+};
+Status support_of(int width, int height, float x, float y, float scale, Support& s) noexcept {
+  if (width <= 0 || height <= 0) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
   if (!std::isfinite(x) || !std::isfinite(y) || !(scale >= 0.25f) || !(scale <= kOrientedMaxScale))
     return Status(StatusCode::kInvalidArgument, "descriptor: non-finite position or scale outside [0.25, 4]");
-  const float cell = kOrientedCellScale * scale;
-  const float half_w = 2.0f * cell;  // descriptor window half-width
-  const int radius = static_cast<int>(std::ceil(half_w * 1.41422f)) + 1;
-  const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
-  if (xi - radius < 1 || yi - radius < 1 || xi + radius > img.width() - 2 || yi + radius > img.height() - 2) {
+  s.cell = kOrientedCellScale * scale;
+  s.half_w = 2.0f * s.cell;  // descriptor window half-width
+  s.radius = static_cast<int>(std::ceil(s.half_w * 1.41422f)) + 1;
+  s.xi = static_cast<int>(std::lround(x));
+  s.yi = static_cast<int>(std::lround(y));
+  if (s.xi - s.radius < 1 || s.yi - s.radius < 1 || s.xi + s.radius > width - 2 || s.yi + s.radius > height - 2)
     return Status(StatusCode::kOutOfRange, "descriptor: support leaves the image");
-  }
-  // Gradient magnitude and angle of the whole support, once (Sobel: robust to pixel noise).
-  const int side = 2 * radius + 1;
-  float mag[kOrientedMaxSide * kOrientedMaxSide];
-  float ang[kOrientedMaxSide * kOrientedMaxSide];
-  support_gradients(img, xi, yi, radius, mag, ang);
+  return Status::ok();
+}
+
+// Orientation and histogram from the gradient magnitude and angle of the support (mag / ang at its
+// top-left sample, rows `stride` floats apart).
+Status describe(const float* mag, const float* ang, std::ptrdiff_t stride, const Support& sp, float x, float y,
+                float scale, OrientedDescriptor& out) noexcept {
+  const int radius = sp.radius, side = 2 * radius + 1;
   // Separable Gaussian weights around the sub-pixel position.
-  const float ox = static_cast<float>(xi) - x, oy = static_cast<float>(yi) - y;
+  const float ox = static_cast<float>(sp.xi) - x, oy = static_cast<float>(sp.yi) - y;
   float wxo[kOrientedMaxSide], wyo[kOrientedMaxSide], wxd[kOrientedMaxSide], wyd[kOrientedMaxSide];
   const float sigma_o = 4.5f * scale;
-  const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * half_w * half_w);
+  const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * sp.half_w * sp.half_w);
   const float d0x = static_cast<float>(-radius) + ox, d0y = static_cast<float>(-radius) + oy;
   gaussian_table(d0x, inv2so, side, wxo);
   gaussian_table(d0y, inv2so, side, wyo);
@@ -307,15 +331,56 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   // 1. Dominant orientation (sigma 4.5 scale, inside a circle of radius 2 sigma).
   const int ro = static_cast<int>(std::ceil(2.0f * sigma_o)) < radius ? static_cast<int>(std::ceil(2.0f * sigma_o)) : radius;
   float ori = 0.0f;
-  if (!dominant_orientation(mag, ang, radius, ro, wxo, wyo, ori))
+  if (!dominant_orientation(mag, ang, stride, radius, ro, wxo, wyo, ori))
     return Status(StatusCode::kDegenerate, "descriptor: no gradient around the point");
   // 2. 4 x 4 x 8 histogram in the rotated frame, Gaussian weight sigma = half_w.
   float h6[2 * 6 * 6 * 8] = {};
-  cell_histograms(mag, ang, radius, ox, oy, ori, cell, wxd, wyd, h6);
+  cell_histograms(mag, ang, stride, radius, ox, oy, ori, sp.cell, wxd, wyd, h6);
   if (!normalise_descriptor(h6, out)) return Status(StatusCode::kDegenerate, "descriptor: empty histogram");
   out.orientation_rad = ori;
   out.valid = true;
   return Status::ok();
+}
+
+}  // namespace
+
+Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
+  out.valid = false;
+  if (img.empty()) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
+  Support sp;
+  QNAV_RETURN_IF_ERROR(support_of(img.width(), img.height(), x, y, scale, sp));
+  // Gradient magnitude and angle of the whole support, once (Sobel: robust to pixel noise).
+  const int side = 2 * sp.radius + 1;
+  float mag[kOrientedMaxSide * kOrientedMaxSide];
+  float ang[kOrientedMaxSide * kOrientedMaxSide];
+  support_gradients(img, sp.xi, sp.yi, sp.radius, mag, ang);
+  return describe(mag, ang, side, sp, x, y, scale, out);
+}
+
+Status compute_gradient_planes(ConstImageViewU8 img, Span<float> mag, Span<float> ang, GradientPlanes& out) noexcept {
+  out = GradientPlanes{};
+  const int w = img.width(), h = img.height();
+  if (img.empty() || w < 3 || h < 3) return Status(StatusCode::kInvalidArgument, "gradient planes: image smaller than 3 x 3");
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (mag.size() < n || ang.size() < n) return Status(StatusCode::kCapacityExceeded, "gradient planes: planes too small");
+  for (int y = 1; y < h - 1; ++y) plane_row(img, y, mag.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w),
+                                            ang.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w));
+  out.mag = mag.data();
+  out.ang = ang.data();
+  out.width = w;
+  out.height = h;
+  return Status::ok();
+}
+
+Status compute_oriented_descriptor(const GradientPlanes& planes, float x, float y, float scale, OrientedDescriptor& out) noexcept {
+  out.valid = false;
+  if (planes.mag == nullptr || planes.ang == nullptr)
+    return Status(StatusCode::kInvalidArgument, "descriptor: empty gradient planes");
+  Support sp;
+  QNAV_RETURN_IF_ERROR(support_of(planes.width, planes.height, x, y, scale, sp));
+  const std::ptrdiff_t stride = planes.width;
+  const std::ptrdiff_t top_left = static_cast<std::ptrdiff_t>(sp.yi - sp.radius) * stride + (sp.xi - sp.radius);
+  return describe(planes.mag + top_left, planes.ang + top_left, stride, sp, x, y, scale, out);
 }
 
 float descriptor_distance_sq(const OrientedDescriptor& a, const OrientedDescriptor& b) noexcept {
