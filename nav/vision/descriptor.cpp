@@ -3,6 +3,14 @@
 #include <cmath>
 #include <cstring>
 
+// The histogram's per-row loop: two passes, the first vectorised, where there is SIMD; one scalar
+// pass over the window's samples where there is not (cell_histograms). The same values either way.
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__)
+#define QNAV_DESCRIPTOR_SIMD 1
+#else
+#define QNAV_DESCRIPTOR_SIMD 0
+#endif
+
 namespace qnav::vision {
 
 namespace {
@@ -205,6 +213,27 @@ namespace {
   return true;
 }
 
+// One sample's trilinear scatter into the 6 x 6 x 8 histogram copy h (bin coordinates bx, by in
+// 0 < b < 5, orientation bin bo in [0, 8], weight m > 0).
+inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noexcept {
+  const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
+  const float wx = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
+  const int o0 = oi & 7, o1 = (oi + 1) & 7;
+  const float m1 = m * wyy, m0 = m - m1;        // rows y0, y0 + 1
+  const float m00 = m0 - m0 * wx, m01 = m0 * wx;  // (y0, x0), (y0, x0 + 1)
+  const float m10 = m1 - m1 * wx, m11 = m1 * wx;
+  float* h = h6 + (y0 * 6 + x0) * 8;
+  const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
+  h[o0] += m00 - v00;
+  h[o1] += v00;
+  h[8 + o0] += m01 - v01;
+  h[8 + o1] += v01;
+  h[48 + o0] += m10 - v10;
+  h[48 + o1] += v10;
+  h[56 + o0] += m11 - v11;
+  h[56 + o1] += v11;
+}
+
 // The 4 x 4 x 8 histogram in the frame rotated by ori, trilinear binning, Gaussian weights wxd x wyd,
 // cells of `cell` px, (ox, oy) = support centre - sub-pixel position. Accumulated in a 6 x 6 x 8
 // histogram with a one-cell border (cells -1..4) so the trilinear scatter needs no bounds tests; the
@@ -219,6 +248,14 @@ namespace {
   const float inv_cell = 1.0f / cell;
   const float cx = co * inv_cell, sx = so * inv_cell;
   constexpr float kOBin = 8.0f / kTwoPi;
+#if !QNAV_DESCRIPTOR_SIMD
+  float cfx[kOrientedMaxSide], sfx[kOrientedMaxSide];
+  for (int i = 0; i < side; ++i) {
+    const float fx = static_cast<float>(i - radius) + ox;
+    cfx[i] = cx * fx;
+    sfx[i] = sx * fx;
+  }
+#endif
   for (int dy = -radius; dy <= radius; ++dy) {
     const float fy = static_cast<float>(dy) + oy;
     const float wy = wyd[dy + radius];
@@ -226,6 +263,7 @@ namespace {
     const float* arow = ang + (dy + radius) * stride + radius;
     // Shifted bin coordinates: cell centres at 1..4, the window is 0 < b < 5.
     const float bx0 = sx * fy + 2.5f, by0 = cx * fy + 2.5f;
+#if QNAV_DESCRIPTOR_SIMD
     // Pass A (vectorised): bin coordinates and weight of every sample of the row; samples outside
     // the window get weight 0 and clamped coordinates. Pass B: scatter of the non-zero samples.
     float pbx[kOrientedMaxSide], pby[kOrientedMaxSide], pbo[kOrientedMaxSide], pm[kOrientedMaxSide];
@@ -248,24 +286,23 @@ namespace {
     for (int i = 0; i < side; ++i) {
       const float m = pm[i];
       if (!(m > 0.0f)) continue;
-      const float bx = pbx[i], by = pby[i], bo = pbo[i];
-      const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
-      const float wx = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
-      const int o0 = oi & 7, o1 = (oi + 1) & 7;
-      const float m1 = m * wyy, m0 = m - m1;        // rows y0, y0 + 1
-      const float m00 = m0 - m0 * wx, m01 = m0 * wx;  // (y0, x0), (y0, x0 + 1)
-      const float m10 = m1 - m1 * wx, m11 = m1 * wx;
-      float* h = h6 + (i & 1) * (6 * 6 * 8) + (y0 * 6 + x0) * 8;  // even / odd samples: two copies
-      const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
-      h[o0] += m00 - v00;
-      h[o1] += v00;
-      h[8 + o0] += m01 - v01;
-      h[8 + o1] += v01;
-      h[48 + o0] += m10 - v10;
-      h[48 + o1] += v10;
-      h[56 + o0] += m11 - v11;
-      h[56 + o1] += v11;
+      scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, pbx[i], pby[i], pbo[i]);  // even / odd samples: two copies
     }
+#else
+    // Without SIMD (LEON3, armhf without NEON) one pass: the window test first, from the products
+    // cfx[i] = cx fx, sfx[i] = sx fx taken once per descriptor (the same for every row), and the
+    // weight, angle bin and scatter only inside the window. The same values as the two passes above
+    // (a weight times keep = 1 is itself; no FMA on these targets), bit for bit.
+    for (int i = 0; i < side; ++i) {
+      const float bx = cfx[i] + bx0, by = by0 - sfx[i];
+      if (!(bx > 0.0f && bx < 5.0f && by > 0.0f && by < 5.0f)) continue;
+      const float m = mrow[i - radius] * wxd[i] * wy;
+      if (!(m > 0.0f)) continue;
+      const float da = arow[i - radius] - ori;
+      const float bo = (da + (bits_of(da) < 0 ? kTwoPi : 0.0f)) * kOBin;
+      scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, bx, by, bo);
+    }
+#endif
   }
 }
 
