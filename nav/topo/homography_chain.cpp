@@ -67,8 +67,10 @@ static vision::HarrisConfig harris_config(const HomographyChainConfig& c) noexce
 std::size_t HomographyChain::arena_bytes(const HomographyChainConfig& c) noexcept {
   if (c.max_width <= 0 || c.max_height <= 0 || c.pyramid_levels < 1 || c.pyramid_levels > 4) return 0;
   std::size_t total = 4096;
-  for (int l = 0; l < c.pyramid_levels; ++l)
-    total += bytes_of<std::uint8_t>(static_cast<std::size_t>(c.max_width >> l) * static_cast<std::size_t>(c.max_height >> l));
+  for (int l = 0; l < c.pyramid_levels; ++l) {
+    const std::size_t px = static_cast<std::size_t>(c.max_width >> l) * static_cast<std::size_t>(c.max_height >> l);
+    total += bytes_of<std::uint8_t>(px) + 2 * bytes_of<float>(px);  // level, gradient planes
+  }
   total += vision::HarrisDetector::arena_bytes(harris_config(c));
   total += match::RatioMatcher::arena_bytes(ratio_config(c));
   const std::size_t cpl = static_cast<std::size_t>(c.corners_per_level > 0 ? c.corners_per_level : 0);
@@ -113,6 +115,13 @@ Status HomographyChain::init(const HomographyChainConfig& c, Arena& arena) noexc
   QNAV_RETURN_IF_ERROR(pyramid_.init(pc, arena));
   QNAV_RETURN_IF_ERROR(harris_.init(harris_config(c), arena));
   QNAV_RETURN_IF_ERROR(matcher_.init(ratio_config(c), arena));
+  for (int l = 0; l < c.pyramid_levels; ++l) {
+    const std::size_t px = static_cast<std::size_t>(c.max_width >> l) * static_cast<std::size_t>(c.max_height >> l);
+    grad_mag_[l] = arena.allocate<float>(px);
+    grad_ang_[l] = arena.allocate<float>(px);
+    if (grad_mag_[l].empty() || grad_ang_[l].empty())
+      return Status(StatusCode::kCapacityExceeded, "homography chain: arena too small");
+  }
 
   const std::size_t cpl = static_cast<std::size_t>(c.corners_per_level);
   Span<vision::Corner> cs = arena.allocate<vision::Corner>(cpl);
@@ -190,6 +199,7 @@ std::uint8_t HomographyChain::check_frame(ConstImageViewU8 f) const noexcept {
 Status HomographyChain::extract(ConstImageViewU8 frame, BoundedVector<vision::OrientedDescriptor>& out) noexcept {
   out.clear();
   all_corners_.clear();
+  for (vision::GradientPlanes& p : planes_) p = vision::GradientPlanes{};
   QNAV_RETURN_IF_ERROR(pyramid_.build(frame));
   const int levels = std::min(pyramid_.levels_built(), config_.pyramid_levels);
   for (int l = 0; l < levels; ++l) {
@@ -197,6 +207,9 @@ Status HomographyChain::extract(ConstImageViewU8 frame, BoundedVector<vision::Or
     if (img.width() <= 2 * harris_.config().border_px + 2 || img.height() <= 2 * harris_.config().border_px + 2) break;
     const Status s = harris_.detect(img, corners_);
     if (!s) continue;  // e.g. a level too small: the other levels still count
+    if (!corners_.empty() &&
+        !vision::compute_gradient_planes(img, grad_mag_[l], grad_ang_[l], planes_[l]).is_ok())
+      continue;  // planes sized for max_width x max_height: only a frame that lies gets here
     const float sc = vision::ImagePyramid::scale(l);
     for (const vision::Corner& c : corners_) {
       vision::Corner c0 = c;
@@ -234,7 +247,7 @@ Status HomographyChain::extract(ConstImageViewU8 frame, BoundedVector<vision::Or
     const float xl = (c.x + 0.5f) / sc - 0.5f, yl = (c.y + 0.5f) / sc - 0.5f;
     vision::OrientedDescriptor* d = out.emplace_back();
     if (d == nullptr) break;
-    if (!vision::compute_oriented_descriptor(pyramid_.level(l), xl, yl, config_.descriptor_scale, *d)) {
+    if (!vision::compute_oriented_descriptor(planes_[l], xl, yl, config_.descriptor_scale, *d)) {
       (void)out.pop_back();
       continue;
     }
@@ -314,28 +327,37 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     step.status = StepStatus::kFewKeypoints;
     return Status::ok();
   }
-
   if (!have_reference_) {
-    std::swap(key_, cur_);
-    last_ = key_;
-    key_w_ = frame.width();
-    key_h_ = frame.height();
-    have_reference_ = true;
-    key_frame_index_ = step.frame_index;
-    keyframes_ = 1;
-    H_0_key_ = Mat3d::Identity();
-    H_key_last_ = Mat3d::Identity();
-    have_prediction_ = true;
-    pose_ = ChainPose{};
-    update_pose_outputs(pose_, altitude_m);
-    step.reference = true;
-    step.new_keyframe = true;
-    step.keyframe_index = step.frame_index;
-    step.overlap = 1.0;
-    step.pose = pose_;
+    take_reference(frame, altitude_m, step);
     return Status::ok();
   }
+  Mat3d H;
+  if (!match_to_keyframe(step) || !fit_to_keyframe(step, H) || !plausible(H, frame, step)) return Status::ok();
+  chain_pose(H, altitude_m, step);
+  return Status::ok();
+}
 
+void HomographyChain::take_reference(ConstImageViewU8 frame, double altitude_m, ChainStep& step) noexcept {
+  std::swap(key_, cur_);
+  last_ = key_;
+  key_w_ = frame.width();
+  key_h_ = frame.height();
+  have_reference_ = true;
+  key_frame_index_ = step.frame_index;
+  keyframes_ = 1;
+  H_0_key_ = Mat3d::Identity();
+  H_key_last_ = Mat3d::Identity();
+  have_prediction_ = true;
+  pose_ = ChainPose{};
+  update_pose_outputs(pose_, altitude_m);
+  step.reference = true;
+  step.new_keyframe = true;
+  step.keyframe_index = step.frame_index;
+  step.overlap = 1.0;
+  step.pose = pose_;
+}
+
+bool HomographyChain::match_to_keyframe(ChainStep& step) noexcept {
   // Ratio-test matching: query = current frame, train = keyframe.
   const Span<const vision::OrientedDescriptor> query(cur_->data(), cur_->size());
   const Span<const vision::OrientedDescriptor> train(key_->data(), key_->size());
@@ -357,7 +379,7 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
   step.matches = static_cast<std::uint32_t>(matches_.size());
   if (matches_.size() < config_.min_matches) {
     step.status = StepStatus::kFewMatches;
-    return Status::ok();
+    return false;
   }
   const std::size_t n = matches_.size();
   for (std::size_t i = 0; i < n; ++i) {
@@ -367,6 +389,11 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     dst_[i] = Vec2d(t.x, t.y);
   }
   last_matches_ = n;
+  return true;
+}
+
+bool HomographyChain::fit_to_keyframe(ChainStep& step, Mat3d& H) noexcept {
+  const std::size_t n = last_matches_;
   Span<const Vec2d> src(src_.data(), n), dst(dst_.data(), n);
   if (config_.fundamental_filter) {
     Result<match::FundamentalConsensus> f = match::robust_fundamental_both(
@@ -390,22 +417,25 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
                                                                 Span<double>(scratch_.data(), src.size()));
   if (!rh.is_ok()) {
     step.status = rh.status() == StatusCode::kNotFound ? StepStatus::kFewMatches : StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
   step.inliers = rh->inliers;
   step.rms_px = rh->fit.rms_transfer_px;
   if (rh->inliers < config_.min_inliers) {
     step.status = StepStatus::kFewMatches;
-    return Status::ok();
+    return false;
   }
-  Mat3d H = rh->fit.H;
+  H = rh->fit.H;
   if (!H.allFinite() || !(std::abs(H(2, 2)) > 1e-12)) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
   H /= H(2, 2);
   step.H_key_cur = H;
+  return true;
+}
 
+bool HomographyChain::plausible(const Mat3d& H, ConstImageViewU8 frame, ChainStep& step) const noexcept {
   // Plausibility: scale and orientation of the affine part at the principal point, perspective terms
   // with the image half-width as unit.
   const Vec2d c = principal_point();
@@ -422,19 +452,22 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
       !(std::sqrt(J.determinant()) >= config_.min_scale && std::sqrt(J.determinant()) <= config_.max_scale) ||
       !(std::abs(Hn(2, 0)) <= config_.max_perspective && std::abs(Hn(2, 1)) <= config_.max_perspective)) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
   step.overlap = overlap_of(H, frame.width(), frame.height());
   if (step.overlap <= 0.0) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return false;
   }
+  return true;
+}
 
+void HomographyChain::chain_pose(const Mat3d& H, double altitude_m, ChainStep& step) noexcept {
   // Eq. 2: H_0<-cur = H_0<-key H_key<-cur.
   Mat3d H0 = H_0_key_ * H;
   if (!H0.allFinite() || !(std::abs(H0(2, 2)) > 1e-12)) {
     step.status = StepStatus::kDegenerate;
-    return Status::ok();
+    return;
   }
   H0 /= H0(2, 2);
   pose_.H_0_cur = H0;
@@ -453,7 +486,6 @@ Status HomographyChain::process(ConstImageViewU8 frame, double altitude_m, Chain
     step.new_keyframe = true;
   }
   step.pose = pose_;
-  return Status::ok();
 }
 
 }  // namespace qnav::topo

@@ -3,7 +3,9 @@
 //   -> ImagePyramid -> HarrisDetector on each level -> keypoints in level-0 pixels, strongest first,
 //      a keypoint closer than min_separation_px to a stronger one removed (grid of cells of side
 //      min_separation_px / sqrt 2: one kept keypoint per cell, 5 x 5 cells checked)
-//   -> OrientedDescriptor (nav/vision) at each kept keypoint on its level, up to max_keypoints
+//   -> OrientedDescriptor (nav/vision) at each kept keypoint on its level, up to max_keypoints, from
+//      the level's gradient planes (Sobel magnitude and angle computed once per pixel of a level with
+//      corners, not once per keypoint support: the supports overlap several times)
 //   -> RatioMatcher against the current KEYFRAME (predicted through the last homography when the
 //      last frame registered; all-against-all when that fails or there is no prediction)
 //   -> optional outlier filter: fundamental matrix by RANSAC and LMedS, keep what both accept (the
@@ -26,7 +28,9 @@
 //
 // Bounds: keypoints <= max_keypoints per frame, corners per level <= corners_per_level, matches <=
 // max_keypoints, RANSAC / LMedS iterations from the configuration. Memory: every buffer from the Arena
-// in init() (arena_bytes()); process() allocates nothing. Stack: ~45 KB inside the descriptor.
+// in init() (arena_bytes(): the pyramid levels and their two float gradient planes, 9 bytes per pixel
+// of each level, are most of it); process() allocates nothing. Stack: ~3 KB inside the descriptor (its 40 KB
+// per-support planes are not used: the chain describes from the level planes).
 // Cost per frame: pyramid + Harris O(W H), descriptors O(K r^2), matching O(K min(K, candidates) 128),
 // robust fits O(iterations K).
 #pragma once
@@ -161,6 +165,12 @@ class HomographyChain {
  private:
   std::uint8_t check_frame(ConstImageViewU8 frame) const noexcept;
   Status extract(ConstImageViewU8 frame, BoundedVector<vision::OrientedDescriptor>& out) noexcept;
+  // The steps of process() after extract(); each false return has set step.status.
+  void take_reference(ConstImageViewU8 frame, double altitude_m, ChainStep& step) noexcept;
+  bool match_to_keyframe(ChainStep& step) noexcept;              // matches_, src_ / dst_, last_matches_
+  bool fit_to_keyframe(ChainStep& step, Mat3d& H) noexcept;      // H_key<-cur, normalised h22 = 1
+  bool plausible(const Mat3d& H, ConstImageViewU8 frame, ChainStep& step) const noexcept;  // scale, perspective, overlap
+  void chain_pose(const Mat3d& H, double altitude_m, ChainStep& step) noexcept;  // eq. 2, keyframe switch
   void update_pose_outputs(ChainPose& p, double altitude_m) noexcept;
   Vec2d principal_point() const noexcept;
   double overlap_of(const Mat3d& H_key_cur, int w, int h) const noexcept;
@@ -175,6 +185,8 @@ class HomographyChain {
   Span<std::int32_t> grid_;                    // separation grid: kept corner index per cell or -1
   int grid_w_ = 0, grid_h_ = 0;
   float cell_px_ = 1.0f;
+  Span<float> grad_mag_[4], grad_ang_[4];      // per pyramid level: Sobel magnitude and angle planes
+  vision::GradientPlanes planes_[4];           // this frame's, for the levels with corners
   BoundedVector<vision::OrientedDescriptor> desc_a_, desc_b_;
   BoundedVector<vision::OrientedDescriptor>* key_ = &desc_a_;  // keyframe's descriptors
   BoundedVector<vision::OrientedDescriptor>* cur_ = &desc_b_;  // the frame being processed

@@ -3,6 +3,14 @@
 #include <cmath>
 #include <cstring>
 
+// The histogram's per-row loop: two passes, the first vectorised, where there is SIMD; one scalar
+// pass over the window's samples where there is not (cell_histograms). The same values either way.
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__)
+#define QNAV_DESCRIPTOR_SIMD 1
+#else
+#define QNAV_DESCRIPTOR_SIMD 0
+#endif
+
 namespace qnav::vision {
 
 namespace {
@@ -120,22 +128,15 @@ inline void gaussian_table(float d0, float k, int n, float* w) noexcept {
   }
 }
 
-Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
-  out.valid = false;
-  if (img.empty()) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
-  if (!std::isfinite(x) || !std::isfinite(y) || !(scale >= 0.25f) || !(scale <= kOrientedMaxScale))
-    return Status(StatusCode::kInvalidArgument, "descriptor: non-finite position or scale outside [0.25, 4]");
-  const float cell = kOrientedCellScale * scale;
-  const float half_w = 2.0f * cell;  // descriptor window half-width
-  const int radius = static_cast<int>(std::ceil(half_w * 1.41422f)) + 1;
-  const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
-  if (xi - radius < 1 || yi - radius < 1 || xi + radius > img.width() - 2 || yi + radius > img.height() - 2) {
-    return Status(StatusCode::kOutOfRange, "descriptor: support leaves the image");
-  }
-  // Gradient magnitude and angle of the whole support, once (Sobel: robust to pixel noise).
+// The steps of compute_oriented_descriptor, each its own function (not inlined: the caller holds the
+// 40 KB of scratch planes, and a step whose frame stays small reaches its spill and conversion slots
+// with one instruction on SPARC, whose load/store offsets are 13 bits).
+namespace {
+
+// Sobel gradient magnitude and angle of the side x side support centred on (xi, yi).
+[[gnu::noinline]] void support_gradients(ConstImageViewU8 img, int xi, int yi, int radius, float* __restrict mag,
+                                         float* __restrict ang) noexcept {
   const int side = 2 * radius + 1;
-  float mag[kOrientedMaxSide * kOrientedMaxSide];
-  float ang[kOrientedMaxSide * kOrientedMaxSide];
   for (int j = 0; j < side; ++j) {
     const std::uint8_t* a = img.row(yi - radius + j - 1) + (xi - radius);
     const std::uint8_t* b = img.row(yi - radius + j) + (xi - radius);
@@ -157,28 +158,39 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   }
   // The sqrt in a separate scalar pass: libm sqrt keeps its errno path, which does not vectorise.
   for (int k = 0; k < n; ++k) mag[k] = std::sqrt(mag[k]);
-  // Separable Gaussian weights around the sub-pixel position.
-  const float ox = static_cast<float>(xi) - x, oy = static_cast<float>(yi) - y;
-  float wxo[kOrientedMaxSide], wyo[kOrientedMaxSide], wxd[kOrientedMaxSide], wyd[kOrientedMaxSide];
-  const float sigma_o = 4.5f * scale;
-  const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * half_w * half_w);
-  const float d0x = static_cast<float>(-radius) + ox, d0y = static_cast<float>(-radius) + oy;
-  gaussian_table(d0x, inv2so, side, wxo);
-  gaussian_table(d0y, inv2so, side, wyo);
-  gaussian_table(d0x, inv2sd, side, wxd);
-  gaussian_table(d0y, inv2sd, side, wyd);
-  // 1. Dominant orientation: 36-bin histogram of Gaussian-weighted gradients (sigma 4.5 scale,
-  //    inside a circle of radius 2 sigma).
+}
+
+// Row y (1 .. height-2) of the gradient planes: the values support_gradients computes, pixel by pixel
+// (integer Sobel sums, the magnitude as sqrt of their exact square sum, the angle by fast_angle), for
+// x in 1 .. width-2; the border columns are not written.
+[[gnu::noinline]] void plane_row(ConstImageViewU8 img, int y, float* __restrict mag, float* __restrict ang) noexcept {
+  const std::uint8_t* a = img.row(y - 1);
+  const std::uint8_t* b = img.row(y);
+  const std::uint8_t* c = img.row(y + 1);
+  const int w = img.width();
+  for (int i = 1; i < w - 1; ++i) {
+    const int gx = (a[i + 1] - a[i - 1]) + 2 * (b[i + 1] - b[i - 1]) + (c[i + 1] - c[i - 1]);
+    const int gy = (c[i - 1] + 2 * c[i] + c[i + 1]) - (a[i - 1] + 2 * a[i] + a[i + 1]);
+    mag[i] = static_cast<float>(gx * gx + gy * gy);
+    ang[i] = fast_angle(gy, gx);
+  }
+  // The sqrt in a separate pass: libm sqrt keeps its errno path, which does not vectorise.
+  for (int i = 1; i < w - 1; ++i) mag[i] = std::sqrt(mag[i]);
+}
+
+// Dominant orientation: 36-bin histogram of Gaussian-weighted gradients (weights wxo x wyo, inside a
+// circle of radius ro), smoothed, peak interpolated. False when there is no gradient.
+[[gnu::noinline]] bool dominant_orientation(const float* mag, const float* ang, std::ptrdiff_t stride, int radius, int ro,
+                                            const float* wxo, const float* wyo, float& ori) noexcept {
   constexpr int kOriBins = 36;
   float hist[kOriBins] = {};
-  const int ro = static_cast<int>(std::ceil(2.0f * sigma_o)) < radius ? static_cast<int>(std::ceil(2.0f * sigma_o)) : radius;
   float total = 0.0f;
   for (int dy = -ro; dy <= ro; ++dy) {
     int hx = 0;  // half-width of the circle on this row
     while ((hx + 1) * (hx + 1) + dy * dy <= ro * ro) ++hx;
     const float wy = wyo[dy + radius];
-    const float* mrow = mag + (dy + radius) * side + radius;
-    const float* arow = ang + (dy + radius) * side + radius;
+    const float* mrow = mag + (dy + radius) * stride + radius;
+    const float* arow = ang + (dy + radius) * stride + radius;
     for (int dx = -hx; dx <= hx; ++dx) {
       const float wm = mrow[dx] * wxo[dx + radius] * wy;
       int b = static_cast<int>(arow[dx] * (kOriBins / kTwoPi));
@@ -187,7 +199,7 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
       total += wm;
     }
   }
-  if (!(total > 1e-3f)) return Status(StatusCode::kDegenerate, "descriptor: no gradient around the point");
+  if (!(total > 1e-3f)) return false;
   float smooth[kOriBins];
   for (int i = 0; i < kOriBins; ++i)
     smooth[i] = 0.25f * hist[(i + kOriBins - 1) % kOriBins] + 0.5f * hist[i] + 0.25f * hist[(i + 1) % kOriBins];
@@ -197,26 +209,61 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   const float l = smooth[(best + kOriBins - 1) % kOriBins], c0 = smooth[best], r = smooth[(best + 1) % kOriBins];
   const float den = l - 2.0f * c0 + r;
   const float off = den < 0.0f ? 0.5f * (l - r) / den : 0.0f;
-  const float ori = wrap_2pi((static_cast<float>(best) + 0.5f + off) * (kTwoPi / kOriBins));
+  ori = wrap_2pi((static_cast<float>(best) + 0.5f + off) * (kTwoPi / kOriBins));
+  return true;
+}
 
-  // 2. 4 x 4 x 8 histogram in the rotated frame, trilinear binning, Gaussian weight sigma = half_w.
-  //    Accumulated in a 6 x 6 x 8 histogram with a one-cell border (cells -1..4) so the trilinear
-  //    scatter needs no bounds tests; the border (weights of samples beyond the outer cell centres)
-  //    is dropped at the end, as the bounds tests did.
-  //    Even and odd samples of a row go to two copies (summed at the end), which halves the chains of
-  //    read-modify-write updates of the same bins by neighbouring samples.
-  float h6[2 * 6 * 6 * 8] = {};
+// One sample's trilinear scatter into the 6 x 6 x 8 histogram copy h (bin coordinates bx, by in
+// 0 < b < 5, orientation bin bo in [0, 8], weight m > 0).
+inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noexcept {
+  const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
+  const float wx = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
+  const int o0 = oi & 7, o1 = (oi + 1) & 7;
+  const float m1 = m * wyy, m0 = m - m1;        // rows y0, y0 + 1
+  const float m00 = m0 - m0 * wx, m01 = m0 * wx;  // (y0, x0), (y0, x0 + 1)
+  const float m10 = m1 - m1 * wx, m11 = m1 * wx;
+  float* h = h6 + (y0 * 6 + x0) * 8;
+  const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
+  h[o0] += m00 - v00;
+  h[o1] += v00;
+  h[8 + o0] += m01 - v01;
+  h[8 + o1] += v01;
+  h[48 + o0] += m10 - v10;
+  h[48 + o1] += v10;
+  h[56 + o0] += m11 - v11;
+  h[56 + o1] += v11;
+}
+
+// The 4 x 4 x 8 histogram in the frame rotated by ori, trilinear binning, Gaussian weights wxd x wyd,
+// cells of `cell` px, (ox, oy) = support centre - sub-pixel position. Accumulated in a 6 x 6 x 8
+// histogram with a one-cell border (cells -1..4) so the trilinear scatter needs no bounds tests; the
+// border (weights of samples beyond the outer cell centres) is dropped by the caller, as the bounds
+// tests did. Even and odd samples of a row go to two copies (h6[0..287], h6[288..575], summed by the
+// caller), which halves the chains of read-modify-write updates of the same bins by neighbours.
+[[gnu::noinline]] void cell_histograms(const float* mag, const float* ang, std::ptrdiff_t stride, int radius, float ox,
+                                       float oy, float ori, float cell, const float* wxd, const float* wyd,
+                                       float* h6) noexcept {
+  const int side = 2 * radius + 1;
   const float co = std::cos(ori), so = std::sin(ori);
   const float inv_cell = 1.0f / cell;
   const float cx = co * inv_cell, sx = so * inv_cell;
   constexpr float kOBin = 8.0f / kTwoPi;
+#if !QNAV_DESCRIPTOR_SIMD
+  float cfx[kOrientedMaxSide], sfx[kOrientedMaxSide];
+  for (int i = 0; i < side; ++i) {
+    const float fx = static_cast<float>(i - radius) + ox;
+    cfx[i] = cx * fx;
+    sfx[i] = sx * fx;
+  }
+#endif
   for (int dy = -radius; dy <= radius; ++dy) {
     const float fy = static_cast<float>(dy) + oy;
     const float wy = wyd[dy + radius];
-    const float* mrow = mag + (dy + radius) * side + radius;
-    const float* arow = ang + (dy + radius) * side + radius;
+    const float* mrow = mag + (dy + radius) * stride + radius;
+    const float* arow = ang + (dy + radius) * stride + radius;
     // Shifted bin coordinates: cell centres at 1..4, the window is 0 < b < 5.
     const float bx0 = sx * fy + 2.5f, by0 = cx * fy + 2.5f;
+#if QNAV_DESCRIPTOR_SIMD
     // Pass A (vectorised): bin coordinates and weight of every sample of the row; samples outside
     // the window get weight 0 and clamped coordinates. Pass B: scatter of the non-zero samples.
     float pbx[kOrientedMaxSide], pby[kOrientedMaxSide], pbo[kOrientedMaxSide], pm[kOrientedMaxSide];
@@ -239,25 +286,29 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
     for (int i = 0; i < side; ++i) {
       const float m = pm[i];
       if (!(m > 0.0f)) continue;
-      const float bx = pbx[i], by = pby[i], bo = pbo[i];
-      const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
-      const float wx = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
-      const int o0 = oi & 7, o1 = (oi + 1) & 7;
-      const float m1 = m * wyy, m0 = m - m1;        // rows y0, y0 + 1
-      const float m00 = m0 - m0 * wx, m01 = m0 * wx;  // (y0, x0), (y0, x0 + 1)
-      const float m10 = m1 - m1 * wx, m11 = m1 * wx;
-      float* h = h6 + (i & 1) * (6 * 6 * 8) + (y0 * 6 + x0) * 8;  // even / odd samples: two copies
-      const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
-      h[o0] += m00 - v00;
-      h[o1] += v00;
-      h[8 + o0] += m01 - v01;
-      h[8 + o1] += v01;
-      h[48 + o0] += m10 - v10;
-      h[48 + o1] += v10;
-      h[56 + o0] += m11 - v11;
-      h[56 + o1] += v11;
+      scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, pbx[i], pby[i], pbo[i]);  // even / odd samples: two copies
     }
+#else
+    // Without SIMD (LEON3, armhf without NEON) one pass: the window test first, from the products
+    // cfx[i] = cx fx, sfx[i] = sx fx taken once per descriptor (the same for every row), and the
+    // weight, angle bin and scatter only inside the window. The same values as the two passes above
+    // (a weight times keep = 1 is itself; no FMA on these targets), bit for bit.
+    for (int i = 0; i < side; ++i) {
+      const float bx = cfx[i] + bx0, by = by0 - sfx[i];
+      if (!(bx > 0.0f && bx < 5.0f && by > 0.0f && by < 5.0f)) continue;
+      const float m = mrow[i - radius] * wxd[i] * wy;
+      if (!(m > 0.0f)) continue;
+      const float da = arow[i - radius] - ori;
+      const float bo = (da + (bits_of(da) < 0 ? kTwoPi : 0.0f)) * kOBin;
+      scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, bx, by, bo);
+    }
+#endif
   }
+}
+
+// The inner 4 x 4 cells of the two copies summed into out.v, L2-normalised, clipped at 0.2,
+// renormalised. False for an empty histogram.
+bool normalise_descriptor(const float* h6, OrientedDescriptor& out) noexcept {
   for (int cy = 0; cy < 4; ++cy)
     for (int cxi = 0; cxi < 4; ++cxi)
       for (int o = 0; o < 8; ++o) {
@@ -266,7 +317,7 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
       }
   float ss = 0.0f;
   for (float v : out.v) ss += v * v;
-  if (!(ss > 1e-12f)) return Status(StatusCode::kDegenerate, "descriptor: empty histogram");
+  if (!(ss > 1e-12f)) return false;
   float inv = 1.0f / std::sqrt(ss);
   ss = 0.0f;
   for (float& v : out.v) {
@@ -276,9 +327,97 @@ Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float
   }
   inv = 1.0f / std::sqrt(ss);
   for (float& v : out.v) v *= inv;
+  return true;
+}
+
+// Support of a descriptor at (x, y) with `scale`: radius and rounded centre, checked against a width x
+// height image with one pixel of Sobel border.
+struct Support {
+  float cell = 0.0f, half_w = 0.0f;
+  int radius = 0, xi = 0, yi = 0;
+};
+Status support_of(int width, int height, float x, float y, float scale, Support& s) noexcept {
+  if (width <= 0 || height <= 0) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
+  if (!std::isfinite(x) || !std::isfinite(y) || !(scale >= 0.25f) || !(scale <= kOrientedMaxScale))
+    return Status(StatusCode::kInvalidArgument, "descriptor: non-finite position or scale outside [0.25, 4]");
+  s.cell = kOrientedCellScale * scale;
+  s.half_w = 2.0f * s.cell;  // descriptor window half-width
+  s.radius = static_cast<int>(std::ceil(s.half_w * 1.41422f)) + 1;
+  s.xi = static_cast<int>(std::lround(x));
+  s.yi = static_cast<int>(std::lround(y));
+  if (s.xi - s.radius < 1 || s.yi - s.radius < 1 || s.xi + s.radius > width - 2 || s.yi + s.radius > height - 2)
+    return Status(StatusCode::kOutOfRange, "descriptor: support leaves the image");
+  return Status::ok();
+}
+
+// Orientation and histogram from the gradient magnitude and angle of the support (mag / ang at its
+// top-left sample, rows `stride` floats apart).
+Status describe(const float* mag, const float* ang, std::ptrdiff_t stride, const Support& sp, float x, float y,
+                float scale, OrientedDescriptor& out) noexcept {
+  const int radius = sp.radius, side = 2 * radius + 1;
+  // Separable Gaussian weights around the sub-pixel position.
+  const float ox = static_cast<float>(sp.xi) - x, oy = static_cast<float>(sp.yi) - y;
+  float wxo[kOrientedMaxSide], wyo[kOrientedMaxSide], wxd[kOrientedMaxSide], wyd[kOrientedMaxSide];
+  const float sigma_o = 4.5f * scale;
+  const float inv2so = 1.0f / (2.0f * sigma_o * sigma_o), inv2sd = 1.0f / (2.0f * sp.half_w * sp.half_w);
+  const float d0x = static_cast<float>(-radius) + ox, d0y = static_cast<float>(-radius) + oy;
+  gaussian_table(d0x, inv2so, side, wxo);
+  gaussian_table(d0y, inv2so, side, wyo);
+  gaussian_table(d0x, inv2sd, side, wxd);
+  gaussian_table(d0y, inv2sd, side, wyd);
+  // 1. Dominant orientation (sigma 4.5 scale, inside a circle of radius 2 sigma).
+  const int ro = static_cast<int>(std::ceil(2.0f * sigma_o)) < radius ? static_cast<int>(std::ceil(2.0f * sigma_o)) : radius;
+  float ori = 0.0f;
+  if (!dominant_orientation(mag, ang, stride, radius, ro, wxo, wyo, ori))
+    return Status(StatusCode::kDegenerate, "descriptor: no gradient around the point");
+  // 2. 4 x 4 x 8 histogram in the rotated frame, Gaussian weight sigma = half_w.
+  float h6[2 * 6 * 6 * 8] = {};
+  cell_histograms(mag, ang, stride, radius, ox, oy, ori, sp.cell, wxd, wyd, h6);
+  if (!normalise_descriptor(h6, out)) return Status(StatusCode::kDegenerate, "descriptor: empty histogram");
   out.orientation_rad = ori;
   out.valid = true;
   return Status::ok();
+}
+
+}  // namespace
+
+Status compute_oriented_descriptor(ConstImageViewU8 img, float x, float y, float scale, OrientedDescriptor& out) noexcept {
+  out.valid = false;
+  if (img.empty()) return Status(StatusCode::kInvalidArgument, "descriptor: empty image");
+  Support sp;
+  QNAV_RETURN_IF_ERROR(support_of(img.width(), img.height(), x, y, scale, sp));
+  // Gradient magnitude and angle of the whole support, once (Sobel: robust to pixel noise).
+  const int side = 2 * sp.radius + 1;
+  float mag[kOrientedMaxSide * kOrientedMaxSide];
+  float ang[kOrientedMaxSide * kOrientedMaxSide];
+  support_gradients(img, sp.xi, sp.yi, sp.radius, mag, ang);
+  return describe(mag, ang, side, sp, x, y, scale, out);
+}
+
+Status compute_gradient_planes(ConstImageViewU8 img, Span<float> mag, Span<float> ang, GradientPlanes& out) noexcept {
+  out = GradientPlanes{};
+  const int w = img.width(), h = img.height();
+  if (img.empty() || w < 3 || h < 3) return Status(StatusCode::kInvalidArgument, "gradient planes: image smaller than 3 x 3");
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (mag.size() < n || ang.size() < n) return Status(StatusCode::kCapacityExceeded, "gradient planes: planes too small");
+  for (int y = 1; y < h - 1; ++y) plane_row(img, y, mag.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w),
+                                            ang.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w));
+  out.mag = mag.data();
+  out.ang = ang.data();
+  out.width = w;
+  out.height = h;
+  return Status::ok();
+}
+
+Status compute_oriented_descriptor(const GradientPlanes& planes, float x, float y, float scale, OrientedDescriptor& out) noexcept {
+  out.valid = false;
+  if (planes.mag == nullptr || planes.ang == nullptr)
+    return Status(StatusCode::kInvalidArgument, "descriptor: empty gradient planes");
+  Support sp;
+  QNAV_RETURN_IF_ERROR(support_of(planes.width, planes.height, x, y, scale, sp));
+  const std::ptrdiff_t stride = planes.width;
+  const std::ptrdiff_t top_left = static_cast<std::ptrdiff_t>(sp.yi - sp.radius) * stride + (sp.xi - sp.radius);
+  return describe(planes.mag + top_left, planes.ang + top_left, stride, sp, x, y, scale, out);
 }
 
 float descriptor_distance_sq(const OrientedDescriptor& a, const OrientedDescriptor& b) noexcept {

@@ -74,6 +74,23 @@ struct OrientedDescriptor {
 // Fills v, orientation_rad, valid; x/y/scale are left for the caller (level-0 bookkeeping).
 // Errors: kOutOfRange (support leaves the image), kDegenerate (no gradient), kInvalidArgument.
 Status compute_oriented_descriptor(ConstImageViewU8 image, float x, float y, float scale, OrientedDescriptor& out) noexcept;
+
+// Gradient planes of one image, for describing many of its keypoints: the Sobel magnitude and angle
+// compute_oriented_descriptor computes over each keypoint's support, computed once per pixel (supports
+// of neighbouring keypoints overlap many times). Views into caller-owned storage, row-major, stride =
+// width; the one-pixel border is not written (no support reaches it).
+struct GradientPlanes {
+  const float* mag = nullptr;
+  const float* ang = nullptr;
+  int width = 0, height = 0;
+};
+// Fills mag and ang (each at least width x height floats) from image; out views them. Time O(W H),
+// no allocation. Errors: kInvalidArgument (image under 3 x 3), kCapacityExceeded (planes too small).
+Status compute_gradient_planes(ConstImageViewU8 image, Span<float> mag, Span<float> ang, GradientPlanes& out) noexcept;
+// The descriptor of compute_oriented_descriptor(image, ...) from the image's gradient planes: bit for
+// bit the same output and the same errors, without the per-support gradient pass.
+Status compute_oriented_descriptor(const GradientPlanes& planes, float x, float y, float scale,
+                                   OrientedDescriptor& out) noexcept;
 // Squared L2 distance of two descriptors (large value if either is invalid).
 float descriptor_distance_sq(const OrientedDescriptor& a, const OrientedDescriptor& b) noexcept;
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "nav/vision/harris.hpp"
@@ -157,6 +158,53 @@ TEST(OrientedDescriptor, RejectsBadInputAndDoesNotAllocate) {
             StatusCode::kDegenerate);
   OrientedDescriptor ok;
   EXPECT_GT(descriptor_distance_sq(d, ok), 1e20f);
+}
+
+}  // namespace
+}  // namespace qnav::vision
+
+namespace qnav::vision {
+namespace {
+
+// The gradient-plane path (what the homography chain runs) gives the per-support path's descriptor bit
+// for bit, and the same errors, at every scale, sub-pixel positions and the image edges.
+TEST(OrientedDescriptor, FromGradientPlanesIsBitIdenticalToThePerSupportPath) {
+  constexpr int kW = 160, kH = 120;
+  Pair p(kW, kH, 0, 1, 0, 11);
+  std::vector<float> mag(kW * kH, -1.0f), ang(kW * kH, -1.0f);
+  GradientPlanes planes;
+  ASSERT_TRUE(compute_gradient_planes(ConstImageViewU8(p.va), Span<float>(mag.data(), mag.size()),
+                                      Span<float>(ang.data(), ang.size()), planes)
+                  .is_ok());
+  int compared = 0, refused = 0;
+  const float scales[] = {0.25f, 0.5f, 1.0f, 1.5f, 2.0f, 3.0f, 4.0f};
+  for (float scale : scales) {
+    for (int k = 0; k < 60; ++k) {
+      const float x = 2.0f + static_cast<float>((k * 37) % 157) + 0.13f * static_cast<float>(k % 7);
+      const float y = 2.0f + static_cast<float>((k * 53) % 117) - 0.29f * static_cast<float>(k % 5);
+      OrientedDescriptor a, b;
+      const Status sa = compute_oriented_descriptor(p.va, x, y, scale, a);
+      const Status sb = compute_oriented_descriptor(planes, x, y, scale, b);
+      ASSERT_EQ(sa.code(), sb.code()) << x << " " << y << " " << scale;
+      ASSERT_EQ(a.valid, b.valid);
+      if (!sa.is_ok()) {
+        ++refused;
+        continue;
+      }
+      ++compared;
+      ASSERT_EQ(std::memcmp(a.v, b.v, sizeof a.v), 0) << x << " " << y << " " << scale;
+      ASSERT_EQ(std::memcmp(&a.orientation_rad, &b.orientation_rad, sizeof(float)), 0);
+    }
+  }
+  EXPECT_GT(compared, 150);  // most points inside, and some supports leave the image
+  EXPECT_GT(refused, 20);
+  // Planes too small, an image under 3 x 3, empty planes: named errors.
+  EXPECT_EQ(compute_gradient_planes(ConstImageViewU8(p.va), Span<float>(mag.data(), 10), Span<float>(ang.data(), ang.size()), planes)
+                .code(),
+            StatusCode::kCapacityExceeded);
+  OrientedDescriptor d;
+  EXPECT_EQ(compute_oriented_descriptor(GradientPlanes{}, 50.0f, 50.0f, 1.0f, d).code(), StatusCode::kInvalidArgument);
+  EXPECT_FALSE(d.valid);
 }
 
 }  // namespace
