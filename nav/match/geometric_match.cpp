@@ -82,11 +82,27 @@ double GeometricMatcher::compat(std::size_t p, std::size_t c, std::size_t p2, st
 }
 
 void GeometricMatcher::run_round(std::size_t np, std::size_t nc, const MotionPrior& prior) noexcept {
+  gather_candidates(np, nc, prior);
+  stats_.candidates = n_cands_;
+  score_candidates();
+  const std::size_t m = select_potential(nc);
+  stats_.potential_matches = m;
+  stats_.removed_by_consistency = consistency_pass(m);
+  n_out_ = 0;
+  for (std::size_t k = 0; k < m; ++k) {
+    if (!alive_[k]) continue;
+    Match o = potential_[k];
+    o.consistency = static_cast<float>(compat_sum_[k]);
+    out_[n_out_++] = o;
+  }
+}
+
+// 1. gated candidates, k nearest per prev landmark (insertion into a sorted run of <= kmax).
+void GeometricMatcher::gather_candidates(std::size_t np, std::size_t nc, const MotionPrior& prior) noexcept {
   const std::size_t kmax = config_.max_candidates_per_landmark;
   const double st2 = prior.translation_sigma_m * prior.translation_sigma_m;
   n_cands_ = 0;
   n_groups_ = 0;
-  // 1. gated candidates, k nearest per prev landmark (insertion into a sorted run of <= kmax).
   for (std::size_t i = 0; i < np; ++i) {
     if (!prev_ok_[i]) continue;
     const std::uint32_t first = static_cast<std::uint32_t>(n_cands_);
@@ -116,8 +132,10 @@ void GeometricMatcher::run_round(std::size_t np, std::size_t nc, const MotionPri
     groups_[n_groups_++] = Group{first, count};
     n_cands_ += count;
   }
-  stats_.candidates = n_cands_;
-  // 2. matching scores (eq. 4 with f = fb or fc), max over each other prev landmark's candidates.
+}
+
+// 2. matching scores (eq. 4 with f = fb or fc), max over each other prev landmark's candidates.
+void GeometricMatcher::score_candidates() noexcept {
   for (std::size_t g = 0; g < n_groups_; ++g) {
     for (std::uint32_t a = groups_[g].first; a < groups_[g].first + groups_[g].count; ++a) {
       Candidate& ca = cands_[a];
@@ -147,7 +165,11 @@ void GeometricMatcher::run_round(std::size_t np, std::size_t nc, const MotionPri
       ca.score = s;
     }
   }
-  // 3. potential matches: best candidate per prev, then best prev per cur (one-to-one).
+}
+
+// 3. potential matches: best candidate per prev, then best prev per cur (one-to-one), at most
+// max_matches of the highest scores; returns their count.
+std::size_t GeometricMatcher::select_potential(std::size_t nc) noexcept {
   const std::uint32_t kNone = 0xFFFFFFFFu;
   for (std::size_t j = 0; j < nc; ++j) best_of_cur_[j] = kNone;
   std::size_t n_best = 0;
@@ -178,8 +200,13 @@ void GeometricMatcher::run_round(std::size_t np, std::size_t nc, const MotionPri
     }
     m = config_.max_matches;
   }
-  stats_.potential_matches = m;
-  // 4. consistency pass (eq. 6).
+  return m;
+}
+
+// 4. consistency pass (eq. 6) over the m potential matches: the least consistent is removed until every
+// one left agrees with all others; alive_ and compat_sum_ say which are left and their consistency.
+// Returns the number removed.
+std::size_t GeometricMatcher::consistency_pass(std::size_t m) noexcept {
   const std::size_t w = words_per_row_;
   for (std::size_t k = 0; k < m; ++k) {
     for (std::size_t q = 0; q < w; ++q) compat_bits_[k * w + q] = 0;
@@ -225,14 +252,7 @@ void GeometricMatcher::run_round(std::size_t np, std::size_t nc, const MotionPri
       }
     }
   }
-  stats_.removed_by_consistency = removed;
-  n_out_ = 0;
-  for (std::size_t k = 0; k < m; ++k) {
-    if (!alive_[k]) continue;
-    Match o = potential_[k];
-    o.consistency = static_cast<float>(compat_sum_[k]);
-    out_[n_out_++] = o;
-  }
+  return removed;
 }
 
 Result<Span<const Match>> GeometricMatcher::match(Span<const Landmark3> prev, Span<const Landmark3> cur,

@@ -147,6 +147,11 @@ class GeometricMatcher {
   // Compatibility of (p, c) with (p2, c2): returns f (0 when incompatible); binary_ok tells fb.
   double compat(std::size_t p, std::size_t c, std::size_t p2, std::size_t c2, bool* binary_ok) const noexcept;
   void run_round(std::size_t np, std::size_t nc, const MotionPrior& prior) noexcept;
+  // The steps of a round (geometric_match.cpp says what each does).
+  void gather_candidates(std::size_t np, std::size_t nc, const MotionPrior& prior) noexcept;
+  void score_candidates() noexcept;
+  std::size_t select_potential(std::size_t nc) noexcept;
+  std::size_t consistency_pass(std::size_t m) noexcept;
 
   GeometricMatchConfig config_;
   std::size_t bytes_ = 0;

@@ -258,44 +258,10 @@ Status HarrisDetector::detect(ConstImageViewF32 image, RectI roi, BoundedVector<
   return detect_impl<float>(image, roi, out);
 }
 
-template <typename Pixel>
-Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, BoundedVector<Corner>& out) noexcept {
-  out.clear();
-  last_response_ = ConstImageViewF32();
-  if (!ready_) return Status(StatusCode::kNotReady, "harris: detect before init");
-  if (image.empty() || image.width() <= 0 || image.height() <= 0) {
-    counters_.increment(VisionCounter::kBadImage);
-    return Status(StatusCode::kInvalidArgument, "harris: empty image");
-  }
-  if (image.width() > config_.max_width || image.height() > config_.max_height) {
-    counters_.increment(VisionCounter::kBadImage);
-    return Status(StatusCode::kInvalidArgument, "harris: image larger than configured");
-  }
-  if (out.capacity() == 0) return Status(StatusCode::kCapacityExceeded, "harris: output has no capacity");
-  const int W = image.width(), H = image.height();
-  const int r = config_.block_radius;
-  const int nms = config_.nms_radius;
-  const int b = config_.border_px;
+namespace {
 
-  // Detection area: ROI clipped to the image minus the border.
-  const RectI det = roi.intersect(RectI{b, b, W - 2 * b, H - 2 * b});
-  if (roi.empty() || det.empty()) {
-    if (roi.empty() || roi.intersect(RectI{0, 0, W, H}).empty()) {
-      counters_.increment(VisionCounter::kBadRoi);
-      return Status(StatusCode::kOutOfRange, "harris: region of interest empty or outside the image");
-    }
-    return Status::ok();  // ROI only covers the border: no corners, not an error
-  }
-  // Response area: detection area grown by the NMS radius (+1 for sub-pixel), clipped to where the
-  // response is defined (gradient needs 1 px, the box r px).
-  const int v0 = r + 1;
-  const RectI valid{v0, v0, W - 2 * v0, H - 2 * v0};
-  const RectI grown{det.x - nms - 1, det.y - nms - 1, det.width + 2 * nms + 2, det.height + 2 * nms + 2};
-  const RectI g = grown.intersect(valid);
-  const RectI gz = grown.intersect(RectI{0, 0, W, H});
-
-  ImageViewF32 resp = ImageViewF32::unchecked(response_.data(), W, H, W);
-  // Zero the part of the grown area where the response is not defined (NMS reads it).
+// Zeroes the part of the grown area gz where the response is not defined (outside g): NMS reads it.
+void zero_undefined(ImageViewF32 resp, RectI g, RectI gz) noexcept {
   for (int y = gz.y; y < gz.y + gz.height; ++y) {
     float* row = resp.row(y);
     if (y < g.y || y >= g.y + g.height) {
@@ -305,8 +271,109 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
       for (int x = g.x + g.width; x < gz.x + gz.width; ++x) row[x] = 0.0f;
     }
   }
+}
 
+// Row maximum over the 2 nms + 1 columns around each x of [dx0, dx1) of row yy.
+void nms_row_max(ConstImageViewF32 resp, int nms, int yy, int dx0, int dx1, float* __restrict dst) noexcept {
+  const float* __restrict src = resp.row(yy);
+  if (nms == 2) {  // the default radius, unrolled (no inner loop: half the instructions without SIMD)
+    for (int x = dx0; x < dx1; ++x) {
+      const float m01 = src[x - 2] > src[x - 1] ? src[x - 2] : src[x - 1];
+      const float m23 = src[x] > src[x + 1] ? src[x] : src[x + 1];
+      const float m = m01 > m23 ? m01 : m23;
+      dst[x] = m > src[x + 2] ? m : src[x + 2];
+    }
+    return;
+  }
+  for (int x = dx0; x < dx1; ++x) {
+    float m = src[x - nms];
+    for (int j = -nms + 1; j <= nms; ++j) m = src[x + j] > m ? src[x + j] : m;
+    dst[x] = m;
+  }
+}
+
+// The exact window check with the tie rule: (x, y) of value v is the maximum of its (2 nms + 1)^2 window,
+// and the earlier pixel in raster order wins a tie.
+bool strict_window_max(ConstImageViewF32 resp, int nms, int x, int y, float v) noexcept {
+  for (int dy = -nms; dy <= nms; ++dy) {
+    const float* nr = resp.row(y + dy);
+    for (int dx = -nms; dx <= nms; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      const float nv = nr[x + dx];
+      if (nv > v || (nv == v && (dy < 0 || (dy == 0 && dx < 0)))) return false;
+    }
+  }
+  return true;
+}
+
+// A corner at (x, y) of response v; its score normalised by *mean (when given and positive).
+inline Corner make_corner(int x, int y, float v, const float* mean) noexcept {
+  Corner c;
+  c.x = static_cast<float>(x);
+  c.y = static_cast<float>(y);
+  c.response = v;
+  c.level = 0;
+  if (mean != nullptr) {
+    const float d = *mean;
+    c.score = d > 0.0f ? v / d : v;
+  } else {
+    c.score = v;
+  }
+  return c;
+}
+
+// Keeps the best cap corners in the min-heap heap[0..hn) (`better` is a total order on distinct
+// pixels, so the corners kept do not depend on the order they are offered in); dropped: one was not.
+inline void keep_best(const Corner& c, Corner* heap, std::size_t& hn, std::size_t cap, bool& dropped) noexcept {
+  if (hn < cap) {
+    heap[hn++] = c;
+    std::push_heap(heap, heap + hn, better);
+  } else {
+    dropped = true;
+    if (better(c, heap[0])) {
+      std::pop_heap(heap, heap + hn, better);
+      heap[hn - 1] = c;
+      std::push_heap(heap, heap + hn, better);
+    }
+  }
+}
+
+// Parabola through the 3x3 response around each corner: |offset| <= 0.5 px in x and y.
+void refine_subpixel(ConstImageViewF32 resp, Corner* corners, std::size_t n) noexcept {
+  for (std::size_t i = 0; i < n; ++i) {
+    const int x = static_cast<int>(corners[i].x), y = static_cast<int>(corners[i].y);
+    const float c0 = resp(x, y);
+    const float l = resp(x - 1, y), rr = resp(x + 1, y), u = resp(x, y - 1), d = resp(x, y + 1);
+    const float denx = l - 2.0f * c0 + rr, deny = u - 2.0f * c0 + d;
+    float ox = denx < 0.0f ? 0.5f * (l - rr) / denx : 0.0f;
+    float oy = deny < 0.0f ? 0.5f * (u - d) / deny : 0.0f;
+    ox = std::min(0.5f, std::max(-0.5f, ox));
+    oy = std::min(0.5f, std::max(-0.5f, oy));
+    corners[i].x += ox;
+    corners[i].y += oy;
+  }
+}
+
+}  // namespace
+
+Status HarrisDetector::check_input(int width, int height, std::size_t out_capacity) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "harris: detect before init");
+  if (width <= 0 || height <= 0) {
+    counters_.increment(VisionCounter::kBadImage);
+    return Status(StatusCode::kInvalidArgument, "harris: empty image");
+  }
+  if (width > config_.max_width || height > config_.max_height) {
+    counters_.increment(VisionCounter::kBadImage);
+    return Status(StatusCode::kInvalidArgument, "harris: image larger than configured");
+  }
+  if (out_capacity == 0) return Status(StatusCode::kCapacityExceeded, "harris: output has no capacity");
+  return Status::ok();
+}
+
+template <typename Pixel>
+void HarrisDetector::float_tensor_response(ImageView<const Pixel> image, RectI g, ImageViewF32 resp) noexcept {
   // Streaming structure tensor: a ring of 2r+1 product rows, then vertical + horizontal box sums.
+  const int r = config_.block_radius;
   const int nrows = 2 * r + 1;
   const std::size_t wz = static_cast<std::size_t>(config_.max_width);
   float* gxr = grad_.data();
@@ -316,11 +383,7 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
   float* csxy = colsum_.data() + 2 * wz;
   const int px0 = g.x - r, px1 = g.x + g.width + r;  // product columns needed
   const float k = config_.k;
-  bool integer_tensor = false;
-  if constexpr (kHarrisIntegerTensor && std::is_same<Pixel, std::uint8_t>::value) {
-    if (r == 1) integer_tensor = harris_response_u8_r1(image, g, k, resp, ring_);  // g is 2 px inside (valid)
-  }
-  for (int py = g.y - r; !integer_tensor && py < g.y + g.height + r; ++py) {
+  for (int py = g.y - r; py < g.y + g.height + r; ++py) {
     const int slot = (py - (g.y - r)) % nrows;
     float* __restrict pxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
     float* __restrict pyy = pxx + wz;
@@ -358,10 +421,10 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
       }
     }
   }
-  last_response_ = ConstImageViewF32(resp);
+}
 
-  // Statistics over the detection area: max (threshold), positive sum (normalisation floor) and
-  // the normalisation cell sums.
+float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noexcept {
+  const int W = resp.width(), H = resp.height();
   const int cell = config_.norm_cell_px;
   const int cw = (W + cell - 1) / cell, ch = (H + cell - 1) / cell;
   float* csum = cells_.data();
@@ -402,38 +465,33 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
         cmean[cy * cw + cx] = (c > 0.0f ? s / c : 0.0f) + floor_v;
       }
   }
+  return rmax;
+}
 
-  const float thresh = std::max(config_.min_response, config_.quality_level * rmax);
-  const std::size_t cap = std::min(static_cast<std::size_t>(config_.max_corners), out.capacity());
+std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap,
+                                              bool& dropped) noexcept {
+  const int nms = config_.nms_radius;
+  const std::size_t wz = static_cast<std::size_t>(config_.max_width);
+  const int cell = config_.norm_cell_px;
+  const int cw = (resp.width() + cell - 1) / cell, ch = (resp.height() + cell - 1) / cell;
+  const float* cmean = cells_.data() + 2 * static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch);
   Corner* heap = heap_.data();
   std::size_t hn = 0;
-  bool dropped = false;
+  dropped = false;
+  auto keep = [&](int x, int y, float v) {
+    keep_best(make_corner(x, y, v, config_.normalise ? cmean + (y / cell) * cw + (x / cell) : nullptr), heap, hn, cap,
+              dropped);
+  };
   // Non-maximum suppression: a separable max filter (row max over 2n+1 columns kept in a ring of
   // 2n+1 rows, then the max over the ring) finds pixels equal to their window maximum with
   // vectorisable loops; only those (and above the threshold) get the exact check with the tie rule.
   const int nwin = 2 * nms + 1;
   const int dx0 = det.x, dx1 = det.x + det.width;
-  auto row_max = [&](int yy, float* __restrict dst) {
-    const float* __restrict src = resp.row(yy);
-    if (nms == 2) {  // the default radius, unrolled (no inner loop: half the instructions without SIMD)
-      for (int x = dx0; x < dx1; ++x) {
-        const float m01 = src[x - 2] > src[x - 1] ? src[x - 2] : src[x - 1];
-        const float m23 = src[x] > src[x + 1] ? src[x] : src[x + 1];
-        const float m = m01 > m23 ? m01 : m23;
-        dst[x] = m > src[x + 2] ? m : src[x + 2];
-      }
-      return;
-    }
-    for (int x = dx0; x < dx1; ++x) {
-      float m = src[x - nms];
-      for (int j = -nms + 1; j <= nms; ++j) m = src[x + j] > m ? src[x + j] : m;
-      dst[x] = m;
-    }
-  };
   for (int yy = det.y - nms; yy < det.y + nms; ++yy)
-    row_max(yy, nms_ring_.data() + static_cast<std::size_t>((yy - (det.y - nms)) % nwin) * wz);
+    nms_row_max(resp, nms, yy, dx0, dx1, nms_ring_.data() + static_cast<std::size_t>((yy - (det.y - nms)) % nwin) * wz);
   for (int y = det.y; y < det.y + det.height; ++y) {
-    row_max(y + nms, nms_ring_.data() + static_cast<std::size_t>((y + nms - (det.y - nms)) % nwin) * wz);
+    nms_row_max(resp, nms, y + nms, dx0, dx1,
+                nms_ring_.data() + static_cast<std::size_t>((y + nms - (det.y - nms)) % nwin) * wz);
     // The window maximum is the max over the ring of the row maxima; it is only needed where the pixel
     // is the maximum of its own row window (about one pixel in three), so it is taken there alone:
     // a third of the compares of a full column pass, the same candidates.
@@ -462,60 +520,103 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
         for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
         if (below) continue;
       }
-      // Exact check with the tie rule: the earlier pixel in raster order wins.
-      bool is_max = true;
-      for (int dy = -nms; dy <= nms && is_max; ++dy) {
-        const float* nr = resp.row(y + dy);
-        for (int dx = -nms; dx <= nms; ++dx) {
-          if (dx == 0 && dy == 0) continue;
-          const float nv = nr[x + dx];
-          if (nv > v || (nv == v && (dy < 0 || (dy == 0 && dx < 0)))) {
-            is_max = false;
-            break;
+      if (!strict_window_max(resp, nms, x, y, v)) continue;
+      keep(x, y, v);
+    }
+  }
+  return hn;
+}
+
+std::size_t HarrisDetector::suppress_blocks(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap,
+                                            bool& dropped) noexcept {
+  const int nms = config_.nms_radius;
+  const int side = nms + 1;
+  const int cell = config_.norm_cell_px;
+  const int cw = (resp.width() + cell - 1) / cell, ch = (resp.height() + cell - 1) / cell;
+  const float* cmean = cells_.data() + 2 * static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch);
+  Corner* heap = heap_.data();
+  std::size_t hn = 0;
+  dropped = false;
+  auto keep = [&](int x, int y, float v) {
+    keep_best(make_corner(x, y, v, config_.normalise ? cmean + (y / cell) * cw + (x / cell) : nullptr), heap, hn, cap,
+              dropped);
+  };
+  const int dx1 = det.x + det.width, dy1 = det.y + det.height;
+  for (int by = det.y; by < dy1; by += side) {
+    const int ye = std::min(by + side, dy1);
+    for (int bx = det.x; bx < dx1; bx += side) {
+      const int xe = std::min(bx + side, dx1);
+      // The block's maximum, the earliest in raster order among equals: the only pixel of the block
+      // that can be a maximum of its window (every other one is within nms of it and loses to it).
+      int wx = bx, wy = by;
+      float wv = resp.row(by)[bx];
+      for (int y = by; y < ye; ++y) {
+        const float* __restrict row = resp.row(y);
+        for (int x = bx; x < xe; ++x)
+          if (row[x] > wv) {
+            wv = row[x];
+            wx = x;
+            wy = y;
           }
-        }
       }
-      if (!is_max) continue;
-      Corner c;
-      c.x = static_cast<float>(x);
-      c.y = static_cast<float>(y);
-      c.response = v;
-      c.level = 0;
-      if (config_.normalise) {
-        const float d = cmean[(y / cell) * cw + (x / cell)];
-        c.score = d > 0.0f ? v / d : v;
-      } else {
-        c.score = v;
-      }
-      if (hn < cap) {
-        heap[hn++] = c;
-        std::push_heap(heap, heap + hn, better);
-      } else {
-        dropped = true;
-        if (better(c, heap[0])) {
-          std::pop_heap(heap, heap + hn, better);
-          heap[hn - 1] = c;
-          std::push_heap(heap, heap + hn, better);
-        }
-      }
+      if (!(wv > thresh) || !strict_window_max(resp, nms, wx, wy, wv)) continue;
+      keep(wx, wy, wv);
     }
   }
+  return hn;
+}
+
+template <typename Pixel>
+Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, BoundedVector<Corner>& out) noexcept {
+  out.clear();
+  last_response_ = ConstImageViewF32();
+  const Status in = check_input(image.empty() ? 0 : image.width(), image.empty() ? 0 : image.height(), out.capacity());
+  if (!in) return in;
+  const int W = image.width(), H = image.height();
+  const int r = config_.block_radius;
+  const int nms = config_.nms_radius;
+  const int b = config_.border_px;
+
+  // Detection area: ROI clipped to the image minus the border.
+  const RectI det = roi.intersect(RectI{b, b, W - 2 * b, H - 2 * b});
+  if (roi.empty() || det.empty()) {
+    if (roi.empty() || roi.intersect(RectI{0, 0, W, H}).empty()) {
+      counters_.increment(VisionCounter::kBadRoi);
+      return Status(StatusCode::kOutOfRange, "harris: region of interest empty or outside the image");
+    }
+    return Status::ok();  // ROI only covers the border: no corners, not an error
+  }
+  // Response area: detection area grown by the NMS radius (+1 for sub-pixel), clipped to where the
+  // response is defined (gradient needs 1 px, the box r px).
+  const int v0 = r + 1;
+  const RectI valid{v0, v0, W - 2 * v0, H - 2 * v0};
+  const RectI grown{det.x - nms - 1, det.y - nms - 1, det.width + 2 * nms + 2, det.height + 2 * nms + 2};
+  const RectI g = grown.intersect(valid);
+  const RectI gz = grown.intersect(RectI{0, 0, W, H});
+
+  ImageViewF32 resp = ImageViewF32::unchecked(response_.data(), W, H, W);
+  zero_undefined(resp, g, gz);
+  bool integer_tensor = false;
+  if constexpr (kHarrisIntegerTensor && std::is_same<Pixel, std::uint8_t>::value) {
+    if (r == 1) integer_tensor = harris_response_u8_r1(image, g, config_.k, resp, ring_);  // g is 2 px inside (valid)
+  }
+  if (!integer_tensor) float_tensor_response(image, g, resp);
+  last_response_ = ConstImageViewF32(resp);
+
+  // Statistics over the detection area: max (threshold), positive sum (normalisation floor) and the
+  // normalisation cell means; then NMS and the top-K heap.
+  const float rmax = response_statistics(resp, det);
+  const float thresh = std::max(config_.min_response, config_.quality_level * rmax);
+  const std::size_t cap = std::min(static_cast<std::size_t>(config_.max_corners), out.capacity());
+  bool dropped = false;
+  // Without SIMD, on 8-bit images (a finite response), the block NMS; the same corners (see harris.hpp).
+  const bool blocks = block_nms_ && std::is_same<Pixel, std::uint8_t>::value;
+  const std::size_t hn =
+      blocks ? suppress_blocks(resp, det, thresh, cap, dropped) : suppress_and_keep(resp, det, thresh, cap, dropped);
   if (dropped) counters_.increment(VisionCounter::kCornerCapReached);
+  Corner* heap = heap_.data();
   std::sort(heap, heap + hn, better);
-  if (config_.subpixel) {
-    for (std::size_t i = 0; i < hn; ++i) {
-      const int x = static_cast<int>(heap[i].x), y = static_cast<int>(heap[i].y);
-      const float c0 = resp(x, y);
-      const float l = resp(x - 1, y), rr = resp(x + 1, y), u = resp(x, y - 1), d = resp(x, y + 1);
-      const float denx = l - 2.0f * c0 + rr, deny = u - 2.0f * c0 + d;
-      float ox = denx < 0.0f ? 0.5f * (l - rr) / denx : 0.0f;
-      float oy = deny < 0.0f ? 0.5f * (u - d) / deny : 0.0f;
-      ox = std::min(0.5f, std::max(-0.5f, ox));
-      oy = std::min(0.5f, std::max(-0.5f, oy));
-      heap[i].x += ox;
-      heap[i].y += oy;
-    }
-  }
+  if (config_.subpixel) refine_subpixel(resp, heap, hn);
   for (std::size_t i = 0; i < hn; ++i) QNAV_ASSERT(out.push_back(heap[i]).is_ok(), "harris: more corners kept than the output holds (hn <= capacity)");
   return Status::ok();
 }

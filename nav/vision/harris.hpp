@@ -110,10 +110,29 @@ class HarrisDetector {
   ConstImageViewF32 response() const noexcept { return last_response_; }
   const HarrisConfig& config() const noexcept { return config_; }
   const VisionCounters& counters() const noexcept { return counters_; }
+  // Which NMS detect() runs on 8-bit images: by blocks (suppress_blocks; the default without SIMD) or by
+  // row maxima (with SIMD, and always on float images). The same corners either way (test
+  // Harris.BlockNmsGivesTheSameCornersAsTheRowMaximumNms); a switch for that test.
+  void use_block_nms(bool on) noexcept { block_nms_ = on; }
 
  private:
   template <typename Pixel>
   Status detect_impl(ImageView<const Pixel> image, RectI roi, BoundedVector<Corner>& out) noexcept;
+  // The steps of detect_impl, in order (harris.cpp says what each does).
+  Status check_input(int width, int height, std::size_t out_capacity) noexcept;
+  template <typename Pixel>
+  void float_tensor_response(ImageView<const Pixel> image, RectI g, ImageViewF32 resp) noexcept;
+  // Max response over det (returned) and the normalisation cell means (cells_).
+  float response_statistics(ConstImageViewF32 resp, RectI det) noexcept;
+  // NMS over det above thresh, the best cap kept in heap_ (returned: their count; dropped: some were not).
+  std::size_t suppress_and_keep(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap, bool& dropped) noexcept;
+  // The same by blocks of (nms_radius + 1)^2 pixels (Neubeck and Van Gool's NMS): only each block's
+  // maximum gets the window check, so each pixel is compared about once plus the checks of the block
+  // maxima. The same corners as suppress_and_keep on a finite response (every pixel of a block is
+  // within nms_radius of the block's maximum, earliest in raster order among equals, so only it can be
+  // its window's maximum under the tie rule; the heap keeps the same best corners in any order). Used
+  // without SIMD on 8-bit images, where the per-pixel row maxima cost most of the NMS.
+  std::size_t suppress_blocks(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap, bool& dropped) noexcept;
 
   HarrisConfig config_{};
   bool ready_ = false;
@@ -125,6 +144,7 @@ class HarrisDetector {
   Span<Corner> heap_;      // max_corners: top-K heap
   Span<float> nms_ring_;   // (2 * nms_radius + 2) rows of max_width: row maxima ring + window max
   ConstImageViewF32 last_response_;
+  bool block_nms_ = kHarrisIntegerTensor;
   VisionCounters counters_;
 };
 

@@ -350,11 +350,7 @@ std::size_t StereoVo::refine_pairs(const VoInput& in, const BoundedVector<match:
   return m;
 }
 
-Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
-  if (!ready_) return Status(StatusCode::kNotReady, "StereoVo::process before init");
-  VoStep step;
-  if (frames_since_filter_ < 1000000u) ++frames_since_filter_;
-  // --- input checks ----------------------------------------------------------------------------
+bool StereoVo::accept_input(const VoInput& in, VoStep& step) noexcept {
   const bool image_ok = !in.left.empty() && !in.right.empty() && in.left.width() == in.right.width() &&
                         in.left.height() == in.right.height() && in.left.width() <= config_.max_width &&
                         in.left.height() <= config_.max_height;
@@ -374,26 +370,28 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
     }
     chain_R_ = chain_R_ * in.R_prev_cur;
   }
-  if (!image_ok || !attitude_ok) {
-    step.flags |= kVoBadInput | kVoLost;
-    counters_.increment(VoCounter::kLostFrames);
-    if (!attitude_ok) {
-      // Without a rotation the chain is broken: the next good frame restarts from scratch.
-      have_prev_ = false;
-      chain_R_ = Mat3d::Identity();
-      chain_t_ = Vec3d::Zero();
-      chain_sigma2_ = 0.0;
-      chain_has_t_ = true;
-      att_filter_.reset();  // restarts from the next good sample
-      filter_stamp_ns_ = 0;
-    }
-    // With a good attitude the reference is kept and the chained prior carries this frame's motion.
-    step.world_T_cur = integrator_.pose();
-    return step;
+  if (image_ok && attitude_ok) return true;
+  step.flags |= kVoBadInput | kVoLost;
+  counters_.increment(VoCounter::kLostFrames);
+  if (!attitude_ok) {
+    // Without a rotation the chain is broken: the next good frame restarts from scratch.
+    have_prev_ = false;
+    reset_chain();
+    att_filter_.reset();  // restarts from the next good sample
+    filter_stamp_ns_ = 0;
   }
-  // --- front end ----------------------------------------------------------------------------------
-  const int next = 1 - cur_;
-  BoundedVector<match::Landmark3>& lms = landmarks_[next];
+  // With a good attitude the reference is kept and the chained prior carries this frame's motion.
+  return false;
+}
+
+void StereoVo::reset_chain() noexcept {
+  chain_R_ = Mat3d::Identity();
+  chain_t_ = Vec3d::Zero();
+  chain_sigma2_ = 0.0;
+  chain_has_t_ = true;
+}
+
+bool StereoVo::front_end(const VoInput& in, BoundedVector<match::Landmark3>& lms, VoStep& step) noexcept {
   lms.clear();
   points_.clear();
   const Status hs = harris_.detect(in.left, corners_);
@@ -404,41 +402,32 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
   }
   step.stereo_points = points_.size();
   step.landmarks = lms.size();
-  const bool frame_ok = lms.size() >= config_.min_stereo_points;
-  if (!frame_ok) {
-    counters_.increment(step.corners < config_.min_stereo_points ? VoCounter::kFewCorners : VoCounter::kFewStereo);
-    const std::uint32_t why = step.corners < config_.min_stereo_points ? kVoFewCorners : kVoFewStereo;
-    if (have_prev_) {
-      // Keep the old reference; the chained prior carries the motion to the next frame.
-      step.flags |= why | kVoLost;
-      counters_.increment(VoCounter::kLostFrames);
-    } else {
-      step.flags |= why | kVoLost | kVoFirstFrame;
-      counters_.increment(VoCounter::kLostFrames);
-    }
-    step.world_T_cur = integrator_.pose();
-    return step;
+  if (lms.size() >= config_.min_stereo_points) return true;
+  const bool few_corners = step.corners < config_.min_stereo_points;
+  counters_.increment(few_corners ? VoCounter::kFewCorners : VoCounter::kFewStereo);
+  // Without a reference yet this is still the first frame; with one, the old reference is kept and the
+  // chained prior carries the motion to the next frame.
+  step.flags |= (few_corners ? kVoFewCorners : kVoFewStereo) | kVoLost | (have_prev_ ? 0u : kVoFirstFrame);
+  counters_.increment(VoCounter::kLostFrames);
+  return false;
+}
+
+void StereoVo::start_reference(const VoInput& in, int next, VoStep& step) noexcept {
+  step.flags |= kVoFirstFrame;
+  const Mat3d* att = filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step);
+  if (att != nullptr && integrator_.steps() == 0) {
+    Pose3 p = integrator_.pose();
+    p.R = *att;
+    integrator_.reset(p);
   }
-  if (!have_prev_) {
-    step.flags |= kVoFirstFrame;
-    const Mat3d* att = filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step);
-    if (att != nullptr && integrator_.steps() == 0) {
-      Pose3 p = integrator_.pose();
-      p.R = *att;
-      integrator_.reset(p);
-    }
-    filter_ref_R_ = att != nullptr ? *att : Mat3d::Identity();
-    keep_reference_image(in.left);
-    cur_ = next;
-    have_prev_ = true;
-    chain_R_ = Mat3d::Identity();
-    chain_t_ = Vec3d::Zero();
-    chain_sigma2_ = 0.0;
-    chain_has_t_ = true;
-    step.world_T_cur = integrator_.pose();
-    return step;
-  }
-  // --- matching -------------------------------------------------------------------------------------
+  filter_ref_R_ = att != nullptr ? *att : Mat3d::Identity();
+  keep_reference_image(in.left);
+  cur_ = next;
+  have_prev_ = true;
+  reset_chain();
+}
+
+match::MotionPrior StereoVo::chained_prior() const noexcept {
   match::MotionPrior prior;
   prior.R_prev_cur = chain_R_;
   if (chain_has_t_) {
@@ -448,147 +437,184 @@ Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
     prior.t_prev_cur_m = Vec3d::Zero();
     prior.translation_sigma_m = config_.default_translation_sigma_m;
   }
-  const BoundedVector<match::Landmark3>& ref = landmarks_[cur_];
-  Result<Span<const match::Match>> mr =
-      matcher_.match(Span<const match::Landmark3>(ref.data(), ref.size()), Span<const match::Landmark3>(lms.data(), lms.size()), prior);
+  return prior;
+}
+
+std::uint32_t StereoVo::estimate_step(const BoundedVector<match::Landmark3>& ref, const BoundedVector<match::Landmark3>& lms,
+                                      VoStep& step, motion::RigidEstimate& est, std::size_t& n_final_pairs) noexcept {
+  n_final_pairs = 0;
+  Result<Span<const match::Match>> mr = matcher_.match(Span<const match::Landmark3>(ref.data(), ref.size()),
+                                                       Span<const match::Landmark3>(lms.data(), lms.size()), chained_prior());
   step.match_stats = matcher_.stats();
-  std::uint32_t why = 0;
-  motion::RigidEstimate est;
-  std::size_t n_final_pairs = 0;  // pairs in mp_/mc_/w_ that est was computed from (0: inconsistent)
   if (!mr) {
-    why = kVoDegenerate;
     counters_.increment(VoCounter::kDegenerate);
-  } else {
-    const Span<const match::Match> matches = mr.value();
-    step.matches = matches.size();
-    if (matches.size() < config_.min_matches) {
-      why = kVoFewMatches;
-      counters_.increment(VoCounter::kFewMatches);
-    } else {
-      const std::size_t n = matches.size();
-      for (std::size_t k = 0; k < n; ++k) {
-        const match::Landmark3& a = ref[matches[k].prev];
-        const match::Landmark3& b = lms[matches[k].cur];
-        mp_[k] = a.position_m;
-        mc_[k] = b.position_m;
-        w_[k] = weight_for(a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m);
-        pair_ref_[k] = static_cast<std::int32_t>(matches[k].prev);
-        pair_cur_[k] = static_cast<std::int32_t>(matches[k].cur);
-      }
-      std::size_t n_final = n;
-      std::size_t n_buf = n;
-      Result<motion::RigidEstimate> r = solve_pairs(n);
-      for (int it = 0; r && it < config_.icp_iterations; ++it) {
-        const std::size_t m = icp_associate(ref, lms, r->pose);
-        n_buf = m;
-        if (m < config_.min_matches) break;
-        Result<motion::RigidEstimate> r2 = solve_pairs(m);
-        if (!r2) break;
-        r = r2;
-        step.matches = m;
-        n_final = m;
-      }
-      if (!r) {
-        why = kVoDegenerate;
-        counters_.increment(VoCounter::kDegenerate);
-      } else {
-        est = r.value();
-        n_final_pairs = n_buf == n_final ? n_final : 0;
-        step.inliers = est.inliers;
-        step.rms_residual_m = est.rms_residual_m;
-        // w = 1e-4 / s2 (weighted) -> predicted rms sigma from the weights' harmonic mean.
-        double sum_s2 = 0.0;
-        for (std::size_t k = 0; k < n_final; ++k) sum_s2 += config_.weighted ? 1e-4 / w_[k] : 0.0;
-        const double pred = config_.weighted && n_final > 0 ? std::sqrt(sum_s2 / static_cast<double>(n_final)) : 0.0;
-        step.normalized_residual = pred > 0.0 ? est.rms_residual_m / pred : 0.0;
-        if (!(est.rms_residual_m <= config_.max_rms_residual_m) ||
-            !(step.normalized_residual <= config_.max_normalized_residual)) {
-          why = kVoHighResidual;
-          counters_.increment(VoCounter::kHighResidual);
-        } else if (!(est.pose.t.norm() <= config_.max_step_m) ||
-                   !(rotation_angle_rad(est.pose.R) <= config_.max_step_rotation_rad) || !est.pose.is_finite()) {
-          why = kVoImplausible;
-          counters_.increment(VoCounter::kImplausibleStep);
-        }
-      }
+    return kVoDegenerate;
+  }
+  const Span<const match::Match> matches = mr.value();
+  step.matches = matches.size();
+  if (matches.size() < config_.min_matches) {
+    counters_.increment(VoCounter::kFewMatches);
+    return kVoFewMatches;
+  }
+  const std::size_t n = matches.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const match::Landmark3& a = ref[matches[k].prev];
+    const match::Landmark3& b = lms[matches[k].cur];
+    mp_[k] = a.position_m;
+    mc_[k] = b.position_m;
+    w_[k] = weight_for(a.sigma_m * a.sigma_m + b.sigma_m * b.sigma_m);
+    pair_ref_[k] = static_cast<std::int32_t>(matches[k].prev);
+    pair_cur_[k] = static_cast<std::int32_t>(matches[k].cur);
+  }
+  std::size_t n_final = n;
+  std::size_t n_buf = n;
+  Result<motion::RigidEstimate> r = solve_pairs(n);
+  for (int it = 0; r && it < config_.icp_iterations; ++it) {
+    const std::size_t m = icp_associate(ref, lms, r->pose);
+    n_buf = m;
+    if (m < config_.min_matches) break;
+    Result<motion::RigidEstimate> r2 = solve_pairs(m);
+    if (!r2) break;
+    r = r2;
+    step.matches = m;
+    n_final = m;
+  }
+  if (!r) {
+    counters_.increment(VoCounter::kDegenerate);
+    return kVoDegenerate;
+  }
+  est = r.value();
+  n_final_pairs = n_buf == n_final ? n_final : 0;  // 0: the buffers no longer hold est's pairs
+  return check_estimate(est, n_final, step);
+}
+
+std::uint32_t StereoVo::check_estimate(const motion::RigidEstimate& est, std::size_t n_final, VoStep& step) noexcept {
+  step.inliers = est.inliers;
+  step.rms_residual_m = est.rms_residual_m;
+  // w = 1e-4 / s2 (weighted) -> predicted rms sigma from the weights' harmonic mean.
+  double sum_s2 = 0.0;
+  for (std::size_t k = 0; k < n_final; ++k) sum_s2 += config_.weighted ? 1e-4 / w_[k] : 0.0;
+  const double pred = config_.weighted && n_final > 0 ? std::sqrt(sum_s2 / static_cast<double>(n_final)) : 0.0;
+  step.normalized_residual = pred > 0.0 ? est.rms_residual_m / pred : 0.0;
+  if (!(est.rms_residual_m <= config_.max_rms_residual_m) || !(step.normalized_residual <= config_.max_normalized_residual)) {
+    counters_.increment(VoCounter::kHighResidual);
+    return kVoHighResidual;
+  }
+  if (!(est.pose.t.norm() <= config_.max_step_m) || !(rotation_angle_rad(est.pose.R) <= config_.max_step_rotation_rad) ||
+      !est.pose.is_finite()) {
+    counters_.increment(VoCounter::kImplausibleStep);
+    return kVoImplausible;
+  }
+  return 0;
+}
+
+std::size_t StereoVo::refine_estimate(const VoInput& in, const BoundedVector<match::Landmark3>& ref,
+                                      const BoundedVector<match::Landmark3>& lms, std::size_t n_final_pairs,
+                                      motion::RigidEstimate& est, VoStep& step) noexcept {
+  if (!config_.refine_tracks || n_final_pairs == 0) return 0;
+  const std::size_t m = refine_pairs(in, ref, lms, n_final_pairs, est.pose);
+  if (m == 0) return 0;
+  // The buffers now hold the aligned pairs.
+  Result<motion::RigidEstimate> rr = solve_pairs(m);
+  if (rr && config_.mode == VmeMode::k6D && config_.anisotropic_vo_rotation) {
+    const Span<const Vec3d> P(mp_.data(), m), C(mc_.data(), m);
+    Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, rr.value(), stereo_point_model(true));
+    if (ra) rr = ra;
+  }
+  if (rr && rr->pose.is_finite() && rr->pose.t.norm() <= config_.max_step_m &&
+      rotation_angle_rad(rr->pose.R) <= config_.max_step_rotation_rad) {
+    est.pose = rr->pose;
+    est.covariance = rr->covariance;
+    step.refined_pairs = m;
+  }
+  return m;
+}
+
+const Mat3d* StereoVo::filtered_attitude(const VoInput& in, std::size_t n_pairs, bool refined, motion::RigidEstimate& est,
+                                         VoStep& step) noexcept {
+  if (!filter_active(in)) return sensor_attitude(in);
+  // 6D-VME on the final pairs gives this step's visual rotation for the attitude filter.
+  const Span<const Vec3d> P(mp_.data(), n_pairs), C(mc_.data(), n_pairs);
+  const Span<const double> W(w_.data(), n_pairs);
+  Result<motion::RigidEstimate> r6 = motion::estimate_rigid_6d(P, C, W);
+  if (r6 && config_.irls)
+    r6 = motion::refine_irls_6d(P, C, r6.value(), config_.irls_config, Span<double>(scratch_.data(), n_pairs), W);
+  if (r6 && config_.anisotropic_vo_rotation) {
+    Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, r6.value(), stereo_point_model(refined));
+    if (ra) r6 = ra;
+  }
+  const bool vo_ok = n_pairs >= config_.min_matches && r6 && r6->pose.is_finite() &&
+                     rotation_angle_rad(r6->pose.R) <= config_.max_step_rotation_rad;
+  const Mat3d R6 = vo_ok ? r6->pose.R : Mat3d::Identity();
+  const Mat3d cov_right = vo_ok ? Mat3d(R6.transpose() * r6->covariance.topLeftCorner<3, 3>() * R6) : Mat3d::Zero();
+  step.has_vo_rotation = vo_ok;
+  step.vo_R_prev_cur = R6;
+  step.vo_rotation_cov_right = cov_right;
+  const Mat3d ref_R = filter_ref_R_;
+  const bool was_init = att_filter_.initialised();
+  const Mat3d* att = filter_frame(in, vo_ok, R6, cov_right, step);
+  if (config_.corrected_step_rotation && was_init && att_filter_.initialised() && step.attitude_corrected) {
+    // 3D-VME again with the corrected step rotation (same pairs, same weights).
+    const Mat3d R_step = ref_R.transpose() * (*att);
+    Result<motion::RigidEstimate> r3 = motion::estimate_translation_3d(P, C, R_step, W);
+    if (r3 && config_.irls)
+      r3 = motion::refine_irls_3d(P, C, r3.value(), config_.irls_config, Span<double>(scratch_.data(), n_pairs), W);
+    if (r3 && r3->pose.is_finite() && r3->pose.t.norm() <= config_.max_step_m) {
+      est.pose = r3->pose;
+      est.covariance = r3->covariance;
     }
   }
+  return att;
+}
+
+void StereoVo::integrate_step(const VoInput& in, const BoundedVector<match::Landmark3>& ref,
+                              const BoundedVector<match::Landmark3>& lms, std::size_t n_final_pairs,
+                              motion::RigidEstimate& est, VoStep& step) noexcept {
+  // Track refinement: the final pairs re-measured by patch alignment, the step re-estimated on them.
+  const std::size_t m = refine_estimate(in, ref, lms, n_final_pairs, est, step);
+  const std::size_t n_pairs = m > 0 ? m : n_final_pairs;
+  const bool refined = step.refined_pairs > 0;
+  const Mat3d* att = filtered_attitude(in, n_pairs, refined, est, step);
+  const Mat3d cov_t = est.covariance.bottomRightCorner<3, 3>();
+  if (integrator_.add_step(est.pose, cov_t, att).is_ok()) {
+    step.visual = true;
+    step.prev_T_cur = est.pose;
+    step.covariance = est.covariance;
+  } else {
+    finish_lost(step, kVoDegenerate, att);  // dead-reckon with the attitude this frame already has
+  }
+}
+
+Result<VoStep> StereoVo::process(const VoInput& in) noexcept {
+  if (!ready_) return Status(StatusCode::kNotReady, "StereoVo::process before init");
+  VoStep step;
+  if (frames_since_filter_ < 1000000u) ++frames_since_filter_;
+  const int next = 1 - cur_;
+  BoundedVector<match::Landmark3>& lms = landmarks_[next];
+  if (!accept_input(in, step) || !front_end(in, lms, step)) {
+    step.world_T_cur = integrator_.pose();
+    return step;
+  }
+  if (!have_prev_) {
+    start_reference(in, next, step);
+    step.world_T_cur = integrator_.pose();
+    return step;
+  }
+  const BoundedVector<match::Landmark3>& ref = landmarks_[cur_];
+  motion::RigidEstimate est;
+  std::size_t n_final_pairs = 0;  // pairs in mp_/mc_/w_ that est was computed from (0: inconsistent)
+  const std::uint32_t why = estimate_step(ref, lms, step, est, n_final_pairs);
   if (why != 0) {
     finish_lost(step, why, filter_frame(in, false, Mat3d::Identity(), Mat3d::Zero(), step));
   } else {
-    // Track refinement: the final pairs re-measured by patch alignment, the step re-estimated on them.
-    std::size_t n_pairs = n_final_pairs;
-    bool refined = false;
-    if (config_.refine_tracks && n_final_pairs > 0) {
-      const std::size_t m = refine_pairs(in, ref, lms, n_final_pairs, est.pose);
-      if (m > 0) {
-        n_pairs = m;  // the buffers now hold the aligned pairs
-        Result<motion::RigidEstimate> rr = solve_pairs(m);
-        if (rr && config_.mode == VmeMode::k6D && config_.anisotropic_vo_rotation) {
-          const Span<const Vec3d> P(mp_.data(), m), C(mc_.data(), m);
-          Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, rr.value(), stereo_point_model(true));
-          if (ra) rr = ra;
-        }
-        if (rr && rr->pose.is_finite() && rr->pose.t.norm() <= config_.max_step_m &&
-            rotation_angle_rad(rr->pose.R) <= config_.max_step_rotation_rad) {
-          est.pose = rr->pose;
-          est.covariance = rr->covariance;
-          refined = true;
-          step.refined_pairs = m;
-        }
-      }
-    }
-    const Mat3d* att = sensor_attitude(in);
-    if (filter_active(in)) {
-      // 6D-VME on the final pairs gives this step's visual rotation for the attitude filter.
-      const Span<const Vec3d> P(mp_.data(), n_pairs), C(mc_.data(), n_pairs);
-      const Span<const double> W(w_.data(), n_pairs);
-      Result<motion::RigidEstimate> r6 = motion::estimate_rigid_6d(P, C, W);
-      if (r6 && config_.irls)
-        r6 = motion::refine_irls_6d(P, C, r6.value(), config_.irls_config, Span<double>(scratch_.data(), n_pairs), W);
-      if (r6 && config_.anisotropic_vo_rotation) {
-        Result<motion::RigidEstimate> ra = motion::refine_rigid_6d_stereo(P, C, r6.value(), stereo_point_model(refined));
-        if (ra) r6 = ra;
-      }
-      const bool vo_ok = n_pairs >= config_.min_matches && r6 && r6->pose.is_finite() && rotation_angle_rad(r6->pose.R) <= config_.max_step_rotation_rad;
-      const Mat3d R6 = vo_ok ? r6->pose.R : Mat3d::Identity();
-      const Mat3d cov_right = vo_ok ? Mat3d(R6.transpose() * r6->covariance.topLeftCorner<3, 3>() * R6) : Mat3d::Zero();
-      step.has_vo_rotation = vo_ok;
-      step.vo_R_prev_cur = R6;
-      step.vo_rotation_cov_right = cov_right;
-      const Mat3d ref_R = filter_ref_R_;
-      const bool was_init = att_filter_.initialised();
-      att = filter_frame(in, vo_ok, R6, cov_right, step);
-      if (config_.corrected_step_rotation && was_init && att_filter_.initialised() && step.attitude_corrected) {
-        // 3D-VME again with the corrected step rotation (same pairs, same weights).
-        const Mat3d R_step = ref_R.transpose() * (*att);
-        Result<motion::RigidEstimate> r3 = motion::estimate_translation_3d(P, C, R_step, W);
-        if (r3 && config_.irls)
-          r3 = motion::refine_irls_3d(P, C, r3.value(), config_.irls_config, Span<double>(scratch_.data(), n_pairs), W);
-        if (r3 && r3->pose.is_finite() && r3->pose.t.norm() <= config_.max_step_m) {
-          est.pose = r3->pose;
-          est.covariance = r3->covariance;
-        }
-      }
-    }
-    const Mat3d cov_t = est.covariance.bottomRightCorner<3, 3>();
-    if (integrator_.add_step(est.pose, cov_t, att).is_ok()) {
-      step.visual = true;
-      step.prev_T_cur = est.pose;
-      step.covariance = est.covariance;
-    } else {
-      finish_lost(step, kVoDegenerate, att);  // dead-reckon with the attitude this frame already has
-    }
+    integrate_step(in, ref, lms, n_final_pairs, est, step);
   }
   filter_ref_R_ = (step.attitude_corrected ? (config_.use_filtered_orientation ? att_filter_.corrected() : filter_out_R_)
                                            : (in.has_absolute_attitude ? in.world_R_cam : Mat3d::Identity()));
   // This frame becomes the reference (it has enough landmarks), so the next good frame recovers.
   keep_reference_image(in.left);
   cur_ = next;
-  chain_R_ = Mat3d::Identity();
-  chain_t_ = Vec3d::Zero();
-  chain_sigma2_ = 0.0;
-  chain_has_t_ = true;
+  reset_chain();
   step.world_T_cur = integrator_.pose();
   return step;
 }

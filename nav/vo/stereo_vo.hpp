@@ -198,6 +198,35 @@ class StereoVo {
   static const char* const kCounterNames[static_cast<std::size_t>(VoCounter::kCount)];
 
  private:
+  // The steps of process(), in order. accept_input: checks the input, counts what is bad, chains the
+  // prior; false (step flagged bad input, lost) when the frame cannot be used.
+  bool accept_input(const VoInput& in, VoStep& step) noexcept;
+  void reset_chain() noexcept;  // the prior chained since the reference starts again from identity
+  // Harris, stereo and the landmarks of this frame into lms; false (flagged few corners / few stereo,
+  // lost) when they are too few for a reference.
+  bool front_end(const VoInput& in, BoundedVector<match::Landmark3>& lms, VoStep& step) noexcept;
+  // The first usable frame becomes the reference (landmarks_[next]) and sets the start attitude.
+  void start_reference(const VoInput& in, int next, VoStep& step) noexcept;
+  match::MotionPrior chained_prior() const noexcept;  // the matcher's prior from the chain
+  // fc matching, the VME and the ICP rounds into est; returns the lost reason (0: est is usable) and the
+  // pair count in mp_/mc_/w_ that est was computed from (0 when the buffers no longer hold them).
+  std::uint32_t estimate_step(const BoundedVector<match::Landmark3>& ref, const BoundedVector<match::Landmark3>& lms,
+                              VoStep& step, motion::RigidEstimate& est, std::size_t& n_final_pairs) noexcept;
+  // Residual and plausibility checks of est (n_final pairs); the lost reason or 0.
+  std::uint32_t check_estimate(const motion::RigidEstimate& est, std::size_t n_final, VoStep& step) noexcept;
+  // Track refinement (refine_tracks) of the final pairs and the re-estimate on them (kept in est when
+  // plausible, step.refined_pairs set); returns the aligned pair count now in the buffers (0: none).
+  std::size_t refine_estimate(const VoInput& in, const BoundedVector<match::Landmark3>& ref,
+                              const BoundedVector<match::Landmark3>& lms, std::size_t n_final_pairs,
+                              motion::RigidEstimate& est, VoStep& step) noexcept;
+  // The attitude this step integrates with: the sensor's, or with the attitude filter the corrected one
+  // (the filter fed with the step's 6D-VME rotation on the n_pairs final pairs; est re-estimated with the
+  // corrected step rotation when configured).
+  const Mat3d* filtered_attitude(const VoInput& in, std::size_t n_pairs, bool refined, motion::RigidEstimate& est,
+                                 VoStep& step) noexcept;
+  // Refinement, attitude and integration of an accepted estimate.
+  void integrate_step(const VoInput& in, const BoundedVector<match::Landmark3>& ref, const BoundedVector<match::Landmark3>& lms,
+                      std::size_t n_final_pairs, motion::RigidEstimate& est, VoStep& step) noexcept;
   void build_landmarks(const VoInput& in, BoundedVector<match::Landmark3>& out) noexcept;
   // The appearance descriptor of a landmark for fc-matching's optional term (match.appearance_weight > 0).
   static bool fill_appearance(ConstImageViewU8 img, float x_px, float y_px, match::Landmark3& l) noexcept;

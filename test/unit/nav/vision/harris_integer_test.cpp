@@ -110,6 +110,57 @@ TEST(HarrisIntegerTensor, SameCornersFromTheByteAndTheFloatImage) {
   }
 }
 
+// The block NMS (suppress_blocks: only each (nms+1)^2 block's maximum gets the window check; what
+// detect() runs on 8-bit images without SIMD) against the row-maximum NMS: the same corners, bit for bit,
+// in the same order, with ties (the checkerboard's equal responses), a ROI, other radii and a cap.
+TEST(Harris, BlockNmsGivesTheSameCornersAsTheRowMaximumNms) {
+  struct Case {
+    int nms, cap;
+    RectI roi;
+    bool normalise;
+  };
+  const Case cases[] = {{2, 500, RectI{0, 0, Images::kW, Images::kH}, true},
+                        {2, 12, RectI{0, 0, Images::kW, Images::kH}, true},  // the cap is reached
+                        {1, 500, RectI{0, 0, Images::kW, Images::kH}, false},
+                        {3, 500, RectI{13, 9, 61, 47}, true},
+                        {4, 40, RectI{30, 20, 66, 60}, false}};
+  std::vector<Corner> s1(500), s2(500);
+  BoundedVector<Corner> o1(Span<Corner>(s1.data(), s1.size())), o2(Span<Corner>(s2.data(), s2.size()));
+  std::size_t compared = 0;
+  for (const Case& k : cases) {
+    HarrisConfig c;
+    c.max_width = Images::kW;
+    c.max_height = Images::kH;
+    c.nms_radius = k.nms;
+    c.max_corners = k.cap;
+    c.normalise = k.normalise;
+    ArenaStorage arena(2 * HarrisDetector::arena_bytes(c));
+    HarrisDetector rows, blocks;
+    ASSERT_TRUE(rows.init(c, arena).is_ok());
+    ASSERT_TRUE(blocks.init(c, arena).is_ok());
+    rows.use_block_nms(false);
+    blocks.use_block_nms(true);
+    for (int kind = 0; kind < 3; ++kind) {
+      Images im;
+      make(im, kind);
+      const ConstImageViewU8 img(ImageViewU8::make(im.u8.data(), Images::kW, Images::kH).value());
+      ASSERT_TRUE(rows.detect(img, k.roi, o1).is_ok());
+      ASSERT_TRUE(blocks.detect(img, k.roi, o2).is_ok());
+      ASSERT_EQ(o1.size(), o2.size()) << "image " << kind << " nms " << k.nms;
+      ASSERT_GT(o1.size(), 0u);
+      for (std::size_t i = 0; i < o1.size(); ++i) {
+        EXPECT_EQ(bits(o1[i].x), bits(o2[i].x)) << i;
+        EXPECT_EQ(bits(o1[i].y), bits(o2[i].y)) << i;
+        EXPECT_EQ(bits(o1[i].score), bits(o2[i].score)) << i;
+        EXPECT_EQ(bits(o1[i].response), bits(o2[i].response)) << i;
+      }
+      compared += o1.size();
+    }
+    EXPECT_EQ(rows.counters().get(VisionCounter::kCornerCapReached), blocks.counters().get(VisionCounter::kCornerCapReached));
+  }
+  EXPECT_GT(compared, 100u);
+}
+
 TEST(HarrisIntegerTensor, RefusesAnAreaTooCloseToTheEdgeOrTooLittleScratch) {
   std::vector<std::uint8_t> px(40 * 30, 7);
   std::vector<float> resp(40 * 30), ring(9 * 40);
