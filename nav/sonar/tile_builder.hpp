@@ -152,8 +152,16 @@ class TileBuilder {
   std::uint8_t* valid(int i, int side) noexcept {
     return valid_.data() + (ring(i) * 2 + static_cast<std::size_t>(side)) * static_cast<std::size_t>(cfg_.max_bins_per_side);
   }
+  // build() in steps, in this order:
+  void place_tile(int first, int count) noexcept;       // tile_ origin from the swath's bounding box
+  void clear_previous_box() noexcept;                   // zero what the previous tile touched
+  void splat_scanline(int i, int end) noexcept;         // scanline i and its sub-steps toward i + 1 (< end)
+  void splat_side(int i, int side, const Slot* next, float t, const Pose2& p, int across) noexcept;
   inline void splat(float col, float row, float v) noexcept;
+  void normalise() noexcept;                            // intensity and coverage 1 in the touched box
   void fill_holes() noexcept;
+  std::size_t quantise() noexcept;                      // the u8 raster; returns the covered pixels
+  void finish_tile(int first, int count, std::size_t covered) noexcept;
 
   TileBuilderConfig cfg_{};
   bool ready_ = false;
