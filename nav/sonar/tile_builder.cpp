@@ -15,6 +15,15 @@ double lerp_angle(double a, double b, double t) noexcept { return a + t * wrap_a
 // A pose step below this fraction of the mean step is "no odometry" (a DVL loss freezes the dead
 // reckoning; the AHRS still turns its 1 s extrapolation by millimetres).
 constexpr double kFrozenStepFraction = 0.05;
+// Where the splat's fast path keeps the pixel column the next bin shares in registers (splat_side):
+// on hosts with SIMD (out-of-order cores, where a 16-byte load half overlapping the previous store
+// stalls on store forwarding); elsewhere (LEON3: in order, no forwarding to lose) the extra selects
+// only add instructions. Both add the same terms to every pixel in the same order: the same tile.
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__)
+constexpr bool kCarryColumn = true;
+#else
+constexpr bool kCarryColumn = false;
+#endif
 int floor_to_int_clamped(double v) noexcept {
   constexpr double kLimit = 1073741824.0;
   if (!(v > -kLimit)) return -1073741824;
@@ -292,6 +301,7 @@ void TileBuilder::splat_scanline(int i, int end) noexcept {
   // Sub-sample spacing of at most one pixel: the bilinear splat spreads each sample over 2 x 2
   // pixels, so one-pixel spacing leaves no pixel between samples without weight.
   const double step_m = cfg_.resolution_m;
+  const double inv_res = inv_res_;
   const Slot& a = slots_[ring(i)];
   const bool has_next = i + 1 < end;
   const Slot* bslot = has_next ? &slots_[ring(i + 1)] : nullptr;
@@ -324,18 +334,18 @@ void TileBuilder::splat_scanline(int i, int end) noexcept {
       p.y_m = a.pose.y_m + td * (bslot->pose.y_m - a.pose.y_m);
       p.heading_rad = lerp_angle(a.pose.heading_rad, bslot->pose.heading_rad, td);
     }
-    for (int side = 0; side < 2; ++side) splat_side(i, side, bslot, t, p, across);
+    const Vec2d sb = starboard_unit(p.heading_rad);
+    const double c0 = (p.y_m - tile_.origin_east_m) * inv_res;
+    const double r0 = (tile_.origin_north_m - p.x_m) * inv_res;
+    for (int side = 0; side < 2; ++side) splat_side(i, side, bslot, t, c0, r0, sb, across);
   }
 }
 
-void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, const Pose2& p, int across) noexcept {
+void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double c0, double r0, const Vec2d& sb, int across) noexcept {
   const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
-  const double inv_res = 1.0 / cfg_.resolution_m;
+  const double inv_res = inv_res_;
   const Slot& a = slots_[ring(i)];
   const int bins = a.bins;
-  const Vec2d sb = starboard_unit(p.heading_rad);
-  const double c0 = (p.y_m - tile_.origin_east_m) * inv_res;
-  const double r0 = (tile_.origin_north_m - p.x_m) * inv_res;
   const float* va = values(i, side);
   const std::uint8_t* ka = valid(i, side);
   const float* vb = bslot != nullptr && bslot->bins == bins ? values(i + 1, side) : nullptr;
@@ -361,13 +371,37 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, const 
   const float drb = static_cast<float>(dr * static_cast<double>(a.bin_m));
   if (inside && across <= 1 && vb != nullptr) {
     // Fast path (the common case): the whole line lies inside the raster, one splat per bin.
-    // Along a row the next bin's splat usually shares a column of two pixels with this one (the
-    // line moves one pixel a bin). That column is kept in registers ("pending") until the next
-    // splat has added to it, instead of a store the next 16-byte load only half overlaps (no store
-    // forwarding: that stall was most of the build). Every pixel receives the same additions in the
-    // same order as splatting into memory one bin at a time, so the sums are the same bit for bit.
     const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
     Acc* base = acc_.data();
+    if (!kCarryColumn) {
+      for (int b = 0; b < bins; ++b) {
+        const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
+        if (m == 0) continue;
+        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
+        if (v < 0.0f) continue;
+        const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+        const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
+        const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+        Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+        Acc* q1 = q0 + W;
+        const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+        q0[0].sum += w00 * v;
+        q0[0].weight += w00;
+        q0[1].sum += w10 * v;
+        q0[1].weight += w10;
+        q1[0].sum += w01 * v;
+        q1[0].weight += w01;
+        q1[1].sum += w11 * v;
+        q1[1].weight += w11;
+      }
+      return;
+    }
+    // Along a row the next bin's splat usually shares a column of two pixels with this one (the
+    // line moves one pixel a bin). With kCarryColumn that column is kept in registers ("pending")
+    // until the next splat has added to it, instead of a store the next 16-byte load only half
+    // overlaps (no store forwarding: that stall was most of the host's build). Every pixel receives
+    // the same additions in the same order as splatting into memory one bin at a time, so the sums
+    // are the same bit for bit.
     const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
     Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
     Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
@@ -442,15 +476,17 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, const 
 }
 
 void TileBuilder::normalise() noexcept {
+  // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
+  const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
   // Normalise and mark coverage. Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
   const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
-  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+  for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
     const Acc* acc = acc_.data() + row;
     float* out = intensity_.data() + row;
     std::uint8_t* cov = coverage_.data() + row;
-    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+    for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
       out[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
       cov[x] = c ? 1 : 0;
@@ -459,18 +495,20 @@ void TileBuilder::normalise() noexcept {
 }
 
 std::size_t TileBuilder::quantise() noexcept {
+  // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
+  const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
   const int W = cfg_.tile_width_px;
   const float scale = 255.0f / cfg_.display_max;
   std::size_t covered = 0;
-  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+  for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
     const float* in = intensity_.data() + row;
     const std::uint8_t* cov = coverage_.data() + row;
     std::uint8_t* out = u8_.data() + row;
     std::uint32_t row_covered = 0;
-    for (int x = bb_x0_; x <= bb_x1_; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
+    for (int x = bx0; x <= bx1; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
     covered += row_covered;
-    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+    for (int x = bx0; x <= bx1; ++x) {
       float u = in[x] * scale + 0.5f;
       u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
       out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
@@ -523,6 +561,7 @@ Status TileBuilder::build(int first, int count) noexcept {
   bb_x1_ = -1;
   bb_y1_ = -1;
   clipped_ = 0;
+  inv_res_ = 1.0 / cfg_.resolution_m;
   for (int i = first; i < first + count; ++i) splat_scanline(i, first + count);
   // Touched box, clipped to the raster (every later pass works inside it only).
   if (bb_x0_ < 0) bb_x0_ = 0;
