@@ -14,6 +14,7 @@ void Parser::set_signing_key(const SigningKey& key) noexcept {
 }
 
 void Parser::drop(std::size_t n) noexcept {
+  need_ = 0;
   if (n >= len_) {
     len_ = 0;
     return;
@@ -45,7 +46,10 @@ bool Parser::extract() noexcept {
 Parser::Step Parser::check(std::size_t& frame_len) noexcept {
   const bool v2 = buf_[0] == kMagicV2;
   const std::size_t header = v2 ? kHeaderV2 : kHeaderV1;
-  if (len_ < header) return Step::kNeedMore;
+  if (len_ < header) {
+    need_ = header;
+    return Step::kNeedMore;
+  }
   const std::uint8_t plen = buf_[1];
   std::uint8_t incompat = 0;
   std::uint32_t msgid = 0;
@@ -64,7 +68,10 @@ Parser::Step Parser::check(std::size_t& frame_len) noexcept {
   frame_len = header + plen + kChecksumBytes + (is_signed ? kSignatureBytes : 0);
   const MessageInfo* info = message_info(msgid);
   if (info == nullptr) {
-    if (len_ < frame_len) return Step::kNeedMore;
+    if (len_ < frame_len) {
+      need_ = frame_len;
+      return Step::kNeedMore;
+    }
     counters_.increment(ParserCounter::kUnknownMessage);
     return Step::kDropFrame;
   }
@@ -73,7 +80,10 @@ Parser::Step Parser::check(std::size_t& frame_len) noexcept {
     counters_.increment(ParserCounter::kBadLength);
     return Step::kDropOne;
   }
-  if (len_ < frame_len) return Step::kNeedMore;
+  if (len_ < frame_len) {
+    need_ = frame_len;
+    return Step::kNeedMore;
+  }
   const std::size_t crc_at = header + plen;
   std::uint16_t crc = crc_mcrf4xx(buf_ + 1, crc_at - 1);
   crc = crc_accumulate(info->crc_extra, crc);

@@ -86,6 +86,7 @@ class Parser {
         drop(1);
       }
       buf_[len_++] = b;
+      if (len_ < need_) continue;  // the candidate at buf_[0] was checked and is still short
       while (extract()) on_frame(static_cast<const Frame&>(frame_));
     }
   }
@@ -110,6 +111,10 @@ class Parser {
 
   std::uint8_t buf_[kMaxFrameBytes] = {};
   std::size_t len_ = 0;
+  // Bytes the candidate frame at buf_[0] needs before check() can decide anything new (its header,
+  // then its whole length once the header is known); 0 after any drop. Looking the message up again
+  // on every byte of a frame was most of a parse (issue 30).
+  std::size_t need_ = 0;
   Frame frame_;
   bool accept_v1_ = true;
   bool has_key_ = false;

@@ -15,7 +15,7 @@ constexpr std::uint8_t kOutside = 0, kAverage = 1, kInterpolate = 2;  // BinGeom
 std::size_t ScanlineCorrector::arena_bytes(const ScanlineCorrectorConfig& c) noexcept {
   const std::size_t n = c.max_samples_per_side > 0 ? static_cast<std::size_t>(c.max_samples_per_side) : 0;
   const std::size_t b = c.ground_bins_per_side > 0 ? static_cast<std::size_t>(c.ground_bins_per_side) : 0;
-  return padded(n * sizeof(float)) + padded((n + 1) * sizeof(double)) + padded(n * sizeof(float)) +
+  return padded(n * sizeof(float)) + 2 * padded((n + 1) * sizeof(double)) + padded(n * sizeof(float)) +
          4 * padded(b * sizeof(float)) + 2 * padded(b) + 2 * padded(b * sizeof(std::uint16_t)) + padded(b * sizeof(BinGeometry));
 }
 
@@ -42,6 +42,7 @@ Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) n
   const std::size_t b = static_cast<std::size_t>(c.ground_bins_per_side);
   tvg_ = arena.allocate<float>(n);
   prefix_ = arena.allocate<double>(n + 1);
+  prefix_stbd_ = arena.allocate<double>(n + 1);
   smooth_ = arena.allocate<float>(n);
   geometry_ = arena.allocate<BinGeometry>(b);
   egn_port_ = arena.allocate<float>(b);
@@ -52,12 +53,13 @@ Status ScanlineCorrector::init(const ScanlineCorrectorConfig& c, Arena& arena) n
   out_stbd_ = arena.allocate<float>(b);
   valid_port_ = arena.allocate<std::uint8_t>(b);
   valid_stbd_ = arena.allocate<std::uint8_t>(b);
-  if (tvg_.empty() || prefix_.empty() || smooth_.empty() || geometry_.empty() || egn_port_.empty() || egn_stbd_.empty() || egn_n_port_.empty() || egn_n_stbd_.empty() || out_port_.empty() ||
+  if (tvg_.empty() || prefix_.empty() || prefix_stbd_.empty() || smooth_.empty() || geometry_.empty() || egn_port_.empty() || egn_stbd_.empty() || egn_n_port_.empty() || egn_n_stbd_.empty() || out_port_.empty() ||
       out_stbd_.empty() || valid_port_.empty() || valid_stbd_.empty())
     return Status(StatusCode::kCapacityExceeded, "arena too small for ScanlineCorrector");
   cfg_ = c;
   tvg_range_m_ = -1.0f;
   tvg_n_ = -1;
+  geom_n_ = -1;
   reset_normalisation();
   ready_ = true;
   return Status::ok();
@@ -168,6 +170,10 @@ void ScanlineCorrector::update_tvg(float slant_range_m, int n) noexcept {
 }
 
 void ScanlineCorrector::bin_geometry(int n, float dr_m, float altitude_m) noexcept {
+  if (n == geom_n_ && dr_m == geom_dr_m_ && altitude_m == geom_altitude_m_) return;  // the table is a function of these alone
+  geom_n_ = n;
+  geom_dr_m_ = dr_m;
+  geom_altitude_m_ = altitude_m;
   const double h2 = static_cast<double>(altitude_m) * static_cast<double>(altitude_m);
   const double g_bin = static_cast<double>(cfg_.ground_bin_m);
   const double inv_dr = 1.0 / static_cast<double>(dr_m);
@@ -208,15 +214,29 @@ void ScanlineCorrector::bin_geometry(int n, float dr_m, float altitude_m) noexce
   }
 }
 
-void ScanlineCorrector::correct_side(Span<const float> s, float* egn, std::uint16_t* egn_n, float* out, std::uint8_t* valid) noexcept {
-  const int n = static_cast<int>(s.size());
-  prefix_[0] = 0.0;
-  for (int i = 0; i < n; ++i)
-    prefix_[static_cast<std::size_t>(i) + 1] =
-        prefix_[static_cast<std::size_t>(i)] + static_cast<double>(s[static_cast<std::size_t>(i)] * tvg_[static_cast<std::size_t>(i)]);
+void ScanlineCorrector::prefix_sums(const SonarPing& ping) noexcept {
+  // Each side's sum is the same serial chain of double additions as before; the two sides are
+  // interleaved so that one's addition latency hides the other's.
+  const int n = static_cast<int>(ping.port.size());
+  const float* sp = ping.port.data();
+  const float* ss = ping.stbd.data();
+  const float* g = tvg_.data();
+  double* pp = prefix_.data();
+  double* ps = prefix_stbd_.data();
+  double ap = 0.0, as = 0.0;
+  pp[0] = 0.0;
+  ps[0] = 0.0;
+  for (int i = 0; i < n; ++i) {
+    ap += static_cast<double>(sp[i] * g[i]);
+    as += static_cast<double>(ss[i] * g[i]);
+    pp[i + 1] = ap;
+    ps[i + 1] = as;
+  }
+}
+
+void ScanlineCorrector::correct_side(const double* p, int n, float* egn, std::uint16_t* egn_n, float* out, std::uint8_t* valid) noexcept {
   const float alpha = cfg_.egn_alpha;
   const int bins = cfg_.ground_bins_per_side;
-  const double* p = prefix_.data();
   const auto prefix_at = [p, n](std::int32_t i, double f) { return i >= n ? p[n] : p[i] + f * (p[i + 1] - p[i]); };
   for (int b = 0; b < bins; ++b) {
     const BinGeometry& q = geometry_[static_cast<std::size_t>(b)];
@@ -267,8 +287,9 @@ Status ScanlineCorrector::correct(const SonarPing& ping, CorrectedScanline& out)
   update_tvg(ping.slant_range_m, n);
   const float dr = ping.slant_range_m / static_cast<float>(n);
   bin_geometry(n, dr, h);
-  correct_side(ping.port, egn_port_.data(), egn_n_port_.data(), out_port_.data(), valid_port_.data());
-  correct_side(ping.stbd, egn_stbd_.data(), egn_n_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
+  prefix_sums(ping);
+  correct_side(prefix_.data(), n, egn_port_.data(), egn_n_port_.data(), out_port_.data(), valid_port_.data());
+  correct_side(prefix_stbd_.data(), n, egn_stbd_.data(), egn_n_stbd_.data(), out_stbd_.data(), valid_stbd_.data());
   out.stamp_ns = ping.stamp_ns;
   out.ping_number = ping.ping_number;
   out.bin_m = cfg_.ground_bin_m;

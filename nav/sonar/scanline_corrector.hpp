@@ -94,7 +94,8 @@ class ScanlineCorrector {
   Result<float> detect_bottom_checked(const SonarPing& ping) noexcept;
   void update_tvg(float slant_range_m, int n) noexcept;
   void bin_geometry(int n, float dr_m, float altitude_m) noexcept;
-  void correct_side(Span<const float> samples, float* egn_mean, std::uint16_t* egn_count, float* out, std::uint8_t* valid) noexcept;
+  void prefix_sums(const SonarPing& ping) noexcept;  // both sides' in one pass (two independent chains)
+  void correct_side(const double* prefix, int n, float* egn_mean, std::uint16_t* egn_count, float* out, std::uint8_t* valid) noexcept;
 
   // One ground bin's slant-range footprint, the same for both sides of a ping (bin_geometry()).
   struct BinGeometry {
@@ -107,7 +108,7 @@ class ScanlineCorrector {
   ScanlineCorrectorConfig cfg_{};
   bool ready_ = false;
   Span<float> tvg_;        // per slant sample gain
-  Span<double> prefix_;    // prefix sums of TVG-corrected samples (n + 1)
+  Span<double> prefix_, prefix_stbd_;  // prefix sums of TVG-corrected samples (n + 1), port and starboard
   Span<float> smooth_;     // bottom detection work buffer
   Span<BinGeometry> geometry_;  // per ground bin, this ping's (both sides)
   Span<float> egn_port_, egn_stbd_;
@@ -116,6 +117,10 @@ class ScanlineCorrector {
   Span<std::uint8_t> valid_port_, valid_stbd_;
   float tvg_range_m_ = -1.0f;
   int tvg_n_ = -1;
+  // The inputs bin_geometry() last computed geometry_ for (a detected altitude is a whole number of
+  // samples, so consecutive pings often repeat it): the same inputs reuse the table.
+  int geom_n_ = -1;
+  float geom_dr_m_ = -1.0f, geom_altitude_m_ = -1.0f;
   CounterSet<CorrectorCounter> counters_{kCorrectorCounterNames};
 };
 

@@ -15,6 +15,15 @@ double lerp_angle(double a, double b, double t) noexcept { return a + t * wrap_a
 // A pose step below this fraction of the mean step is "no odometry" (a DVL loss freezes the dead
 // reckoning; the AHRS still turns its 1 s extrapolation by millimetres).
 constexpr double kFrozenStepFraction = 0.05;
+// Where the splat's fast path keeps the pixel column the next bin shares in registers (splat_side):
+// on hosts with SIMD (out-of-order cores, where a 16-byte load half overlapping the previous store
+// stalls on store forwarding); elsewhere (LEON3: in order, no forwarding to lose) the extra selects
+// only add instructions. Both add the same terms to every pixel in the same order: the same tile.
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__)
+constexpr bool kCarryColumn = true;
+#else
+constexpr bool kCarryColumn = false;
+#endif
 int floor_to_int_clamped(double v) noexcept {
   constexpr double kLimit = 1073741824.0;
   if (!(v > -kLimit)) return -1073741824;
@@ -239,7 +248,7 @@ inline void TileBuilder::splat(float col, float row, float v) noexcept {
   }
 }
 
-Status TileBuilder::build(int first, int count) noexcept {
+void TileBuilder::place_tile(int first, int count) noexcept {
   const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
   const double res = cfg_.resolution_m;
   // Bounding box of the swath (first and last valid bin of each side of each scanline).
@@ -269,9 +278,12 @@ Status TileBuilder::build(int first, int count) noexcept {
   tile_.resolution_m = res;
   tile_.origin_north_m = std::round((cn + 0.5 * H * res) / res) * res;
   tile_.origin_east_m = std::round((ce - 0.5 * W * res) / res) * res;
-  const std::size_t px = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+}
+
+void TileBuilder::clear_previous_box() noexcept {
   // Every buffer is zero outside the previous tile's touched box (init zeroes them all), so only
   // that box needs clearing.
+  const int W = cfg_.tile_width_px;
   if (prev_x1_ >= prev_x0_) {
     const std::size_t len = static_cast<std::size_t>(prev_x1_ - prev_x0_ + 1);
     for (int y = prev_y0_; y <= prev_y1_; ++y) {
@@ -282,163 +294,232 @@ Status TileBuilder::build(int first, int count) noexcept {
       std::fill(u8_.data() + k, u8_.data() + k + len, std::uint8_t{0});
     }
   }
-  bb_x0_ = W;
-  bb_y0_ = H;
-  bb_x1_ = -1;
-  bb_y1_ = -1;
-  clipped_ = 0;
-  const double inv_res = 1.0 / res;
+}
+
+void TileBuilder::splat_scanline(int i, int end) noexcept {
+  const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
   // Sub-sample spacing of at most one pixel: the bilinear splat spreads each sample over 2 x 2
   // pixels, so one-pixel spacing leaves no pixel between samples without weight.
-  const double step_m = res;
-  for (int i = first; i < first + count; ++i) {
-    const Slot& a = slots_[ring(i)];
-    const bool has_next = i + 1 < first + count;
-    const Slot* bslot = has_next ? &slots_[ring(i + 1)] : nullptr;
-    int steps = 1;
-    if (has_next) {
-      const double d = (bslot->pose.translation() - a.pose.translation()).norm();
-      if (d > cfg_.max_gap_m) {
-        counters_.increment(TileCounter::kNavJump);
-        bslot = nullptr;
-      } else {
-        // Steps such that the far-range bins advance at most one pixel per sub-step.
-        const double reach = a.bins * static_cast<double>(a.bin_m);
-        const double dh = std::fabs(wrap_angle_rad(bslot->pose.heading_rad - a.pose.heading_rad));
-        const double move = d + dh * reach;
-        const double want = std::ceil(move / step_m - 1e-3);
-        steps = !(want >= 1.0) ? 1 : (want > static_cast<double>(cfg_.max_substeps) ? cfg_.max_substeps : static_cast<int>(want));
-      }
+  const double step_m = cfg_.resolution_m;
+  const double inv_res = inv_res_;
+  const Slot& a = slots_[ring(i)];
+  const bool has_next = i + 1 < end;
+  const Slot* bslot = has_next ? &slots_[ring(i + 1)] : nullptr;
+  int steps = 1;
+  if (has_next) {
+    const double d = (bslot->pose.translation() - a.pose.translation()).norm();
+    if (d > cfg_.max_gap_m) {
+      counters_.increment(TileCounter::kNavJump);
+      bslot = nullptr;
+    } else {
+      // Steps such that the far-range bins advance at most one pixel per sub-step.
+      const double reach = a.bins * static_cast<double>(a.bin_m);
+      const double dh = std::fabs(wrap_angle_rad(bslot->pose.heading_rad - a.pose.heading_rad));
+      const double move = d + dh * reach;
+      const double want = std::ceil(move / step_m - 1e-3);
+      steps = !(want >= 1.0) ? 1 : (want > static_cast<double>(cfg_.max_substeps) ? cfg_.max_substeps : static_cast<int>(want));
     }
-    const int bins = a.bins;
-    // Pixels across one bin (float bin sizes), at most the raster's size: a bin wider than the tile
-    // (a damaged ping's range) is not spread over more sub-steps than the tile has pixels.
-    const int across_max = W > H ? W : H;
-    const int across_px = floor_to_int_clamped(std::ceil(static_cast<double>(a.bin_m) / step_m - 1e-3));
-    const int across = across_px > across_max ? across_max : across_px;
-    for (int j = 0; j < steps; ++j) {
-      const float t = static_cast<float>(j) / static_cast<float>(steps);
-      Pose2 p = a.pose;
-      if (bslot != nullptr && j > 0) {
-        const double td = static_cast<double>(t);
-        p.x_m = a.pose.x_m + td * (bslot->pose.x_m - a.pose.x_m);
-        p.y_m = a.pose.y_m + td * (bslot->pose.y_m - a.pose.y_m);
-        p.heading_rad = lerp_angle(a.pose.heading_rad, bslot->pose.heading_rad, td);
+  }
+  // Pixels across one bin (float bin sizes), at most the raster's size: a bin wider than the tile
+  // (a damaged ping's range) is not spread over more sub-steps than the tile has pixels.
+  const int across_max = W > H ? W : H;
+  const int across_px = floor_to_int_clamped(std::ceil(static_cast<double>(a.bin_m) / step_m - 1e-3));
+  const int across = across_px > across_max ? across_max : across_px;
+  for (int j = 0; j < steps; ++j) {
+    const float t = static_cast<float>(j) / static_cast<float>(steps);
+    Pose2 p = a.pose;
+    if (bslot != nullptr && j > 0) {
+      const double td = static_cast<double>(t);
+      p.x_m = a.pose.x_m + td * (bslot->pose.x_m - a.pose.x_m);
+      p.y_m = a.pose.y_m + td * (bslot->pose.y_m - a.pose.y_m);
+      p.heading_rad = lerp_angle(a.pose.heading_rad, bslot->pose.heading_rad, td);
+    }
+    const Vec2d sb = starboard_unit(p.heading_rad);
+    const double c0 = (p.y_m - tile_.origin_east_m) * inv_res;
+    const double r0 = (tile_.origin_north_m - p.x_m) * inv_res;
+    for (int side = 0; side < 2; ++side) splat_side(i, side, bslot, t, c0, r0, sb, across);
+  }
+}
+
+void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double c0, double r0, const Vec2d& sb, int across) noexcept {
+  const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
+  const double inv_res = inv_res_;
+  const Slot& a = slots_[ring(i)];
+  const int bins = a.bins;
+  const float* va = values(i, side);
+  const std::uint8_t* ka = valid(i, side);
+  const float* vb = bslot != nullptr && bslot->bins == bins ? values(i + 1, side) : nullptr;
+  const std::uint8_t* kb = vb != nullptr ? valid(i + 1, side) : nullptr;
+  // Per metre across track: d(col) = sign*sb.east/res, d(row) = -sign*sb.north/res.
+  const double dc = side_sign(side) * sb.y() * inv_res;
+  const double dr = -side_sign(side) * sb.x() * inv_res;
+  bool inside;
+  {
+    // Touched box of this line of samples: its two ends (+1 pixel for the bilinear splat).
+    const double reach = bins * static_cast<double>(a.bin_m);
+    const double xa = c0 - 0.5, ya = r0 - 0.5, xb = c0 + reach * dc - 0.5, yb = r0 + reach * dr - 0.5;
+    const int lx = floor_to_int_clamped(xa < xb ? xa : xb), hx = floor_to_int_clamped(xa < xb ? xb : xa) + 1;
+    const int ly = floor_to_int_clamped(ya < yb ? ya : yb), hy = floor_to_int_clamped(ya < yb ? yb : ya) + 1;
+    bb_x0_ = lx < bb_x0_ ? lx : bb_x0_;
+    bb_y0_ = ly < bb_y0_ ? ly : bb_y0_;
+    bb_x1_ = hx > bb_x1_ ? hx : bb_x1_;
+    bb_y1_ = hy > bb_y1_ ? hy : bb_y1_;
+    inside = lx >= 0 && ly >= 0 && hx < W && hy < H;
+  }
+  const float c0f = static_cast<float>(c0), r0f = static_cast<float>(r0);
+  const float dcb = static_cast<float>(dc * static_cast<double>(a.bin_m));  // per bin
+  const float drb = static_cast<float>(dr * static_cast<double>(a.bin_m));
+  if (inside && across <= 1 && vb != nullptr) {
+    // Fast path (the common case): the whole line lies inside the raster, one splat per bin.
+    const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
+    Acc* base = acc_.data();
+    if (!kCarryColumn) {
+      for (int b = 0; b < bins; ++b) {
+        const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
+        if (m == 0) continue;
+        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
+        if (v < 0.0f) continue;
+        const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+        const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
+        const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+        Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+        Acc* q1 = q0 + W;
+        const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+        q0[0].sum += w00 * v;
+        q0[0].weight += w00;
+        q0[1].sum += w10 * v;
+        q0[1].weight += w10;
+        q1[0].sum += w01 * v;
+        q1[0].weight += w01;
+        q1[1].sum += w11 * v;
+        q1[1].weight += w11;
       }
-      const Vec2d sb = starboard_unit(p.heading_rad);
-      const double c0 = (p.y_m - tile_.origin_east_m) * inv_res;
-      const double r0 = (tile_.origin_north_m - p.x_m) * inv_res;
-      for (int side = 0; side < 2; ++side) {
-        const float* va = values(i, side);
-        const std::uint8_t* ka = valid(i, side);
-        const float* vb = bslot != nullptr && bslot->bins == bins ? values(i + 1, side) : nullptr;
-        const std::uint8_t* kb = vb != nullptr ? valid(i + 1, side) : nullptr;
-        // Per metre across track: d(col) = sign*sb.east/res, d(row) = -sign*sb.north/res.
-        const double dc = side_sign(side) * sb.y() * inv_res;
-        const double dr = -side_sign(side) * sb.x() * inv_res;
-        bool inside;
-        {
-          // Touched box of this line of samples: its two ends (+1 pixel for the bilinear splat).
-          const double reach = bins * static_cast<double>(a.bin_m);
-          const double xa = c0 - 0.5, ya = r0 - 0.5, xb = c0 + reach * dc - 0.5, yb = r0 + reach * dr - 0.5;
-          const int lx = floor_to_int_clamped(xa < xb ? xa : xb), hx = floor_to_int_clamped(xa < xb ? xb : xa) + 1;
-          const int ly = floor_to_int_clamped(ya < yb ? ya : yb), hy = floor_to_int_clamped(ya < yb ? yb : ya) + 1;
-          bb_x0_ = lx < bb_x0_ ? lx : bb_x0_;
-          bb_y0_ = ly < bb_y0_ ? ly : bb_y0_;
-          bb_x1_ = hx > bb_x1_ ? hx : bb_x1_;
-          bb_y1_ = hy > bb_y1_ ? hy : bb_y1_;
-          inside = lx >= 0 && ly >= 0 && hx < W && hy < H;
+      return;
+    }
+    // Along a row the next bin's splat usually shares a column of two pixels with this one (the
+    // line moves one pixel a bin). With kCarryColumn that column is kept in registers ("pending")
+    // until the next splat has added to it, instead of a store the next 16-byte load only half
+    // overlaps (no store forwarding: that stall was most of the host's build). Every pixel receives
+    // the same additions in the same order as splatting into memory one bin at a time, so the sums
+    // are the same bit for bit.
+    const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
+    Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
+    Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
+    for (int b = 0; b < bins; ++b) {
+      const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
+      if (m == 0) continue;
+      const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
+      if (v < 0.0f) continue;
+      const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+      const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
+      const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+      Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+      const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+      Acc* shared = east ? q0 : q0 + 1;  // the column the previous splat may have left pending
+      Acc* fresh = east ? q0 + 1 : q0;   // the column the next splat may share
+      const float ws0 = east ? w00 : w10, ws1 = east ? w01 : w11, wf0 = east ? w10 : w00, wf1 = east ? w11 : w01;
+      Acc s0, s1;
+      if (shared == pending) {
+        s0 = p0;
+        s1 = p1;
+      } else {
+        if (pending != nullptr) {
+          pending[0] = p0;
+          pending[W] = p1;
         }
-        const float c0f = static_cast<float>(c0), r0f = static_cast<float>(r0);
-        const float dcb = static_cast<float>(dc * static_cast<double>(a.bin_m));  // per bin
-        const float drb = static_cast<float>(dr * static_cast<double>(a.bin_m));
-        if (inside && across <= 1 && vb != nullptr) {
-          // Fast path (the common case): the whole line lies inside the raster, one splat per bin.
-          const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
-          Acc* base = acc_.data();
-          for (int b = 0; b < bins; ++b) {
-            const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-            if (m == 0) continue;
-            const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
-            if (v < 0.0f) continue;
-            const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
-            const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
-            const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
-            Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
-            Acc* q1 = q0 + W;
-            const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
-            q0[0].sum += w00 * v;
-            q0[0].weight += w00;
-            q0[1].sum += w10 * v;
-            q0[1].weight += w10;
-            q1[0].sum += w01 * v;
-            q1[0].weight += w01;
-            q1[1].sum += w11 * v;
-            q1[1].weight += w11;
-          }
-          continue;
-        }
-        for (int b = 0; b < bins; ++b) {
-          float v;
-          if (vb != nullptr && ka[b] && kb[b]) {
-            v = va[b] + t * (vb[b] - va[b]);
-          } else if (ka[b] && (vb == nullptr || t < 0.5f || !kb[b])) {
-            v = va[b];
-          } else if (vb != nullptr && kb[b] && t >= 0.5f) {
-            v = vb[b];
-          } else {
-            continue;
-          }
-          if (across <= 1) {
-            const float g = static_cast<float>(b) + 0.5f;  // in bins
-            splat(c0f + g * dcb, r0f + g * drb, v);
-          } else {
-            // Bin wider than a pixel: spread it across in sub-steps (constant value within the bin).
-            for (int q = 0; q < across; ++q) {
-              const float g = static_cast<float>(b) + (static_cast<float>(q) + 0.5f) / static_cast<float>(across);
-              splat(c0f + g * dcb, r0f + g * drb, v);
-            }
-          }
-        }
+        s0 = shared[0];
+        s1 = shared[W];
+      }
+      Acc f0 = fresh[0], f1 = fresh[W];
+      s0.sum += ws0 * v;
+      s0.weight += ws0;
+      f0.sum += wf0 * v;
+      f0.weight += wf0;
+      s1.sum += ws1 * v;
+      s1.weight += ws1;
+      f1.sum += wf1 * v;
+      f1.weight += wf1;
+      shared[0] = s0;
+      shared[W] = s1;
+      pending = fresh;
+      p0 = f0;
+      p1 = f1;
+    }
+    if (pending != nullptr) {
+      pending[0] = p0;
+      pending[W] = p1;
+    }
+    return;
+  }
+  for (int b = 0; b < bins; ++b) {
+    float v;
+    if (vb != nullptr && ka[b] && kb[b]) {
+      v = va[b] + t * (vb[b] - va[b]);
+    } else if (ka[b] && (vb == nullptr || t < 0.5f || !kb[b])) {
+      v = va[b];
+    } else if (vb != nullptr && kb[b] && t >= 0.5f) {
+      v = vb[b];
+    } else {
+      continue;
+    }
+    if (across <= 1) {
+      const float g = static_cast<float>(b) + 0.5f;  // in bins
+      splat(c0f + g * dcb, r0f + g * drb, v);
+    } else {
+      // Bin wider than a pixel: spread it across in sub-steps (constant value within the bin).
+      for (int q = 0; q < across; ++q) {
+        const float g = static_cast<float>(b) + (static_cast<float>(q) + 0.5f) / static_cast<float>(across);
+        splat(c0f + g * dcb, r0f + g * drb, v);
       }
     }
   }
-  // Touched box, clipped to the raster (every later pass works inside it only).
-  if (bb_x0_ < 0) bb_x0_ = 0;
-  if (bb_y0_ < 0) bb_y0_ = 0;
-  if (bb_x1_ > W - 1) bb_x1_ = W - 1;
-  if (bb_y1_ > H - 1) bb_y1_ = H - 1;
-  // Normalise and mark coverage.
+}
+
+void TileBuilder::normalise() noexcept {
+  // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
+  const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
+  // Normalise and mark coverage. Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
+  const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
-  std::size_t covered = 0;
-  // Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
-  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+  for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
     const Acc* acc = acc_.data() + row;
     float* out = intensity_.data() + row;
     std::uint8_t* cov = coverage_.data() + row;
-    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+    for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
       out[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
       cov[x] = c ? 1 : 0;
     }
   }
-  if (cfg_.hole_fill_radius_px > 0) fill_holes();
+}
+
+std::size_t TileBuilder::quantise() noexcept {
+  // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
+  const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
+  const int W = cfg_.tile_width_px;
   const float scale = 255.0f / cfg_.display_max;
-  for (int y = bb_y0_; y <= bb_y1_; ++y) {
+  std::size_t covered = 0;
+  for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
     const float* in = intensity_.data() + row;
     const std::uint8_t* cov = coverage_.data() + row;
     std::uint8_t* out = u8_.data() + row;
     std::uint32_t row_covered = 0;
-    for (int x = bb_x0_; x <= bb_x1_; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
+    for (int x = bx0; x <= bx1; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
     covered += row_covered;
-    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+    for (int x = bx0; x <= bx1; ++x) {
       float u = in[x] * scale + 0.5f;
       u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
       out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
     }
   }
+  return covered;
+}
+
+void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcept {
+  const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
+  const std::size_t px = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   prev_x0_ = bb_x0_;
   prev_y0_ = bb_y0_;
   prev_x1_ = bb_x1_;
@@ -467,6 +548,29 @@ Status TileBuilder::build(int first, int count) noexcept {
   tile_.coverage_fraction = static_cast<float>(static_cast<double>(covered) / static_cast<double>(px));
   tile_.clipped_splats = clipped_;
   ++tiles_built_;
+}
+
+Status TileBuilder::build(int first, int count) noexcept {
+  // Place the raster on the swath, clear what the previous tile left, splat every scanline (and
+  // its sub-steps toward the next), then normalise, fill holes and quantise inside the touched box.
+  const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
+  place_tile(first, count);
+  clear_previous_box();
+  bb_x0_ = W;
+  bb_y0_ = H;
+  bb_x1_ = -1;
+  bb_y1_ = -1;
+  clipped_ = 0;
+  inv_res_ = 1.0 / cfg_.resolution_m;
+  for (int i = first; i < first + count; ++i) splat_scanline(i, first + count);
+  // Touched box, clipped to the raster (every later pass works inside it only).
+  if (bb_x0_ < 0) bb_x0_ = 0;
+  if (bb_y0_ < 0) bb_y0_ = 0;
+  if (bb_x1_ > W - 1) bb_x1_ = W - 1;
+  if (bb_y1_ > H - 1) bb_y1_ = H - 1;
+  normalise();
+  if (cfg_.hole_fill_radius_px > 0) fill_holes();
+  finish_tile(first, count, quantise());
   return Status::ok();
 }
 

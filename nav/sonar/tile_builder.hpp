@@ -152,8 +152,17 @@ class TileBuilder {
   std::uint8_t* valid(int i, int side) noexcept {
     return valid_.data() + (ring(i) * 2 + static_cast<std::size_t>(side)) * static_cast<std::size_t>(cfg_.max_bins_per_side);
   }
+  // build() in steps, in this order:
+  void place_tile(int first, int count) noexcept;       // tile_ origin from the swath's bounding box
+  void clear_previous_box() noexcept;                   // zero what the previous tile touched
+  void splat_scanline(int i, int end) noexcept;         // scanline i and its sub-steps toward i + 1 (< end)
+  // One side of one sub-step: pixel coordinates (c0, r0) of the sub-step's pose, sb its starboard unit.
+  void splat_side(int i, int side, const Slot* next, float t, double c0, double r0, const Vec2d& sb, int across) noexcept;
   inline void splat(float col, float row, float v) noexcept;
+  void normalise() noexcept;                            // intensity and coverage 1 in the touched box
   void fill_holes() noexcept;
+  std::size_t quantise() noexcept;                      // the u8 raster; returns the covered pixels
+  void finish_tile(int first, int count, std::size_t covered) noexcept;
 
   TileBuilderConfig cfg_{};
   bool ready_ = false;
@@ -182,6 +191,7 @@ class TileBuilder {
   double last_end_m_ = 0.0;    // where the last tile ended
   bool overflow_ = false;      // a ping the next tile needed was dropped
   int first_in_tile(double start_m) const noexcept;
+  double inv_res_ = 0.0;        // 1 / resolution_m, set by build()
   int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
   int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};
