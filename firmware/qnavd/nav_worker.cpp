@@ -55,11 +55,8 @@ bool NavWorker::run_once() noexcept {
   // One ping or one stereo pair per loop, the earlier by sample time.
   PingMsg ping;
   FrameMsg pair;
-  const PingMsg* next_ping = q_.pings->front();
-  const FrameMsg* next_pair = q_.frames != nullptr ? q_.frames->front() : nullptr;
-  const bool take_pair = next_pair != nullptr && (next_ping == nullptr || next_pair->stamp.sample_ns < next_ping->stamp.sample_ns);
-  const bool have_ping = !take_pair && q_.pings->try_pop(ping).is_ok();
-  const bool have_pair = take_pair && q_.frames->try_pop(pair).is_ok();
+  bool have_ping = false, have_pair = false;
+  q_.pop_earlier(ping, have_ping, pair, have_pair);
   // Every input sampled up to this ping or pair (mode commands, attitude, velocities), and none after
   // it: the sample is placed with the navigation of its own time, whatever the I/O thread queued since.
   // And only the inputs that had arrived when the ping or pair arrived: one sampled before it but
@@ -312,28 +309,21 @@ void NavWorker::handle_pair(const FrameMsg& f) noexcept {
     ++counters_.frames_out_of_order;
     return;
   }
+  const std::size_t pair_bytes = 2 * static_cast<std::size_t>(cfg_.vo.max_width) * static_cast<std::size_t>(cfg_.vo.max_height);
   if (f.downward) {
-    if (state_.mode != qc::Mode::kMap || !map_.ready()) return;
-    if (!QNAVD_CHECK(f.width == cfg_.map_width && f.height == cfg_.map_height, "downward frame of another size than map.width x map.height"))
-      return;
-    map_.on_frame(f, q_.frame_slot(f.slot, 2 * static_cast<std::size_t>(cfg_.vo.max_width) * static_cast<std::size_t>(cfg_.vo.max_height)));
+    if (state_.mode != qc::Mode::kMap || !map_.ready() || !map_.on_frame(f, q_.frame_slot(f.slot, pair_bytes))) return;
     if (source_.enabled() && map_.step().observed) source_.map_step(map_.step().place, inputs_.dr());
     stage_time(Stage::kMap, t0);
     map_.log_frame(f, static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6);
     return;
   }
   if (state_.mode != qc::Mode::kVo || !vo_.ready()) return;
-  const int W = cfg_.vo.max_width, H = cfg_.vo.max_height;
-  if (!QNAVD_CHECK(f.width == W && f.height == H, "stereo pair of another size than its pool slot")) return;
-  const std::uint8_t* left = q_.frame_slot(f.slot, 2 * static_cast<std::size_t>(W) * static_cast<std::size_t>(H));
-  // The newest attitude at or before the pair (inputs are taken up to its time), if not stale.
-  Mat3d world_R_body = Mat3d::Identity();
-  const bool has_attitude = inputs_.attitude_at(f.stamp.sample_ns, &world_R_body);
-  FrameReport& r = vo_.on_pair(f, left, left + static_cast<std::size_t>(W) * static_cast<std::size_t>(H), has_attitude, world_R_body, inputs_.dr());
+  FrameReport* r = vo_.on_pair(f, q_.frame_slot(f.slot, pair_bytes), inputs_);
+  if (r == nullptr) return;
   stage_time(Stage::kVo, t0);
-  r.latency_ms = static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6;
-  vo_.log_pair(r);
-  if (frame_observer_) frame_observer_(frame_ctx_, r);
+  r->latency_ms = static_cast<double>(cpu_clock_.now_ns() - t0) * 1e-6;
+  vo_.log_pair(*r);
+  if (frame_observer_) frame_observer_(frame_ctx_, *r);
 }
 
 void NavWorker::shutdown() noexcept {

@@ -74,6 +74,14 @@ struct NavQueues {
   const std::uint8_t* frame_slot(std::uint32_t slot, std::size_t pair_bytes) const noexcept {
     return frame_pool + static_cast<std::size_t>(slot) * (frame_slot_bytes != 0 ? frame_slot_bytes : pair_bytes);
   }
+  // Takes the earlier queued sample by sample time: a ping or a stereo pair / downward frame.
+  void pop_earlier(PingMsg& ping, bool& have_ping, FrameMsg& frame, bool& have_frame) const noexcept {
+    const PingMsg* np = pings->front();
+    const FrameMsg* nf = frames != nullptr ? frames->front() : nullptr;
+    const bool take_frame = nf != nullptr && (np == nullptr || nf->stamp.sample_ns < np->stamp.sample_ns);
+    have_ping = !take_frame && pings->try_pop(ping).is_ok();
+    have_frame = take_frame && frames->try_pop(frame).is_ok();
+  }
   // Bounds (until_ns, until_arrival_ns) by the first ping and frame queued now, if any.
   void bound_by_queued_samples(std::int64_t& until_ns, std::int64_t& until_arrival_ns) const noexcept {
     const PingMsg* np = pings->front();
@@ -118,9 +126,6 @@ class NavWorker {
   ModeReject last_reject() const noexcept { return state_.last_reject; }
   std::uint32_t tiles() const noexcept { return counters_.tiles; }
   std::uint32_t pings() const noexcept { return counters_.pings; }
-  // Inputs taken off the queues (each then handled or counted as rejected by its receiver).
-  std::uint64_t can_frames() const noexcept { return inputs_.can_frames(); }
-  std::uint64_t dvl_samples() const noexcept { return inputs_.dvl_samples(); }
   // Pings the tile pipeline's corrector refused as damaged (range, samples, altitude), and pings
   // stamped at or before the previous one (dropped).
   std::uint32_t pings_rejected() const noexcept { return health_.pings_rejected(); }
@@ -128,16 +133,14 @@ class NavWorker {
   // Stereo pairs taken off the queue; out of order.
   std::uint32_t frames() const noexcept { return counters_.frames; }
   std::uint32_t frames_out_of_order() const noexcept { return counters_.frames_out_of_order; }
-  // qnav CAN frames refused by the receiver (format, length, range, invalid, stale, error frames).
-  std::uint32_t can_rejected() const noexcept { return inputs_.can_rejected(); }
-  std::uint32_t can_error_frames() const noexcept { return inputs_.receiver().counters().get(drivers::qnavcan::RxCounter::kErrorFrame); }
-  bool bus_off() const noexcept { return inputs_.bus_off(); }
   std::uint32_t writer_errors() const noexcept { return teach_.errors() + map_.save_errors(); }
   // The last teach could not be committed (the route stays under .new; the exit code says so).
   bool commit_failed() const noexcept { return teach_.commit_failed(); }
-  // The components, read-only, for their counters (each header lists them): the repeat (experiences
+  // The components, read-only, for their counters (each header lists them): the inputs (CAN frames and
+  // DVL samples taken off the queues, CAN frames the receiver refused, bus-off), the repeat (experiences
   // learnt and failed, its "route_meta" bytes), VO (frames, visual steps, without attitude), the map
   // (frames, refused frames, map file saves and failures, the mapper).
+  const NavInputs& inputs() const noexcept { return inputs_; }
   const RouteRepeat& repeat() const noexcept { return repeat_; }
   const VoComponent& vo() const noexcept { return vo_; }
   const MapComponent& map() const noexcept { return map_; }

@@ -167,8 +167,8 @@ int main(int argc, char** argv) {
   // Every input accounted for: what is neither processed nor dropped nor rejected is still queued,
   // and a queue holds at most its capacity.
   const long long ping_rest = static_cast<long long>(io.pings_in.load()) - nav.pings() - io.ping_overflow.load() - io.sonar_rejected.load();
-  const long long dvl_rest = static_cast<long long>(io.dvl_in.load()) - static_cast<long long>(nav.dvl_samples()) - io.dvl_overflow.load();
-  const long long can_rest = static_cast<long long>(io.can_rx_in.load()) - static_cast<long long>(nav.can_frames()) - io.can_rx_overflow.load();
+  const long long dvl_rest = static_cast<long long>(io.dvl_in.load()) - static_cast<long long>(nav.inputs().dvl_samples()) - io.dvl_overflow.load();
+  const long long can_rest = static_cast<long long>(io.can_rx_in.load()) - static_cast<long long>(nav.inputs().can_frames()) - io.can_rx_overflow.load();
   const bool accounted = ping_rest >= 0 && ping_rest <= static_cast<long long>(cfg.ping_queue) && dvl_rest >= 0 && dvl_rest <= static_cast<long long>(kDvlQueueCapacity) && can_rest >= 0 &&
                          can_rest <= static_cast<long long>(cfg.can_rx_queue);
 
@@ -182,8 +182,8 @@ int main(int argc, char** argv) {
         mission_hours, static_cast<unsigned long long>(allocations), counted ? "true" : "false", rss_start, rss_end,
         nav.deadline_misses(), nav.tiles(), nodes, static_cast<unsigned long long>(io.pings_in.load()), nav.pings(),
         io.ping_overflow.load(), io.sonar_rejected.load(), ping_rest, static_cast<unsigned long long>(io.dvl_in.load()),
-        static_cast<unsigned long long>(nav.dvl_samples()), io.dvl_overflow.load(), io.dvl_rejected.load(),
-        static_cast<unsigned long long>(io.can_rx_in.load()), static_cast<unsigned long long>(nav.can_frames()), io.can_rx_overflow.load(),
+        static_cast<unsigned long long>(nav.inputs().dvl_samples()), io.dvl_overflow.load(), io.dvl_rejected.load(),
+        static_cast<unsigned long long>(io.can_rx_in.load()), static_cast<unsigned long long>(nav.inputs().can_frames()), io.can_rx_overflow.load(),
         SoftwareFaults::count(), nav.writer_errors(), d.mission_done() ? "true" : "false", accounted ? "true" : "false");
   } else {
     std::printf("qnavd soak: %.2f mission hours, %llu heap allocations after start, RSS %ld -> %ld kB, %u deadline misses, %u tiles, "

@@ -1,5 +1,7 @@
 #include "firmware/qnavd/components/map_component.hpp"
 
+#include "firmware/qnavd/software_fault.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -58,7 +60,9 @@ bool MapComponent::camera_lost(std::int64_t now_ns) const noexcept {
   return now_ns - std::max(order_.last_ns, mode_start_ns_) > static_cast<std::int64_t>(ctx_.cfg->map_stale_s * 1e9);
 }
 
-void MapComponent::on_frame(const FrameMsg& f, const std::uint8_t* image) noexcept {
+bool MapComponent::on_frame(const FrameMsg& f, const std::uint8_t* image) noexcept {
+  if (!QNAVD_CHECK(f.width == ctx_.cfg->map_width && f.height == ctx_.cfg->map_height, "downward frame of another size than map.width x map.height"))
+    return false;
   ++frames_;
   const ConstImageViewU8 img = ConstImageViewU8::make(image, ctx_.cfg->map_width, ctx_.cfg->map_height).value();
   const Status s = mapper_.step(img, ctx_.cfg->map_altitude_m > 0.0 ? ctx_.cfg->map_altitude_m : -1.0, step_);
@@ -66,6 +70,7 @@ void MapComponent::on_frame(const FrameMsg& f, const std::uint8_t* image) noexce
   if (step_.chain.status != topo::StepStatus::kOk) ++bad_frames_;
   if (step_.observed && step_.place.kind == topo::ObserveKind::kCreated) save();  // durable as it grows
   publish(f);
+  return true;
 }
 
 // QNAV_MAP_POSE + QNAV_MAP_STATUS for this frame (sent once, at this loop's outputs).

@@ -34,7 +34,8 @@ class MapComponent {
   // False when the frame is older than the previous downward frame (counted out of order by the worker).
   bool in_order(std::int64_t sample_ns) noexcept { return order_.advance(sample_ns); }
   // One downward frame (map.width x map.height); a step error is counted (step_errors).
-  void on_frame(const FrameMsg& f, const std::uint8_t* image) noexcept;
+  // False: a frame of another size than map.width x map.height (a software fault, counted).
+  bool on_frame(const FrameMsg& f, const std::uint8_t* image) noexcept;
   void log_frame(const FrameMsg& f, double latency_ms) const noexcept;
   // Mode = Map: no downward frame for map.stale_s since the last one (or the mode's start).
   bool camera_lost(std::int64_t now_ns) const noexcept;

@@ -1,5 +1,7 @@
 #include "firmware/qnavd/components/vo_component.hpp"
 
+#include "firmware/qnavd/software_fault.hpp"
+
 #include <algorithm>
 
 #include "drivers/qnavcan/messages.hpp"
@@ -32,10 +34,15 @@ bool VoComponent::camera_lost(std::int64_t now_ns) const noexcept {
   return now_ns - std::max(order_.last_ns, mode_start_ns_) > static_cast<std::int64_t>(ctx_.cfg->vo_stale_s * 1e9);
 }
 
-FrameReport& VoComponent::on_pair(const FrameMsg& f, const std::uint8_t* left, const std::uint8_t* right, bool has_attitude,
-                                        const Mat3d& world_R_body, const pipeline::DeadReckoner& dr) noexcept {
+FrameReport* VoComponent::on_pair(const FrameMsg& f, const std::uint8_t* slot, const NavInputs& inputs) noexcept {
   const DaemonConfig& cfg = *ctx_.cfg;
   const int W = cfg.vo.max_width, H = cfg.vo.max_height;
+  if (!QNAVD_CHECK(f.width == W && f.height == H, "stereo pair of another size than its pool slot")) return nullptr;
+  const std::uint8_t* left = slot;
+  const std::uint8_t* right = slot + static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  Mat3d world_R_body = Mat3d::Identity();
+  const bool has_attitude = inputs.attitude_at(f.stamp.sample_ns, &world_R_body);
+  const pipeline::DeadReckoner& dr = inputs.dr();
   FrameReport& r = report_;
   r = FrameReport{};
   r.seq = f.sequence;
@@ -79,7 +86,7 @@ FrameReport& VoComponent::on_pair(const FrameMsg& f, const std::uint8_t* left, c
     }
   }
   r.world_T_body = vo_.body_pose();
-  return r;
+  return &r;
 }
 
 void VoComponent::log_pair(const FrameReport& r) const noexcept {

@@ -18,6 +18,7 @@
 #include "firmware/pipeline/dead_reckoner.hpp"
 #include "firmware/pipeline/vo_odometry.hpp"
 #include "firmware/qnavd/components/component.hpp"
+#include "firmware/qnavd/components/nav_inputs.hpp"
 #include "firmware/qnavd/messages.hpp"
 
 namespace qnav::daemon {
@@ -46,9 +47,10 @@ class VoComponent {
   void reset(std::int64_t now_ns) noexcept;
   // False when the pair is older than the previous one (counted out of order by the worker).
   bool in_order(std::int64_t sample_ns) noexcept { return order_.advance(sample_ns); }
-  // One pair (left, right: vo.max_width x vo.max_height). has_attitude: world_R_body at the pair's time.
-  FrameReport& on_pair(const FrameMsg& f, const std::uint8_t* left, const std::uint8_t* right, bool has_attitude,
-                             const Mat3d& world_R_body, const pipeline::DeadReckoner& dr) noexcept;
+  // One pair from its frame slot (left then right, each vo.max_width x vo.max_height), with the
+  // newest attitude at or before it (if not stale) and the dead reckoning from the inputs. nullptr: a
+  // pair of another size than the slot (a software fault, counted).
+  FrameReport* on_pair(const FrameMsg& f, const std::uint8_t* slot, const NavInputs& inputs) noexcept;
   // The pair's log line (log.format json or kv), latency_ms filled in by the caller.
   void log_pair(const FrameReport& r) const noexcept;
   // Mode = Vo: no pair for vo.stale_s since the last one (or the mode's start).

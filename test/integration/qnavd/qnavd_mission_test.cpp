@@ -505,8 +505,8 @@ void run_with_fault(const char* kind, int pass, double length_s, FaultRun& out, 
   const IoCounters& io = d.io_counters();
   out.injected = io.faults_injected.load();
   out.dvl_rejected = io.dvl_rejected.load();
-  out.can_rejected = d.nav().can_rejected();
-  out.error_frames = d.nav().can_error_frames();
+  out.can_rejected = d.nav().inputs().can_rejected();
+  out.error_frames = d.nav().inputs().receiver().counters().get(qc::RxCounter::kErrorFrame);
   out.pings_rejected = d.nav().pings_rejected();
   out.pings_out_of_order = d.nav().pings_out_of_order();
   out.writer_errors = d.nav().writer_errors();
