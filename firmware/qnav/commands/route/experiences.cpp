@@ -124,33 +124,31 @@ struct MpPass {
   int learned_wrong = 0;  // experiences appended to a node more than 1 from the learnt tile's true node
 };
 
-// One pass through a repeater (experiences optional, learning optional), scored from kWarmupTiles on.
+// One pass through the repeat component (experiences optional, learning optional), as `route repeat`
+// and qnavd run it, scored from kWarmupTiles on.
 Status run_pass(const route::RouteParams& params, const std::vector<route::NodeMeta>& meta, route::NodeSource& nodes, const char* route_path,
-                const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along, bool reverse, bool use_exp, bool learn,
-                MpPass& out, route::RouteDirection told) {
+                const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along, bool use_exp, bool learn, MpPass& out,
+                route::RouteDirection told) {
   out = MpPass{};
-  route::LocaliserConfig lc = pipeline::default_localiser_config(told, meta.size() + 8);
-  if (use_exp) pipeline::enable_experiences(lc, static_cast<std::size_t>(g_opt.max_experiences));
-  auto rep = std::make_unique<pipeline::RouteRepeater>();
-  QNAV_RETURN_IF_ERROR(rep->init(lc));
-  QNAV_RETURN_IF_ERROR(rep->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), nodes));
-  pipeline::RouteExperiences exps(hal::host_file_store());
-  if (use_exp) {
-    QNAV_RETURN_IF_ERROR(exps.init(meta.size(), static_cast<std::uint16_t>(g_opt.max_experiences), learn_config(),
-                                   g_opt.backfill ? &lc.registration : nullptr));
-    QNAV_RETURN_IF_ERROR(exps.open(route_path, params, nodes, learn));
-    if (exps.has_experiences()) {
-      QNAV_RETURN_IF_ERROR(exps.attach(*rep, Span<const route::NodeMeta>(meta.data(), meta.size()), told == route::RouteDirection::kReverse));
-    }
-  }
-  (void)reverse;
+  pipeline::RepeatSessionConfig sc;
+  sc.localiser = pipeline::default_localiser_config(told, meta.size() + 8);
+  if (use_exp) pipeline::enable_experiences(sc.localiser, static_cast<std::size_t>(g_opt.max_experiences));
+  sc.max_nodes = meta.size();
+  sc.experiences_per_node = use_exp ? static_cast<std::uint16_t>(g_opt.max_experiences) : 0;
+  sc.learn = learn_config();
+  sc.backfill = g_opt.backfill;
+  pipeline::RouteRepeatSession session(hal::host_file_store());
+  QNAV_RETURN_IF_ERROR(session.init(sc));
+  QNAV_RETURN_IF_ERROR(session.start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), nodes, told == route::RouteDirection::kReverse));
+  const pipeline::ExperiencesOpened opened = session.open_experiences(route_path, learn);
+  QNAV_RETURN_IF_ERROR(opened.status);
+  const pipeline::RouteExperiences& exps = session.experiences();
   for (std::size_t k = 0; k < tiles.size(); ++k) {
     route::LocaliserStep st;
-    const double d = k == 0 ? 0.0 : tiles[k].nav_step_m;
-    QNAV_RETURN_IF_ERROR(rep->step(tiles[k].node, d, st));
-    bool learned = false;
-    if (use_exp) QNAV_RETURN_IF_ERROR(exps.on_step(tiles[k].node, d, st, &learned));
-    if (learned && k > 0)  // the experience is the previous tile's
+    const pipeline::RepeatTileResult r = session.step(tiles[k], false, st);
+    QNAV_RETURN_IF_ERROR(r.step);
+    QNAV_RETURN_IF_ERROR(r.learn);
+    if (r.learned && k > 0)  // the experience is the previous tile's
       out.learned_wrong += std::abs(static_cast<int>(exps.last_learned_node()) - true_node(node_along, tiles[k - 1].truth_along_m)) > 1;
     for (std::size_t b = 0; k > 0 && b < exps.last_backfill_count(); ++b) {  // tiles before it, learnt from that fix
       const std::size_t tile = k - 1 - exps.last_backfill_age(b);
@@ -163,8 +161,7 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
       out.registered += st.registration.ok && st.registration.inliers > 5;
     }
   }
-  exps.end_pass();
-  out.learned = static_cast<int>(exps.learned());
+  out.learned = static_cast<int>(session.end());
   return Status::ok();
 }
 
@@ -387,7 +384,7 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   std::vector<MpPass> before(test_pcts.size()), after(test_pcts.size());
   for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
     s = fly(pipe, w, w.pass(test_pcts[i] / 100.0 * w.swath_m, true, ++seed), tests[i]);
-    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, false, before[i], rev);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, false, false, before[i], rev);
   }
   // Poisoning, before anything is learnt: a pass over another seabed (the wrong route) and a pass
   // flown forwards while the localiser is told it runs in reverse (its odometry contradicts every
@@ -398,10 +395,10 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
     pipeline::SimSurvey other;
     s = other.init(x.length_m, 900 + static_cast<std::uint64_t>(sb));
     if (s) s = fly(pipe, other, other.pass(0.3 * other.swath_m, true, ++seed), tiles);
-    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, wrong, rev);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, wrong, rev);
   }
   if (s) s = fly(pipe, w, w.pass(0.3 * w.swath_m, false, ++seed), tiles);
-  if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, forced, rev);
+  if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, forced, rev);
   t.poison_learned += wrong.learned + forced.learned;
   t.poison_passes += 2;
   // Learning passes.
@@ -409,7 +406,7 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   for (int lp : learn_pcts) {
     MpPass l;
     if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
-    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, true, l, rev);
+    if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, l, rev);
     learned += l.learned;
     learned_wrong += l.learned_wrong;
     t.learn_scored += l.scored;
@@ -420,7 +417,7 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   t.learned += learned;
   t.learned_wrong += learned_wrong;
   for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
-    s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, true, false, after[i], rev);
+    s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, after[i], rev);
     t.scored += before[i].scored;
     t.before += before[i].within1;
     t.after += after[i].within1;
@@ -515,14 +512,14 @@ int cmd_eval_changed_seabed() {
       for (int r = 0; s && r < 2; ++r) {
         s = fly(pipe, changed, changed.pass(0.2 * changed.swath_m, r == 1, ++seed), tests[static_cast<std::size_t>(r)]);
         if (s)
-          s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, r == 1, false, false, b[r],
+          s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, false, false, b[r],
                        r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
       }
       std::vector<pipeline::RouteTile> tiles;
       if (s) s = fly(pipe, changed, changed.pass(0.0, false, ++seed), tiles);
-      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, false, true, true, l, route::RouteDirection::kForward);
+      if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, l, route::RouteDirection::kForward);
       for (int r = 0; s && r < 2; ++r)
-        s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, r == 1, true, false, a[r],
+        s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, true, false, a[r],
                      r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
       if (!s) break;
       for (int r = 0; r < 2; ++r) {
