@@ -30,9 +30,11 @@ Status SideScanSimulator::init(const SideScanSimConfig& c, const Seabed* seabed)
   if (!(c.beam_width_rad > 0.0f) || !std::isfinite(c.depression_rad)) return Status(StatusCode::kInvalidArgument, "bad beam pattern");
   if (!(c.gain > 0.0f) || !(c.noise_floor >= 0.0f) || !std::isfinite(c.spreading_db) || !(c.absorption_db_per_m >= 0.0f))
     return Status(StatusCode::kInvalidArgument, "bad gain, noise or loss");
+  if (!(c.speckle_coherence_m >= 0.0f && c.speckle_coherence_m < 1000.0f))
+    return Status(StatusCode::kInvalidArgument, "speckle_coherence_m outside [0, 1000)");
   const std::size_t n = static_cast<std::size_t>(c.samples_per_side);
   if (!mem_ || mem_samples_ != n) {  // a second init() of the same size (a new pass) reuses the buffers
-    mem_.reset(new (std::nothrow) float[4 * n]);
+    mem_.reset(new (std::nothrow) float[8 * n]);
     if (!mem_) return Status(StatusCode::kCapacityExceeded, "out of memory for the simulator");
     mem_samples_ = n;
   }
@@ -40,6 +42,9 @@ Status SideScanSimulator::init(const SideScanSimConfig& c, const Seabed* seabed)
   own_port_ = energy_ + n;
   own_stbd_ = own_port_ + n;
   loss_ = own_stbd_ + n;
+  coh_ = loss_ + n;
+  have_prev_ = false;
+  coh_rho_ = 0.0f;
   cfg_ = c;
   seabed_ = seabed;
   const double dr = static_cast<double>(c.slant_range_m) / static_cast<double>(n);
@@ -111,9 +116,28 @@ void SideScanSimulator::render_side(const Pose2& pose, float altitude_m, int sid
   Xorshift rng{mix64(rng_seed) | 1u};
   const float inv_dr = static_cast<float>(1.0 / dr);
   const float noise = cfg_.noise_floor * cfg_.gain;
+  const bool coherent = cfg_.speckle && cfg_.speckle_coherence_m > 0.0f;
+  // Phases from a stream of their own: the amplitude stream, and so a ping with rho = 0, is the same
+  // as without coherence.
+  Xorshift phase_rng{mix64(rng_seed ^ 0x2545F4914F6CDD1DULL) | 1u};
+  float* zre = coh_ + static_cast<std::ptrdiff_t>(2 * side) * n;
+  float* zim = zre + n;
+  const float rho = coh_rho_, keep = std::sqrt(1.0f - rho * rho);
+  constexpr float kTwoPiOver2p24 = static_cast<float>(2.0 * kPi / 16777216.0);
   for (int i = 0; i < n; ++i) {
-    const float sp = cfg_.speckle ? rayleigh_[rng.next() >> 52] : 1.0f;
+    float sp = cfg_.speckle ? rayleigh_[rng.next() >> 52] : 1.0f;
     const float nz = cfg_.speckle ? rayleigh_[rng.next() >> 52] : 1.0f;
+    if (coherent) {
+      const float phi = static_cast<float>(phase_rng.next() >> 40) * kTwoPiOver2p24;
+      float re = sp * std::cos(phi), im = sp * std::sin(phi);
+      if (rho > 0.0f) {
+        re = rho * zre[i] + keep * re;
+        im = rho * zim[i] + keep * im;
+        sp = std::sqrt(re * re + im * im);
+      }
+      zre[i] = re;
+      zim[i] = im;
+    }
     out[i] = cfg_.gain * std::sqrt(energy_[i] * inv_dr) * sp * loss_[i] + noise * nz;
   }
 }
@@ -126,8 +150,16 @@ Status SideScanSimulator::ping(const Pose2& pose, float altitude_m, std::uint32_
   if (!pose.is_finite() || !std::isfinite(altitude_m) || altitude_m <= 0.0f)
     return Status(StatusCode::kInvalidArgument, "pose or altitude not finite / altitude <= 0");
   const std::uint64_t base = mix64(cfg_.seed ^ (static_cast<std::uint64_t>(ping_index) << 1));
+  coh_rho_ = 0.0f;
+  if (have_prev_ && cfg_.speckle_coherence_m > 0.0f) {
+    const double d = (pose.translation() - prev_pose_.translation()).norm();
+    const double rho = 1.0 - d / static_cast<double>(cfg_.speckle_coherence_m);
+    coh_rho_ = rho > 0.0 ? static_cast<float>(rho) : 0.0f;
+  }
   render_side(pose, altitude_m, 0, base, port.data());
   render_side(pose, altitude_m, 1, base ^ 0x5555555555555555ULL, stbd.data());
+  prev_pose_ = pose;
+  have_prev_ = true;
   return Status::ok();
 }
 

@@ -13,8 +13,15 @@
 //    between two samples), so layover and foreshortening come out naturally;
 //  - amplitude = sqrt(energy) * Rayleigh speckle (unit mean, from a seeded table) * range loss
 //    r^(-spreading_db/10) * 10^(-2*absorption*r/10) * gain, plus a noise floor; the water column
-//    (r < a) holds noise only.
-// Deterministic: ping(index) depends only on the configs, the pose and the index.
+//    (r < a) holds noise only;
+//  - speckle between pings: a real sonar's speckle stays partly coherent until it has moved about
+//    half its transducer length. With speckle_coherence_m = L > 0 each sample's speckle is complex,
+//    z = rho * z_previous_ping + sqrt(1 - rho^2) * w (w: this ping's own Rayleigh draw with a phase
+//    from a separate stream), rho = 1 - d / L for a ping d metres from the previous one (0 when
+//    d >= L, the first ping, or L = 0): |z| is again unit-mean Rayleigh, and a ping d >= L from the
+//    previous one is bit-identical to a simulator without coherence.
+// Deterministic: ping(index) depends only on the configs, the pose and the index; with
+// speckle_coherence_m > 0 also on the previous ping() call since init() when it was closer than L.
 // Memory: buffers sized by init() from samples_per_side (one allocation at init, none per ping).
 // Cost: O(samples_per_side) Seabed::sample calls per side; about 0.1-0.3 ms per ping for 2 x 1024
 // samples on the host (bench_sonar prints it).
@@ -41,6 +48,10 @@ struct SideScanSimConfig {
   float gain = 1000.0f;              // overall scale of the output amplitude
   float noise_floor = 0.02f;         // additive noise amplitude (in output units)
   bool speckle = true;
+  // Along-track distance over which a ping's speckle stays partly coherent with the previous ping's
+  // (see the model above); 0 = independent per ping. The real Iver2 file (600 kHz) decorrelates over
+  // about 0.2 m (docs/route.md, scripts/sonar-speckle-corr).
+  float speckle_coherence_m = 0.0f;
   std::uint64_t seed = 42;
 };
 
@@ -70,12 +81,16 @@ class SideScanSimulator {
 
   SideScanSimConfig cfg_{};
   const Seabed* seabed_ = nullptr;
-  std::unique_ptr<float[]> mem_;  // energy accumulator + two output sides + loss table
+  std::unique_ptr<float[]> mem_;  // energy accumulator + two output sides + loss table + the last ping's complex speckle (2 sides x re, im)
   std::size_t mem_samples_ = 0;   // samples per side mem_ was sized for (init() again with the same size allocates nothing)
   float* energy_ = nullptr;
   float* own_port_ = nullptr;
   float* own_stbd_ = nullptr;
   float* loss_ = nullptr;
+  float* coh_ = nullptr;          // 4 * samples_per_side: side 0 re, im, side 1 re, im
+  float coh_rho_ = 0.0f;          // coherence with the previous ping for the ping being rendered
+  bool have_prev_ = false;
+  Pose2 prev_pose_{};
   float rayleigh_[4096] = {};
 };
 
