@@ -278,13 +278,13 @@ SpeckleStats speckle_stats(const SpeckleRun& r) {
 TEST(SideScanSim, SpeckleStaysCoherentBetweenPingsCloserThanTheCoherenceLength) {
   Seabed bed;
   ASSERT_TRUE(bed.init(flat_seabed()).is_ok());
-  const SpeckleStats near = speckle_stats(speckle_run(bed, 0.2f, 0.1, 24));   // rho 0.5: intensity correlation 0.25
-  const SpeckleStats close = speckle_stats(speckle_run(bed, 0.2f, 0.05, 24));  // rho 0.75: 0.5625
+  const SpeckleStats half = speckle_stats(speckle_run(bed, 0.2f, 0.1, 24));   // rho 0.5: intensity correlation 0.25
+  const SpeckleStats three_quarters = speckle_stats(speckle_run(bed, 0.2f, 0.05, 24));  // rho 0.75: 0.5625
   const SpeckleStats indep = speckle_stats(speckle_run(bed, 0.0f, 0.1, 24));
-  EXPECT_NEAR(near.neighbour_intensity_corr, 0.25, 0.05);
-  EXPECT_NEAR(close.neighbour_intensity_corr, 0.5625, 0.05);
+  EXPECT_NEAR(half.neighbour_intensity_corr, 0.25, 0.05);
+  EXPECT_NEAR(three_quarters.neighbour_intensity_corr, 0.5625, 0.05);
   EXPECT_NEAR(indep.neighbour_intensity_corr, 0.0, 0.04);
-  for (const SpeckleStats& s : {near, close, indep}) EXPECT_NEAR(s.mean_amplitude, 1.0, 0.03);  // unit-mean Rayleigh kept
+  for (const SpeckleStats& s : {half, three_quarters, indep}) EXPECT_NEAR(s.mean_amplitude, 1.0, 0.03);  // unit-mean Rayleigh kept
 }
 
 TEST(SideScanSim, PingsAtLeastTheCoherenceLengthApartAreUnchanged) {
