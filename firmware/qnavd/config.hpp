@@ -100,7 +100,12 @@ struct DaemonConfig {
   std::size_t max_nodes = 10000;             // route.max_nodes [2, 65535]
   bool route_learn = false;                  // route.learn: Repeat appends confident tiles to ROUTE.exp (issue 29)
   std::uint16_t max_experiences = 4;         // route.max_experiences [1, 8]: experiences per node (fixed memory)
-  pipeline::RouteTileConfig tiles = pipeline::default_route_tile_config();
+  // The daemon only extracts features from its tiles: no u8 raster (docs/budgets.md, the demo's peak RSS).
+  pipeline::RouteTileConfig tiles = [] {
+    pipeline::RouteTileConfig t = pipeline::default_route_tile_config();
+    t.tiles.u8_raster = false;
+    return t;
+  }();
   route::LocaliserConfig localiser = pipeline::default_localiser_config(route::RouteDirection::kForward, 10000);
   //   route.tile_length_m [0, 5000]         -> tiles.tiles.tile_length_m (0: tiles by ping count)
   //   route.tile_stride_m [0.1, tile_length_m] -> tiles.tiles.tile_stride_m

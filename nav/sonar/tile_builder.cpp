@@ -37,8 +37,9 @@ std::size_t TileBuilder::arena_bytes(const TileBuilderConfig& c) noexcept {
   const std::size_t n = static_cast<std::size_t>(c.scanlines_per_tile);
   const std::size_t b = static_cast<std::size_t>(c.max_bins_per_side);
   const std::size_t px = static_cast<std::size_t>(c.tile_width_px) * static_cast<std::size_t>(c.tile_height_px);
-  return padded(n * sizeof(Slot)) + padded(n * 2 * b * sizeof(float)) + padded(n * 2 * b) + padded(px * sizeof(Acc)) + padded(px * sizeof(float)) +
-         2 * padded(px);
+  // The accumulator (its first half is the float intensity raster), one intensity row, coverage and u8.
+  return padded(n * sizeof(Slot)) + padded(n * 2 * b * sizeof(float)) + padded(n * 2 * b) + padded(px * sizeof(Acc)) +
+         padded(static_cast<std::size_t>(c.tile_width_px) * sizeof(float)) + padded(px) + (c.u8_raster ? padded(px) : 0);
 }
 
 Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
@@ -70,11 +71,13 @@ Status TileBuilder::init(const TileBuilderConfig& c, Arena& arena) noexcept {
   values_ = arena.allocate<float>(n * 2 * b);
   valid_ = arena.allocate<std::uint8_t>(n * 2 * b);
   acc_ = arena.allocate<Acc>(px);
-  intensity_ = arena.allocate<float>(px);
+  static_assert(sizeof(Acc) == 2 * sizeof(float), "the intensity raster takes the first half of the accumulator");
+  intensity_ = acc_.empty() ? nullptr : static_cast<float*>(static_cast<void*>(acc_.data()));
+  row_ = arena.allocate<float>(static_cast<std::size_t>(c.tile_width_px));
   coverage_ = arena.allocate<std::uint8_t>(px);
-  u8_ = arena.allocate<std::uint8_t>(px);
-  if (slots_.empty() || values_.empty() || valid_.empty() || acc_.empty() || intensity_.empty() ||
-      coverage_.empty() || u8_.empty())
+  u8_ = c.u8_raster ? arena.allocate<std::uint8_t>(px) : Span<std::uint8_t>();
+  if (slots_.empty() || values_.empty() || valid_.empty() || acc_.empty() || row_.empty() ||
+      coverage_.empty() || (c.u8_raster && u8_.empty()))
     return Status(StatusCode::kCapacityExceeded, "arena too small for TileBuilder");
   cfg_ = c;
   reset();
@@ -282,16 +285,16 @@ void TileBuilder::place_tile(int first, int count) noexcept {
 
 void TileBuilder::clear_previous_box() noexcept {
   // Every buffer is zero outside the previous tile's touched box (init zeroes them all), so only
-  // that box needs clearing.
+  // that box needs clearing. The accumulator was emptied by normalise(); what its bytes still hold
+  // is the previous tile's intensity, in the same box of the intensity raster.
   const int W = cfg_.tile_width_px;
   if (prev_x1_ >= prev_x0_) {
     const std::size_t len = static_cast<std::size_t>(prev_x1_ - prev_x0_ + 1);
     for (int y = prev_y0_; y <= prev_y1_; ++y) {
       const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(prev_x0_);
-      std::fill(acc_.data() + k, acc_.data() + k + len, Acc{0.0f, 0.0f});
-      std::fill(intensity_.data() + k, intensity_.data() + k + len, 0.0f);
+      std::fill(intensity_ + k, intensity_ + k + len, 0.0f);
       std::fill(coverage_.data() + k, coverage_.data() + k + len, std::uint8_t{0});
-      std::fill(u8_.data() + k, u8_.data() + k + len, std::uint8_t{0});
+      if (!u8_.empty()) std::fill(u8_.data() + k, u8_.data() + k + len, std::uint8_t{0});
     }
   }
 }
@@ -479,18 +482,28 @@ void TileBuilder::normalise() noexcept {
   // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
   const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
   // Normalise and mark coverage. Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
+  // Row by row into row_, then the accumulator row is emptied (the next tile starts from zero) and
+  // row_ goes to the intensity raster, which overlays the accumulator's first half: intensity row y
+  // lies over accumulator pixels [(y W) / 2, ((y + 1) W) / 2), all in rows before y for y >= 1 (and
+  // in row 0, already read, for y = 0): rows this loop has read and emptied, or rows outside the box,
+  // which hold zero and are not read. So every byte of the block outside the intensity box is zero
+  // afterwards, as the tile's intensity view needs.
   const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
+  if (bx1 < bx0) return;
+  const std::size_t len = static_cast<std::size_t>(bx1 - bx0 + 1);
+  float* tmp = row_.data();
   for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    const Acc* acc = acc_.data() + row;
-    float* out = intensity_.data() + row;
+    Acc* acc = acc_.data() + row;
     std::uint8_t* cov = coverage_.data() + row;
     for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
-      out[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
+      tmp[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
       cov[x] = c ? 1 : 0;
     }
+    std::fill(acc + bx0, acc + bx0 + len, Acc{0.0f, 0.0f});
+    std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
   }
 }
 
@@ -502,12 +515,13 @@ std::size_t TileBuilder::quantise() noexcept {
   std::size_t covered = 0;
   for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    const float* in = intensity_.data() + row;
+    const float* in = intensity_ + row;
     const std::uint8_t* cov = coverage_.data() + row;
-    std::uint8_t* out = u8_.data() + row;
     std::uint32_t row_covered = 0;
     for (int x = bx0; x <= bx1; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
     covered += row_covered;
+    if (u8_.empty()) continue;  // no u8 raster (TileBuilderConfig::u8_raster): the count only
+    std::uint8_t* out = u8_.data() + row;
     for (int x = bx0; x <= bx1; ++x) {
       float u = in[x] * scale + 0.5f;
       u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
@@ -529,8 +543,8 @@ void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcep
   const Slot& l = slots_[ring(first + count - 1)];
   const Slot& m = slots_[ring(first + count / 2)];
   tile_.index = tiles_built_;
-  tile_.intensity = ConstImageViewF32::unchecked(intensity_.data(), W, H, W);
-  tile_.intensity_u8 = ConstImageViewU8::unchecked(u8_.data(), W, H, W);
+  tile_.intensity = ConstImageViewF32::unchecked(intensity_, W, H, W);
+  tile_.intensity_u8 = u8_.empty() ? ConstImageViewU8{} : ConstImageViewU8::unchecked(u8_.data(), W, H, W);
   tile_.coverage = ConstImageViewU8::unchecked(coverage_.data(), W, H, W);
   tile_.pose = m.pose;
   tile_.first_pose = f.pose;

@@ -28,7 +28,10 @@
 //    its column (and in at least hole_fill_min_neighbours of the 4 directions) is filled by
 //    inverse-distance interpolation of those nearest measured pixels (coverage 2). No cascading.
 // Memory: every buffer is carved from the Arena in init() (see arena_bytes()); push() copies the
-// scanline into a fixed ring (no allocation); building a tile touches the raster only.
+// scanline into a fixed ring (no allocation); building a tile touches the raster only. The float
+// intensity raster lives in the first half of the accumulator (8 bytes per pixel): normalise()
+// empties the accumulator row by row as it writes the intensity, so the raster costs 10 bytes per
+// pixel (9 without the u8 raster) plus one row, not 14.
 // Cost: push O(bins); tile build O(scanlines * bins * substeps + touched pixels * 4r): see
 // BM_TileBuild500 in bench_sonar (docs/sonar.md). Only the box of pixels touched by this tile and
 // the previous one is cleared and normalised. NaN/inf poses or wrong-size scanlines are rejected
@@ -61,13 +64,15 @@ struct TileBuilderConfig {
   int hole_fill_radius_px = 2;      // 0 = no hole filling
   int hole_fill_min_neighbours = 2; // of the 4 axis directions, how many must reach measured data (2..4)
   float display_max = 2.5f;         // intensity mapped to 255 in the u8 raster
+  bool u8_raster = true;            // false: no u8 raster (SonarTile::intensity_u8 empty; qnavd, which only
+                                    // extracts features, saves its W x H bytes and the pass that fills it)
 };
 
 // One finished tile. Views point into the builder's buffers; valid until the next tile is built.
 struct SonarTile {
   std::uint32_t index = 0;            // 0, 1, 2 ... in emission order
   ConstImageViewF32 intensity;        // normalised intensity (about 1 = mean seabed); 0 where no data
-  ConstImageViewU8 intensity_u8;      // intensity * 255 / display_max, clamped
+  ConstImageViewU8 intensity_u8;      // intensity * 255 / display_max, clamped (empty without u8_raster)
   ConstImageViewU8 coverage;          // 0 no data, 1 measured, 2 filled by hole interpolation
   double resolution_m = 0.0;
   double origin_north_m = 0.0;        // north of the top edge of row 0
@@ -174,7 +179,8 @@ class TileBuilder {
     float weight;
   };
   Span<Acc> acc_;               // weighted sum and weight, interleaved (one cache line per splat row)
-  Span<float> intensity_;
+  float* intensity_ = nullptr;  // W x H floats over the first half of acc_'s bytes (see normalise())
+  Span<float> row_;             // one row of intensity, computed before its accumulator row is emptied
   Span<std::uint8_t> coverage_, u8_;
   int head_ = 0;                // ring index of the oldest buffered scanline
   int count_ = 0;               // buffered scanlines

@@ -135,6 +135,59 @@ TEST(TileBuilder, EmitsEveryStrideAndFlushesTheRest) {
   EXPECT_EQ(tb.tiles_built(), 4u);
 }
 
+// The intensity raster overlays the accumulator, which normalise() empties as it goes (and the next
+// tile clears only the previous tile's box): each tile of a turning track, built after others, must
+// be bit for bit the tile a fresh builder makes from the same scanlines alone. Without the u8 raster
+// (qnavd) intensity, coverage and coverage fraction are the same and intensity_u8 is empty.
+TEST(TileBuilder, ATileCarriesNothingOfThePreviousOneWithOrWithoutTheU8Raster) {
+  TileBuilderConfig cfg = small_config();
+  cfg.scanline_stride = 40;
+  ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+  TileBuilder tb;
+  ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+  TileBuilderConfig fresh_cfg = small_config();
+  fresh_cfg.u8_raster = false;
+  EXPECT_LT(TileBuilder::arena_bytes(fresh_cfg), TileBuilder::arena_bytes(cfg));
+  LineSource src;
+  std::vector<Pose2> poses;
+  double n = 0.0, e = 0.0, heading = 0.0;
+  int tiles = 0;
+  for (int k = 0; k < 400; ++k) {
+    heading += deg_to_rad(k < 200 ? 0.9 : -1.3);  // the tile's box moves and changes shape
+    n += 0.15 * std::cos(heading);
+    e += 0.15 * std::sin(heading);
+    poses.push_back(Pose2{n, e, heading});
+    const Result<bool> r = tb.push(src.make(poses.back(), static_cast<std::uint32_t>(k)), poses.back());
+    ASSERT_TRUE(r.is_ok());
+    if (!r.value()) continue;
+    ++tiles;
+    const SonarTile& t = tb.tile();
+    ArenaStorage fresh_arena(TileBuilder::arena_bytes(fresh_cfg));
+    TileBuilder fresh;
+    ASSERT_TRUE(fresh.init(fresh_cfg, fresh_arena).is_ok());
+    bool built = false;
+    LineSource src2;
+    for (std::uint32_t p = t.first_ping; p <= t.last_ping; ++p) {
+      const Result<bool> r2 = fresh.push(src2.make(poses[p], p), poses[p]);
+      ASSERT_TRUE(r2.is_ok());
+      built = r2.value();
+    }
+    ASSERT_TRUE(built) << "tile " << t.index;
+    const SonarTile& f = fresh.tile();
+    EXPECT_TRUE(f.intensity_u8.empty());
+    ASSERT_FALSE(t.intensity_u8.empty());
+    EXPECT_EQ(f.coverage_fraction, t.coverage_fraction) << "tile " << t.index;
+    EXPECT_EQ(f.origin_north_m, t.origin_north_m);
+    EXPECT_EQ(f.origin_east_m, t.origin_east_m);
+    int differ = 0;
+    for (int row = 0; row < t.intensity.height(); ++row)
+      for (int c = 0; c < t.intensity.width(); ++c)
+        differ += (f.intensity(c, row) != t.intensity(c, row) || f.coverage(c, row) != t.coverage(c, row)) ? 1 : 0;
+    EXPECT_EQ(differ, 0) << "tile " << t.index;
+  }
+  EXPECT_EQ(tiles, 8);
+}
+
 TEST(TileBuilder, InterpolatesBetweenSparseScanlinesAndFillsSmallHoles) {
   TileBuilderConfig cfg = small_config();
   cfg.max_substeps = 1;  // no along-track interpolation: 0.3 m gaps leave holes
