@@ -20,6 +20,9 @@ struct RouteTileConfig {
   sonar::ScanlineCorrectorConfig corrector;
   sonar::TileBuilderConfig tiles;
   route::TileFeatureConfig features;
+  // false: tiles only, no keypoints (`qnav sonar tiles`, which draws the rasters): the pipeline takes
+  // no feature arena and a RouteTile's node has no keypoints (its meta is filled as usual).
+  bool extract_features = true;
 };
 
 // Tiles are framed by along-track distance (the dead-reckoned distance between pings), sized by the
