@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "firmware/pipeline/route_defaults.hpp"
+
 namespace qnav::pipeline {
 
 CameraTileSettings camera_tile_settings() {
@@ -17,16 +19,8 @@ CameraTileSettings camera_tile_settings() {
 }
 
 route::RouteParams camera_route_params(const CameraTileSettings& s, double node_spacing_m, double footprint_across_m) {
-  route::RouteParams params;
-  params.sensor = route::SensorKind::kCamera;
-  params.node_spacing_m = static_cast<float>(node_spacing_m);
-  params.tile_length_m = static_cast<float>(s.projector.height_px * s.projector.resolution_m);
-  params.tile_width_m = static_cast<float>(footprint_across_m);
-  params.pixel_m = static_cast<float>(s.projector.resolution_m);
-  params.max_keypoints = static_cast<std::uint16_t>(s.features.max_keypoints);
-  params.harris_window_px = static_cast<std::uint16_t>(2 * s.features.harris_block_radius + 1);
-  params.keypoint_min_distance_px = static_cast<std::uint16_t>(s.features.harris_nms_radius);
-  return params;
+  return route_params_for(route::SensorKind::kCamera, node_spacing_m, s.projector.height_px * s.projector.resolution_m, footprint_across_m,
+                          s.projector.resolution_m, s.features);
 }
 
 Status CameraTilePipeline::init(const CameraTileSettings& settings) {
