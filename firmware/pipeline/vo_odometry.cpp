@@ -37,9 +37,9 @@ Status VoOdometry::init(const vo::VoConfig& config, const Pose3& body_T_cam, con
 }
 
 void VoOdometry::reset(const Pose3& world_T_body, bool keep_start_attitude) noexcept {
+  keep_start_attitude_ = keep_start_attitude;
   vo_.reset(world_T_body.compose(body_T_cam_));
   started_ = false;
-  keep_start_attitude_ = keep_start_attitude;
   have_velocity_ = false;
   velocity_t_ = Vec3d::Zero();
   velocity_R_ = Mat3d::Identity();
