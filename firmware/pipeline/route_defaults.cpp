@@ -142,18 +142,24 @@ route::LocaliserConfig file_localiser_config(route::RouteDirection d, std::size_
   return lc;
 }
 
-route::RouteParams side_scan_route_params(const RouteTileConfig& c, double spacing_m, double swath_m) {
+route::RouteParams route_params_for(route::SensorKind sensor, double spacing_m, double tile_length_m, double tile_width_m, double pixel_m,
+                                   const route::TileFeatureConfig& f) {
   route::RouteParams p;
-  p.sensor = route::SensorKind::kSideScan;
+  p.sensor = sensor;
   p.depth_m = 0.0f;
   p.node_spacing_m = static_cast<float>(spacing_m);
-  p.tile_length_m = static_cast<float>(c.tiles.tile_length_m > 0.0 ? c.tiles.tile_length_m : spacing_m);
-  p.tile_width_m = static_cast<float>(swath_m);
-  p.pixel_m = static_cast<float>(c.tiles.resolution_m);
-  p.max_keypoints = static_cast<std::uint16_t>(c.features.max_keypoints);
-  p.harris_window_px = static_cast<std::uint16_t>(2 * c.features.harris_block_radius + 1);
-  p.keypoint_min_distance_px = static_cast<std::uint16_t>(c.features.harris_nms_radius);
+  p.tile_length_m = static_cast<float>(tile_length_m);
+  p.tile_width_m = static_cast<float>(tile_width_m);
+  p.pixel_m = static_cast<float>(pixel_m);
+  p.max_keypoints = static_cast<std::uint16_t>(f.max_keypoints);
+  p.harris_window_px = static_cast<std::uint16_t>(2 * f.harris_block_radius + 1);
+  p.keypoint_min_distance_px = static_cast<std::uint16_t>(f.harris_nms_radius);
   return p;
+}
+
+route::RouteParams side_scan_route_params(const RouteTileConfig& c, double spacing_m, double swath_m) {
+  return route_params_for(route::SensorKind::kSideScan, spacing_m, c.tiles.tile_length_m > 0.0 ? c.tiles.tile_length_m : spacing_m, swath_m,
+                          c.tiles.resolution_m, c.features);
 }
 
 }  // namespace qnav::pipeline

@@ -20,6 +20,9 @@ struct RouteTileConfig {
   sonar::ScanlineCorrectorConfig corrector;
   sonar::TileBuilderConfig tiles;
   route::TileFeatureConfig features;
+  // false: tiles only, no keypoints (`qnav sonar tiles`, which draws the rasters): the pipeline takes
+  // no feature arena and a RouteTile's node has no keypoints (its meta is filled as usual).
+  bool extract_features = true;
 };
 
 // Tiles are framed by along-track distance (the dead-reckoned distance between pings), sized by the
@@ -65,6 +68,10 @@ route::LocaliserConfig default_localiser_config(route::RouteDirection direction,
 // distances scaled by the route's node spacing.
 route::LocaliserConfig file_localiser_config(route::RouteDirection direction, std::size_t max_nodes, std::size_t nodes, double spacing_m);
 
+// A route file's header: the sensor, node spacing, tile size and pixel, and the feature settings'
+// keypoint and detector fields (side-scan tiles below, camera tiles in camera_tile_pipeline.hpp).
+route::RouteParams route_params_for(route::SensorKind sensor, double spacing_m, double tile_length_m, double tile_width_m, double pixel_m,
+                                   const route::TileFeatureConfig& features);
 // A route file's header for tiles of this configuration.
 route::RouteParams side_scan_route_params(const RouteTileConfig& config, double spacing_m, double swath_m);
 

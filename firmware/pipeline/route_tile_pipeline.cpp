@@ -21,7 +21,7 @@ double route_aligned_stride_m(const route::LocaliserStep& st, Span<const route::
 
 std::size_t RouteTilePipeline::arena_bytes(const RouteTileConfig& config) noexcept {
   return sonar::ScanlineCorrector::arena_bytes(config.corrector) + sonar::TileBuilder::arena_bytes(config.tiles) +
-         route::TileFeatureExtractor::arena_bytes(config.features) + 4096;
+         (config.extract_features ? route::TileFeatureExtractor::arena_bytes(config.features) : 0) + 4096;
 }
 
 Status RouteTilePipeline::init(const RouteTileConfig& config) {
@@ -38,7 +38,7 @@ Status RouteTilePipeline::init(const RouteTileConfig& config, Arena& arena) {
   tile_ = std::make_unique<RouteTile>();
   QNAV_RETURN_IF_ERROR(corrector_->init(config.corrector, arena));
   QNAV_RETURN_IF_ERROR(builder_->init(config.tiles, arena));
-  QNAV_RETURN_IF_ERROR(features_->init(config.features, arena));
+  if (config.extract_features) QNAV_RETURN_IF_ERROR(features_->init(config.features, arena));
   std::size_t ring = 1;
   while (ring < 2 * static_cast<std::size_t>(std::max(1, config.tiles.scanlines_per_tile))) ring <<= 1;
   ring_.assign(ring, PingRecord{});
@@ -64,8 +64,14 @@ Status RouteTilePipeline::emit(const RouteTileSink& sink, bool* stop) {
   g.origin_north_m = t.origin_north_m;
   g.origin_east_m = t.origin_east_m;
   g.pose = t.pose;
-  const Status s = features_->extract(t.intensity, t.coverage, g, out.node);
-  if (!s && s.code() != StatusCode::kEmpty) return s;
+  if (cfg_.extract_features) {
+    const Status s = features_->extract(t.intensity, t.coverage, g, out.node);
+    if (!s && s.code() != StatusCode::kEmpty) return s;
+  } else {
+    out.node.keypoints.clear();
+    out.node.meta.pose = t.pose;
+    out.node.meta.keypoint_count = 0;
+  }
   const std::uint32_t mid = (t.first_ping + t.last_ping) / 2;
   out.node.meta.stamp_ns = (t.first_stamp_ns + t.last_stamp_ns) / 2;
   const PingRecord* mid_rec = record(mid);
@@ -114,15 +120,25 @@ Status RouteTilePipeline::push(const sonar::SonarPing& ping, const Pose2& nav, c
   if (truth) truth_lateral_m_ = truth->lateral_m;
   sonar::CorrectedScanline line;
   const Status cs = corrector_->correct(ping, line);
-  if (!cs) return Status::ok();  // counted by the corrector; the ping is skipped
+  if (!cs) {
+    ++rejected_pings_;  // counted by the corrector; the ping is skipped
+    return Status::ok();
+  }
   Result<bool> built = builder_->push(line, nav);
-  if (!built) return Status::ok();  // counted by the builder
+  if (!built) {
+    ++rejected_pings_;  // counted by the builder
+    return Status::ok();
+  }
   if (*built) return emit(sink, stop);
   return Status::ok();
 }
 
 Status RouteTilePipeline::flush(const RouteTileSink& sink) {
-  Result<bool> built = builder_->flush(builder_->by_distance() ? 2 : builder_->config().scanlines_per_tile / 2);
+  return flush(sink, builder_->by_distance() ? 2 : builder_->config().scanlines_per_tile / 2);
+}
+
+Status RouteTilePipeline::flush(const RouteTileSink& sink, int min_scanlines) {
+  Result<bool> built = builder_->flush(min_scanlines);
   if (built && *built) return emit(sink, nullptr);
   return Status::ok();
 }

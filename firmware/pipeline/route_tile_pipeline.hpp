@@ -86,7 +86,11 @@ class RouteTilePipeline {
   Status push_ping(const sonar::SonarPing& ping, const Pose2& nav_pose, const RouteTileSink& sink, bool* stop);
   // The same with the simulator's truth for this ping (ping.ping_number indexes the pass).
   Status push_ping(const sonar::SonarPing& ping, const Pose2& nav_pose, const PingTruth& truth, const RouteTileSink& sink, bool* stop);
+  // Ends the pass: the tile in progress is emitted if it holds enough scanlines (by distance: 2; by
+  // ping count: half a tile).
   Status flush(const RouteTileSink& sink);
+  // The same with the least number of scanlines a last tile needs (`qnav sonar tiles`: 2).
+  Status flush(const RouteTileSink& sink, int min_scanlines);
   void reset_pass();
   // Tiles by distance: the next tile ends stride_m of travel after the last one (see
   // TileBuilder::set_next_stride_m); call from the sink to frame the next tile on the route.
@@ -96,6 +100,8 @@ class RouteTilePipeline {
   // Pings the corrector refused (its counters: damaged range, samples, altitude; no bottom found).
   const sonar::ScanlineCorrector& corrector() const noexcept { return *corrector_; }
   const route::TileFeatureExtractor& features() const noexcept { return *features_; }
+  // Pings skipped since init: refused by the corrector or the tile builder (each also counts why).
+  std::uint32_t rejected_pings() const noexcept { return rejected_pings_; }
   // The last tile's raster (for debug images).
   const sonar::SonarTile& last_tile() const noexcept { return builder_->tile(); }
 
@@ -126,6 +132,7 @@ class RouteTilePipeline {
   bool have_prev_nav_ = false;
   Pose2 prev_nav_{};
   double nav_dist_m_ = 0.0;
+  std::uint32_t rejected_pings_ = 0;
 };
 
 }  // namespace qnav::pipeline

@@ -36,7 +36,8 @@ Status VoOdometry::init(const vo::VoConfig& config, const Pose3& body_T_cam, con
   return Status::ok();
 }
 
-void VoOdometry::reset(const Pose3& world_T_body) noexcept {
+void VoOdometry::reset(const Pose3& world_T_body, bool keep_start_attitude) noexcept {
+  keep_start_attitude_ = keep_start_attitude;
   vo_.reset(world_T_body.compose(body_T_cam_));
   started_ = false;
   have_velocity_ = false;
@@ -59,16 +60,22 @@ Result<vo::VoStep> VoOdometry::step(const VoFrameInput& in) noexcept {
   v.attitude_recalibrated = in.attitude_recalibrated;
   if (!started_) {
     // The chain starts with the body where reset() put it, in the attitude of this first pair.
-    if (attitude) {
+    if (attitude && !keep_start_attitude_) {
       const Pose3 world_T_body{in.world_R_body, body_pose().t};
       vo_.reset(world_T_body.compose(body_T_cam_));
     }
   } else {
     // Rotation prior: the sensor's relative attitude, else the last visual step's (constant velocity).
     v.R_prev_cur = attitude ? Mat3d(prev_world_R_cam_.transpose() * world_R_cam) : (prior_.zero_motion ? Mat3d::Identity() : velocity_R_);
+    const bool camera_prior = attitude && in.has_camera_translation_prior && in.t_prev_cur_cam_m.allFinite() &&
+                              std::isfinite(in.camera_translation_sigma_m) && in.camera_translation_sigma_m >= 0.0;
     const bool odometry = attitude && in.has_body_displacement && in.body_displacement_world_m.allFinite() &&
                           std::isfinite(in.displacement_sigma_m) && in.displacement_sigma_m >= 0.0;
-    if (odometry) {
+    if (camera_prior) {
+      v.has_translation_prior = true;
+      v.t_prev_cur_prior_m = in.t_prev_cur_cam_m;
+      v.t_prior_sigma_m = in.camera_translation_sigma_m;
+    } else if (odometry) {
       // Camera at p_b + R_wb t_bc: its displacement in the previous camera frame.
       const Vec3d& t_bc = body_T_cam_.t;
       const Vec3d d_world = in.body_displacement_world_m + (in.world_R_body - prev_world_R_body_) * t_bc;

@@ -44,6 +44,11 @@ struct VoFrameInput {
   bool has_body_displacement = false;
   Vec3d body_displacement_world_m = Vec3d::Zero();
   double displacement_sigma_m = 0.05;
+  // A translation prior already in the previous camera frame and its 1-sigma (a simulated odometry
+  // step: `qnav vo eval`); used as it is, before the body displacement. Needs the frame's attitude.
+  bool has_camera_translation_prior = false;
+  Vec3d t_prev_cur_cam_m = Vec3d::Zero();
+  double camera_translation_sigma_m = 0.0;
 };
 
 // Motion between two body poses in the level frame of the first's heading.
@@ -65,8 +70,10 @@ class VoOdometry {
   // The same with the StereoVo arena taken from the caller's (qnavd: its static block; at least
   // StereoVo::arena_bytes(config)), which outlives this.
   Status init(const vo::VoConfig& config, const Pose3& body_T_cam, const VoPriorConfig& prior, Arena& arena);
-  // Starts a new chain with the body at world_T_body.
-  void reset(const Pose3& world_T_body = Pose3{}) noexcept;
+  // Starts a new chain with the body at world_T_body. The chain takes its attitude from the first
+  // pair's sensor sample, or with keep_start_attitude keeps world_T_body's (a start pose known better
+  // than the sensor's: `qnav vo eval` starts on the simulator's truth).
+  void reset(const Pose3& world_T_body = Pose3{}, bool keep_start_attitude = false) noexcept;
   // Processes one pair. Returns the StereoVo step (flags say visual / lost / dead-reckoned), or
   // kNotReady when a 3D-VME frame has no attitude (nothing integrated).
   Result<vo::VoStep> step(const VoFrameInput& in) noexcept;
@@ -85,6 +92,7 @@ class VoOdometry {
   Pose3 body_T_cam_, cam_T_body_;
   VoPriorConfig prior_;
   bool started_ = false;
+  bool keep_start_attitude_ = false;
   Mat3d prev_world_R_cam_ = Mat3d::Identity();
   Mat3d prev_world_R_body_ = Mat3d::Identity();
   bool have_velocity_ = false;

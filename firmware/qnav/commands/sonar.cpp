@@ -41,6 +41,7 @@
 #include "drivers/sidescan/xtf_writer.hpp"
 #include "firmware/cli/cli_app.hpp"
 #include "firmware/pipeline/dead_reckoner.hpp"
+#include "firmware/pipeline/route_tile_pipeline.hpp"
 #include "firmware/qnav/command.hpp"
 #include "firmware/tools/png_writer.hpp"
 #include "firmware/tools/raster_plot.hpp"
@@ -209,11 +210,13 @@ int tiles() {
   tc.scanlines_per_tile = static_cast<int>(lines);
   tc.scanline_stride = static_cast<int>(stride > 0 ? stride : lines);
   tc.max_bins_per_side = cc.ground_bins_per_side;
-  ArenaStorage arena(sonar::ScanlineCorrector::arena_bytes(cc) + sonar::TileBuilder::arena_bytes(tc));
-  sonar::ScanlineCorrector corr;
-  sonar::TileBuilder tb;
-  Status s = corr.init(cc, arena);
-  if (s) s = tb.init(tc, arena);
+  // The tile stage qnavd's SonarTiles runs (corrector -> tile builder), without the keypoints.
+  pipeline::RouteTileConfig pc;
+  pc.corrector = cc;
+  pc.tiles = tc;
+  pc.extract_features = false;
+  pipeline::RouteTilePipeline tiles;
+  const Status s = tiles.init(pc);
   if (!s) {
     std::fprintf(stderr, "qnav sonar tiles: configuration: %s\n", s.message());
     return 2;
@@ -228,10 +231,10 @@ int tiles() {
   std::fprintf(csv,
                "tile,first_ping,last_ping,scanlines,pose_north_m,pose_east_m,heading_deg,origin_north_m,origin_east_m,"
                "resolution_m,width_px,height_px,coverage,origin_file_y,origin_file_x\n");  // file_y/x: lat/lon deg or northing/easting m (file nav units)
-  int written = 0, skipped_nav = 0, failed = 0;
+  int written = 0, skipped_nav = 0;
   const double m_per_deg_lon = 111320.0 * std::cos(deg_to_rad(track.lat0));
-  auto emit = [&]() {
-    const sonar::SonarTile& t = tb.tile();
+  const pipeline::RouteTileSink emit = [&](const pipeline::RouteTile&) {
+    const sonar::SonarTile& t = tiles.last_tile();
     char name[64];
     std::snprintf(name, sizeof name, "/tile_%03u.png", t.index);
     const Status w1 = tools::write_png_gray8((dir + name).c_str(), t.intensity_u8);
@@ -264,32 +267,24 @@ int tiles() {
                 t.index, t.first_ping, t.last_ping, t.scanlines, t.pose.x_m, t.pose.y_m, rad_to_deg(t.pose.heading_rad),
                 100.0 * static_cast<double>(t.coverage_fraction), t.clipped_splats);
     ++written;
+    return true;
   };
   for (std::size_t i = 0; i < fd.pings.size(); ++i) {
     if (!track.ok[i]) {
       ++skipped_nav;
       continue;
     }
-    sonar::CorrectedScanline line;
-    if (!corr.correct(as_ping(fd.pings[i], alt != "detect"), line)) {
-      ++failed;
-      continue;
-    }
-    const Result<bool> r = tb.push(line, track.pose[i]);
-    if (!r) {
-      ++failed;
-      continue;
-    }
-    if (r.value()) emit();
+    (void)tiles.push_ping(as_ping(fd.pings[i], alt != "detect"), track.pose[i], emit, nullptr);
   }
-  const Result<bool> f = tb.flush(2);
-  if (f.is_ok() && f.value()) emit();
+  (void)tiles.flush(emit, 2);
+  const int failed = static_cast<int>(tiles.rejected_pings());
   std::fclose(csv);
   std::printf("%d tiles of %ldx%ld px at %.3f m in %s (tiles.csv); %zu pings, %d without nav, %d rejected; nav=%s, "
               "altitude=%s; reader counters:%s\n",
               written, size, size, res, out, fd.pings.size(), skipped_nav, failed, nav.c_str(), alt.c_str(), fd.counters.c_str());
   std::printf("corrector counters:");
-  for (std::size_t i = 0; i < corr.counters().size(); ++i) std::printf(" %s=%u", corr.counters().name_at(i), corr.counters().count_at(i));
+  const auto& cc_counters = tiles.corrector().counters();
+  for (std::size_t i = 0; i < cc_counters.size(); ++i) std::printf(" %s=%u", cc_counters.name_at(i), cc_counters.count_at(i));
   std::printf("\n");
   return written > 0 ? 0 : 1;
 }

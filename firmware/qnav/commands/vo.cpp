@@ -66,15 +66,16 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// One configuration of the evaluation: the VO component qnavd's vo mode runs (pipeline::VoOdometry),
+// the camera as the body.
 struct VoBox {
-  std::unique_ptr<ArenaStorage> arena;
-  vo::StereoVo vo;
+  pipeline::VoOdometry odo;
   bool init(const vo::VoConfig& c) {
-    arena.reset(new ArenaStorage(vo::StereoVo::arena_bytes(c)));
-    const Status s = vo.init(c, *arena);
+    const Status s = odo.init(c, Pose3{});
     if (!s) std::fprintf(stderr, "vo: init failed: %s\n", s.message());
     return s.is_ok();
   }
+  const vo::StereoVo& vo() const { return odo.vo(); }
 };
 
 // ---------------------------------------------------------------------------------------------------
@@ -163,7 +164,6 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
   Image<std::uint8_t> left = std::move(Image<std::uint8_t>::allocate(bench.width(), bench.height()).value());
   Image<std::uint8_t> right = std::move(Image<std::uint8_t>::allocate(bench.width(), bench.height()).value());
   Pose3 prev_cam, start_cam;
-  Mat3d prev_meas = Mat3d::Identity();
   double last_calib_m = 0.0;
   for (std::size_t frame = 0;; ++frame) {
     const sim::RoverSample& s = frame == 0 ? traj.current() : traj.next();
@@ -178,26 +178,27 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
     }
     const Mat3d meas = noise.measure_attitude(cam.R);
     if (!sim::render_stereo(terrain, bench, cam, seed * 100000 + frame, left.view(), right.view())) return false;
-    vo::VoInput in;
+    // The attitude sensor's sample (the rotation prior is the component's: the relative attitude) and
+    // the odometry step measured from the truth (noise model), in the previous camera frame.
+    pipeline::VoFrameInput in;
     in.left = left.view();
     in.right = right.view();
-    in.has_absolute_attitude = true;
-    in.world_R_cam = meas;
+    in.has_attitude = true;
+    in.world_R_body = meas;
     in.attitude_recalibrated = recalibrated;
     in.stamp_ns = static_cast<std::uint64_t>(std::llround(s.time_s * 1e9)) + 1;  // never 0 (0 = no stamp)
     if (frame == 0) {
       start_cam = cam;
-      for (auto& v : vos) v->vo.reset(cam);
+      for (auto& v : vos) v->odo.reset(cam, true);  // the chain starts on the true pose
     } else {
       const Pose3 truth_step = prev_cam.inverse().compose(cam);
-      in.R_prev_cur = prev_meas.transpose() * meas;
-      in.has_translation_prior = true;
-      in.t_prev_cur_prior_m = noise.measure_translation(truth_step.t);
-      in.t_prior_sigma_m = 0.01 + 1.5 * noise_cfg.translation_noise * truth_step.t.norm();
+      in.has_camera_translation_prior = true;
+      in.t_prev_cur_cam_m = noise.measure_translation(truth_step.t);
+      in.camera_translation_sigma_m = 0.01 + 1.5 * noise_cfg.translation_noise * truth_step.t.norm();
     }
     for (std::size_t k = 0; k < vos.size(); ++k) {
       const Clock::time_point t0 = Clock::now();
-      Result<vo::VoStep> r = vos[k]->vo.process(in);
+      Result<vo::VoStep> r = vos[k]->odo.step(in);
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       RunResult& rr = results[k];
       ++rr.frames;
@@ -209,7 +210,7 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
         const Vec3d rot_err = motion::rotation_log(ts.R.transpose() * Rv);
         const Mat3d rc = r->has_vo_rotation ? r->vo_rotation_cov_right
                                             : Mat3d(Rv.transpose() * r->covariance.topLeftCorner<3, 3>() * Rv);
-        const Vec3d att_err = motion::rotation_log(cam.R.transpose() * vos[k]->vo.pose().R);
+        const Vec3d att_err = motion::rotation_log(cam.R.transpose() * vos[k]->vo().pose().R);
         std::printf("%s f%zu %s corners %zu stereo %zu matches %zu rms %.4f step %.4f err %+.4f %+.4f %+.4f flags 0x%x  "
                     "step_rot_err %+.4f %+.4f %+.4f deg pred_sigma %.4f %.4f %.4f deg  att_err %+.4f %+.4f %+.4f deg "
                     "drift %+.4f %+.4f %+.4f est %+.4f %+.4f %+.4f deg true_rot %+.4f %+.4f %+.4f\n",
@@ -232,7 +233,7 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
         rr.rot_sum2_deg += e.cwiseAbs2();
         ++rr.rot_n;
       }
-      const double err = (vos[k]->vo.pose().t - cam.t).norm();
+      const double err = (vos[k]->vo().pose().t - cam.t).norm();
       rr.max_error_m = std::max(rr.max_error_m, err);
       rr.end_error_m = err;
       rr.path_m = s.path_m;
@@ -240,15 +241,14 @@ bool run_scenario(const Scenario& sc, const std::vector<EvalConfig>& cfgs, const
       rr.trace_err.push_back(err);
     }
     prev_cam = cam;
-    prev_meas = meas;
   }
   if (knobs.verbose) {
     for (std::size_t k = 0; k < vos.size(); ++k) {
       std::printf("%s %s counters:", cfgs[k].name, sc.name);
-      const auto& vc = vos[k]->vo.counters();
+      const auto& vc = vos[k]->vo().counters();
       for (std::size_t i = 0; i < vc.size(); ++i)
         if (vc.count_at(i) != 0) std::printf(" %s=%u", vc.name_at(i), vc.count_at(i));
-      const auto& ac = vos[k]->vo.attitude_filter().counters();
+      const auto& ac = vos[k]->vo().attitude_filter().counters();
       for (std::size_t i = 0; i < ac.size(); ++i)
         if (ac.count_at(i) != 0) std::printf(" %s=%u", ac.name_at(i), ac.count_at(i));
       std::printf("\n");

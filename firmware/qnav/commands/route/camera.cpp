@@ -1,6 +1,8 @@
 // qnav route: camera, teach and repeat on a downward camera (split from route.cpp; what the files share: route_cmd.hpp).
 #include "firmware/qnav/commands/route/route_cmd.hpp"
 
+#include "firmware/pipeline/camera_tile_pipeline.hpp"
+
 namespace route_cmd {
 
 // ---------------------------------------------------------------------------------------------------
@@ -40,16 +42,15 @@ struct CameraWorld {
   }
 };
 
-struct CameraPassFrame {
-  route::RouteNode node;
-  double nav_step_m = 0.0;
+// A tile of a pass (node, nav_step_m: what the repeat component steps on) and its true centre.
+struct CameraPassFrame : pipeline::RouteTile {
   double truth_north_m = 0.0;
 };
 
 // Renders one pass: frames every spacing_m from start_north towards end_north at east = lateral_m,
 // heading north (or south when reverse); nav pose = truth in the pass's own dead-reckoned frame (origin
 // shifted, 1 deg heading bias, 2 % odometry scale error, 0.3 deg compass noise).
-Status camera_pass(const CameraWorld& w, route::CameraTileProjector& proj, route::TileFeatureExtractor& fx, double start_north,
+Status camera_pass(const CameraWorld& w, pipeline::CameraTilePipeline& tiles, double start_north,
                    double end_north, double spacing_m, double lateral_m, bool taught, std::uint64_t seed, std::vector<CameraPassFrame>& out) {
   out.clear();
   const bool reverse = end_north < start_north;
@@ -61,9 +62,6 @@ Status camera_pass(const CameraWorld& w, route::CameraTileProjector& proj, route
   const Vec2d origin = taught ? Vec2d(0.0, 0.0) : Vec2d(3.0, -2.0);
   Image<std::uint8_t> left = std::move(Image<std::uint8_t>::allocate(w.bench.width(), w.bench.height()).value());
   Image<std::uint8_t> right = std::move(Image<std::uint8_t>::allocate(w.bench.width(), w.bench.height()).value());
-  const route::CameraTileConfig& pc = proj.config();
-  Image<float> raster = std::move(Image<float>::allocate(pc.width_px, pc.height_px).value());
-  Image<std::uint8_t> cover = std::move(Image<std::uint8_t>::allocate(pc.width_px, pc.height_px).value());
   double prev_n = start_north;
   for (int i = 0;; ++i) {
     const double n = start_north + dir * spacing_m * i;
@@ -72,20 +70,16 @@ Status camera_pass(const CameraWorld& w, route::CameraTileProjector& proj, route
     const Pose3 cam = w.ned_T_cam(n, lateral_m, yaw, deg_to_rad(2.0) * n01(rng), deg_to_rad(2.0) * n01(rng));
     QNAV_RETURN_IF_ERROR(sim::render_stereo(w.terrain, w.bench, w.sim_T_cam(cam), seed * 1000003 + static_cast<std::uint64_t>(i), left.view(),
                                             right.view()));
-    route::TileGeometry g;
-    const double compass = yaw + bias + (taught ? 0.0 : deg_to_rad(0.3) * n01(rng));
-    const Result<double> cov = proj.project(left.view(), w.k, cam, 0.0, compass, raster.view(), cover.view(), g);
-    if (!cov) return cov.status();
-    // The nav frame: the truth rotated by the heading bias about the pass's start and shifted.
-    const Mat2d Rb = Pose2{0.0, 0.0, bias}.rotation();
-    const Vec2d nav = origin + Rb * Vec2d(g.pose.x_m, g.pose.y_m);
-    const double nav_n = nav.x(), nav_e = nav.y(), true_centre_n = g.pose.x_m;
-    g.origin_north_m += nav_n - g.pose.x_m;
-    g.origin_east_m += nav_e - g.pose.y_m;
-    g.pose.x_m = nav_n;
-    g.pose.y_m = nav_e;
+    pipeline::CameraFrame frame;
+    frame.image = left.view();
+    frame.intrinsics = w.k;
+    frame.ned_T_cam = cam;
+    frame.heading_rad = yaw + bias + (taught ? 0.0 : deg_to_rad(0.3) * n01(rng));
+    frame.nav_T_ground = Pose2{origin.x(), origin.y(), bias};  // the truth rotated by the heading bias and shifted
     CameraPassFrame f;
-    QNAV_RETURN_IF_ERROR(fx.extract(raster.view(), cover.view(), g, f.node));
+    Pose2 truth;
+    QNAV_RETURN_IF_ERROR(tiles.push_frame(frame, f.node, &truth));
+    const double true_centre_n = truth.x_m;
     f.node.meta.along_m = scale * spacing_m * i;
     f.nav_step_m = i == 0 ? 0.0 : scale * std::abs(n - prev_n);
     f.truth_north_m = true_centre_n;  // the tile centre (optical axis on the ground), true north
@@ -102,23 +96,12 @@ int cmd_camera() {
   const long seed = g_opt.camera_seed;
   const bool json = g_opt.json;
   CameraWorld w(static_cast<std::uint64_t>(seed));
-  route::CameraTileConfig pc;  // 4 mm raster, 192 x 192 (0.77 m square)
-  route::TileFeatureConfig fc;
-  fc.max_width = pc.width_px;
-  fc.max_height = pc.height_px;
-  fc.max_keypoints = 128;
-  fc.downsample = 1;  // 4 mm pixels: grains (8 mm) and rock rims give the corners
-  fc.blur_radius_px = 1;
-  fc.harris_nms_radius = 4;
-  fc.harris_norm_cell_px = 32;
-  route::CameraTileProjector proj;
-  route::TileFeatureExtractor fx;
-  ArenaStorage fx_arena(route::TileFeatureExtractor::arena_bytes(fc));
-  Status s = proj.init(pc);
-  if (s) s = fx.init(fc, fx_arena);
+  const pipeline::CameraTileSettings settings = pipeline::camera_tile_settings();
+  pipeline::CameraTilePipeline tiles;
+  Status s = tiles.init(settings);
   std::vector<CameraPassFrame> taught;
   const auto t0 = Clock::now();
-  if (s) s = camera_pass(w, proj, fx, 0.0, length_m, spacing_m, 0.0, true, static_cast<std::uint64_t>(seed) * 31 + 1, taught);
+  if (s) s = camera_pass(w, tiles, 0.0, length_m, spacing_m, 0.0, true, static_cast<std::uint64_t>(seed) * 31 + 1, taught);
   if (!s || taught.size() < 2) {
     std::fprintf(stderr, "qnav route camera: teach: %s\n", s ? "fewer than 2 frames" : s.message());
     return 1;
@@ -131,15 +114,7 @@ int cmd_camera() {
     meta.push_back(m);
     kp += static_cast<double>(taught[i].node.keypoints.size());
   }
-  route::RouteParams params;
-  params.sensor = route::SensorKind::kCamera;
-  params.node_spacing_m = static_cast<float>(spacing_m);
-  params.tile_length_m = static_cast<float>(pc.height_px * pc.resolution_m);
-  params.tile_width_m = static_cast<float>(w.footprint_across_m());
-  params.pixel_m = static_cast<float>(pc.resolution_m);
-  params.max_keypoints = static_cast<std::uint16_t>(fc.max_keypoints);
-  params.harris_window_px = static_cast<std::uint16_t>(2 * fc.harris_block_radius + 1);
-  params.keypoint_min_distance_px = static_cast<std::uint16_t>(fc.harris_nms_radius);
+  const route::RouteParams params = pipeline::camera_route_params(settings, spacing_m, w.footprint_across_m());
   const double swath = w.footprint_across_m();
   if (!json)
     std::printf("camera route: %zu nodes over %.1f m (spacing %.2f m, footprint %.2f x %.2f m, %.0f keypoints/node), %.1f s to teach\n",
@@ -152,8 +127,8 @@ int cmd_camera() {
       const double lateral = pct / 100.0 * swath;
       std::vector<CameraPassFrame> rep;
       const double half = 0.5 * spacing_m;
-      s = rev ? camera_pass(w, proj, fx, length_m - half, 0.0, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2 + 1, rep)
-              : camera_pass(w, proj, fx, half, length_m, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2, rep);
+      s = rev ? camera_pass(w, tiles, length_m - half, 0.0, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2 + 1, rep)
+              : camera_pass(w, tiles, half, length_m, spacing_m, lateral, false, static_cast<std::uint64_t>(seed) * 131 + pct * 2, rep);
       // The recorded-file configuration with its metric settings scaled from 0.3 m feature pixels to 4 mm.
       route::LocaliserConfig lc = pipeline::file_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward,
                                                         taught.size() + 8, taught.size(), spacing_m);
@@ -161,10 +136,12 @@ int cmd_camera() {
       lc.registration.robust.inlier_threshold_m = 0.02;
       lc.registration.fc.sigma_dist_m = 0.013;
       lc.guidance.side_deadband_m = 0.02;
-      auto loc = std::make_unique<pipeline::RouteRepeater>();
+      pipeline::RepeatSessionConfig sc;  // the repeat component without experiences
+      sc.localiser = lc;
+      auto session = std::make_unique<pipeline::RouteRepeatSession>(hal::host_file_store());
       VectorNodeSource<CameraPassFrame> src(&taught);
-      if (s) s = loc->init(lc);
-      if (s) s = loc->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src);
+      if (s) s = session->init(sc);
+      if (s) s = session->start(params, Span<const route::NodeMeta>(meta.data(), meta.size()), src, rev == 1);
       if (!s) {
         std::fprintf(stderr, "qnav route camera: %s\n", s.message());
         return 1;
@@ -172,7 +149,7 @@ int cmd_camera() {
       int p_scored = 0, p_within = 0, p_side_n = 0, p_side_ok = 0, p_off = 0, p_track = 0;
       for (std::size_t k = 0; k < rep.size(); ++k) {
         route::LocaliserStep st;
-        s = loc->step(rep[k].node, rep[k].nav_step_m, st);
+        s = session->step(rep[k], false, st).step;
         if (!s) {
           std::fprintf(stderr, "qnav route camera: %s\n", s.message());
           return 1;

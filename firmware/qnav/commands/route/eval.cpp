@@ -35,8 +35,23 @@ struct PassStats {
 };
 
 
+// The filter step of tile k of a pass: a bare RouteRepeater (the pass's first tile: no travel yet), or
+// the repeat component qnavd and `route repeat` run (pipeline::RouteRepeatSession, which counts the
+// pass's tiles itself; dvl_lost: the paper's eq. 5 motion model).
+Status step_tile(pipeline::RouteRepeater& loc, const pipeline::RouteTile& tile, std::size_t k, route::LocaliserStep& st) {
+  return loc.step(tile.node, k == 0 ? 0.0 : tile.nav_step_m, st);
+}
+struct SessionStepper {
+  pipeline::RouteRepeatSession& session;
+  bool dvl_lost = false;
+};
+Status step_tile(SessionStepper& s, const pipeline::RouteTile& tile, std::size_t, route::LocaliserStep& st) {
+  return s.session.step(tile, s.dvl_lost, st).step;
+}
+
 // One localiser update on tile k of a pass, scored against the simulator's truth into ps (and records).
-Status localise_tile(pipeline::RouteRepeater& loc, const pipeline::RouteTile& tile, std::size_t k, const std::vector<double>& node_along, int pct,
+template <class Localiser>
+Status localise_tile(Localiser& loc, const pipeline::RouteTile& tile, std::size_t k, const std::vector<double>& node_along, int pct,
                      bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps, std::vector<double>* step_ms,
                      std::vector<double>* step_cpu_ms, route::LocaliserStep* step_out = nullptr) {
   ps.pct = pct;
@@ -48,7 +63,7 @@ Status localise_tile(pipeline::RouteRepeater& loc, const pipeline::RouteTile& ti
   r.tile = static_cast<int>(k);
   const auto t0 = Clock::now();
   const double c0 = cpu_ms();
-  QNAV_RETURN_IF_ERROR(loc.step(tile.node, k == 0 ? 0.0 : tile.nav_step_m, r.st));
+  QNAV_RETURN_IF_ERROR(step_tile(loc, tile, k, r.st));
   if (step_cpu_ms) step_cpu_ms->push_back(cpu_ms() - c0);
   if (step_ms) step_ms->push_back(ms_since(t0));
   r.truth = true_node(node_along, tile.truth_along_m);
@@ -72,7 +87,8 @@ Status localise_tile(pipeline::RouteRepeater& loc, const pipeline::RouteTile& ti
   return Status::ok();
 }
 
-Status run_localiser(pipeline::RouteRepeater& loc, const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along,
+template <class Localiser>
+Status run_localiser(Localiser& loc, const std::vector<pipeline::RouteTile>& tiles, const std::vector<double>& node_along,
                      int pct, bool reverse, double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps,
                      std::vector<double>* step_ms, std::vector<double>* step_cpu_ms = nullptr) {
   for (std::size_t k = 0; k < tiles.size(); ++k)
@@ -81,20 +97,21 @@ Status run_localiser(pipeline::RouteRepeater& loc, const std::vector<pipeline::R
   return Status::ok();
 }
 
-// Flies a pass and localises each tile as it is built, framing the next tile on the route
-// (pipeline::route_aligned_stride_m), as qnavd and `route repeat` do.
+// Flies a pass and localises each tile as it is built through the repeat component (a started
+// session), framing the next tile on the route (RouteRepeatSession::next_stride_m), as qnavd and
+// `route repeat` do.
 Status fly_localised(pipeline::RouteTilePipeline& pipe, const pipeline::SimSurvey& w, const sidescan::TrajectoryConfig& traj,
-                     pipeline::RouteRepeater& loc, Span<const route::NodeMeta> meta, const std::vector<double>& node_along, int pct, bool reverse,
+                     pipeline::RouteRepeatSession& session, const std::vector<double>& node_along, int pct, bool reverse,
                      double lateral, double deadband, std::vector<TileRecord>* records, PassStats& ps, std::vector<pipeline::RouteTile>& tiles) {
   tiles.clear();
   Status step_status;
-  const route::RouteDirection dir = reverse ? route::RouteDirection::kReverse : route::RouteDirection::kForward;
+  SessionStepper loc{session, false};
   QNAV_RETURN_IF_ERROR(pipe.run_sim_pass(w.seabed, w.sonar_for(traj.seed), traj, [&](const pipeline::RouteTile& t) {
     tiles.push_back(t);
     route::LocaliserStep st;
     step_status = localise_tile(loc, t, tiles.size() - 1, node_along, pct, reverse, lateral, deadband, records, ps, nullptr, nullptr, &st);
     if (!step_status) return false;
-    if (!g_opt.no_align) pipe.set_next_stride_m(pipeline::route_aligned_stride_m(st, meta, dir, pipe.config().tiles.tile_stride_m));
+    if (!g_opt.no_align) pipe.set_next_stride_m(session.next_stride_m(st, pipe.config().tiles.tile_stride_m));
     return true;
   }));
   if (ps.tiles) ps.mean_entropy /= ps.tiles;
@@ -166,13 +183,15 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
       const double lateral = pct / 100.0 * in.world->swath_m;
       const auto t0 = Clock::now();
       route::LocaliserConfig lc = pipeline::default_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
-      auto loc = std::make_unique<pipeline::RouteRepeater>();
-      QNAV_RETURN_IF_ERROR(loc->init(lc));
-      QNAV_RETURN_IF_ERROR(loc->start(*in.params, in.meta, *in.source));
+      pipeline::RepeatSessionConfig sc;  // the repeat component without experiences
+      sc.localiser = lc;
+      auto session = std::make_unique<pipeline::RouteRepeatSession>(hal::host_file_store());
+      QNAV_RETURN_IF_ERROR(session->init(sc));
+      QNAV_RETURN_IF_ERROR(session->start(*in.params, in.meta, *in.source, rev));
       PassStats ps;
       ps.seabed = in.seabed;
       std::vector<TileRecord> rec;
-      QNAV_RETURN_IF_ERROR(fly_localised(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), *loc, in.meta,
+      QNAV_RETURN_IF_ERROR(fly_localised(*in.pipe, *in.world, in.world->pass(lateral, rev, static_cast<std::uint64_t>(++pass_seed)), *session,
                                          *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, &rec, ps, tiles));
       for (TileRecord& r : rec) {
         r.seabed = in.seabed;
@@ -186,13 +205,13 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
                    ms_since(t0) / 1000.0);
       if (pct == 20 && !rev && kidnap_src != nullptr) *kidnap_src = tiles;
       if (pct == 20 && !rev && eq5_within != nullptr) {
-        // The paper's motion model (eq. 5) on the same tiles, for comparison.
-        route::LocaliserConfig lc5 = lc;
-        lc5.filter.motion = route::MotionModel::kPaperEq5;
-        auto l5 = std::make_unique<pipeline::RouteRepeater>();
+        // The paper's motion model (eq. 5) on the same tiles, for comparison: the repeat component
+        // as while the DVL is lost.
+        auto s5 = std::make_unique<pipeline::RouteRepeatSession>(hal::host_file_store());
+        SessionStepper l5{*s5, true};
         PassStats p5;
-        if (l5->init(lc5) && l5->start(*in.params, in.meta, *in.source) &&
-            run_localiser(*l5, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, nullptr, p5, nullptr))
+        if (s5->init(sc) && s5->start(*in.params, in.meta, *in.source, rev) &&
+            run_localiser(l5, tiles, *in.node_along, pct, rev, lateral, lc.guidance.side_deadband_m, nullptr, p5, nullptr))
           *eq5_within = p5.scored ? 100.0 * p5.within1 / p5.scored : 0.0;
       }
     }
