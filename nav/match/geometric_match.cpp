@@ -138,7 +138,11 @@ void GeometricMatcher::gather_candidates(std::size_t np, std::size_t nc, const M
 // The same arithmetic as compat(), reordered for the O(N^2) loop without changing a result: the prev
 // side of a pair (its vector, length and sigmas) is the same for every candidate of a group, and the
 // direction test (a division, a dot product) is only made for a pair whose score would raise the
-// group's maximum, since a pair that fails it scores 0 and the maximum starts at 0.
+// group's maximum, since a pair that fails it scores 0 and the maximum starts at 0. Before any square
+// root a pair is dropped when its length difference |la - lb| certainly exceeds the distance at which
+// its score is 0 (fc: f <= 0 beyond eps_n f_max / (f_max - 1); fb: eps_n), bounded with every cur
+// sigma at its largest and a relative margin of 1e-9 (far above the rounding of these sums), tested on
+// the squared length lb^2; the pairs it drops score 0 in the exact test too.
 void GeometricMatcher::score_candidates() noexcept {
   const bool continuous = config_.score == MatchScoreKind::kContinuous;
   const double n_sigma = config_.n_sigma;
@@ -147,6 +151,12 @@ void GeometricMatcher::score_candidates() noexcept {
   const double min_vector = config_.min_vector_m;
   const double f_max = config_.f_max;
   const double f_slope_num = 1.0 - config_.f_max;
+  const double k_skip = (continuous ? f_max / (f_max - 1.0) : 1.0) * (1.0 + 1e-9);
+  double max_sc2 = 0.0;
+  for (std::size_t a = 0; a < n_cands_; ++a) {
+    const double sc = cur_sigma_[cands_[a].cur];
+    if (sc * sc > max_sc2) max_sc2 = sc * sc;
+  }
   std::size_t evaluations = 0;
   for (std::size_t g = 0; g < n_groups_; ++g) {
     for (std::uint32_t a = groups_[g].first; a < groups_[g].first + groups_[g].count; ++a) {
@@ -164,12 +174,19 @@ void GeometricMatcher::score_candidates() noexcept {
         const double la = va.norm();
         const double sp = spa + prev_sigma_[p2] * prev_sigma_[p2];
         const bool direction_test = la >= min_vector;
+        const double eps_upper = n_sigma * std::sqrt(sp + sca + max_sc2) + eps_floor;
+        const double t = eps_upper * k_skip;  // |la - lb| > t: the pair scores 0
+        const double hi2 = (la + t) * (la + t) * (1.0 + 1e-9);
+        const double lo = la - t;
+        const double lo2 = lo > 0.0 ? lo * lo * (1.0 - 1e-9) : -1.0;
         double best = 0.0;
         for (std::uint32_t b = b0; b < b1; ++b) {
           const Candidate& cb = cands_[b];
           if (cb.cur == ca.cur) continue;
           ++evaluations;
           const Vec3d vb = qa - cur_rot_[cb.cur];
+          const double lb2 = vb.squaredNorm();
+          if (lb2 > hi2 || lb2 < lo2) continue;
           const double lb = vb.norm();
           const double dl = std::fabs(la - lb);
           const double s2 = sp + sca + cur_sigma_[cb.cur] * cur_sigma_[cb.cur];
