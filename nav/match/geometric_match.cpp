@@ -135,25 +135,82 @@ void GeometricMatcher::gather_candidates(std::size_t np, std::size_t nc, const M
 }
 
 // 2. matching scores (eq. 4 with f = fb or fc), max over each other prev landmark's candidates.
+// The same arithmetic as compat(), reordered for the O(N^2) loop without changing a result: the prev
+// side of a pair (its vector, length and sigmas) is the same for every candidate of a group, and the
+// direction test (a division, a dot product) is only made for a pair whose score would raise the
+// group's maximum, since a pair that fails it scores 0 and the maximum starts at 0. Before any square
+// root a pair is dropped when its length difference |la - lb| certainly exceeds the distance at which
+// its score is 0 (fc: f <= 0 beyond eps_n f_max / (f_max - 1); fb: eps_n), bounded with every cur
+// sigma at its largest and a relative margin of 1e-9 (far above the rounding of these sums), tested on
+// the squared length lb^2; the pairs it drops score 0 in the exact test too.
 void GeometricMatcher::score_candidates() noexcept {
+  const bool continuous = config_.score == MatchScoreKind::kContinuous;
+  const double n_sigma = config_.n_sigma;
+  const double eps_floor = config_.eps_n_floor_m;
+  const double att_tol = config_.n_sigma * config_.attitude_sigma_rad;
+  const double min_vector = config_.min_vector_m;
+  const double f_max = config_.f_max;
+  const double f_slope_num = 1.0 - config_.f_max;
+  const double k_skip = (continuous ? f_max / (f_max - 1.0) : 1.0) * (1.0 + 1e-9);
+  double max_sc2 = 0.0;
+  for (std::size_t a = 0; a < n_cands_; ++a) {
+    const double sc = cur_sigma_[cands_[a].cur];
+    if (sc * sc > max_sc2) max_sc2 = sc * sc;
+  }
+  std::size_t evaluations = 0;
   for (std::size_t g = 0; g < n_groups_; ++g) {
     for (std::uint32_t a = groups_[g].first; a < groups_[g].first + groups_[g].count; ++a) {
       Candidate& ca = cands_[a];
+      const Vec3d pa = prev_pos_[ca.prev];
+      const Vec3d qa = cur_rot_[ca.cur];
+      const double spa = prev_sigma_[ca.prev] * prev_sigma_[ca.prev];
+      const double sca = cur_sigma_[ca.cur] * cur_sigma_[ca.cur];
       double s = 0.0;
       for (std::size_t h = 0; h < n_groups_; ++h) {
         if (h == g) continue;
+        const std::uint32_t b0 = groups_[h].first, b1 = groups_[h].first + groups_[h].count;
+        const std::uint16_t p2 = cands_[b0].prev;  // one prev landmark per group
+        const Vec3d va = pa - prev_pos_[p2];
+        const double la = va.norm();
+        const double sp = spa + prev_sigma_[p2] * prev_sigma_[p2];
+        const bool direction_test = la >= min_vector;
+        const double eps_upper = n_sigma * std::sqrt(sp + sca + max_sc2) + eps_floor;
+        const double t = eps_upper * k_skip;  // |la - lb| > t: the pair scores 0
+        const double hi2 = (la + t) * (la + t) * (1.0 + 1e-9);
+        const double lo = la - t;
+        const double lo2 = lo > 0.0 ? lo * lo * (1.0 - 1e-9) : -1.0;
         double best = 0.0;
-        for (std::uint32_t b = groups_[h].first; b < groups_[h].first + groups_[h].count; ++b) {
+        for (std::uint32_t b = b0; b < b1; ++b) {
           const Candidate& cb = cands_[b];
           if (cb.cur == ca.cur) continue;
-          bool bin = false;
-          const double f = compat(ca.prev, ca.cur, cb.prev, cb.cur, &bin);
-          ++stats_.pair_evaluations;
-          if (f > best) best = f;
+          ++evaluations;
+          const Vec3d vb = qa - cur_rot_[cb.cur];
+          const double lb2 = vb.squaredNorm();
+          if (lb2 > hi2 || lb2 < lo2) continue;
+          const double lb = vb.norm();
+          const double dl = std::fabs(la - lb);
+          const double s2 = sp + sca + cur_sigma_[cb.cur] * cur_sigma_[cb.cur];
+          const double eps_n = n_sigma * std::sqrt(s2) + eps_floor;
+          double v;  // the pair's score if its direction test passes
+          if (continuous) {
+            const double f = f_slope_num / eps_n * dl + f_max;
+            v = f > 0.0 ? f : 0.0;
+          } else {
+            v = dl < eps_n ? 1.0 : 0.0;
+          }
+          if (!(v > best)) continue;
+          if (direction_test && lb > 0.0) {
+            double tol = att_tol + eps_n / la;
+            if (tol > 1.0) tol = 1.0;
+            const double t2 = tol * tol;
+            const double eps_p = t2 * (0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0)));
+            if (va.dot(vb) < (1.0 - eps_p) * la * lb) continue;  // scores 0
+          }
+          best = v;
         }
         s += best;
       }
-      if (config_.appearance_weight > 0.0 && config_.score == MatchScoreKind::kContinuous) {
+      if (config_.appearance_weight > 0.0 && continuous) {
         const Landmark3& lp = prev_in_[ca.prev];
         const Landmark3& lc = cur_in_[ca.cur];
         if (lp.has_appearance && lc.has_appearance) {
@@ -165,6 +222,7 @@ void GeometricMatcher::score_candidates() noexcept {
       ca.score = s;
     }
   }
+  stats_.pair_evaluations += evaluations;
 }
 
 // 3. potential matches: best candidate per prev, then best prev per cur (one-to-one), at most

@@ -144,6 +144,8 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
   bool converged = false;
   int it = 0;
   double ess = 0.0, cross = 0.0;
+  const int ws = s + 1;                 // side of the target window under the patch
+  int win_x = -1, win_y = -1;           // its integer position (none yet)
   for (; it < config_.max_iterations; ++it) {
     if (!inside(target, x, y, r)) return Status(StatusCode::kOutOfRange, "patch align: left the image");
     // Normalised target patch at the current estimate: every sample has the same fractional offset, so
@@ -152,14 +154,25 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
     const float ax = x - static_cast<float>(ix), ay = y - static_cast<float>(iy);
     const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay), w10 = (1.0f - ax) * ay, w11 = ax * ay;
     const int px0 = ix - r, py0 = iy - r;
+    // The (s+1)^2 target pixels as floats, converted once per integer position (the estimate moves by
+    // sub-pixel steps, so usually once per call) rather than four times per sample and iteration: the
+    // same exact values, so the same sums.
+    if (ix != win_x || iy != win_y) {
+      for (int j = 0; j < ws; ++j) {
+        const std::uint8_t* src = target.row(py0 + j) + px0;
+        float* dst = win_ + j * ws;
+        for (int i = 0; i < ws; ++i) dst[i] = static_cast<float>(src[i]);
+      }
+      win_x = ix;
+      win_y = iy;
+    }
     double tsum = 0.0;
     for (int j = 0; j < s; ++j) {
-      const std::uint8_t* r0 = target.row(py0 + j) + px0;
-      const std::uint8_t* r1 = target.row(py0 + j + 1) + px0;
+      const float* r0 = win_ + j * ws;
+      const float* r1 = r0 + ws;
       float row_sum = 0.0f;
       for (int i = 0; i < s; ++i) {
-        const float v = w00 * static_cast<float>(r0[i]) + w01 * static_cast<float>(r0[i + 1]) +
-                        w10 * static_cast<float>(r1[i]) + w11 * static_cast<float>(r1[i + 1]);
+        const float v = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
         grid_[j * s + i] = v;
         row_sum += v;
       }

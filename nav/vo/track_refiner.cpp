@@ -29,7 +29,14 @@ Vec3d TrackRefiner::local_normal(Span<const match::Landmark3> ref, std::size_t i
   std::size_t idx[kMaxNeighbours];
   int k = 0;
   for (std::size_t j = 0; j < ref.size(); ++j) {
-    const double d = (ref[j].position_m - p).squaredNorm();
+    const Vec3d& q = ref[j].position_m;
+    // Once K are held, a point whose x difference alone reaches the K-th distance is out: the squared
+    // norm (a sum of non-negative rounded squares) is at least dx^2, so the test below would drop it too.
+    if (k == k_max) {
+      const double dx = q.x() - p.x();
+      if (dx * dx >= d2[k - 1]) continue;
+    }
+    const double d = (q - p).squaredNorm();
     if (k == k_max && d >= d2[k - 1]) continue;
     int pos = k < k_max ? k++ : k - 1;
     while (pos > 0 && d2[pos - 1] > d) {
