@@ -151,14 +151,17 @@ TEST(RouteAutopilot, HoldsCourseOnHoldCourseAndStopsOnRouteEnd) {
   EXPECT_NEAR(cmd.cross_track_m, -40.0, 1e-9);
   EXPECT_NEAR(cmd.course_rad, RouteAutopilotConfig{}.max_intercept_rad, 1e-9);  // back towards the track, steepest intercept
   send(ap, g, status(qc::GuidanceState::kHoldCourse, 9), 3500000000);  // a later HoldCourse does not stop it
-  ap.on_nav(4000000000, Pose2{995.0, 1.0, 0.0}, 0.0);  // 5 m before the track's end (1000 m)
-  EXPECT_EQ(ap.command().mode, AutopilotMode::kFollowing);
-  ap.on_nav(5000000000, Pose2{1000.5, 0.5, 0.0}, 0.0);  // past it: stopped there
+  std::int64_t t = 4000000000;
+  for (double x = 205.0; x <= 995.0; x += 5.0) {  // on along the track (the foot point is searched step by step)
+    ap.on_nav(t += 1000000000, Pose2{x, 1.0, 0.0}, 0.0);
+    ASSERT_EQ(ap.command().mode, AutopilotMode::kFollowing) << "at " << x << " m, before the track's end (1000 m)";
+  }
+  ap.on_nav(t += 1000000000, Pose2{1000.5, 0.5, 0.0}, 0.0);  // past it: stopped there
   cmd = ap.command();
   EXPECT_EQ(cmd.mode, AutopilotMode::kStopped);
   EXPECT_EQ(cmd.speed_mps, 0.0);
   // Stopped stays stopped, whatever comes next.
-  send(ap, g, status(qc::GuidanceState::kTracking, 10), 6000000000);
+  send(ap, g, status(qc::GuidanceState::kTracking, 10), t + 1000000000);
   EXPECT_EQ(ap.command().mode, AutopilotMode::kStopped);
 }
 
