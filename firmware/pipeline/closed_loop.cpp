@@ -62,6 +62,7 @@ Status teach_closed_loop_route(double length_m, std::uint64_t seed, TaughtSimRou
   out.spacing_m = tile_stride_m(tc, out.survey.route.speed_mps, out.survey.route.ping_rate_hz);
   out.params = side_scan_route_params(tc, out.spacing_m, out.survey.swath_m);
   out.tile_age_s = tile_age_s(tc, out.survey.route.speed_mps, out.survey.route.ping_rate_hz);
+  out.tile_age_m = tile_age_m(tc);
   const sidescan::TrajectoryConfig t0 = out.survey.pass(0.0, false, teach_pass_seed(seed));
   out.tiles.clear();
   QNAV_RETURN_IF_ERROR(
@@ -165,6 +166,7 @@ Status start_closed_loop(Span<const Pose2> track, Span<const std::uint32_t> node
   RouteAutopilotConfig apc = sc.autopilot;
   apc.cruise_speed_mps = speed_mps;
   apc.guidance_age_s = qnav ? guidance_age_s : 0.0;
+  if (!qnav) apc.guidance_age_m = 0.0;
   apc.reverse = sc.reverse;
   QNAV_RETURN_IF_ERROR(ap.reset(apc, track, node_at, veh.t_ns(), veh.dr_pose()));
   if (!qnav) {
@@ -201,9 +203,11 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   const float altitude = static_cast<float>(w.route.altitude_m);
   ClosedLoopVehicle veh;
   RouteAutopilot ap;
+  ClosedLoopScenario scq = sc;  // the autopilot allows for half a tile of its own travel (tiles in metres)
+  scq.autopilot.guidance_age_m = route.tile_age_m;
   QNAV_RETURN_IF_ERROR(start_closed_loop(Span<const Pose2>(route.track.data(), route.track.size()),
                                          Span<const std::uint32_t>(route.node_at.data(), route.node_at.size()),
-                                         truth_poly, sc, guide, route.tile_age_s, speed, 0, veh, ap));
+                                         truth_poly, scq, guide, route.tile_age_s, speed, 0, veh, ap));
 
   // qnav's side: tiles -> repeater -> CAN publisher on a sim bus; the autopilot is another node.
   std::unique_ptr<RouteTilePipeline> pipe;
@@ -233,14 +237,15 @@ Status run_closed_loop(const TaughtSimRoute& route, const ClosedLoopScenario& sc
   std::uint32_t seq = 0;
   Status step_status;
   const RouteTileSink sink = [&](const RouteTile& t) {
-    // Unlike qnavd, the filter keeps the odometry motion model through the vehicle's DVL dropouts and
-    // the tiles are not framed on the taught nodes (next_stride_m). Both were tried in this loop
-    // (`route follow --sim --length-m 2000 --seeds 1:4`): framing made seed 3 worse forwards (p95 3.9
-    // -> 9.2 m, max 8.0 -> 19.2 m), the eq. 5 model during dropouts the reverse runs (p95 2.8 -> 3.7 m,
-    // max 6.2 -> 8.6 m). docs/route.md, "Not done / weak".
+    // Unlike qnavd, the filter keeps the odometry motion model through the vehicle's DVL dropouts:
+    // tried in this loop (`route follow --sim --length-m 2000 --seeds 1:4`, before the guidance age
+    // was counted in metres), it made the reverse runs worse (p95 2.8 -> 3.7 m, max 6.2 -> 8.6 m).
     route::LocaliserStep st;
     step_status = rep->step(t, false, st).step;
     if (!step_status) return false;
+    // The next tile framed on the taught nodes (a reverse pass brought into step with them), as
+    // qnavd and `route repeat` frame theirs.
+    pipe->set_next_stride_m(rep->next_stride_m(st, pipe->config().tiles.tile_stride_m));
     qc::RouteGuidance g;
     qc::RouteStatus s;
     route_can_messages(st, rep->repeater().localiser().node_spacing_m(), seq++, g, s);

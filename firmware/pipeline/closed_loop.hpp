@@ -34,6 +34,7 @@ struct TaughtSimRoute {
   std::vector<route::NodeMeta> meta;
   double spacing_m = 0.0;
   double tile_age_s = 0.0;       // age of a tile's pose when the tile is finished (half a tile of pings)
+  double tile_age_m = 0.0;       // the same as dead-reckoned travel (half the tile length; 0: tiles by ping count)
   Pose2 nav_start{}, nav_end{};  // the teach pass's dead-reckoned first and last poses
   std::vector<Pose2> track;      // the autopilot's taught track: the teach's dead-reckoned poses every track_step_m,
   std::vector<std::uint32_t> node_at;  // with every node's pose inserted (node i = track[node_at[i]]), teach frame
@@ -47,7 +48,7 @@ struct ClosedLoopScenario {
   double start_offset_m = 0.0;     // start this far right of the route (direction of travel)
   VehicleDynamicsConfig dynamics;  // including the current
   DriftConfig drift;
-  RouteAutopilotConfig autopilot;  // guidance_age_s is set from the route's tile age for kQnav
+  RouteAutopilotConfig autopilot;  // guidance_age_s (and, in run_closed_loop, guidance_age_m) set from the route's tile age for kQnav
   double max_travel_factor = 1.3;
   std::uint64_t pass_seed = 1;  // the repeat's sonar speckle
 };

@@ -29,7 +29,8 @@ Status RouteAutopilot::reset(const RouteAutopilotConfig& config, Span<const Pose
     if (node_at[i] >= track.size() || (i > 0 && node_at[i] <= node_at[i - 1]))
       return Status(StatusCode::kInvalidArgument,
                     "route autopilot: node indices must increase and lie inside the track");
-  if (!(config.lookahead_m > 0.0) || !(config.max_intercept_rad > 0.0) || !(config.cross_track_gain >= 0.0))
+  if (!(config.lookahead_m > 0.0) || !(config.max_intercept_rad > 0.0) || !(config.cross_track_gain >= 0.0) ||
+      !(config.guidance_age_m >= 0.0 && config.guidance_age_m < 1e6))
     return Status(StatusCode::kInvalidArgument, "route autopilot: lookahead, intercept limit or gain out of range");
   cfg_ = config;
   track_ = track;
@@ -47,12 +48,13 @@ Status RouteAutopilot::reset(const RouteAutopilotConfig& config, Span<const Pose
   cum_hint_ = 0.0;
   pose_ = dr_pose;
   sideslip_rad_ = 0.0;
-  has_line_ = stopped_ = following_ = false;
+  has_line_ = stopped_ = following_ = route_end_ = false;
   dr_to_teach_ = Pose2{};
   chi_hold_ = stop_heading_ = last_course_ = dr_pose.heading_rad;
   have_guidance_ = have_seq_ = false;
   last_seq_ = 0;
   hist_n_ = hist_head_ = 0;
+  travelled_m_ = 0.0;
   counters_.reset();
   on_nav(t_ns, dr_pose, 0.0);
   return Status::ok();
@@ -65,11 +67,14 @@ void RouteAutopilot::set_frame(const Pose2& dr_to_teach) noexcept {
 }
 
 void RouteAutopilot::on_nav(std::int64_t t_ns, const Pose2& dr_pose, double sideslip_rad) noexcept {
-  if (dr_pose.is_finite()) pose_ = dr_pose;
+  if (dr_pose.is_finite()) {
+    if (hist_n_ > 0) travelled_m_ += (dr_pose.translation() - pose_.translation()).norm();
+    pose_ = dr_pose;
+  }
   if (std::isfinite(sideslip_rad)) sideslip_rad_ = sideslip_rad;
   const std::size_t last = (hist_head_ + kHistory - 1) % kHistory;
   if (hist_n_ == 0 || static_cast<double>(t_ns - hist_[last].t_ns) * 1e-9 >= kHistoryStepS) {
-    hist_[hist_head_] = Hist{t_ns, pose_};
+    hist_[hist_head_] = Hist{t_ns, pose_, travelled_m_};
     hist_head_ = (hist_head_ + 1) % kHistory;
     hist_n_ = std::min(hist_n_ + 1, kHistory);
   }
@@ -82,6 +87,18 @@ Pose2 RouteAutopilot::pose_at(std::int64_t t_ns) const noexcept {
     const Hist& h = hist_[(hist_head_ + kHistory - 1 - k) % kHistory];
     best = h.pose;
     if (h.t_ns <= t_ns) break;
+  }
+  return best;
+}
+
+Pose2 RouteAutopilot::pose_travelled_back(double back_m) const noexcept {
+  // The newest history entry at least back_m of own travel before now (the oldest one otherwise).
+  const double want = travelled_m_ - back_m;
+  Pose2 best = pose_;
+  for (std::size_t k = 0; k < hist_n_; ++k) {
+    const Hist& h = hist_[(hist_head_ + kHistory - 1 - k) % kHistory];
+    best = h.pose;
+    if (h.travelled_m <= want) break;
   }
   return best;
 }
@@ -136,6 +153,12 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
   if (stopped_) return;
   switch (fix.status) {
     case qc::GuidanceState::kRouteEnd:
+      // qnav's last node is the centre of the teach's last tile, up to half a tile before the taught
+      // track's end: with a frame, follow the track on to its end (command() stops past it).
+      if (has_line_) {
+        route_end_ = following_ = true;
+        return;
+      }
       stopped_ = true;
       following_ = false;
       stop_heading_ = pose_.heading_rad;
@@ -148,7 +171,7 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
         return;
       counters_.increment(AutopilotCounter::kSteerFixes);
       const std::int64_t age_ns = static_cast<std::int64_t>(std::llround(std::max(0.0, age_s) * 1e9));
-      const Pose2 a = age_ns > 0 ? pose_at(t_ns - age_ns) : pose_;
+      const Pose2 a = cfg_.guidance_age_m > 0.0 ? pose_travelled_back(cfg_.guidance_age_m) : age_ns > 0 ? pose_at(t_ns - age_ns) : pose_;
       const double sgn = cfg_.reverse ? -1.0 : 1.0;
       const Pose2 in_node{sgn * (spacing_m_ - fix.dist_to_next_m), sgn * fix.cross_track_m,
                           wrap_angle_rad(fix.heading_error_rad - (cfg_.reverse ? kPi : 0.0))};
@@ -164,7 +187,7 @@ void RouteAutopilot::on_fix(const RouteFix& fix, std::int64_t t_ns, double age_s
     }
     case qc::GuidanceState::kHoldCourse:
     case qc::GuidanceState::kNotRepeating:
-      if (cfg_.follow_track_on_hold && has_line_) return;  // the track on dead reckoning, last frame
+      if ((cfg_.follow_track_on_hold || route_end_) && has_line_) return;  // the track on dead reckoning, last frame
       if (following_) chi_hold_ = last_course_;
       following_ = false;
       return;

@@ -11,8 +11,8 @@
 // dead-reckoned frame NOW into the teach frame.
 // Per new fix (a ROUTE_STATUS whose TileSeq differs from the last, paired with the ROUTE_GUIDANCE sent
 // right before it) with status Tracking or DeadReckoned, node n = TargetNode:
-//   A  = own dead-reckoned pose guidance_age_s before the frame arrived (qnav's offsets describe the
-//        vehicle at the sensed tile's centre, half a tile of pings earlier);
+//   A  = own dead-reckoned pose guidance_age_m of own travel (or guidance_age_s) before the frame
+//        arrived (qnav's offsets describe the vehicle at the sensed tile's centre, half a tile earlier);
 //   in = (sgn * (spacing - DistToNext), sgn * CrossTrack, HeadingError - (reverse ? pi : 0)),
 //        sgn = +1 forward / -1 reverse, spacing = the track's mean node spacing;
 //   V  = track[node_at[n]] (+) in          (the vehicle in the teach frame at A's time)
@@ -25,7 +25,9 @@
 // beta = the DVL's sideslip atan2(v_starboard, v_forward) (0 when crab_compensation is off).
 // HoldCourse / NotRepeating: hold the course steered when it arrived (before any fix: the heading
 // at reset); with follow_track_on_hold and a frame, keep following the track on dead reckoning.
-// RouteEnd, or s past the track's end: stop (speed 0, heading held).
+// RouteEnd: with a frame, keep following the track with the last frame (later Tracking /
+// DeadReckoned fixes still re-anchor it, HoldCourse does not stop it) up to the track's end; without
+// one, stop at once. s past the track's end while following: stop (speed 0, heading held).
 // The dead-reckoning-only baseline is the same law with T set once (set_frame) and no frames.
 // stbd(h) = (-sin h, cos h) in (north, east); headings are compass (clockwise from north).
 // Memory: the borrowed track (caller storage) and a fixed ring of kHistory poses; no heap.
@@ -49,6 +51,9 @@ struct RouteAutopilotConfig {
   double cross_track_gain = 1.0;  // k_e: multiplies the cross-track inside the LOS angle
   double max_intercept_rad = 0.5236;  // 30 deg: steepest approach to the route
   double guidance_age_s = 0.0;        // age of qnav's guidance when it arrives (tile duration / 2)
+  // > 0: the age as own dead-reckoned travel instead (tiles sized in metres: half the tile length);
+  // guidance_age_s is then not used. The vehicle's speed over ground (current) does not change it.
+  double guidance_age_m = 0.0;
   double cruise_speed_mps = 1.5;
   bool reverse = false;           // the route is followed from its end to its start
   bool crab_compensation = true;  // steer course over ground (DVL sideslip), not heading
@@ -113,6 +118,7 @@ class RouteAutopilot {
 
  private:
   Pose2 pose_at(std::int64_t t_ns) const noexcept;
+  Pose2 pose_travelled_back(double back_m) const noexcept;
   Vec2d pt(std::size_t i) const noexcept;  // track point i in the direction of travel
   void locate(const Vec2d& p, double& along_m, double& cross_m, Vec2d& foot, std::size_t& seg) const noexcept;
   Vec2d point_at(double along_m) const noexcept;
@@ -125,6 +131,7 @@ class RouteAutopilot {
   Pose2 pose_{};
   double sideslip_rad_ = 0.0;
   bool has_line_ = false, stopped_ = false, following_ = false;
+  bool route_end_ = false;  // RouteEnd arrived with a frame: following the track on to its end
   Pose2 dr_to_teach_{};
   double chi_hold_ = 0.0;  // course held on HoldCourse (own frame)
   double last_course_ = 0.0;
@@ -135,7 +142,9 @@ class RouteAutopilot {
   struct Hist {
     std::int64_t t_ns = 0;
     Pose2 pose{};
+    double travelled_m = 0.0;  // own dead-reckoned travel since reset
   };
+  double travelled_m_ = 0.0;
   Hist hist_[kHistory];
   std::size_t hist_n_ = 0, hist_head_ = 0;  // head_ = next slot
   CounterSet<AutopilotCounter> counters_{kAutopilotCounterNames};

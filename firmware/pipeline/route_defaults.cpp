@@ -27,6 +27,8 @@ double tile_age_s(const RouteTileConfig& c, double speed_mps, double ping_rate_h
   return c.tiles.tile_length_m > 0.0 ? 0.5 * c.tiles.tile_length_m / speed_mps : 0.5 * c.tiles.scanlines_per_tile / ping_rate_hz;
 }
 
+double tile_age_m(const RouteTileConfig& c) { return c.tiles.tile_length_m > 0.0 ? 0.5 * c.tiles.tile_length_m : 0.0; }
+
 double tile_stride_m(const RouteTileConfig& c, double speed_mps, double ping_rate_hz) {
   if (c.tiles.tile_length_m > 0.0) return c.tiles.tile_stride_m;
   return c.tiles.scanline_stride * speed_mps / ping_rate_hz;

@@ -47,6 +47,10 @@ double tile_stride_m(const RouteTileConfig& c, double speed_mps, double ping_rat
 // How old a tile's pose is when the tile is finished (half a tile of travel), at this speed and ping
 // rate: what a closed loop's autopilot allows for when it steers on the tile's guidance.
 double tile_age_s(const RouteTileConfig& c, double speed_mps, double ping_rate_hz);
+// The same as travel: half the tile length for tiles by distance (0 by ping count). An autopilot that
+// looks its pose up this far back along its own dead reckoning is right whatever its speed over ground
+// (a current ahead or astern changes the time a tile takes, not its length).
+double tile_age_m(const RouteTileConfig& c);
 
 // Tiles for the simulator's sonar (50 m slant range, swath 100 m): 0.2 m raster 704 x 704 (141 m
 // square), tiles of 90 m of track every 60 m (the node spacing), 128 keypoints; ground bins 0.2 m x 256.

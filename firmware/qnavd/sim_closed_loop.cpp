@@ -105,6 +105,7 @@ Status SimClosedLoop::start(std::uint32_t pass, std::uint64_t pass_seed, const p
   // The drift of `qnav route follow --sim` for this seed, the start offset of the pass.
   pipeline::ClosedLoopScenario sc = pipeline::follow_scenario(cfg_.sim_seed, p.reverse, p.offset_pct / 100.0 * c.swath_m, pipeline::FollowDrift{});
   sc.pass_seed = pass_seed;
+  sc.autopilot.guidance_age_m = pipeline::tile_age_m(cfg_.tiles);  // half a tile of its own travel (0: by ping count)
   c.dt_s = 1.0 / survey.route.ping_rate_hz;
   c.max_travel_m = sc.max_travel_factor * c.length_m;
   const double age_s = pipeline::tile_age_s(cfg_.tiles, survey.route.speed_mps, survey.route.ping_rate_hz);

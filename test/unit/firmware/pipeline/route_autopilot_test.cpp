@@ -101,6 +101,31 @@ TEST(RouteAutopilot, AnchorsQnavsFixFromCanFramesAndPropagatesOnDeadReckoning) {
   EXPECT_EQ(ap.counters().get(AutopilotCounter::kSteerFixes), 1u);
 }
 
+TEST(RouteAutopilot, AnchorsAFixHalfATileOfOwnTravelBackWhateverTheSpeed) {
+  // Tiles in metres: the fix describes the vehicle guidance_age_m of its own travel ago, however long
+  // that took (a current ahead or astern changes the time, not the distance).
+  Track tr;
+  RouteAutopilot ap;
+  RouteAutopilotConfig c;
+  c.guidance_age_m = 45.0;
+  c.guidance_age_s = 5.0;  // not used when guidance_age_m is set
+  ASSERT_TRUE(ap.reset(c, tr.p(), tr.n(), 0, Pose2{0.0, 0.0, 0.0}).is_ok());
+  // Along the track: 1 m per 0.5 s up to 40 m, then 0.25 m per 0.5 s (slowed down) up to 75 m.
+  std::int64_t t = 0;
+  for (double x = 1.0; x <= 40.0; x += 1.0) ap.on_nav(t += 500000000, Pose2{x, 0.0, 0.0}, 0.0);
+  for (double x = 40.25; x <= 75.0; x += 0.25) ap.on_nav(t += 500000000, Pose2{x, 0.0, 0.0}, 0.0);
+  // qnav: at node 0 (30 m), on it (DistToNext = the spacing), 2 m to starboard.
+  qc::RouteGuidance g;
+  g.cross_track_m = 2.0;
+  g.dist_to_next_m = 60.0;
+  g.target_node = 0;
+  send(ap, g, status(qc::GuidanceState::kTracking, 1), t);
+  const AutopilotCommand cmd = ap.command();
+  EXPECT_EQ(cmd.mode, AutopilotMode::kFollowing);
+  EXPECT_NEAR(cmd.along_m, 75.0, 0.5);  // anchored at its pose 45 m back (at 30 m); 5 s back: 32.5 m
+  EXPECT_NEAR(cmd.cross_track_m, 2.0, 1e-6);
+}
+
 TEST(RouteAutopilot, HoldsCourseOnHoldCourseAndStopsOnRouteEnd) {
   Track tr;
   RouteAutopilot ap;
@@ -117,13 +142,39 @@ TEST(RouteAutopilot, HoldsCourseOnHoldCourseAndStopsOnRouteEnd) {
   EXPECT_NEAR(cmd.course_rad, following, 1e-12);
   EXPECT_NEAR(cmd.heading_rad, following - 0.05, 1e-12);
   EXPECT_GT(cmd.speed_mps, 0.0);
+  // RouteEnd with a frame: on along the taught track (the last frame) to its end, not stopped where
+  // the status arrives (qnav's last node is half a tile before the track's end).
   send(ap, g, status(qc::GuidanceState::kRouteEnd, 8), 3000000000);
+  cmd = ap.command();
+  EXPECT_EQ(cmd.mode, AutopilotMode::kFollowing);
+  EXPECT_GT(cmd.speed_mps, 0.0);
+  EXPECT_NEAR(cmd.cross_track_m, -40.0, 1e-9);
+  EXPECT_NEAR(cmd.course_rad, RouteAutopilotConfig{}.max_intercept_rad, 1e-9);  // back towards the track, steepest intercept
+  send(ap, g, status(qc::GuidanceState::kHoldCourse, 9), 3500000000);  // a later HoldCourse does not stop it
+  std::int64_t t = 4000000000;
+  for (double x = 205.0; x <= 995.0; x += 5.0) {  // on along the track (the foot point is searched step by step)
+    ap.on_nav(t += 1000000000, Pose2{x, 1.0, 0.0}, 0.0);
+    ASSERT_EQ(ap.command().mode, AutopilotMode::kFollowing) << "at " << x << " m, before the track's end (1000 m)";
+  }
+  ap.on_nav(t += 1000000000, Pose2{1000.5, 0.5, 0.0}, 0.0);  // past it: stopped there
   cmd = ap.command();
   EXPECT_EQ(cmd.mode, AutopilotMode::kStopped);
   EXPECT_EQ(cmd.speed_mps, 0.0);
   // Stopped stays stopped, whatever comes next.
-  send(ap, g, status(qc::GuidanceState::kTracking, 9), 4000000000);
+  send(ap, g, status(qc::GuidanceState::kTracking, 10), t + 1000000000);
   EXPECT_EQ(ap.command().mode, AutopilotMode::kStopped);
+}
+
+TEST(RouteAutopilot, StopsAtOnceOnRouteEndWithoutAFrame) {
+  Track tr;
+  RouteAutopilot ap;
+  ASSERT_TRUE(ap.reset(RouteAutopilotConfig{}, tr.p(), tr.n(), 0, Pose2{100.0, 10.0, 0.3}).is_ok());
+  qc::RouteGuidance g;
+  send(ap, g, status(qc::GuidanceState::kRouteEnd, 1), 1000000000);  // no fix, no set_frame: no track to follow
+  const AutopilotCommand cmd = ap.command();
+  EXPECT_EQ(cmd.mode, AutopilotMode::kStopped);
+  EXPECT_EQ(cmd.speed_mps, 0.0);
+  EXPECT_NEAR(cmd.heading_rad, 0.3, 1e-12);
 }
 
 TEST(RouteAutopilot, WithFollowTrackOnHoldKeepsFollowingTheTrackOnDeadReckoning) {
