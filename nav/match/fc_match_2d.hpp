@@ -91,9 +91,12 @@ class FcMatcher2d {
   Span<Candidate> cand_;
   Span<std::uint32_t> first_;   // per a: first candidate index (cand_ is grouped by a)
   Span<std::uint32_t> order_;   // candidate order: by implied translation x (scoring), then for the greedy pass
-  Span<std::uint32_t> rank_;    // per candidate: its place in the translation order
   Span<std::uint32_t> near_;    // one candidate's neighbours in translation (scoring)
   Span<Vec2d> translation_;     // per candidate (a, b): b - R(dtheta) a
+  // The candidates in translation order, streamed by the scoring's neighbour scan: t.x, t.y, the
+  // position of a, a's index, the candidate index.
+  Span<double> sorted_tx_, sorted_ty_, sorted_ax_, sorted_ay_;
+  Span<std::uint32_t> sorted_a_;
   Span<std::uint8_t> used_a_;
   Span<std::uint8_t> used_b_;
   Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
