@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace qnav::match {
 
@@ -49,6 +50,7 @@ std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) + 4 * nc * sizeof(double) +
          2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
+         c.max_points * (sizeof(std::int32_t) + sizeof(float)) +
          128;
 }
 
@@ -75,9 +77,11 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   stats_b_ = arena.allocate<float>(2 * c.max_points);
   wide_a_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
   wide_b_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
+  dot_row_ = arena.allocate<std::int32_t>(c.max_points);
+  z_row_ = arena.allocate<float>(c.max_points);
   if (cand_.empty() || first_.empty() || order_.empty() || sorted_a_.empty() || near_.empty() || translation_.empty() ||
       sorted_tx_.empty() || sorted_ty_.empty() || sorted_ax_.empty() || sorted_ay_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
-      wide_a_.empty() || wide_b_.empty())
+      wide_a_.empty() || wide_b_.empty() || dot_row_.empty() || z_row_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -131,12 +135,23 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
     const std::int16_t* da = wide_a_.data() + i * d;
+    // The row's dot products, then its ZNCCs, each in a loop without branches (independent
+    // iterations the compiler pipelines or vectorises), then the selection: the same float
+    // expression per pair as one loop with everything, so the same z.
+    std::int32_t* dots = dot_row_.data();
+    if (d == 64) {
+      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
+    } else {
+      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
+    }
+    float* zs = z_row_.data();
+    const float* sb = stats_b_.data();
     for (std::size_t j = 0; j < nb; ++j) {
-      const float ib = stats_b_[2 * j + 1];
-      if (ib == 0.0f) continue;
-      const std::int16_t* db = wide_b_.data() + j * d;
-      const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
-      const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
+      const float z = (static_cast<float>(dots[j]) - sa * sb[2 * j] * inv_d) * ia * sb[2 * j + 1];
+      zs[j] = sb[2 * j + 1] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
+    }
+    for (std::size_t j = 0; j < nb; ++j) {
+      const float z = zs[j];
       if (!(z >= config_.min_appearance)) continue;
       if (have == k && z <= list[k - 1].appearance) continue;
       std::size_t pos = have < k ? have++ : k - 1;

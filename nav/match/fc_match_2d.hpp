@@ -101,6 +101,8 @@ class FcMatcher2d {
   Span<std::uint8_t> used_b_;
   Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
   Span<std::int16_t> wide_a_, wide_b_;  // descriptors widened to int16 (max_points x max_descriptor_bytes)
+  Span<std::int32_t> dot_row_;  // one a's dot products with every b (appearance)
+  Span<float> z_row_;           // one a's ZNCC with every b (-inf for a flat b)
   CounterSet<FcMatchCounter> counters_;
 };
 
