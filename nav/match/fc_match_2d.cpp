@@ -135,9 +135,11 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
     const std::int16_t* da = wide_a_.data() + i * d;
-    // The row's dot products, then its ZNCCs, each in a loop without branches (independent
-    // iterations the compiler pipelines or vectorises), then the selection: the same float
-    // expression per pair as one loop with everything, so the same z.
+#if defined(__SSE2__) || defined(__ARM_NEON)
+    // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
+    // (independent iterations the compiler pipelines or vectorises), then the selection: the same
+    // float expression per pair as the fused loop below, so the same z. Without SIMD (LEON3, armhf
+    // VFP) the fused loop is fewer instructions (no row buffers).
     std::int32_t* dots = dot_row_.data();
     if (d == 64) {
       for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
@@ -152,6 +154,14 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
     }
     for (std::size_t j = 0; j < nb; ++j) {
       const float z = zs[j];
+#else
+    for (std::size_t j = 0; j < nb; ++j) {
+      const float ib = stats_b_[2 * j + 1];
+      if (ib == 0.0f) continue;
+      const std::int16_t* db = wide_b_.data() + j * d;
+      const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
+      const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
+#endif
       if (!(z >= config_.min_appearance)) continue;
       if (have == k && z <= list[k - 1].appearance) continue;
       std::size_t pos = have < k ? have++ : k - 1;

@@ -20,7 +20,8 @@
 // copies of the descriptors (widened once per call; a 16-bit multiply-add the compiler vectorises on
 // x86 and ARM, the same integer sums as int8), with a fixed-length loop for 64-byte descriptors.
 // Memory: init() takes all buffers from an Arena (2 * max_points * max_descriptor_bytes int16 of
-// them for the widened descriptors); match() never allocates.
+// them for the widened descriptors; per candidate 4 doubles + 1 uint32 of translation-ordered copies
+// for the scoring's neighbour scan; one row of dot products and ZNCCs); match() never allocates.
 #pragma once
 
 #include <cstddef>
