@@ -50,7 +50,7 @@ std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) + 4 * nc * sizeof(double) +
          2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
-         c.max_points * (sizeof(std::int32_t) + sizeof(float)) +
+         c.max_points * (sizeof(std::int32_t) + 3 * sizeof(float)) +
          128;
 }
 
@@ -79,9 +79,11 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   wide_b_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
   dot_row_ = arena.allocate<std::int32_t>(c.max_points);
   z_row_ = arena.allocate<float>(c.max_points);
+  sum_b_ = arena.allocate<float>(c.max_points);
+  inv_b_ = arena.allocate<float>(c.max_points);
   if (cand_.empty() || first_.empty() || order_.empty() || sorted_a_.empty() || near_.empty() || translation_.empty() ||
       sorted_tx_.empty() || sorted_ty_.empty() || sorted_ax_.empty() || sorted_ay_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
-      wide_a_.empty() || wide_b_.empty() || dot_row_.empty() || z_row_.empty())
+      wide_a_.empty() || wide_b_.empty() || dot_row_.empty() || z_row_.empty() || sum_b_.empty() || inv_b_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -124,6 +126,10 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   };
   for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
   for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
+  for (std::size_t j = 0; j < nb; ++j) {
+    sum_b_[j] = stats_b_[2 * j];
+    inv_b_[j] = stats_b_[2 * j + 1];
+  }
   for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
   for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
   const float inv_d = 1.0f / static_cast<float>(d);
@@ -147,10 +153,11 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
       for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
     }
     float* zs = z_row_.data();
-    const float* sb = stats_b_.data();
+    const float* sum_b = sum_b_.data();
+    const float* inv_b = inv_b_.data();
     for (std::size_t j = 0; j < nb; ++j) {
-      const float z = (static_cast<float>(dots[j]) - sa * sb[2 * j] * inv_d) * ia * sb[2 * j + 1];
-      zs[j] = sb[2 * j + 1] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
+      const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
+      zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
     }
     for (std::size_t j = 0; j < nb; ++j) {
       const float z = zs[j];

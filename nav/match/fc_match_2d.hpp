@@ -104,6 +104,7 @@ class FcMatcher2d {
   Span<std::int16_t> wide_a_, wide_b_;  // descriptors widened to int16 (max_points x max_descriptor_bytes)
   Span<std::int32_t> dot_row_;  // one a's dot products with every b (appearance)
   Span<float> z_row_;           // one a's ZNCC with every b (-inf for a flat b)
+  Span<float> sum_b_, inv_b_;   // stats_b_ split in two arrays (a loop over b that vectorises)
   CounterSet<FcMatchCounter> counters_;
 };
 
