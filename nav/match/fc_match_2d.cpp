@@ -126,10 +126,12 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   };
   for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
   for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
-  for (std::size_t j = 0; j < nb; ++j) {
+#if defined(__SSE2__) || defined(__ARM_NEON)
+  for (std::size_t j = 0; j < nb; ++j) {  // for the row loop below, which vectorises
     sum_b_[j] = stats_b_[2 * j];
     inv_b_[j] = stats_b_[2 * j + 1];
   }
+#endif
   for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
   for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
   const float inv_d = 1.0f / static_cast<float>(d);
