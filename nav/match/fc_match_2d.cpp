@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace qnav::match {
 
@@ -47,8 +48,9 @@ inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::s
 
 std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
-  return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) +
+  return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) + 4 * nc * sizeof(double) +
          2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
+         c.max_points * (sizeof(std::int32_t) + 3 * sizeof(float)) +
          128;
 }
 
@@ -62,17 +64,26 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   cand_ = arena.allocate<Candidate>(nc);
   first_ = arena.allocate<std::uint32_t>(c.max_points + 1);
   order_ = arena.allocate<std::uint32_t>(nc);
-  rank_ = arena.allocate<std::uint32_t>(nc);
+  sorted_a_ = arena.allocate<std::uint32_t>(nc);
   near_ = arena.allocate<std::uint32_t>(nc);
   translation_ = arena.allocate<Vec2d>(nc);
+  sorted_tx_ = arena.allocate<double>(nc);
+  sorted_ty_ = arena.allocate<double>(nc);
+  sorted_ax_ = arena.allocate<double>(nc);
+  sorted_ay_ = arena.allocate<double>(nc);
   used_a_ = arena.allocate<std::uint8_t>(c.max_points);
   used_b_ = arena.allocate<std::uint8_t>(c.max_points);
   stats_a_ = arena.allocate<float>(2 * c.max_points);
   stats_b_ = arena.allocate<float>(2 * c.max_points);
   wide_a_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
   wide_b_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
-  if (cand_.empty() || first_.empty() || order_.empty() || rank_.empty() || near_.empty() || translation_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
-      wide_a_.empty() || wide_b_.empty())
+  dot_row_ = arena.allocate<std::int32_t>(c.max_points);
+  z_row_ = arena.allocate<float>(c.max_points);
+  sum_b_ = arena.allocate<float>(c.max_points);
+  inv_b_ = arena.allocate<float>(c.max_points);
+  if (cand_.empty() || first_.empty() || order_.empty() || sorted_a_.empty() || near_.empty() || translation_.empty() ||
+      sorted_tx_.empty() || sorted_ty_.empty() || sorted_ax_.empty() || sorted_ay_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
+      wide_a_.empty() || wide_b_.empty() || dot_row_.empty() || z_row_.empty() || sum_b_.empty() || inv_b_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -115,6 +126,12 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   };
   for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
   for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
+#if defined(__SSE2__) || defined(__ARM_NEON)
+  for (std::size_t j = 0; j < nb; ++j) {  // for the row loop below, which vectorises
+    sum_b_[j] = stats_b_[2 * j];
+    inv_b_[j] = stats_b_[2 * j + 1];
+  }
+#endif
   for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
   for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
   const float inv_d = 1.0f / static_cast<float>(d);
@@ -126,12 +143,34 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
     const std::int16_t* da = wide_a_.data() + i * d;
+#if defined(__SSE2__) || defined(__ARM_NEON)
+    // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
+    // (independent iterations the compiler pipelines or vectorises), then the selection: the same
+    // float expression per pair as the fused loop below, so the same z. Without SIMD (LEON3, armhf
+    // VFP) the fused loop is fewer instructions (no row buffers).
+    std::int32_t* dots = dot_row_.data();
+    if (d == 64) {
+      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
+    } else {
+      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
+    }
+    float* zs = z_row_.data();
+    const float* sum_b = sum_b_.data();
+    const float* inv_b = inv_b_.data();
+    for (std::size_t j = 0; j < nb; ++j) {
+      const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
+      zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
+    }
+    for (std::size_t j = 0; j < nb; ++j) {
+      const float z = zs[j];
+#else
     for (std::size_t j = 0; j < nb; ++j) {
       const float ib = stats_b_[2 * j + 1];
       if (ib == 0.0f) continue;
       const std::int16_t* db = wide_b_.data() + j * d;
       const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
       const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
+#endif
       if (!(z >= config_.min_appearance)) continue;
       if (have == k && z <= list[k - 1].appearance) continue;
       std::size_t pos = have < k ? have++ : k - 1;
@@ -186,7 +225,15 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
     if (translation_[x].x() != translation_[y].x()) return translation_[x].x() < translation_[y].x();
     return x < y;
   });
-  for (std::size_t o = 0; o < nc; ++o) rank_[order_[o]] = static_cast<std::uint32_t>(o);
+  for (std::size_t o = 0; o < nc; ++o) {
+    const std::uint32_t c = order_[o];
+    const std::uint32_t ai = cand_[c].a;
+    sorted_tx_[o] = translation_[c].x();
+    sorted_ty_[o] = translation_[c].y();
+    sorted_ax_[o] = a.position_m[ai].x();
+    sorted_ay_[o] = a.position_m[ai].y();
+    sorted_a_[o] = ai;
+  }
   const double gr2 = gate_radius_m * gate_radius_m;
   // Per pair, with la^2 = |a' - a|^2 (no square root): gate2 <= 27.6 (3 sd^2 + 2 sigma_dir^2 la^2),
   // as (sigma_dir la + sd)^2 <= 2 sigma_dir^2 la^2 + 2 sd^2; with a relative and an absolute margin
@@ -195,28 +242,30 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   const double pair_c0 = 2.0 * 13.8 * 3.0 * sd2 * (1.0 + 1e-9);
   const double pair_c1 = 2.0 * 13.8 * 2.0 * config_.sigma_dir_rad * config_.sigma_dir_rad * (1.0 + 1e-9);
   const double pair_margin = 1e-9 * (1.0 + abs_max_m) * (1.0 + abs_max_m);
-  for (std::size_t c = 0; c < nc; ++c) {
+  // Candidates are scored in translation order (each score depends only on its own candidate), so
+  // the window of candidates within gate_radius_m in t.x moves one way: [lo, hi) by two pointers (a
+  // correctly rounded difference is monotonic in its operands, so the window is the same contiguous
+  // run the per-candidate scan found). The window is streamed from the sorted arrays with a
+  // branch-free compaction; the scoring below reads the neighbours in candidate order as before.
+  std::size_t lo = 0, hi = 0;
+  for (std::size_t rc = 0; rc < nc; ++rc) {
+    const std::uint32_t c = order_[rc];
     Candidate& cc = cand_[c];
     const std::size_t i = cc.a;
-    const Vec2d tc = translation_[c];
-    const Vec2d pai = a.position_m[i];
-    const auto near_enough = [&](std::uint32_t c2) {
-      const double dt2 = (translation_[c2] - tc).squaredNorm();
-      if (!(dt2 <= gr2) || cand_[c2].a == i) return false;
-      return dt2 <= pair_c0 + pair_c1 * (a.position_m[cand_[c2].a] - pai).squaredNorm() + pair_margin;
-    };
-    // The candidates within the radius in t, in candidate order (= grouped by a', increasing).
+    const double tcx = sorted_tx_[rc], tcy = sorted_ty_[rc];
+    const double pix = sorted_ax_[rc], piy = sorted_ay_[rc];
+    while (lo < rc && !(tcx - sorted_tx_[lo] <= gate_radius_m)) ++lo;
+    if (hi < rc + 1) hi = rc + 1;
+    while (hi < nc && sorted_tx_[hi] - tcx <= gate_radius_m) ++hi;
     std::size_t nn = 0;
-    const std::size_t rc = rank_[c];
-    for (std::size_t o = rc; o-- > 0;) {
-      const std::uint32_t c2 = order_[o];
-      if (!(tc.x() - translation_[c2].x() <= gate_radius_m)) break;
-      if (near_enough(c2)) near_[nn++] = c2;
-    }
-    for (std::size_t o = rc + 1; o < nc; ++o) {
-      const std::uint32_t c2 = order_[o];
-      if (!(translation_[c2].x() - tc.x() <= gate_radius_m)) break;
-      if (near_enough(c2)) near_[nn++] = c2;
+    for (std::size_t o = lo; o < hi; ++o) {
+      const double dx = sorted_tx_[o] - tcx, dy = sorted_ty_[o] - tcy;
+      const double dt2 = dx * dx + dy * dy;
+      const double ex = sorted_ax_[o] - pix, ey = sorted_ay_[o] - piy;
+      const double la2 = ex * ex + ey * ey;
+      const bool keep = (dt2 <= gr2) & (dt2 <= pair_c0 + pair_c1 * la2 + pair_margin) & (sorted_a_[o] != i);
+      near_[nn] = order_[o];
+      nn += keep ? 1u : 0u;
     }
     std::sort(near_.begin(), near_.begin() + nn);
     double acc = 0.0;

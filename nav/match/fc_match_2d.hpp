@@ -20,7 +20,8 @@
 // copies of the descriptors (widened once per call; a 16-bit multiply-add the compiler vectorises on
 // x86 and ARM, the same integer sums as int8), with a fixed-length loop for 64-byte descriptors.
 // Memory: init() takes all buffers from an Arena (2 * max_points * max_descriptor_bytes int16 of
-// them for the widened descriptors); match() never allocates.
+// them for the widened descriptors; per candidate 4 doubles + 1 uint32 of translation-ordered copies
+// for the scoring's neighbour scan; one row of dot products and ZNCCs); match() never allocates.
 #pragma once
 
 #include <cstddef>
@@ -91,13 +92,19 @@ class FcMatcher2d {
   Span<Candidate> cand_;
   Span<std::uint32_t> first_;   // per a: first candidate index (cand_ is grouped by a)
   Span<std::uint32_t> order_;   // candidate order: by implied translation x (scoring), then for the greedy pass
-  Span<std::uint32_t> rank_;    // per candidate: its place in the translation order
   Span<std::uint32_t> near_;    // one candidate's neighbours in translation (scoring)
   Span<Vec2d> translation_;     // per candidate (a, b): b - R(dtheta) a
+  // The candidates in translation order, streamed by the scoring's neighbour scan: t.x, t.y, the
+  // position of a, a's index, the candidate index.
+  Span<double> sorted_tx_, sorted_ty_, sorted_ax_, sorted_ay_;
+  Span<std::uint32_t> sorted_a_;
   Span<std::uint8_t> used_a_;
   Span<std::uint8_t> used_b_;
   Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
   Span<std::int16_t> wide_a_, wide_b_;  // descriptors widened to int16 (max_points x max_descriptor_bytes)
+  Span<std::int32_t> dot_row_;  // one a's dot products with every b (appearance)
+  Span<float> z_row_;           // one a's ZNCC with every b (-inf for a flat b)
+  Span<float> sum_b_, inv_b_;   // stats_b_ split in two arrays (a loop over b that vectorises)
   CounterSet<FcMatchCounter> counters_;
 };
 
