@@ -20,7 +20,8 @@ Status RouteRepeatSession::start(const route::RouteParams& params, Span<const ro
   nodes_ = &nodes;
   params_ = params;
   repeater_.set_motion(direction(), route::MotionModel::kOdometry);
-  return repeater_.start(params, meta, nodes);
+  QNAV_RETURN_IF_ERROR(repeater_.start(params, meta, nodes));
+  return repeater_.apply_entry_prior(kEntryPriorMass, kEntryPriorSigmaNodes);
 }
 
 ExperiencesOpened RouteRepeatSession::open_experiences(const char* route_path, bool learn) noexcept {

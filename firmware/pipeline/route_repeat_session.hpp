@@ -60,6 +60,13 @@ struct RepeatTileResult {
 
 class RouteRepeatSession {
  public:
+  // A pass starts at the route's entry end (node 0 forwards, the last node in reverse): start() puts
+  // this share of the filter's start belief there (RouteFilter::apply_entry_prior, sigma 1 node), the
+  // rest uniform. A uniform start lost a weak pass's first 3-20 tiles (docs/route.md, "Routes that
+  // learn"); the prior alone does not make the filter confident, and a pass joining the route
+  // elsewhere is found by the wide search as before.
+  static constexpr double kEntryPriorMass = 0.5;
+  static constexpr double kEntryPriorSigmaNodes = 1.0;
   explicit RouteRepeatSession(hal::FileStore& store) : experiences_(store) {}
 
   // arena: the localiser's buffers from the caller's (qnavd: its static block), nullptr: its own.

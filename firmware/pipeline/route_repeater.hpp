@@ -42,6 +42,11 @@ class RouteRepeater {
     if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: attach_experiences() before init()");
     return localiser_->attach_experiences(index, records);
   }
+  // See RouteLocaliser::apply_entry_prior.
+  Status apply_entry_prior(double mass, double sigma_nodes) noexcept {
+    if (!localiser_) return Status(StatusCode::kNotReady, "route repeater: apply_entry_prior() before init()");
+    return localiser_->apply_entry_prior(mass, sigma_nodes);
+  }
   void set_motion(route::RouteDirection direction, route::MotionModel motion) noexcept {
     if (localiser_) localiser_->set_motion(direction, motion);
     config_.filter.direction = direction;

@@ -7,7 +7,11 @@
 //     route knows (< redundant_inliers: a view the route has needs no second copy),
 //   - the estimate agrees with the odometry's expected node: the previous confident estimate moved
 //     on by the distance travelled (in nodes of the route's spacing, in the pass's direction), within
-//     max_node_disagreement + 0.5 nodes (the half node: the estimate is a whole node, the odometry not);
+//     max_node_disagreement + 0.5 nodes (the half node: the estimate is a whole node, the odometry not),
+//     and the tile's heading is the pass's direction on that node (within 90 deg of the node's heading
+//     forwards, of its opposite in reverse): a pass told the wrong direction, whose belief sweeps the
+//     route against the vehicle, agrees with a registration where the two cross (counted as
+//     disagrees_with_odometry);
 // and it is learnt only when the NEXT step confirms it (confident, agreeing with odometry again). A
 // pass on another route (no strong registration), one never confident, or one whose estimate jumps
 // against its odometry (a forced mislocalisation) therefore learns nothing. finish() (end of the
@@ -69,7 +73,7 @@ class ExperienceLearner {
   // confirmed by this one; its slot chosen in `index` by the replacement rule).
   bool observe(const RouteNode& sensed, double distance_m, const LocaliserStep& step, const ExperienceIndex& index, Experience& out) noexcept {
     bool emitted = false;
-    const bool agrees = step.confident && agrees_with_odometry(step.estimate, distance_m);
+    const bool agrees = step.confident && agrees_with_odometry(step.estimate, distance_m) && heading_agrees(sensed, step.estimate);
     if (has_pending_) {
       if (agrees) {
         const std::uint16_t slot = index.choose_slot(pending_->meta.node, pending_keep_);
@@ -149,6 +153,11 @@ class ExperienceLearner {
   const ExperienceLearnConfig& config() const noexcept { return config_; }
 
  private:
+  bool heading_agrees(const RouteNode& sensed, std::uint32_t estimate) const noexcept {
+    if (estimate >= meta_.size() || !std::isfinite(sensed.meta.pose.heading_rad)) return false;
+    const double along = std::cos(sensed.meta.pose.heading_rad - meta_[estimate].pose.heading_rad);  // > 0: the node's direction
+    return reverse_ ? along < 0.0 : along > 0.0;
+  }
   bool agrees_with_odometry(std::uint32_t estimate, double distance_m) const noexcept {
     if (!has_anchor_ || !std::isfinite(distance_m)) return false;
     const double moved = (since_anchor_m_ + distance_m) / spacing_m_;

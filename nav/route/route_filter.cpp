@@ -42,6 +42,22 @@ Status RouteFilter::reset(std::uint32_t node_count, double node_spacing_m) noexc
   return Status::ok();
 }
 
+Status RouteFilter::apply_entry_prior(double mass, double sigma_nodes) noexcept {
+  if (!ready_ || n_ < 2) return Status(StatusCode::kNotReady, "route filter: reset() before apply_entry_prior()");
+  if (!(mass >= 0.0 && mass < 1.0) || !(sigma_nodes > 0.0 && sigma_nodes <= 1e6))
+    return Status(StatusCode::kInvalidArgument, "route filter: entry prior mass must be in [0, 1), sigma > 0");
+  if (mass == 0.0) return Status::ok();
+  const bool fwd = config_.direction == RouteDirection::kForward;
+  const std::uint32_t reach = static_cast<std::uint32_t>(std::min(static_cast<double>(n_ - 1), std::ceil(4.0 * sigma_nodes)));
+  double g_sum = 0.0;
+  for (std::uint32_t d = 0; d <= reach; ++d) g_sum += std::exp(-0.5 * (d / sigma_nodes) * (d / sigma_nodes));
+  for (std::uint32_t i = 0; i < n_; ++i) bel_[i] = static_cast<float>((1.0 - mass) / n_);
+  for (std::uint32_t d = 0; d <= reach; ++d)
+    bel_[fwd ? d : n_ - 1 - d] += static_cast<float>(mass * std::exp(-0.5 * (d / sigma_nodes) * (d / sigma_nodes)) / g_sum);
+  summarise();
+  return Status::ok();
+}
+
 Status RouteFilter::normalise(Span<float> v) noexcept {
   double sum = 0.0;
   for (std::uint32_t i = 0; i < n_; ++i) sum += static_cast<double>(v[i]);

@@ -92,6 +92,11 @@ class RouteLocaliser {
   // and index->per_node() <= it. O(1).
   Status attach_experiences(const ExperienceIndex* index, NodeSource* records) noexcept;
 
+  // See RouteFilter::apply_entry_prior: right after start(), the pass starts at its entry end. O(N).
+  Status apply_entry_prior(double mass, double sigma_nodes) noexcept {
+    if (!started_) return Status(StatusCode::kNotReady, "localiser: start() first");
+    return filter_.apply_entry_prior(mass, sigma_nodes);
+  }
   // See RouteFilter::set_motion (guidance follows the direction too). O(1), no heap.
   void set_motion(RouteDirection direction, MotionModel motion) noexcept {
     config_.filter.direction = direction;

@@ -124,6 +124,16 @@ struct MpPass {
   int learned_wrong = 0;  // experiences appended to a node more than 1 from the learnt tile's true node
 };
 
+// Every tile of every pass of eval --multi-pass, one CSV row (OUT/route_multipass_tiles.csv): where
+// the misses are (seabed, pass, tile position, confidence, what it registered against).
+struct MpTrace {
+  FILE* f = nullptr;
+  long seabed = 0;
+  const char* pass = "";
+  int pct = 0;
+};
+MpTrace g_trace;
+
 // One pass through the repeat component (experiences optional, learning optional), as `route repeat`
 // and qnavd run it, scored from kWarmupTiles on.
 Status run_pass(const route::RouteParams& params, const std::vector<route::NodeMeta>& meta, route::NodeSource& nodes, const char* route_path,
@@ -154,6 +164,16 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
       const std::size_t tile = k - 1 - exps.last_backfill_age(b);
       if (tile < tiles.size())
         out.learned_wrong += std::abs(static_cast<int>(exps.last_backfill_node(b)) - true_node(node_along, tiles[tile].truth_along_m)) > 1;
+    }
+    if (g_trace.f != nullptr) {
+      const int tn = true_node(node_along, tiles[k].truth_along_m);
+      int exp_at_true = 0;
+      if (session.with_experiences() && tn >= 0)
+        for (const route::ExperienceSlot& e : exps.index()->slots(static_cast<std::uint32_t>(tn))) exp_at_true += e.record != route::kNoExperience;
+      std::fprintf(g_trace.f, "%ld,%s,%d,%zu,%zu,%d,%u,%d,%.3f,%.3f,%u,%d,%d,%d,%u,%u,%.1f\n", g_trace.seabed, g_trace.pass, g_trace.pct, k, tiles.size(), tn,
+                   st.estimate, st.confident ? 1 : 0, static_cast<double>(st.probability), st.mass_pm1, st.registration.ok ? st.registration.inliers : 0u,
+                   st.experience_record != route::kNoExperience ? 1 : 0, exp_at_true, r.learned ? 1 : 0, st.registrations, st.experience_registrations,
+                   tiles[k].truth_along_m);
     }
     if (static_cast<int>(k) >= kWarmupTiles) {
       ++out.scored;
@@ -384,6 +404,8 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   std::vector<MpPass> before(test_pcts.size()), after(test_pcts.size());
   for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
     s = fly(pipe, w, w.pass(test_pcts[i] / 100.0 * w.swath_m, true, ++seed), tests[i]);
+    g_trace.pass = "without";
+    g_trace.pct = test_pcts[i];
     if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, false, false, before[i], rev);
   }
   // Poisoning, before anything is learnt: a pass over another seabed (the wrong route) and a pass
@@ -391,6 +413,8 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   // registration), both with --learn.
   MpPass wrong, forced;
   std::vector<pipeline::RouteTile> tiles;
+  g_trace.pass = "poison";
+  g_trace.pct = 30;
   if (s) {
     pipeline::SimSurvey other;
     s = other.init(x.length_m, 900 + static_cast<std::uint64_t>(sb));
@@ -405,6 +429,8 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   int learned = 0, learned_wrong = 0;
   for (int lp : learn_pcts) {
     MpPass l;
+    g_trace.pass = "learn";
+    g_trace.pct = lp;
     if (s) s = fly(pipe, w, w.pass(lp / 100.0 * w.swath_m, true, ++seed), tiles);
     if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, l, rev);
     learned += l.learned;
@@ -417,6 +443,8 @@ Status mp_seabed(Experiment& x, long sb, EvalRoute& er, const std::string& route
   t.learned += learned;
   t.learned_wrong += learned_wrong;
   for (std::size_t i = 0; s && i < test_pcts.size(); ++i) {
+    g_trace.pass = "with";
+    g_trace.pct = test_pcts[i];
     s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[i], node_along, true, false, after[i], rev);
     t.scored += before[i].scored;
     t.before += before[i].within1;
@@ -441,6 +469,11 @@ int cmd_eval_multi_pass() {
   const std::vector<int> learn_pcts{30, 40};
   const std::vector<int> test_pcts = g_opt.quick ? std::vector<int>{60} : std::vector<int>{55, 60, 65};
   MpTotals t;
+  const std::string trace_path = x.out_dir + "/route_multipass_tiles.csv";
+  g_trace.f = std::fopen(trace_path.c_str(), "w");
+  if (g_trace.f != nullptr)
+    std::fprintf(g_trace.f, "seabed,pass,pct,tile,tiles,true_node,estimate,confident,probability,mass_pm1,inliers,via_experience,experiences_at_true_node,"
+                            "learned,registrations,experience_registrations,truth_along_m\n");
   std::fprintf(x.log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
                       "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
                g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
@@ -449,8 +482,11 @@ int cmd_eval_multi_pass() {
     std::string route_path;
     if (const int rc = x.teach(sb, "multipass", true, er, route_path); rc > 0) return rc;
     else if (rc < 0) break;
+    g_trace.seabed = sb;
     x.s = mp_seabed(x, sb, er, route_path, learn_pcts, test_pcts, t);
   }
+  if (g_trace.f != nullptr) std::fclose(g_trace.f);
+  g_trace.f = nullptr;
   if (!x.s) {
     std::fprintf(stderr, "qnav route eval --multi-pass: %s\n", x.s.message());
     return 1;

@@ -77,6 +77,8 @@ TEST(RouteRepeatSession, GivesWhatTheLocaliserWiredByHandGivesWithTheDvlLostMidP
   RouteRepeater hand;
   ASSERT_TRUE(hand.init(sc.localiser).is_ok());
   ASSERT_TRUE(hand.start(r.params, r.m(), nodes_b).is_ok());
+  // The session starts a pass with the entry prior (the pass starts at the route's entry end).
+  ASSERT_TRUE(hand.apply_entry_prior(RouteRepeatSession::kEntryPriorMass, RouteRepeatSession::kEntryPriorSigmaNodes).is_ok());
   const std::size_t lost_from = 3, lost_to = 6;  // the DVL lost for tiles 3..5: eq. 5, then odometry again
   int confident = 0;
   for (std::size_t k = 0; k < r.repeat.size(); ++k) {

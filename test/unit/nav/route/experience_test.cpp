@@ -204,6 +204,12 @@ TEST(RouteExperiences, EstimatesAgainstTheOdometryOrNeverConfidentLearnNothing) 
   for (std::uint32_t k = 0; k < 6; ++k) learned += learner->observe(sensed, kSpacing, step(k, false), l.index, *e);
   learner->finish();
   EXPECT_EQ(learned, 0);
+  // Estimates and odometry agreeing, but the tiles are flown against the pass's direction (a pass told
+  // reverse flying forwards: its belief sweeps the route against the vehicle and meets it once): nothing.
+  ASSERT_TRUE(learner->start(Span<const NodeMeta>(s.meta.data(), s.meta.size()), kSpacing, true, 7).is_ok());
+  for (std::uint32_t k = 0; k < 6; ++k) learned += learner->observe(sensed, kSpacing, step(9 - k, true), l.index, *e);
+  learner->finish();
+  EXPECT_EQ(learned, 0);
   // The same steps agreeing with the odometry: learnt, each confirmed by the next (the last one is not).
   ASSERT_TRUE(learner->start(Span<const NodeMeta>(s.meta.data(), s.meta.size()), kSpacing, false, 6).is_ok());
   for (std::uint32_t k = 0; k < 6; ++k) learned += learner->observe(sensed, kSpacing, step(k + 2, true), l.index, *e);

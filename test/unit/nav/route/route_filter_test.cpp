@@ -41,6 +41,38 @@ TEST(RouteFilter, StartsUniformWithMaximumEntropy) {
   EXPECT_FALSE(t.f.confident());
 }
 
+TEST(RouteFilter, TheEntryPriorLeansOnTheEntryEndWithoutBeingConfidentAndAStrongMatchElsewhereWins) {
+  for (RouteDirection d : {RouteDirection::kForward, RouteDirection::kReverse}) {
+    F t(small(MotionModel::kOdometry, d));
+    ASSERT_TRUE(t.f.reset(34, 60.0).is_ok());
+    ASSERT_TRUE(t.f.apply_entry_prior(0.5, 1.0).is_ok());
+    const std::uint32_t entry = d == RouteDirection::kForward ? 0 : 33;
+    EXPECT_NEAR(sum(t.f.belief()), 1.0, 1e-5);
+    EXPECT_EQ(t.f.argmax(), entry);
+    // Half-Gaussian over 0..4 nodes: 0.5 * 1 / 1.7533 on the entry node, + the uniform 0.5 / 34.
+    EXPECT_NEAR(t.f.probability(entry), 0.5 / 1.75331 + 0.5 / 34.0, 1e-4);
+    EXPECT_NEAR(t.f.probability(16), 0.5 / 34.0, 1e-6);  // far from the entry: the uniform share
+    EXPECT_FALSE(t.f.confident());                        // a prior, not a fix
+    EXPECT_NEAR(t.f.mass_near_argmax(), 0.5 * (1.0 + std::exp(-0.5)) / 1.75331 + 1.0 / 34.0, 1e-3);
+    // A vehicle that joined the route elsewhere: two strong matches there (20 inliers) outweigh the
+    // prior (the entry node starts 20 x as probable as node 16).
+    const NodeMeasurement m[] = {{entry, 0.0f}, {16, 20.0f}};
+    for (int k = 0; k < 2; ++k) {
+      ASSERT_TRUE(t.f.predict(0.0).is_ok());
+      ASSERT_TRUE(t.f.update(Span<const NodeMeasurement>(m, 2)).is_ok());
+    }
+    EXPECT_EQ(t.f.argmax(), 16u);
+  }
+  F t(small(MotionModel::kOdometry));
+  EXPECT_EQ(t.f.apply_entry_prior(0.5, 1.0).code(), StatusCode::kNotReady);  // before reset()
+  ASSERT_TRUE(t.f.reset(10, 60.0).is_ok());
+  EXPECT_EQ(t.f.apply_entry_prior(1.0, 1.0).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(t.f.apply_entry_prior(0.5, 0.0).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(t.f.apply_entry_prior(std::nan(""), 1.0).code(), StatusCode::kInvalidArgument);
+  ASSERT_TRUE(t.f.apply_entry_prior(0.0, 1.0).is_ok());  // 0: the paper's uniform start, unchanged
+  EXPECT_NEAR(t.f.probability(0), 0.1, 1e-6);
+}
+
 TEST(RouteFilter, PaperEq5KernelMatchesTheFormula) {
   RouteFilterConfig c = small(MotionModel::kPaperEq5);
   c.sigma_w2 = 1.0;
