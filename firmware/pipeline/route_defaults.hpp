@@ -52,6 +52,10 @@ double tile_age_s(const RouteTileConfig& c, double speed_mps, double ping_rate_h
 // (a current ahead or astern changes the time a tile takes, not its length).
 double tile_age_m(const RouteTileConfig& c);
 
+// The share of a repeat pass's start belief on the route's entry end (RepeatSessionConfig::entry_prior,
+// qnavd's route.entry_prior): a pass starts where the route does (docs/route.md, "Routes that learn").
+inline constexpr double kDefaultEntryPrior = 0.5;
+
 // Tiles for the simulator's sonar (50 m slant range, swath 100 m): 0.2 m raster 704 x 704 (141 m
 // square), tiles of 90 m of track every 60 m (the node spacing), 128 keypoints; ground bins 0.2 m x 256.
 RouteTileConfig default_route_tile_config();

@@ -3,6 +3,8 @@
 namespace qnav::pipeline {
 
 Status RouteRepeatSession::init(const RepeatSessionConfig& config, Arena* arena) {
+  if (!(config.entry_prior >= 0.0 && config.entry_prior < 1.0))
+    return Status(StatusCode::kInvalidArgument, "repeat session: entry_prior must be in [0, 1)");
   config_ = config;
   QNAV_RETURN_IF_ERROR(arena != nullptr ? repeater_.init(config.localiser, *arena) : repeater_.init(config.localiser));
   if (config.experiences_per_node > 0)
@@ -21,7 +23,7 @@ Status RouteRepeatSession::start(const route::RouteParams& params, Span<const ro
   params_ = params;
   repeater_.set_motion(direction(), route::MotionModel::kOdometry);
   QNAV_RETURN_IF_ERROR(repeater_.start(params, meta, nodes));
-  return repeater_.apply_entry_prior(kEntryPriorMass, kEntryPriorSigmaNodes);
+  return repeater_.apply_entry_prior(config_.entry_prior, kEntryPriorSigmaNodes);
 }
 
 ExperiencesOpened RouteRepeatSession::open_experiences(const char* route_path, bool learn) noexcept {

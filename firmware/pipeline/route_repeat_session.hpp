@@ -22,6 +22,7 @@
 #include <cstdint>
 
 #include "drivers/route_store/experience_file.hpp"
+#include "firmware/pipeline/route_defaults.hpp"
 #include "firmware/pipeline/route_experiences.hpp"
 #include "firmware/pipeline/route_repeater.hpp"
 #include "firmware/pipeline/route_tile_pipeline.hpp"
@@ -39,6 +40,9 @@ struct RepeatSessionConfig {
   std::uint16_t experiences_per_node = 0;  // 0: the route's experiences are never read nor learnt
   route::ExperienceLearnConfig learn{};
   bool backfill = false;  // learning passes also learn the tiles before their first confirmed fix
+  // Share of the start belief on the route's entry end (qnavd: route.entry_prior). 0: uniform, for
+  // passes that may join the route anywhere. In [0, 1); init() refuses anything else.
+  double entry_prior = kDefaultEntryPrior;
 };
 
 // What open_experiences() did. ok(): read (or opened for learning), or there is no companion.
@@ -61,11 +65,11 @@ struct RepeatTileResult {
 class RouteRepeatSession {
  public:
   // A pass starts at the route's entry end (node 0 forwards, the last node in reverse): start() puts
-  // this share of the filter's start belief there (RouteFilter::apply_entry_prior, sigma 1 node), the
-  // rest uniform. A uniform start lost a weak pass's first 3-20 tiles (docs/route.md, "Routes that
+  // config.entry_prior (default this share) of the filter's start belief there
+  // (RouteFilter::apply_entry_prior, sigma 1 node), the rest uniform. A uniform start lost a weak pass's first 3-20 tiles (docs/route.md, "Routes that
   // learn"); the prior alone does not make the filter confident, and a pass joining the route
   // elsewhere is found by the wide search as before.
-  static constexpr double kEntryPriorMass = 0.5;
+  static constexpr double kEntryPriorMass = kDefaultEntryPrior;
   static constexpr double kEntryPriorSigmaNodes = 1.0;
   explicit RouteRepeatSession(hal::FileStore& store) : experiences_(store) {}
 

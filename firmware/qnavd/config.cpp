@@ -670,6 +670,10 @@ std::vector<KeySpec> build_key_table() {
   t.push_back(bool_key(
       "route.learn", [](auto& c) -> auto& { return c.route_learn; },
       "Repeat learns: confidently localised tiles that agree with odometry are appended to the route's experiences (ROUTE.exp)"));
+  t.push_back(float_key(
+      "route.entry_prior", [](auto& c) -> auto& { return c.route_entry_prior; }, 0.0, 0.99, "share",
+      "Share of a Repeat pass's start belief on the route's entry end (node 0 forwards, the last node in reverse), "
+      "the rest uniform; 0: uniform, for a pass that may join the route anywhere"));
   t.push_back(int_key(
       "route.max_experiences", [](auto& c) -> auto& { return c.max_experiences; }, 1,
       static_cast<std::int64_t>(route::kMaxExperiencesPerNode), "experiences",

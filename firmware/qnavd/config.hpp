@@ -99,6 +99,7 @@ struct DaemonConfig {
   std::uint16_t route_id = 1;                // route.id [0, 65535]: route used when a MODE_CMD gives 0
   std::size_t max_nodes = 10000;             // route.max_nodes [2, 65535]
   bool route_learn = false;                  // route.learn: Repeat appends confident tiles to ROUTE.exp (issue 29)
+  double route_entry_prior = pipeline::kDefaultEntryPrior;  // route.entry_prior: start belief on the route's entry end
   std::uint16_t max_experiences = 4;         // route.max_experiences [1, 8]: experiences per node (fixed memory)
   // The daemon only extracts features from its tiles: no u8 raster (docs/budgets.md, the demo's peak RSS).
   pipeline::RouteTileConfig tiles = [] {

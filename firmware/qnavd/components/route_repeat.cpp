@@ -14,6 +14,7 @@ Status RouteRepeat::init(StaticMemory* mem, qc::QnavCanPublisher& publisher) {
   sc.localiser = repeat_localiser_config(*ctx_.cfg);
   sc.max_nodes = ctx_.cfg->max_nodes;
   sc.experiences_per_node = ctx_.cfg->max_experiences;
+  sc.entry_prior = ctx_.cfg->route_entry_prior;
   Result<Arena*> a = arena_.take(mem, "localiser", route::RouteLocaliser::arena_bytes(sc.localiser));
   if (!a) return a.status();
   QNAV_RETURN_IF_ERROR(session_.init(sc, a.value()));

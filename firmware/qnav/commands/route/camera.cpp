@@ -138,6 +138,7 @@ int cmd_camera() {
       lc.guidance.side_deadband_m = 0.02;
       pipeline::RepeatSessionConfig sc;  // the repeat component without experiences
       sc.localiser = lc;
+      sc.entry_prior = 0.0;  // the paper's uniform start: the figures docs/route.md quotes from this sweep
       auto session = std::make_unique<pipeline::RouteRepeatSession>(hal::host_file_store());
       VectorNodeSource<CameraPassFrame> src(&taught);
       if (s) s = session->init(sc);

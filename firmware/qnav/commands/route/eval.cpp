@@ -185,6 +185,7 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
       route::LocaliserConfig lc = pipeline::default_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
       pipeline::RepeatSessionConfig sc;  // the repeat component without experiences
       sc.localiser = lc;
+      sc.entry_prior = 0.0;  // the paper's uniform start: the figures docs/route.md quotes from this sweep
       auto session = std::make_unique<pipeline::RouteRepeatSession>(hal::host_file_store());
       QNAV_RETURN_IF_ERROR(session->init(sc));
       QNAV_RETURN_IF_ERROR(session->start(*in.params, in.meta, *in.source, rev));

@@ -101,6 +101,38 @@ TEST(RouteRepeatSession, GivesWhatTheLocaliserWiredByHandGivesWithTheDvlLostMidP
   EXPECT_EQ(session.end(), 0u);
 }
 
+TEST(RouteRepeatSession, EntryPriorZeroStartsUniformAndOutOfRangeIsRefused) {
+  const Route& r = route20();
+  ASSERT_GE(r.repeat.size(), 4u);
+  std::vector<std::uint8_t> disk(1 << 16);
+  hal::MemoryFileStore store(Span<std::uint8_t>(disk.data(), disk.size()));
+  RepeatSessionConfig sc = session_config(r.meta.size(), false, 0);
+  for (const double bad : {-0.1, 1.0, 2.0}) {
+    sc.entry_prior = bad;
+    RouteRepeatSession refused(store);
+    EXPECT_EQ(refused.init(sc).code(), StatusCode::kInvalidArgument) << bad;
+  }
+  // qnavd's route.entry_prior = 0: the filter starts uniform, as the localiser wired by hand does.
+  sc.entry_prior = 0.0;
+  RouteRepeatSession session(store);
+  ASSERT_TRUE(session.init(sc).is_ok());
+  VectorNodeSource<RouteTile> nodes_a(&r.taught), nodes_b(&r.taught), nodes_c(&r.taught);
+  ASSERT_TRUE(session.start(r.params, r.m(), nodes_a, false).is_ok());
+  RouteRepeater uniform, prior;
+  ASSERT_TRUE(uniform.init(sc.localiser).is_ok());
+  ASSERT_TRUE(uniform.start(r.params, r.m(), nodes_b).is_ok());
+  ASSERT_TRUE(prior.init(sc.localiser).is_ok());
+  ASSERT_TRUE(prior.start(r.params, r.m(), nodes_c).is_ok());
+  ASSERT_TRUE(prior.apply_entry_prior(kDefaultEntryPrior, RouteRepeatSession::kEntryPriorSigmaNodes).is_ok());
+  route::LocaliserStep a, b, c;
+  ASSERT_TRUE(session.step(r.repeat[0], false, a).step.is_ok());
+  ASSERT_TRUE(uniform.step(r.repeat[0].node, 0.0, b).is_ok());
+  ASSERT_TRUE(prior.step(r.repeat[0].node, 0.0, c).is_ok());
+  EXPECT_EQ(a.estimate, b.estimate);
+  EXPECT_EQ(a.probability, b.probability);
+  EXPECT_NE(a.probability, c.probability) << "the prior must change the first step, or this test compares nothing";
+}
+
 TEST(RouteRepeatSession, LearnsIntoTheRoutesExperiencesAndTheNextPassReadsThem) {
   const Route& r = route20();
   VectorNodeSource<RouteTile> nodes(&r.taught);

@@ -82,6 +82,7 @@ const std::vector<Field>& fields() {
       QNAV_FIELD(route_id),
       QNAV_FIELD(max_nodes),
       QNAV_FIELD(route_learn),
+      QNAV_FIELD(route_entry_prior),
       QNAV_FIELD(max_experiences),
       QNAV_FIELD(localiser.filter.max_nodes),
       QNAV_FIELD(tiles.tiles.tile_length_m),
@@ -502,6 +503,7 @@ stale_s = 4.0
 id = 7
 max_nodes = 20000
 learn = true
+entry_prior = 0.25
 max_experiences = 2
 tile_length_m = 0
 tile_stride_m = 30.0
