@@ -566,6 +566,7 @@ int cmd_eval_changed_seabed() {
       sc.change_fraction = f;
       sc.change_ripple_shift_m = f * 2.0f * sc.ripple_wavelength_m;
       sc.change_seed = 17 + static_cast<std::uint64_t>(sb);
+      sc.change_irregular = g_opt.change_irregular;
       if (s) s = changed.seabed.init(sc);
       std::remove((route_path + ".exp").c_str());
       g_trace.pct = degrees[di];
