@@ -82,8 +82,15 @@ SeabedSample Seabed::sample(double n, double e, SeabedCache& cache) const noexce
     const double fn = std::floor(n / cs), fe = std::floor(e / cs);
     const std::uint64_t h = hash3(static_cast<std::int64_t>(fn), static_cast<std::int64_t>(fe), cfg_.change_seed * 0x9E3779B97F4A7C15ULL + 300);
     if (unit(h) < cfg_.change_fraction) {
-      const double dn = n / cs - (fn + 0.5), de = e / cs - (fe + 0.5);
-      const float w = clampf((0.45f - static_cast<float>(std::sqrt(dn * dn + de * de))) * 10.0f, 0.0f, 1.0f);
+      double cn = 0.5, ce = 0.5, rad = 0.45;
+      if (cfg_.change_irregular) {  // radius and centre drawn per cell: no lattice of equal discs
+        const std::uint64_t g = mix64(h ^ 0x5bd1e995ULL);
+        rad = 0.2 + 0.25 * static_cast<double>(g & 0xffff) / 65535.0;
+        cn = 0.5 + (0.5 - rad) * (2.0 * static_cast<double>((g >> 16) & 0xffff) / 65535.0 - 1.0);
+        ce = 0.5 + (0.5 - rad) * (2.0 * static_cast<double>((g >> 32) & 0xffff) / 65535.0 - 1.0);
+      }
+      const double dn = n / cs - (fn + cn), de = e / cs - (fe + ce);
+      const float w = clampf((static_cast<float>(rad) - static_cast<float>(std::sqrt(dn * dn + de * de))) * 10.0f, 0.0f, 1.0f);
       refl += ((mix64(h) & 1u) ? 1.0f : -1.0f) * cfg_.change_contrast * w;
     }
   }

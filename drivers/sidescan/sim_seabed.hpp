@@ -56,6 +56,10 @@ struct SeabedConfig {
   float change_contrast = 0.3f;
   float change_scale_m = 12.0f;
   std::uint64_t change_seed = 7;
+  // false: every changed cell's disc is centred in its cell with radius 0.45 cell, so the changed cells
+  // form a 12 m lattice of equal discs (which any tile of the changed seabed matches at lattice shifts);
+  // true: radius 0.2-0.45 cell and the centre drawn per cell (the disc stays inside it).
+  bool change_irregular = false;
 };
 
 // What the seabed is at one point.

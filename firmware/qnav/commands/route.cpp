@@ -475,6 +475,7 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_number(*e, "--max-experiences", g_opt.max_experiences, "with --multi-pass: experiences per node", "", 1, 8);
   add_flag(*e, "--changed-seabed", g_opt.changed_seabed, "the seabed changed since the teach (20/40/60 %): repeats at 20 % without, then after learning one repeat");
   add_number(*e, "--learn-min-inliers", g_opt.learn_min_inliers, "with --multi-pass: a tile is learnt only when registered with this many inliers", "", 5, 128);
+  add_flag(*e, "--change-irregular", g_opt.change_irregular, "with --changed-seabed: changed discs of random radius and centre (default: a 12 m lattice of equal discs)");
   add_flag(*e, "--backfill", g_opt.backfill, "with --multi-pass / --changed-seabed: learning passes also learn the tiles before each confirmed fix");
   add_flag(*e, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
   run.on(e, cmd_eval);

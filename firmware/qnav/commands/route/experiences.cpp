@@ -134,6 +134,12 @@ struct MpTrace {
 };
 MpTrace g_trace;
 
+void write_trace_header() {
+  std::fprintf(g_trace.f, "seabed,pass,pct,tile,tiles,true_node,estimate,confident,probability,mass_pm1,inliers,via_experience,experiences_at_true_node,"
+                            "learned,registrations,experience_registrations,truth_along_m,best_node,best_inliers,true_node_inliers,learned_node,"
+                            "learned_tile_true_node,via_neighbour,reg_x_m,estimate_truth_along_m\n");
+}
+
 // One pass through the repeat component (experiences optional, learning optional), as `route repeat`
 // and qnavd run it, scored from kWarmupTiles on.
 Status run_pass(const route::RouteParams& params, const std::vector<route::NodeMeta>& meta, route::NodeSource& nodes, const char* route_path,
@@ -170,10 +176,26 @@ Status run_pass(const route::RouteParams& params, const std::vector<route::NodeM
       int exp_at_true = 0;
       if (session.with_experiences() && tn >= 0)
         for (const route::ExperienceSlot& e : exps.index()->slots(static_cast<std::uint32_t>(tn))) exp_at_true += e.record != route::kNoExperience;
-      std::fprintf(g_trace.f, "%ld,%s,%d,%zu,%zu,%d,%u,%d,%.3f,%.3f,%u,%d,%d,%d,%u,%u,%.1f\n", g_trace.seabed, g_trace.pass, g_trace.pct, k, tiles.size(), tn,
+      std::fprintf(g_trace.f, "%ld,%s,%d,%zu,%zu,%d,%u,%d,%.3f,%.3f,%u,%d,%d,%d,%u,%u,%.1f", g_trace.seabed, g_trace.pass, g_trace.pct, k, tiles.size(), tn,
                    st.estimate, st.confident ? 1 : 0, static_cast<double>(st.probability), st.mass_pm1, st.registration.ok ? st.registration.inliers : 0u,
                    st.experience_record != route::kNoExperience ? 1 : 0, exp_at_true, r.learned ? 1 : 0, st.registrations, st.experience_registrations,
                    tiles[k].truth_along_m);
+      // Diagnostics: the node measured strongest this step, the true node's measurement (-1: not
+      // registered), the node an experience was appended to at this step and the true node of its tile.
+      std::uint32_t best_node = 0;
+      float best_sim = -1.0f, true_sim = -1.0f;
+      for (const route::NodeMeasurement& m : session.repeater().localiser().last_measurements()) {
+        if (m.inliers > best_sim) {
+          best_sim = m.inliers;
+          best_node = m.node;
+        }
+        if (static_cast<int>(m.node) == tn) true_sim = m.inliers;
+      }
+      const int ln = r.learned && k > 0 ? static_cast<int>(exps.last_learned_node()) : -1;
+      const int lt = r.learned && k > 0 ? true_node(node_along, tiles[k - 1].truth_along_m) : -1;
+      const double est_along = st.estimate < node_along.size() ? node_along[st.estimate] : -1.0;
+      std::fprintf(g_trace.f, ",%u,%.0f,%.0f,%d,%d,%d,%.1f,%.1f\n", best_node, static_cast<double>(best_sim), static_cast<double>(true_sim), ln, lt,
+                   st.via_neighbour ? 1 : 0, st.registration.sensed_to_node.x_m, est_along);
     }
     if (static_cast<int>(k) >= kWarmupTiles) {
       ++out.scored;
@@ -472,8 +494,7 @@ int cmd_eval_multi_pass() {
   const std::string trace_path = x.out_dir + "/route_multipass_tiles.csv";
   g_trace.f = std::fopen(trace_path.c_str(), "w");
   if (g_trace.f != nullptr)
-    std::fprintf(g_trace.f, "seabed,pass,pct,tile,tiles,true_node,estimate,confident,probability,mass_pm1,inliers,via_experience,experiences_at_true_node,"
-                            "learned,registrations,experience_registrations,truth_along_m\n");
+    write_trace_header();
   std::fprintf(x.log, "multi-pass: per seabed teach forwards at 0; repeat in reverse at %s%% of the swath without experiences; learn reverse passes at 30%% and 40%% "
                       "(--learn); repeat the same reverse passes with the experiences (<= %ld per node)\n",
                g_opt.quick ? "60" : "55, 60, 65", g_opt.max_experiences);
@@ -520,6 +541,9 @@ int cmd_eval_changed_seabed() {
   Status& s = x.s;
   const auto t_all = x.t_all;
   std::vector<int> scored(degrees.size(), 0), before(degrees.size(), 0), after(degrees.size(), 0), learnt(degrees.size(), 0);
+  // Every tile of every pass, as eval --multi-pass writes them (pass: without_fwd/_rev, learn, with_fwd/_rev; pct: the change).
+  g_trace.f = std::fopen((x.out_dir + "/route_changed_tiles.csv").c_str(), "w");
+  if (g_trace.f != nullptr) write_trace_header();
   std::fprintf(log, "changed seabed: per seabed and degree d: ripples moved by d%% x 2 wavelengths, d%% of 12 m cells with reflectivity +/-0.3, d%% of rock cells "
                     "flipped (a rock gone or new); repeats at 20%% forwards and reverse without experiences, then after learning one forward repeat at 0%% "
                     "over the changed seabed\n");
@@ -533,6 +557,7 @@ int cmd_eval_changed_seabed() {
     tools::RouteFileReader& reader = er.reader;
     const std::vector<double>& node_along = er.node_along;
     std::uint64_t seed = 70000 + 1000 * static_cast<std::uint64_t>(sb);
+    g_trace.seabed = sb;
     for (std::size_t di = 0; s && di < degrees.size(); ++di) {
       const float f = static_cast<float>(degrees[di]) / 100.0f;
       pipeline::SimSurvey changed;
@@ -541,22 +566,28 @@ int cmd_eval_changed_seabed() {
       sc.change_fraction = f;
       sc.change_ripple_shift_m = f * 2.0f * sc.ripple_wavelength_m;
       sc.change_seed = 17 + static_cast<std::uint64_t>(sb);
+      sc.change_irregular = g_opt.change_irregular;
       if (s) s = changed.seabed.init(sc);
       std::remove((route_path + ".exp").c_str());
+      g_trace.pct = degrees[di];
       std::vector<std::vector<pipeline::RouteTile>> tests(2);
       MpPass b[2], a[2], l;
       for (int r = 0; s && r < 2; ++r) {
         s = fly(pipe, changed, changed.pass(0.2 * changed.swath_m, r == 1, ++seed), tests[static_cast<std::size_t>(r)]);
+        g_trace.pass = r == 1 ? "without_rev" : "without_fwd";
         if (s)
           s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, false, false, b[r],
                        r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
       }
       std::vector<pipeline::RouteTile> tiles;
       if (s) s = fly(pipe, changed, changed.pass(0.0, false, ++seed), tiles);
+      g_trace.pass = "learn";
       if (s) s = run_pass(reader.params(), meta, reader, route_path.c_str(), tiles, node_along, true, true, l, route::RouteDirection::kForward);
-      for (int r = 0; s && r < 2; ++r)
+      for (int r = 0; s && r < 2; ++r) {
+        g_trace.pass = r == 1 ? "with_rev" : "with_fwd";
         s = run_pass(reader.params(), meta, reader, route_path.c_str(), tests[static_cast<std::size_t>(r)], node_along, true, false, a[r],
                      r == 1 ? route::RouteDirection::kReverse : route::RouteDirection::kForward);
+      }
       if (!s) break;
       for (int r = 0; r < 2; ++r) {
         scored[di] += b[r].scored;
@@ -570,6 +601,8 @@ int cmd_eval_changed_seabed() {
                    pct(a[1].within1, a[1].scored), b[0].registered, a[0].registered, b[1].registered, a[1].registered);
     }
   }
+  if (g_trace.f != nullptr) std::fclose(g_trace.f);
+  g_trace.f = nullptr;
   if (!s) {
     std::fprintf(stderr, "qnav route eval --changed-seabed: %s\n", s.message());
     return 1;

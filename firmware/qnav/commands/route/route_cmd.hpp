@@ -56,7 +56,7 @@ struct RouteOptions {
   bool sim = false, force = false, reverse = false, json = false, quick = false, no_align = false;
   bool no_speckle = false, no_ripples = false;  // route framing: the simulator without speckle / sand ripples (diagnosis)
   // Experiences (issue 29, route/experiences.cpp).
-  bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false, backfill = false;
+  bool learn = false, no_experiences = false, multi_pass = false, changed_seabed = false, backfill = false, change_irregular = false;
   long max_experiences = 4, learn_min_inliers = 8;
 };
 extern RouteOptions g_opt;

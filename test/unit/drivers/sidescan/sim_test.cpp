@@ -3,6 +3,7 @@
 // navigation matches the ground-truth reflectivity and is georeferenced to better than a pixel.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -105,6 +106,57 @@ TEST(SideScanSim, AChangedSeabedDiffersByAboutItsFractionAndZeroChangeIsTheSameS
   EXPECT_NEAR(static_cast<double>(rock_flips) / 1600.0, 0.3, 0.06) << rock_flips << " of 1600 cells flipped";
   EXPECT_GT(differ, n_pts / 10) << "moved ripples and changed patches";
   EXPECT_LT(differ, n_pts * 9 / 10);
+}
+
+// change_irregular: the changed discs are no longer a lattice (centred in their 12 m cell, one radius):
+// per changed cell, the centroid of the change moves off the cell centre and its area varies; with
+// change_fraction 0 the flag changes nothing.
+TEST(SideScanSim, IrregularChangedDiscsAreNoLatticeAndZeroChangeStaysTheSame) {
+  SeabedConfig bc;
+  bc.rock_cell_m = 0.0f;  // the discs alone change the seabed here
+  Seabed bed, zero_irr, lattice, irregular;
+  ASSERT_TRUE(bed.init(bc).is_ok());
+  SeabedConfig z = bc;
+  z.change_irregular = true;
+  ASSERT_TRUE(zero_irr.init(z).is_ok());
+  SeabedConfig lc = bc;
+  lc.change_fraction = 0.6f;
+  ASSERT_TRUE(lattice.init(lc).is_ok());
+  SeabedConfig ic = lc;
+  ic.change_irregular = true;
+  ASSERT_TRUE(irregular.init(ic).is_ok());
+  const double cs = static_cast<double>(lc.change_scale_m);
+  double lat_max_off = 0.0, irr_sum_off = 0.0;
+  int lat_cells = 0, irr_cells = 0, irr_area_min = 1 << 30, irr_area_max = 0;
+  for (int cn = 0; cn < 12; ++cn)
+    for (int ce = 0; ce < 12; ++ce) {
+      double ln = 0, le = 0, in = 0, ie = 0;
+      int la = 0, ia = 0;
+      for (int i = 0; i < 24; ++i)
+        for (int j = 0; j < 24; ++j) {
+          const double n = cn * cs + (i + 0.5) * cs / 24.0, e = ce * cs + (j + 0.5) * cs / 24.0;
+          const SeabedSample a = bed.sample(n, e);
+          ASSERT_EQ(a.reflectivity, zero_irr.sample(n, e).reflectivity);
+          if (std::fabs(lattice.sample(n, e).reflectivity - a.reflectivity) > 0.05f) ln += n, le += e, ++la;
+          if (std::fabs(irregular.sample(n, e).reflectivity - a.reflectivity) > 0.05f) in += n, ie += e, ++ia;
+        }
+      const double mn = (cn + 0.5) * cs, me = (ce + 0.5) * cs;
+      if (la > 20) {
+        lat_max_off = std::max(lat_max_off, std::hypot(ln / la - mn, le / la - me));
+        ++lat_cells;
+      }
+      if (ia > 20) {
+        irr_sum_off += std::hypot(in / ia - mn, ie / ia - me);
+        ++irr_cells;
+        irr_area_min = std::min(irr_area_min, ia);
+        irr_area_max = std::max(irr_area_max, ia);
+      }
+    }
+  ASSERT_GT(lat_cells, 40);
+  ASSERT_GT(irr_cells, 40);
+  EXPECT_LT(lat_max_off, 0.3) << "lattice: every disc centred in its cell";
+  EXPECT_GT(irr_sum_off / irr_cells, 0.8) << "irregular: discs off their cell centres (m, mean)";
+  EXPECT_GT(irr_area_max, 2 * irr_area_min) << "irregular: radii differ";
 }
 
 TEST(SideScanSim, ObjectCastsAShadowOfTheExpectedLength) {
