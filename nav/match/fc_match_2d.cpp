@@ -90,30 +90,13 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   return Status::ok();
 }
 
-Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double dtheta_rad,
-                          BoundedVector<Match2d>& out) noexcept {
-  out.clear();
-  if (!ready_) return Status(StatusCode::kNotReady, "fc_match_2d: not initialised");
-  if (!std::isfinite(dtheta_rad) || a.desc_bytes == 0 || a.desc_bytes != b.desc_bytes || a.desc_bytes > config_.max_descriptor_bytes ||
-      a.descriptors.size() < a.position_m.size() * a.desc_bytes || b.descriptors.size() < b.position_m.size() * b.desc_bytes) {
-    counters_.increment(FcMatchCounter::kBadInput);
-    return Status(StatusCode::kInvalidArgument, "fc_match_2d: inconsistent keypoint sets");
-  }
-  std::size_t na = a.position_m.size(), nb = b.position_m.size();
-  if (na > config_.max_points) {
-    counters_.increment(FcMatchCounter::kPointsIgnored, static_cast<std::uint32_t>(na - config_.max_points));
-    na = config_.max_points;
-  }
-  if (nb > config_.max_points) {
-    counters_.increment(FcMatchCounter::kPointsIgnored, static_cast<std::uint32_t>(nb - config_.max_points));
-    nb = config_.max_points;
-  }
-  if (na < 2 || nb < 2) return Status::ok();
+// Stage 1 of match(): the appearance candidates of each a in cand_, grouped by a, best first
+// (insertion into a k-long list), first_[i] their start (first_[na] the end). Each descriptor's sum
+// and 1/sqrt(n var) are computed once, so a pair costs one integer dot product. Returns their count.
+std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na,
+                                               std::size_t nb) noexcept {
   const std::size_t k = config_.max_candidates_per_point;
   const std::size_t d = a.desc_bytes;
-
-  // 1. Appearance candidates, grouped by a, best first (insertion into a k-long list). Each
-  //    descriptor's sum and 1/sqrt(n var) are computed once, so a pair costs one integer dot product.
   auto stats = [d](const std::int8_t* p, float* st) {
     std::int32_t s1 = 0, s2 = 0;
     for (std::size_t q = 0; q < d; ++q) {
@@ -143,6 +126,17 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
     const std::int16_t* da = wide_a_.data() + i * d;
+    // b with appearance z joins a's k-long list, best first, when it clears min_appearance.
+    const auto keep_best = [&](std::size_t j, float z) {
+      if (!(z >= config_.min_appearance)) return;
+      if (have == k && z <= list[k - 1].appearance) return;
+      std::size_t pos = have < k ? have++ : k - 1;
+      while (pos > 0 && list[pos - 1].appearance < z) {
+        list[pos] = list[pos - 1];
+        --pos;
+      }
+      list[pos] = Candidate{static_cast<std::uint16_t>(i), static_cast<std::uint16_t>(j), z, 0.0f};
+    };
 #if defined(__SSE2__) || defined(__ARM_NEON)
     // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
     // (independent iterations the compiler pipelines or vectorises), then the selection: the same
@@ -161,28 +155,69 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
       const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
       zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
     }
-    for (std::size_t j = 0; j < nb; ++j) {
-      const float z = zs[j];
+    for (std::size_t j = 0; j < nb; ++j) keep_best(j, zs[j]);
 #else
     for (std::size_t j = 0; j < nb; ++j) {
       const float ib = stats_b_[2 * j + 1];
       if (ib == 0.0f) continue;
       const std::int16_t* db = wide_b_.data() + j * d;
       const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
-      const float z = (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib;
-#endif
-      if (!(z >= config_.min_appearance)) continue;
-      if (have == k && z <= list[k - 1].appearance) continue;
-      std::size_t pos = have < k ? have++ : k - 1;
-      while (pos > 0 && list[pos - 1].appearance < z) {
-        list[pos] = list[pos - 1];
-        --pos;
-      }
-      list[pos] = Candidate{static_cast<std::uint16_t>(i), static_cast<std::uint16_t>(j), z, 0.0f};
+      keep_best(j, (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
     }
+#endif
     nc += have;
   }
   first_[na] = static_cast<std::uint32_t>(nc);
+  return nc;
+}
+
+// The radius in implied translation t within which two candidates can pass the gate (at the longest
+// baseline in A, with a margin over rounding), and the largest coordinate of any finite position.
+void FcMatcher2d::translation_gate(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na, std::size_t nb,
+                                   double& gate_radius_m, double& abs_max_m) const noexcept {
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (std::size_t i = 0; i < na; ++i) {
+    const Vec2d p = a.position_m[i];
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;  // its pairs score 0 (NaN arithmetic)
+    xmin = std::min(xmin, p.x());
+    xmax = std::max(xmax, p.x());
+    ymin = std::min(ymin, p.y());
+    ymax = std::max(ymax, p.y());
+    abs_max_m = std::max(abs_max_m, std::max(std::abs(p.x()), std::abs(p.y())));
+  }
+  for (std::size_t j = 0; j < nb; ++j) {
+    const Vec2d p = b.position_m[j];
+    if (std::isfinite(p.x()) && std::isfinite(p.y())) abs_max_m = std::max(abs_max_m, std::max(std::abs(p.x()), std::abs(p.y())));
+  }
+  const double la_max = xmax >= xmin ? std::sqrt((xmax - xmin) * (xmax - xmin) + (ymax - ymin) * (ymax - ymin)) : 0.0;
+  // gate2 = 27.6 (sd^2 + la^2 sphi^2) and la sphi = sigma_dir la + sd grows with la.
+  const double ls = config_.sigma_dir_rad * la_max + config_.sigma_dist_m;
+  const double gate2_max = 2.0 * 13.8 * (config_.sigma_dist_m * config_.sigma_dist_m + ls * ls);
+  gate_radius_m = std::sqrt(gate2_max) * (1.0 + 1e-9) + 1e-9 * (1.0 + 4.0 * abs_max_m);
+}
+
+Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double dtheta_rad,
+                          BoundedVector<Match2d>& out) noexcept {
+  out.clear();
+  if (!ready_) return Status(StatusCode::kNotReady, "fc_match_2d: not initialised");
+  if (!std::isfinite(dtheta_rad) || a.desc_bytes == 0 || a.desc_bytes != b.desc_bytes || a.desc_bytes > config_.max_descriptor_bytes ||
+      a.descriptors.size() < a.position_m.size() * a.desc_bytes || b.descriptors.size() < b.position_m.size() * b.desc_bytes) {
+    counters_.increment(FcMatchCounter::kBadInput);
+    return Status(StatusCode::kInvalidArgument, "fc_match_2d: inconsistent keypoint sets");
+  }
+  std::size_t na = a.position_m.size(), nb = b.position_m.size();
+  if (na > config_.max_points) {
+    counters_.increment(FcMatchCounter::kPointsIgnored, static_cast<std::uint32_t>(na - config_.max_points));
+    na = config_.max_points;
+  }
+  if (nb > config_.max_points) {
+    counters_.increment(FcMatchCounter::kPointsIgnored, static_cast<std::uint32_t>(nb - config_.max_points));
+    nb = config_.max_points;
+  }
+  if (na < 2 || nb < 2) return Status::ok();
+
+  // 1. Appearance candidates, grouped by a, best first.
+  const std::size_t nc = appearance_candidates(a, b, na, nb);
   if (nc == 0) return Status::ok();
 
   // 2. Continuous geometric score. A pair of candidates c = (a, b), c2 = (a', b') passes the gate below
@@ -196,27 +231,7 @@ Status FcMatcher2d::match(const KeypointSet2d& a, const KeypointSet2d& b, double
   const double inv2sd = 1.0 / (2.0 * config_.sigma_dist_m * config_.sigma_dist_m);
   const float w = config_.appearance_weight;
   double gate_radius_m = 0.0, abs_max_m = 0.0;
-  {
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (std::size_t i = 0; i < na; ++i) {
-      const Vec2d p = a.position_m[i];
-      if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;  // its pairs score 0 (NaN arithmetic)
-      xmin = std::min(xmin, p.x());
-      xmax = std::max(xmax, p.x());
-      ymin = std::min(ymin, p.y());
-      ymax = std::max(ymax, p.y());
-      abs_max_m = std::max(abs_max_m, std::max(std::abs(p.x()), std::abs(p.y())));
-    }
-    for (std::size_t j = 0; j < nb; ++j) {
-      const Vec2d p = b.position_m[j];
-      if (std::isfinite(p.x()) && std::isfinite(p.y())) abs_max_m = std::max(abs_max_m, std::max(std::abs(p.x()), std::abs(p.y())));
-    }
-    const double la_max = xmax >= xmin ? std::sqrt((xmax - xmin) * (xmax - xmin) + (ymax - ymin) * (ymax - ymin)) : 0.0;
-    // gate2 = 27.6 (sd^2 + la^2 sphi^2) and la sphi = sigma_dir la + sd grows with la.
-    const double ls = config_.sigma_dir_rad * la_max + config_.sigma_dist_m;
-    const double gate2_max = 2.0 * 13.8 * (config_.sigma_dist_m * config_.sigma_dist_m + ls * ls);
-    gate_radius_m = std::sqrt(gate2_max) * (1.0 + 1e-9) + 1e-9 * (1.0 + 4.0 * abs_max_m);
-  }
+  translation_gate(a, b, na, nb, gate_radius_m, abs_max_m);
   for (std::size_t c = 0; c < nc; ++c) {
     translation_[c] = b.position_m[cand_[c].b] - r * a.position_m[cand_[c].a];
     order_[c] = static_cast<std::uint32_t>(c);

@@ -87,6 +87,9 @@ class FcMatcher2d {
     float appearance = 0.0f;
     float score = 0.0f;
   };
+  std::size_t appearance_candidates(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na, std::size_t nb) noexcept;
+  void translation_gate(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na, std::size_t nb,
+                        double& gate_radius_m, double& abs_max_m) const noexcept;
   FcMatch2dConfig config_{};
   bool ready_ = false;
   Span<Candidate> cand_;
