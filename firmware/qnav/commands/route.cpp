@@ -488,6 +488,8 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*fr, "--no-align", g_opt.no_align, "frame every repeat tile at the configured stride (no framing on the taught nodes)");
   add_flag(*fr, "--no-speckle", g_opt.no_speckle, "the simulator's pings without speckle (what the sparse ping rates lose)");
   add_flag(*fr, "--no-ripples", g_opt.no_ripples, "the seabed without sand ripples");
+  add_number(*fr, "--entry-prior", g_opt.framing_entry_prior,
+             "share of the start belief on the route's entry end, as qnavd's route.entry_prior (default 0.5; 0: the uniform start route eval scores)", "", 0, 0.99);
   run.on(fr, cmd_framing);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");

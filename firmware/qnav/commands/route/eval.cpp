@@ -170,6 +170,7 @@ struct SweepInputs {
   const std::vector<int>* pcts;
   int seabed;
   FILE* log;
+  double entry_prior = 0.0;  // the paper's uniform start unless a caller says otherwise
 };
 
 // Repeat passes at every offset, forwards and in reverse, over one taught route. kidnap_src (if
@@ -185,7 +186,7 @@ Status offset_sweep(const SweepInputs& in, int& pass_seed, std::vector<TileRecor
       route::LocaliserConfig lc = pipeline::default_localiser_config(rev ? route::RouteDirection::kReverse : route::RouteDirection::kForward, nodes);
       pipeline::RepeatSessionConfig sc;  // the repeat component without experiences
       sc.localiser = lc;
-      sc.entry_prior = 0.0;  // the paper's uniform start: the figures docs/route.md quotes from this sweep
+      sc.entry_prior = in.entry_prior;  // 0 (the paper's uniform start) for route eval's figures
       auto session = std::make_unique<pipeline::RouteRepeatSession>(hal::host_file_store());
       QNAV_RETURN_IF_ERROR(session->init(sc));
       QNAV_RETURN_IF_ERROR(session->start(*in.params, in.meta, *in.source, rev));
@@ -728,7 +729,8 @@ int cmd_framing() {
       TileSource src(&train);
       std::fprintf(log, "%.0f pings/s at %.1f m/s (%.2f m between pings): taught %zu nodes (spacing %.1f m, %.1f keypoints/node)\n", rate, speed,
                    speed / rate, train.size(), sp, kp / static_cast<double>(train.size()));
-      SweepInputs in{&pipe, &w, &train, &src, &params, Span<const route::NodeMeta>(meta.data(), meta.size()), &along, &pcts, 1, log};
+      SweepInputs in{&pipe, &w, &train, &src, &params, Span<const route::NodeMeta>(meta.data(), meta.size()), &along, &pcts, 1, log,
+                     g_opt.framing_entry_prior};
       std::vector<TileRecord> records;
       std::vector<PassStats> stats;
       int pass_seed = 100;
