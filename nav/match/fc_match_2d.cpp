@@ -44,13 +44,72 @@ inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::s
   return s;
 }
 
+#if !(defined(__SSE2__) || defined(__ARM_NEON))
+// Without SIMD (LEON3, armhf VFP): two rows of A against four consecutive rows of B (row stride d)
+// in one pass over the terms, on the int8 descriptors themselves: per term 2 + 4 loads for 8
+// multiply-adds instead of 2 loads per multiply-add, the 8 sums held in registers (D > 0: a fixed
+// length the compiler unrolls, the offsets immediates; D == 0: the length d at run time). The same
+// integer sums as dot_i16, term by term (exact).
+template <std::size_t D>
+inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t d,
+                       std::int32_t* r0, std::int32_t* r1) noexcept {
+  const std::size_t n = D > 0 ? D : d;
+  std::int32_t s00 = 0, s01 = 0, s02 = 0, s03 = 0, s10 = 0, s11 = 0, s12 = 0, s13 = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::int32_t x0 = a0[q], x1 = a1[q];
+    const std::int32_t y0 = b[q], y1 = b[n + q], y2 = b[2 * n + q], y3 = b[3 * n + q];
+    s00 += x0 * y0;
+    s01 += x0 * y1;
+    s02 += x0 * y2;
+    s03 += x0 * y3;
+    s10 += x1 * y0;
+    s11 += x1 * y1;
+    s12 += x1 * y2;
+    s13 += x1 * y3;
+  }
+  r0[0] = s00;
+  r0[1] = s01;
+  r0[2] = s02;
+  r0[3] = s03;
+  r1[0] = s10;
+  r1[1] = s11;
+  r1[2] = s12;
+  r1[3] = s13;
+}
+
+// Two rows of A against one row of B (the last nb % 4 rows).
+template <std::size_t D>
+inline void dot_i8_2x1(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t d,
+                       std::int32_t& r0, std::int32_t& r1) noexcept {
+  const std::size_t n = D > 0 ? D : d;
+  std::int32_t s0 = 0, s1 = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::int32_t y = b[q];
+    s0 += static_cast<std::int32_t>(a0[q]) * y;
+    s1 += static_cast<std::int32_t>(a1[q]) * y;
+  }
+  r0 = s0;
+  r1 = s1;
+}
+
+// The dot products of A's rows i0 and i1 (i1 may equal i0) with every row of B, into r0[0, nb) and r1[0, nb).
+template <std::size_t D>
+void dot_rows_2(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t nb, std::size_t d,
+                std::int32_t* r0, std::int32_t* r1) noexcept {
+  const std::size_t n = D > 0 ? D : d;
+  std::size_t j = 0;
+  for (; j + 4 <= nb; j += 4) dot_i8_2x4<D>(a0, a1, b + j * n, d, r0 + j, r1 + j);
+  for (; j < nb; ++j) dot_i8_2x1<D>(a0, a1, b + j * n, d, r0[j], r1[j]);
+}
+#endif
+
 }  // namespace
 
 std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) + 4 * nc * sizeof(double) +
          2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
-         c.max_points * (sizeof(std::int32_t) + 3 * sizeof(float)) +
+         c.max_points * (2 * sizeof(std::int32_t) + 3 * sizeof(float)) +
          128;
 }
 
@@ -77,7 +136,7 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   stats_b_ = arena.allocate<float>(2 * c.max_points);
   wide_a_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
   wide_b_ = arena.allocate<std::int16_t>(c.max_points * c.max_descriptor_bytes);
-  dot_row_ = arena.allocate<std::int32_t>(c.max_points);
+  dot_row_ = arena.allocate<std::int32_t>(2 * c.max_points);
   z_row_ = arena.allocate<float>(c.max_points);
   sum_b_ = arena.allocate<float>(c.max_points);
   inv_b_ = arena.allocate<float>(c.max_points);
@@ -115,17 +174,21 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
     inv_b_[j] = stats_b_[2 * j + 1];
   }
 #endif
+#if defined(__SSE2__) || defined(__ARM_NEON)
   for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
   for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
+#endif
   const float inv_d = 1.0f / static_cast<float>(d);
   std::size_t nc = 0;
+#if !(defined(__SSE2__) || defined(__ARM_NEON))
+  std::size_t paired_row = na;  // the row of A whose dot products are in dot_row_'s second half (na: none)
+#endif
   for (std::size_t i = 0; i < na; ++i) {
     first_[i] = static_cast<std::uint32_t>(nc);
     const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
     if (ia == 0.0f) continue;  // a flat descriptor has no candidates
     std::size_t have = 0;
     Candidate* list = cand_.data() + nc;
-    const std::int16_t* da = wide_a_.data() + i * d;
     // b with appearance z joins a's k-long list, best first, when it clears min_appearance.
     const auto keep_best = [&](std::size_t j, float z) {
       if (!(z >= config_.min_appearance)) return;
@@ -140,8 +203,8 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
 #if defined(__SSE2__) || defined(__ARM_NEON)
     // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
     // (independent iterations the compiler pipelines or vectorises), then the selection: the same
-    // float expression per pair as the fused loop below, so the same z. Without SIMD (LEON3, armhf
-    // VFP) the fused loop is fewer instructions (no row buffers).
+    // float expression per pair as the loop below, so the same z.
+    const std::int16_t* da = wide_a_.data() + i * d;
     std::int32_t* dots = dot_row_.data();
     if (d == 64) {
       for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
@@ -157,12 +220,26 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
     }
     for (std::size_t j = 0; j < nb; ++j) keep_best(j, zs[j]);
 #else
+    // Without SIMD: the dot products of rows i and i + 1 are taken together (dot_rows_2, on the int8
+    // descriptors) when row i's are not already in dot_row_'s second half; then the selection in b
+    // order with the same float expression per pair as before, so the same z.
+    const std::int32_t* rows = dot_row_.data() + config_.max_points;  // row i + 1's, taken with row i's
+    if (paired_row != i) {
+      std::int32_t* r0 = dot_row_.data();
+      const std::int8_t* a0 = a.descriptors.data() + i * d;
+      const bool pair = i + 1 < na;
+      const std::int8_t* a1 = pair ? a0 + d : a0;
+      if (d == 64)
+        dot_rows_2<64>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);
+      else
+        dot_rows_2<0>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);
+      paired_row = pair ? i + 1 : na;
+      rows = r0;
+    }
     for (std::size_t j = 0; j < nb; ++j) {
       const float ib = stats_b_[2 * j + 1];
       if (ib == 0.0f) continue;
-      const std::int16_t* db = wide_b_.data() + j * d;
-      const std::int32_t dot = d == 64 ? dot_i16<64>(da, db) : dot_i16(da, db, d);
-      keep_best(j, (static_cast<float>(dot) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
+      keep_best(j, (static_cast<float>(rows[j]) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
     }
 #endif
     nc += have;

@@ -16,12 +16,14 @@
 // Bounds: points beyond max_points are ignored (counted); candidates <= max_points *
 // max_candidates_per_point; the scoring visits only candidate pairs whose implied translations lie
 // within the gate's largest radius (same scores as visiting every pair); descriptors of at most max_descriptor_bytes (longer: kBadInput); cost
-// O(nA nB D) appearance + O(C^2) scoring, C candidates. The appearance dot products run on int16
-// copies of the descriptors (widened once per call; a 16-bit multiply-add the compiler vectorises on
-// x86 and ARM, the same integer sums as int8), with a fixed-length loop for 64-byte descriptors.
+// O(nA nB D) appearance + O(C^2) scoring, C candidates. With SIMD (SSE2, NEON) the appearance dot
+// products run on int16 copies of the descriptors (widened once per call; a 16-bit multiply-add the
+// compiler vectorises on x86 and ARM, the same integer sums as int8), with a fixed-length loop for
+// 64-byte descriptors; without SIMD (LEON3, armhf VFP) on the int8 descriptors, two rows of A
+// against four of B per pass (the same integer sums).
 // Memory: init() takes all buffers from an Arena (2 * max_points * max_descriptor_bytes int16 of
 // them for the widened descriptors; per candidate 4 doubles + 1 uint32 of translation-ordered copies
-// for the scoring's neighbour scan; one row of dot products and ZNCCs); match() never allocates.
+// for the scoring's neighbour scan; two rows of dot products, one of ZNCCs); match() never allocates.
 #pragma once
 
 #include <cstddef>
@@ -105,7 +107,7 @@ class FcMatcher2d {
   Span<std::uint8_t> used_b_;
   Span<float> stats_a_, stats_b_;  // per descriptor: sum, 1 / sqrt(n var)
   Span<std::int16_t> wide_a_, wide_b_;  // descriptors widened to int16 (max_points x max_descriptor_bytes)
-  Span<std::int32_t> dot_row_;  // one a's dot products with every b (appearance)
+  Span<std::int32_t> dot_row_;  // two rows of a's dot products with every b (appearance)
   Span<float> z_row_;           // one a's ZNCC with every b (-inf for a flat b)
   Span<float> sum_b_, inv_b_;   // stats_b_ split in two arrays (a loop over b that vectorises)
   CounterSet<FcMatchCounter> counters_;

@@ -1,5 +1,6 @@
 #include "test/timing/canned.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "nav/route/experience.hpp"
 #include "nav/route/registration.hpp"
 #include "nav/route/route_filter.hpp"
+#include "nav/route/route_format.hpp"
 #include "nav/route/route_localiser.hpp"
 #include "nav/route/tile_features.hpp"
 #include "nav/sonar/scanline_corrector.hpp"
@@ -509,11 +511,58 @@ class RepeatingExperienceSource final : public route::NodeSource {
   double spacing_m_;
 };
 
+// The flight localiser's nodes come from the route file: a load is a record read and decoded
+// (route_format's decode_node: CRC, byte order, field checks). The synthetic route sources generate
+// each node instead (a pass over the world's landmarks, a log, a cos and a lround per term: about a
+// third of a counted update on LEON3, test input, not flight code). This source stands in for the
+// file: a recording pass before the counted calls (init) encodes every node the counted updates load
+// into route records, and a counted load decodes its record; the nodes are the same bit for bit (the
+// record holds x, y, score as float and the descriptors as bytes; the tiles' headings are 0), so the
+// updates and their hashes are too. A node not recorded (none, for the canned updates) is generated.
+class RecordedNodeSource final : public route::NodeSource {
+ public:
+  explicit RecordedNodeSource(route::NodeSource* inner) : inner_(inner) {
+    params_.sensor = route::SensorKind::kSideScan;
+    params_.max_keypoints = static_cast<std::uint16_t>(route::kMaxKeypointsPerNode);
+    params_.node_spacing_m = static_cast<float>(kSpacingM);
+    params_.tile_length_m = 90.0f;
+    params_.tile_width_m = 98.0f;
+    params_.pixel_m = 0.1f;
+  }
+  std::uint32_t node_count() const noexcept override { return inner_->node_count(); }
+  Status load(std::uint32_t i, route::RouteNode& out) noexcept override {
+    const std::size_t n = route::record_bytes(params_.max_keypoints);
+    const auto it = std::lower_bound(index_.begin(), index_.end(), i);
+    if (it != index_.end() && *it == i) {
+      const std::size_t r = static_cast<std::size_t>(it - index_.begin());
+      return route::decode_node(params_, Span<const std::uint8_t>(records_.data() + r * n, n), i, out, nullptr);
+    }
+    QNAV_RETURN_IF_ERROR(inner_->load(i, out));
+    if (recording_) {  // insert in index order (before the counted calls only)
+      const std::size_t r = static_cast<std::size_t>(it - index_.begin());
+      index_.insert(index_.begin() + static_cast<std::ptrdiff_t>(r), i);
+      records_.insert(records_.begin() + static_cast<std::ptrdiff_t>(r * n), n, 0);
+      QNAV_RETURN_IF_ERROR(route::encode_node(params_, out, Span<std::uint8_t>(records_.data() + r * n, n)));
+    }
+    return Status::ok();
+  }
+  void set_recording(bool on) { recording_ = on; }
+  std::size_t recorded() const { return index_.size(); }
+
+ private:
+  route::NodeSource* inner_;
+  route::RouteParams params_;
+  std::vector<std::uint32_t> index_;  // sorted
+  std::vector<std::uint8_t> records_;  // one record per index_ entry, same order
+  bool recording_ = false;
+};
+
 }  // namespace
 
 struct CannedRoute::Impl {
   route::testing::SyntheticWorld world{1900.0, 200.0, 0.008, 3};
-  route::testing::RepeatingRouteSource source{&world, kRouteNodes, kSpacingM};
+  route::testing::RepeatingRouteSource generated{&world, kRouteNodes, kSpacingM};
+  RecordedNodeSource source{&generated};
   std::vector<route::NodeMeta> meta;
   route::LocaliserConfig config = pipeline::default_localiser_config(route::RouteDirection::kForward, kRouteNodes);
   route::RouteParams params;
@@ -531,7 +580,8 @@ struct CannedRoute::Impl {
   std::unique_ptr<ArenaStorage> exp_arena;
   route::RouteLocaliser exp_localiser;
   route::ExperienceIndex exp_index;
-  RepeatingExperienceSource exp_source{&world, kRouteNodes, kExperiencesPerNode, kSpacingM};
+  RepeatingExperienceSource exp_generated{&world, kRouteNodes, kExperiencesPerNode, kSpacingM};
+  RecordedNodeSource exp_source{&exp_generated};
   static route::LocaliserConfig with_experiences(route::LocaliserConfig c) {
     pipeline::enable_experiences(c, kExperiencesPerNode);
     return c;
@@ -596,6 +646,17 @@ Status CannedRoute::init() {
     }
   d.raster.assign(static_cast<std::size_t>(d.camera_config.width_px * d.camera_config.height_px), 0.0f);
   d.coverage.assign(d.raster.size(), 0);
+  // The recording pass (RecordedNodeSource): every counted update run once, its loads encoded.
+  d.source.set_recording(true);
+  d.exp_source.set_recording(true);
+  for (int k = 0; k < kUpdates; ++k) {
+    route_restart();
+    (void)route_update(k);
+    route_restart_exp();
+    (void)route_update_exp(k);
+  }
+  d.source.set_recording(false);
+  d.exp_source.set_recording(false);
   return Status::ok();
 }
 

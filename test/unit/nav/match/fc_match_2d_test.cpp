@@ -306,5 +306,45 @@ TEST(FcMatch2d, SameMatchesAndScoresAsTheAllPairsReference) {
   EXPECT_GT(compared, 300);  // the related runs match most of their 128 keypoints
 }
 
+// Odd and ragged counts and flat descriptors: 37 x 63 keypoints (without SIMD the dot products are
+// taken two rows of A by four of B at a time: an unpaired last row of A, three rows of B left over),
+// flat rows of A first in a pair, second in a pair and last, flat rows of B inside a block of four and
+// in the remainder: the same matches, scores and appearances as the reference, bit for bit.
+TEST(FcMatch2d, SameAsTheReferenceForRaggedCountsAndFlatDescriptors) {
+  FcMatch2dConfig c;
+  c.max_points = 64;
+  c.max_candidates_per_point = 3;
+  c.min_appearance = 0.3f;
+  ArenaStorage arena(FcMatcher2d::arena_bytes(c));
+  FcMatcher2d m;
+  ASSERT_TRUE(m.init(c, arena).is_ok());
+  std::vector<Match2d> store(64);
+  for (int run = 0; run < 3; ++run) {
+    const Pose2 rel{6.0 - 4.0 * run, 2.0 + run, 0.3 * run - 0.2};
+    Sets s = make(37, rel, 0.4, 26, false, 300 + static_cast<std::uint64_t>(run));
+    ASSERT_EQ(s.pb.size(), 63u);
+    for (std::size_t i : {std::size_t{0}, std::size_t{5}, std::size_t{36}}) std::fill_n(s.da.begin() + static_cast<long>(i * kD), kD, std::int8_t{7});
+    for (std::size_t j : {std::size_t{2}, std::size_t{61}}) std::fill_n(s.db.begin() + static_cast<long>(j * kD), kD, std::int8_t{-3});
+    const std::vector<Match2d> want = reference_match(s, rel.heading_rad, c);
+    BoundedVector<Match2d> got(Span<Match2d>(store.data(), store.size()));
+    KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(s.da.data(), s.da.size()), kD};
+    KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
+    ASSERT_TRUE(m.match(a, b, rel.heading_rad, got).is_ok());
+    ASSERT_EQ(got.size(), want.size()) << "run " << run;
+    EXPECT_GT(want.size(), 25u);  // the 34 unflattened true pairs, mostly matched
+    for (std::size_t q = 0; q < want.size(); ++q) {
+      EXPECT_EQ(got[q].a, want[q].a);
+      EXPECT_EQ(got[q].b, want[q].b);
+      EXPECT_EQ(got[q].score, want[q].score);
+      EXPECT_EQ(got[q].appearance, want[q].appearance);
+      EXPECT_NE(got[q].a, 0);  // flat descriptors have no candidates
+      EXPECT_NE(got[q].a, 5);
+      EXPECT_NE(got[q].a, 36);
+      EXPECT_NE(got[q].b, 2);
+      EXPECT_NE(got[q].b, 61);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace qnav::match
