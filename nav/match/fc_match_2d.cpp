@@ -55,7 +55,7 @@ inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::
                        std::int32_t* r0, std::int32_t* r1) noexcept {
   const std::size_t n = D > 0 ? D : d;
   std::int32_t s00 = 0, s01 = 0, s02 = 0, s03 = 0, s10 = 0, s11 = 0, s12 = 0, s13 = 0;
-  for (std::size_t q = 0; q < n; ++q) {
+  const auto term = [&](std::size_t q) {
     const std::int32_t x0 = a0[q], x1 = a1[q];
     const std::int32_t y0 = b[q], y1 = b[n + q], y2 = b[2 * n + q], y3 = b[3 * n + q];
     s00 += x0 * y0;
@@ -66,7 +66,8 @@ inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::
     s11 += x1 * y1;
     s12 += x1 * y2;
     s13 += x1 * y3;
-  }
+  };
+  for (std::size_t q = 0; q < n; ++q) term(q);  // (unrolling it costs more on LEON3: spills around the loop)
   r0[0] = s00;
   r0[1] = s01;
   r0[2] = s02;

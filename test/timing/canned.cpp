@@ -518,7 +518,8 @@ class RepeatingExperienceSource final : public route::NodeSource {
 // file: a recording pass before the counted calls (init) encodes every node the counted updates load
 // into route records, and a counted load decodes its record; the nodes are the same bit for bit (the
 // record holds x, y, score as float and the descriptors as bytes; the tiles' headings are 0), so the
-// updates and their hashes are too. A node not recorded (none, for the canned updates) is generated.
+// updates and their hashes are too. A node not recorded is generated and counted (misses(): the
+// route stages fail, hash 0, if any of their loads was generated inside the counted call).
 class RecordedNodeSource final : public route::NodeSource {
  public:
   explicit RecordedNodeSource(route::NodeSource* inner) : inner_(inner) {
@@ -535,26 +536,30 @@ class RecordedNodeSource final : public route::NodeSource {
     const auto it = std::lower_bound(index_.begin(), index_.end(), i);
     if (it != index_.end() && *it == i) {
       const std::size_t r = static_cast<std::size_t>(it - index_.begin());
-      return route::decode_node(params_, Span<const std::uint8_t>(records_.data() + r * n, n), i, out, nullptr);
+      return route::decode_node(params_, Span<const std::uint8_t>(records_.data() + r * n, n), stored_index_[r], out, nullptr);
     }
     QNAV_RETURN_IF_ERROR(inner_->load(i, out));
+    if (!recording_) ++misses_;
     if (recording_) {  // insert in index order (before the counted calls only)
       const std::size_t r = static_cast<std::size_t>(it - index_.begin());
       index_.insert(index_.begin() + static_cast<std::ptrdiff_t>(r), i);
+      stored_index_.insert(stored_index_.begin() + static_cast<std::ptrdiff_t>(r), out.meta.index);
       records_.insert(records_.begin() + static_cast<std::ptrdiff_t>(r * n), n, 0);
       QNAV_RETURN_IF_ERROR(route::encode_node(params_, out, Span<std::uint8_t>(records_.data() + r * n, n)));
     }
     return Status::ok();
   }
   void set_recording(bool on) { recording_ = on; }
-  std::size_t recorded() const { return index_.size(); }
+  std::size_t misses() const { return misses_; }  // loads generated outside the recording pass
 
  private:
   route::NodeSource* inner_;
   route::RouteParams params_;
   std::vector<std::uint32_t> index_;  // sorted
+  std::vector<std::uint32_t> stored_index_;  // the node index each record holds (an experience record: its node's)
   std::vector<std::uint8_t> records_;  // one record per index_ entry, same order
   bool recording_ = false;
+  std::size_t misses_ = 0;
 };
 
 }  // namespace
@@ -675,7 +680,7 @@ void CannedRoute::route_restart() {
 
 std::uint64_t CannedRoute::route_update(int k) {
   Hash h;
-  if (!d_->localiser.step(d_->sensed[k], kSpacingM, d_->step).is_ok()) return 0;
+  if (!d_->localiser.step(d_->sensed[k], kSpacingM, d_->step).is_ok() || d_->source.misses() != 0) return 0;
   h.add(static_cast<std::uint64_t>(d_->step.estimate));
   h.add(static_cast<std::uint64_t>(d_->step.registrations));
   h.add(static_cast<double>(d_->step.probability));
@@ -691,7 +696,8 @@ void CannedRoute::route_restart_exp() {
 
 std::uint64_t CannedRoute::route_update_exp(int k) {
   Hash h;
-  if (!d_->exp_localiser.step(d_->sensed[k], kSpacingM, d_->step).is_ok()) return 0;
+  if (!d_->exp_localiser.step(d_->sensed[k], kSpacingM, d_->step).is_ok() || d_->source.misses() != 0 || d_->exp_source.misses() != 0)
+    return 0;
   if (d_->step.experience_registrations == 0) return 0;  // the stage is meant to register experiences
   h.add(static_cast<std::uint64_t>(d_->step.estimate));
   h.add(static_cast<std::uint64_t>(d_->step.registrations));
