@@ -28,9 +28,10 @@ float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcep
 
 namespace {
 
+#if defined(__SSE2__) || defined(__ARM_NEON)
 // Integer dot product of two widened descriptors: int16 x int16 summed in int32 (exact: |product| <=
 // 2^14, at most a few hundred terms). The fixed-length form lets the compiler unroll and vectorise it
-// (pmaddwd on x86, smlal on ARM); without SIMD it is the plain loop.
+// (pmaddwd on x86, smlal on ARM). Without SIMD the kernels below are used instead.
 template <std::size_t D>
 inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b) noexcept {
   std::int32_t s = 0;
@@ -43,8 +44,7 @@ inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::s
   for (std::size_t q = 0; q < d; ++q) s += static_cast<std::int32_t>(a[q]) * b[q];
   return s;
 }
-
-#if !(defined(__SSE2__) || defined(__ARM_NEON))
+#else
 // Without SIMD (LEON3, armhf VFP): two rows of A against four consecutive rows of B (row stride d)
 // in one pass over the terms, on the int8 descriptors themselves: per term 2 + 4 loads for 8
 // multiply-adds instead of 2 loads per multiply-add, the 8 sums held in registers (D > 0: a fixed
