@@ -80,8 +80,9 @@ class CannedSonar {
 };
 
 // Tile registration, a route-filter update on a 10,000-node route at the searching budget (the
-// daemon's localiser configuration, 16 registrations; and with 4 experiences on every node, up to 32)
-// and a downward-camera tile projection.
+// daemon's localiser configuration, 16 registrations; and with 4 experiences on every node, up to 32;
+// the nodes an update loads are decoded from route records encoded in init(), as a flight load from
+// the route file) and a downward-camera tile projection.
 class CannedRoute {
  public:
   static constexpr int kUpdates = 3;
