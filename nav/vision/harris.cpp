@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <type_traits>
 
 namespace qnav::vision {
@@ -42,12 +43,17 @@ Sizes sizes_for(const HarrisConfig& c) noexcept {
   return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch, static_cast<std::size_t>(2 * c.nms_radius + 1) * w};
 }
 
-// Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x.
-inline bool better(const Corner& a, const Corner& b) noexcept {
-  if (a.score != b.score) return a.score > b.score;
-  if (a.y != b.y) return a.y < b.y;
-  return a.x < b.x;
-}
+// Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x. A
+// function object, so that std::push_heap / pop_heap / sort inline it (a function pointer was an
+// indirect call per comparison).
+struct Better {
+  bool operator()(const Corner& a, const Corner& b) const noexcept {
+    if (a.score != b.score) return a.score > b.score;
+    if (a.y != b.y) return a.y < b.y;
+    return a.x < b.x;
+  }
+};
+constexpr Better better{};
 
 // Sobel gradients of row y over columns [x0, x1) (1 <= x0, x1 <= W-1, 1 <= y <= H-2), scaled by 1/8
 // (exact in float), so a unit step gives a gradient of 0.5 per pixel on both sides.
@@ -167,18 +173,52 @@ inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_
   if (x < x1) step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
 }
 
-// Max and sum of the positive values of v[0..n), in 8 independent lanes (vectorisable without
-// -ffast-math; the lane order is fixed, so the result is deterministic).
+// Four-lane float / int vectors (GCC and clang vector extensions: SSE2 on x86, NEON on ARM, scalar code
+// elsewhere), used only where kHarrisIntegerTensor is false (a target with SIMD). The selections are
+// bitwise on the compare masks, so every lane takes exactly the scalar expression's value (NaN and
+// signed zeros included): the same results bit for bit as the scalar loops they replace.
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+
+inline F4 load4(const float* p) noexcept {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// c ? a : b per lane (c: all ones or all zeros, from a compare).
+inline F4 select4(I4 c, F4 a, F4 b) noexcept { return reinterpret_cast<F4>((c & reinterpret_cast<I4>(a)) | (~c & reinterpret_cast<I4>(b))); }
+
+// Max and sum of the positive values of v[0..n), in 8 independent lanes (lane k: v[k], v[k+8], ...;
+// the tail in lane 0; the lanes combined in order 0..7), so the result is deterministic. With SIMD the
+// 8 lanes are two 4-lane vectors (the same lanes, the same order: the same floats).
 inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum) noexcept {
   float m[8] = {vmax, vmax, vmax, vmax, vmax, vmax, vmax, vmax};
   float s[8] = {};
   int i = 0;
-  for (; i + 8 <= n; i += 8)
-    for (int k = 0; k < 8; ++k) {
-      const float x = v[i + k];
-      m[k] = x > m[k] ? x : m[k];
-      s[k] += x > 0.0f ? x : 0.0f;
+  if constexpr (!kHarrisIntegerTensor) {
+    if (n >= 8) {
+      F4 m0 = load4(m), m1 = m0, s0 = load4(s), s1 = s0;
+      const F4 zero = s0;
+      for (; i + 8 <= n; i += 8) {
+        const F4 x0 = load4(v + i), x1 = load4(v + i + 4);
+        m0 = select4(x0 > m0, x0, m0);
+        m1 = select4(x1 > m1, x1, m1);
+        s0 += select4(x0 > zero, x0, zero);
+        s1 += select4(x1 > zero, x1, zero);
+      }
+      std::memcpy(m, &m0, sizeof m0);
+      std::memcpy(m + 4, &m1, sizeof m1);
+      std::memcpy(s, &s0, sizeof s0);
+      std::memcpy(s + 4, &s1, sizeof s1);
     }
+  } else {
+    for (; i + 8 <= n; i += 8)
+      for (int k = 0; k < 8; ++k) {
+        const float x = v[i + k];
+        m[k] = x > m[k] ? x : m[k];
+        s[k] += x > 0.0f ? x : 0.0f;
+      }
+  }
   for (; i < n; ++i) {
     m[0] = v[i] > m[0] ? v[i] : m[0];
     s[0] += v[i] > 0.0f ? v[i] : 0.0f;
@@ -500,26 +540,40 @@ std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det,
     // With SIMD the full window maximum (max over the ring) is a few vector instructions per pixel, and
     // then only local maxima take a branch: the per-pixel compares and their mispredicted branches were
     // most of the host's Harris time. The same candidates either way (v < max of the ring <=> v below
-    // one of its rows; own is one of them).
-    float* __restrict wmax = colsum_.data();  // scratch (the float tensor's column sums are done with)
+    // one of its rows; own is one of them). The candidates of 16 pixels are one bit mask (the window
+    // maximum and the tests in 4-lane vectors, bitwise selections: the scalar expressions' values), so
+    // only the candidates take a branch; the last < 16 pixels take the scalar test.
+    int x = dx0;
     if constexpr (!kHarrisIntegerTensor) {
       const float* __restrict r0 = nms_ring_.data();
-      for (int x = dx0; x < dx1; ++x) wmax[x] = r0[x];
-      for (int j = 1; j < nwin; ++j) {
-        const float* __restrict rj = r0 + static_cast<std::size_t>(j) * wz;
-        for (int x = dx0; x < dx1; ++x) wmax[x] = rj[x] > wmax[x] ? rj[x] : wmax[x];
+      const F4 t4 = F4{thresh, thresh, thresh, thresh};
+      const I4 w0 = {1, 2, 4, 8}, w1 = w0 << 4, w2 = w0 << 8, w3 = w0 << 12;
+      const auto cand4 = [&](int xs) {
+        F4 w = load4(r0 + xs);
+        for (int j = 1; j < nwin; ++j) {
+          const F4 rj = load4(r0 + static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(xs));
+          w = select4(rj > w, rj, w);
+        }
+        const F4 v = load4(row + xs);
+        return ~(v < w) & (v > t4);  // the scalar loop's !(v < wmax) && v > thresh
+      };
+      for (; x + 16 <= dx1; x += 16) {
+        const I4 b = (cand4(x) & w0) | (cand4(x + 4) & w1) | (cand4(x + 8) & w2) | (cand4(x + 12) & w3);
+        unsigned bits = static_cast<unsigned>(b[0] | b[1] | b[2] | b[3]);
+        while (bits != 0) {
+          const int xc = x + __builtin_ctz(bits);
+          bits &= bits - 1;
+          const float v = row[xc];
+          if (strict_window_max(resp, nms, xc, y, v)) keep(xc, y, v);
+        }
       }
     }
-    for (int x = dx0; x < dx1; ++x) {
+    for (; x < dx1; ++x) {
       const float v = row[x];
-      if constexpr (!kHarrisIntegerTensor) {
-        if (v < wmax[x] || !(v > thresh)) continue;
-      } else {
-        if (v < own[x] || !(v > thresh)) continue;
-        bool below = false;
-        for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
-        if (below) continue;
-      }
+      if (v < own[x] || !(v > thresh)) continue;
+      bool below = false;
+      for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
+      if (below) continue;
       if (!strict_window_max(resp, nms, x, y, v)) continue;
       keep(x, y, v);
     }
