@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <type_traits>
 
 namespace qnav::vision {
@@ -187,6 +190,43 @@ inline F4 load4(const float* p) noexcept {
 }
 // c ? a : b per lane (c: all ones or all zeros, from a compare).
 inline F4 select4(I4 c, F4 a, F4 b) noexcept { return reinterpret_cast<F4>((c & reinterpret_cast<I4>(a)) | (~c & reinterpret_cast<I4>(b))); }
+// a > b ? a : b per lane (NaN in a gives b): SSE's maxps is exactly this; elsewhere the select.
+inline F4 max4(F4 a, F4 b) noexcept {
+#if defined(__SSE2__)
+  return reinterpret_cast<F4>(_mm_max_ps(reinterpret_cast<__m128>(a), reinterpret_cast<__m128>(b)));
+#else
+  return select4(a > b, a, b);
+#endif
+}
+
+// Four whole 16-pixel normalisation cells starting at p (cell side 16, aligned): sums[c] is what
+// max_and_positive_sum gives for cell c alone (lane k of a cell = v[k] + v[k+8] for its positive values,
+// the lanes added in order 0..7 from 0), computed for the 4 cells at once after a 4x4 transpose (lane c
+// = cell c); mv takes the running max of the 64 values (the max over a set with the +0 start, in any order:
+// see response_statistics).
+inline void cells16_x4(const float* __restrict p, F4& mv, float* __restrict sums) noexcept {
+  const F4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
+  F4 lo[4], hi[4];
+  for (int c = 0; c < 4; ++c) {
+    const F4 a = load4(p + 16 * c), b = load4(p + 16 * c + 4), d = load4(p + 16 * c + 8), e = load4(p + 16 * c + 12);
+    mv = max4(a, mv);
+    mv = max4(b, mv);
+    mv = max4(d, mv);
+    mv = max4(e, mv);
+    lo[c] = max4(a, zero) + max4(d, zero);  // lanes 0..3: v[k] + v[k+8] (0 + v[k] is v[k])
+    hi[c] = max4(b, zero) + max4(e, zero);  // lanes 4..7
+  }
+  F4 acc = zero;
+  for (const F4* q : {lo, hi}) {
+    const F4 t0 = __builtin_shufflevector(q[0], q[1], 0, 4, 1, 5), t1 = __builtin_shufflevector(q[0], q[1], 2, 6, 3, 7);
+    const F4 t2 = __builtin_shufflevector(q[2], q[3], 0, 4, 1, 5), t3 = __builtin_shufflevector(q[2], q[3], 2, 6, 3, 7);
+    acc += __builtin_shufflevector(t0, t2, 0, 1, 4, 5);  // lane k of every cell, in order
+    acc += __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+    acc += __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    acc += __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+  }
+  std::memcpy(sums, &acc, sizeof acc);
+}
 
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (lane k: v[k], v[k+8], ...;
 // the tail in lane 0; the lanes combined in order 0..7), so the result is deterministic. With SIMD the
@@ -201,10 +241,10 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
       const F4 zero = s0;
       for (; i + 8 <= n; i += 8) {
         const F4 x0 = load4(v + i), x1 = load4(v + i + 4);
-        m0 = select4(x0 > m0, x0, m0);
-        m1 = select4(x1 > m1, x1, m1);
-        s0 += select4(x0 > zero, x0, zero);
-        s1 += select4(x1 > zero, x1, zero);
+        m0 = max4(x0, m0);
+        m1 = max4(x1, m1);
+        s0 += max4(x0, zero);
+        s1 += max4(x1, zero);
       }
       std::memcpy(m, &m0, sizeof m0);
       std::memcpy(m + 4, &m1, sizeof m1);
@@ -474,12 +514,30 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
   for (int i = 0; i < ncell; ++i) csum[i] = ccount[i] = 0.0f;
   float rmax = 0.0f;
   double pos_sum = 0.0;
+  // With SIMD, runs of 4 whole 16-pixel cells take cells16_x4 (the same sums; the max in a vector
+  // folded into rmax at the end: the max of a set of non-NaN values and the +0 start, where a -0 never
+  // replaces +0 and equal values are the same bits, so the order does not matter).
+  F4 mv = {0.0f, 0.0f, 0.0f, 0.0f};
+  const int xend = det.x + det.width;
   for (int y = det.y; y < det.y + det.height; ++y) {
     const float* row = resp.row(y);
     float* crow_sum = csum + (y / cell) * cw;
     float* crow_cnt = ccount + (y / cell) * cw;
-    for (int x0 = det.x; x0 < det.x + det.width;) {
+    for (int x0 = det.x; x0 < xend;) {
       const int cx = x0 / cell;
+      if constexpr (!kHarrisIntegerTensor) {
+        if (cell == 16 && x0 == cx * 16 && x0 + 64 <= xend) {
+          float s4[4];
+          cells16_x4(row + x0, mv, s4);
+          for (int c = 0; c < 4; ++c) {
+            crow_sum[cx + c] += s4[c];
+            crow_cnt[cx + c] += 16.0f;
+            pos_sum += static_cast<double>(s4[c]);
+          }
+          x0 += 64;
+          continue;
+        }
+      }
       const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
       float s = 0.0f;
       max_and_positive_sum(row + x0, x1 - x0, rmax, s);
@@ -489,6 +547,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
       x0 = x1;
     }
   }
+  for (int k = 0; k < 4; ++k) rmax = mv[k] > rmax ? mv[k] : rmax;
   const double area = static_cast<double>(det.width) * static_cast<double>(det.height);
   const float global_mean = static_cast<float>(pos_sum / area);
   const float floor_v = config_.norm_floor * global_mean;
@@ -552,7 +611,7 @@ std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det,
         F4 w = load4(r0 + xs);
         for (int j = 1; j < nwin; ++j) {
           const F4 rj = load4(r0 + static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(xs));
-          w = select4(rj > w, rj, w);
+          w = max4(rj, w);
         }
         const F4 v = load4(row + xs);
         return ~(v < w) & (v > t4);  // the scalar loop's !(v < wmax) && v > thresh
