@@ -231,11 +231,11 @@ inline void cells16_x4(const float* __restrict p, F4& mv, float* __restrict sums
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (lane k: v[k], v[k+8], ...;
 // the tail in lane 0; the lanes combined in order 0..7), so the result is deterministic. With SIMD the
 // 8 lanes are two 4-lane vectors (the same lanes, the same order: the same floats).
-inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum) noexcept {
+inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum, bool simd) noexcept {
   float m[8] = {vmax, vmax, vmax, vmax, vmax, vmax, vmax, vmax};
   float s[8] = {};
   int i = 0;
-  if constexpr (!kHarrisIntegerTensor) {
+  if (simd) {
     if (n >= 8) {
       F4 m0 = load4(m), m1 = m0, s0 = load4(s), s1 = s0;
       const F4 zero = s0;
@@ -251,7 +251,8 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
       std::memcpy(s, &s0, sizeof s0);
       std::memcpy(s + 4, &s1, sizeof s1);
     }
-  } else {
+  }
+  {
     for (; i + 8 <= n; i += 8)
       for (int k = 0; k < 8; ++k) {
         const float x = v[i + k];
@@ -525,7 +526,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
     float* crow_cnt = ccount + (y / cell) * cw;
     for (int x0 = det.x; x0 < xend;) {
       const int cx = x0 / cell;
-      if constexpr (!kHarrisIntegerTensor) {
+      if (simd_) {
         if (cell == 16 && x0 == cx * 16 && x0 + 64 <= xend) {
           float s4[4];
           cells16_x4(row + x0, mv, s4);
@@ -540,7 +541,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
       }
       const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
       float s = 0.0f;
-      max_and_positive_sum(row + x0, x1 - x0, rmax, s);
+      max_and_positive_sum(row + x0, x1 - x0, rmax, s, simd_);
       crow_sum[cx] += s;
       crow_cnt[cx] += static_cast<float>(x1 - x0);
       pos_sum += static_cast<double>(s);
@@ -603,7 +604,7 @@ std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det,
     // maximum and the tests in 4-lane vectors, bitwise selections: the scalar expressions' values), so
     // only the candidates take a branch; the last < 16 pixels take the scalar test.
     int x = dx0;
-    if constexpr (!kHarrisIntegerTensor) {
+    if (simd_) {
       const float* __restrict r0 = nms_ring_.data();
       const F4 t4 = F4{thresh, thresh, thresh, thresh};
       const I4 w0 = {1, 2, 4, 8}, w1 = w0 << 4, w2 = w0 << 8, w3 = w0 << 12;
