@@ -188,14 +188,14 @@ inline F4 load4(const float* p) noexcept {
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-// c ? a : b per lane (c: all ones or all zeros, from a compare).
-inline F4 select4(I4 c, F4 a, F4 b) noexcept { return reinterpret_cast<F4>((c & reinterpret_cast<I4>(a)) | (~c & reinterpret_cast<I4>(b))); }
-// a > b ? a : b per lane (NaN in a gives b): SSE's maxps is exactly this; elsewhere the select.
+// a > b ? a : b per lane (NaN in a gives b): SSE's maxps is exactly this; elsewhere a bitwise select on
+// the compare mask (all ones or all zeros per lane).
 inline F4 max4(F4 a, F4 b) noexcept {
 #if defined(__SSE2__)
   return reinterpret_cast<F4>(_mm_max_ps(reinterpret_cast<__m128>(a), reinterpret_cast<__m128>(b)));
 #else
-  return select4(a > b, a, b);
+  const I4 c = a > b;
+  return reinterpret_cast<F4>((c & reinterpret_cast<I4>(a)) | (~c & reinterpret_cast<I4>(b)));
 #endif
 }
 
