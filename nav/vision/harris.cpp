@@ -464,6 +464,43 @@ void HarrisDetector::float_tensor_response(ImageView<const Pixel> image, RectI g
   float* csxy = colsum_.data() + 2 * wz;
   const int px0 = g.x - r, px1 = g.x + g.width + r;  // product columns needed
   const float k = config_.k;
+  if constexpr (std::is_same<Pixel, std::uint8_t>::value) {
+    if (r == 1 && simd_) {
+      // 8-bit image, block radius 1, with SIMD: each ring slot holds its row's products already summed over
+      // columns x-1..x+1 (from the gradient row, no product row), and the output sums the 3 slots: two
+      // passes per row instead of four. gx = dx / 8 with |dx| <= 1020, so every product and partial sum
+      // is an integer multiple of 1/64 below 2^24 / 64, exact in any order: the same floats as the passes
+      // below (test Harris.VectorLoopsGiveTheSameCornersAsTheScalarLoops compares the response planes).
+      for (int py = g.y - 1; py < g.y + g.height + 1; ++py) {
+        const int slot = (py - (g.y - 1)) % 3;
+        float* __restrict hxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
+        float* __restrict hyy = hxx + wz;
+        float* __restrict hxy = hyy + wz;
+        sobel_row(image, py, px0, px1, gxr, gyr);
+        const float* __restrict ax = gxr;
+        const float* __restrict ay = gyr;
+        for (int x = g.x; x < g.x + g.width; ++x) {
+          const float a0 = ax[x - 1], a1 = ax[x], a2 = ax[x + 1], c0 = ay[x - 1], c1 = ay[x], c2 = ay[x + 1];
+          hxx[x] = a0 * a0 + a1 * a1 + a2 * a2;
+          hyy[x] = c0 * c0 + c1 * c1 + c2 * c2;
+          hxy[x] = a0 * c0 + a1 * c1 + a2 * c2;
+        }
+        if (py < g.y + 1) continue;  // window not full yet
+        const float* __restrict s0 = ring_.data();
+        const float* __restrict s1 = s0 + 3 * wz;
+        const float* __restrict s2 = s0 + 6 * wz;
+        float* __restrict out_row = resp.row(py - 1);
+        for (int x = g.x; x < g.x + g.width; ++x) {
+          const float sxx = s0[x] + s1[x] + s2[x];
+          const float syy = s0[wz + x] + s1[wz + x] + s2[wz + x];
+          const float sxy = s0[2 * wz + x] + s1[2 * wz + x] + s2[2 * wz + x];
+          const float tr = sxx + syy;
+          out_row[x] = sxx * syy - sxy * sxy - k * tr * tr;
+        }
+      }
+      return;
+    }
+  }
   for (int py = g.y - r; py < g.y + g.height + r; ++py) {
     const int slot = (py - (g.y - r)) % nrows;
     float* __restrict pxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
