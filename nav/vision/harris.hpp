@@ -117,7 +117,7 @@ class HarrisDetector {
   // Whether the statistics and the row-maximum NMS use their 4-lane vector loops (the default where
   // kHarrisIntegerTensor is false, i.e. with SIMD) or the scalar loops (the default without SIMD). The
   // same floats and corners bit for bit either way (test Harris.VectorLoopsGiveTheSameCornersAsTheScalarLoops);
-  // a switch for that test. On without SIMD the vector loops are compiled to scalar code (slower).
+  // a switch for that test. Without SIMD the vector loops are compiled out and the switch does nothing.
   void use_vector_loops(bool on) noexcept { simd_ = on; }
 
  private:
