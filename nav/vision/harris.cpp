@@ -3,6 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <type_traits>
 
 namespace qnav::vision {
@@ -42,12 +46,22 @@ Sizes sizes_for(const HarrisConfig& c) noexcept {
   return Sizes{w * h, 3 * rows * w, 3 * w, 2 * w, 3 * cw * ch, static_cast<std::size_t>(2 * c.nms_radius + 1) * w};
 }
 
-// Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x.
-inline bool better(const Corner& a, const Corner& b) noexcept {
-  if (a.score != b.score) return a.score > b.score;
-  if (a.y != b.y) return a.y < b.y;
-  return a.x < b.x;
-}
+// Strict weak order "a is a better corner than b": higher score, then smaller y, then smaller x. With
+// SIMD a function object, so that std::push_heap / pop_heap / sort inline it (the host's function pointer
+// was an indirect call per comparison); without, a function (the inlined heap counted 1.3 % more leon3
+// instructions for harris).
+struct Better {
+  bool operator()(const Corner& a, const Corner& b) const noexcept {
+    if (a.score != b.score) return a.score > b.score;
+    if (a.y != b.y) return a.y < b.y;
+    return a.x < b.x;
+  }
+};
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__)  // !kHarrisIntegerTensor
+constexpr Better better{};
+#else
+inline bool better(const Corner& a, const Corner& b) noexcept { return Better{}(a, b); }
+#endif
 
 // Sobel gradients of row y over columns [x0, x1) (1 <= x0, x1 <= W-1, 1 <= y <= H-2), scaled by 1/8
 // (exact in float), so a unit step gives a gradient of 0.5 per pixel on both sides.
@@ -167,18 +181,90 @@ inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_
   if (x < x1) step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
 }
 
-// Max and sum of the positive values of v[0..n), in 8 independent lanes (vectorisable without
-// -ffast-math; the lane order is fixed, so the result is deterministic).
-inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum) noexcept {
+// Four-lane float / int vectors (GCC and clang vector extensions: SSE2 on x86, NEON on ARM, scalar code
+// elsewhere), used only where kHarrisIntegerTensor is false (a target with SIMD). The selections are
+// bitwise on the compare masks, so every lane takes exactly the scalar expression's value (NaN and
+// signed zeros included): the same results bit for bit as the scalar loops they replace.
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+
+inline F4 load4(const float* p) noexcept {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// a > b ? a : b per lane (NaN in a gives b): SSE's maxps is exactly this; elsewhere a bitwise select on
+// the compare mask (all ones or all zeros per lane).
+inline F4 max4(F4 a, F4 b) noexcept {
+#if defined(__SSE2__)
+  return reinterpret_cast<F4>(_mm_max_ps(reinterpret_cast<__m128>(a), reinterpret_cast<__m128>(b)));
+#else
+  const I4 c = a > b;
+  return reinterpret_cast<F4>((c & reinterpret_cast<I4>(a)) | (~c & reinterpret_cast<I4>(b)));
+#endif
+}
+
+// Four whole 16-pixel normalisation cells starting at p (cell side 16, aligned): sums[c] is what
+// max_and_positive_sum gives for cell c alone (lane k of a cell = v[k] + v[k+8] for its positive values,
+// the lanes added in order 0..7 from 0), computed for the 4 cells at once after a 4x4 transpose (lane c
+// = cell c); mv takes the running max of the 64 values (the max over a set with the +0 start, in any order:
+// see response_statistics).
+inline void cells16_x4(const float* __restrict p, F4& mv, float* __restrict sums) noexcept {
+  const F4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
+  F4 lo[4], hi[4];
+  for (int c = 0; c < 4; ++c) {
+    const F4 a = load4(p + 16 * c), b = load4(p + 16 * c + 4), d = load4(p + 16 * c + 8), e = load4(p + 16 * c + 12);
+    mv = max4(a, mv);
+    mv = max4(b, mv);
+    mv = max4(d, mv);
+    mv = max4(e, mv);
+    lo[c] = max4(a, zero) + max4(d, zero);  // lanes 0..3: v[k] + v[k+8] (0 + v[k] is v[k])
+    hi[c] = max4(b, zero) + max4(e, zero);  // lanes 4..7
+  }
+  F4 acc = zero;
+  for (const F4* q : {lo, hi}) {
+    const F4 t0 = __builtin_shufflevector(q[0], q[1], 0, 4, 1, 5), t1 = __builtin_shufflevector(q[0], q[1], 2, 6, 3, 7);
+    const F4 t2 = __builtin_shufflevector(q[2], q[3], 0, 4, 1, 5), t3 = __builtin_shufflevector(q[2], q[3], 2, 6, 3, 7);
+    acc += __builtin_shufflevector(t0, t2, 0, 1, 4, 5);  // lane k of every cell, in order
+    acc += __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+    acc += __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    acc += __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+  }
+  std::memcpy(sums, &acc, sizeof acc);
+}
+
+// Max and sum of the positive values of v[0..n), in 8 independent lanes (lane k: v[k], v[k+8], ...;
+// the tail in lane 0; the lanes combined in order 0..7), so the result is deterministic. With SIMD the
+// 8 lanes are two 4-lane vectors (the same lanes, the same order: the same floats).
+inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum, bool simd) noexcept {
   float m[8] = {vmax, vmax, vmax, vmax, vmax, vmax, vmax, vmax};
   float s[8] = {};
   int i = 0;
-  for (; i + 8 <= n; i += 8)
-    for (int k = 0; k < 8; ++k) {
-      const float x = v[i + k];
-      m[k] = x > m[k] ? x : m[k];
-      s[k] += x > 0.0f ? x : 0.0f;
+  if (!kHarrisIntegerTensor && simd) {  // the vector loops only exist with SIMD (compiled out elsewhere)
+    if (n >= 8) {
+      F4 m0 = load4(m), m1 = m0, s0 = load4(s), s1 = s0;
+      const F4 zero = s0;
+      for (; i + 8 <= n; i += 8) {
+        const F4 x0 = load4(v + i), x1 = load4(v + i + 4);
+        m0 = max4(x0, m0);
+        m1 = max4(x1, m1);
+        s0 += max4(x0, zero);
+        s1 += max4(x1, zero);
+      }
+      std::memcpy(m, &m0, sizeof m0);
+      std::memcpy(m + 4, &m1, sizeof m1);
+      std::memcpy(s, &s0, sizeof s0);
+      std::memcpy(s + 4, &s1, sizeof s1);
     }
+  }
+  {
+    for (; i + 8 <= n; i += 8)
+      for (int k = 0; k < 8; ++k) {
+        const float x = v[i + k];
+        m[k] = x > m[k] ? x : m[k];
+        s[k] += x > 0.0f ? x : 0.0f;
+      }
+  }
   for (; i < n; ++i) {
     m[0] = v[i] > m[0] ? v[i] : m[0];
     s[0] += v[i] > 0.0f ? v[i] : 0.0f;
@@ -383,6 +469,43 @@ void HarrisDetector::float_tensor_response(ImageView<const Pixel> image, RectI g
   float* csxy = colsum_.data() + 2 * wz;
   const int px0 = g.x - r, px1 = g.x + g.width + r;  // product columns needed
   const float k = config_.k;
+  if constexpr (std::is_same<Pixel, std::uint8_t>::value) {
+    if (!kHarrisIntegerTensor && r == 1 && simd_) {
+      // 8-bit image, block radius 1, with SIMD: each ring slot holds its row's products already summed over
+      // columns x-1..x+1 (from the gradient row, no product row), and the output sums the 3 slots: two
+      // passes per row instead of four. gx = dx / 8 with |dx| <= 1020, so every product and partial sum
+      // is an integer multiple of 1/64 below 2^24 / 64, exact in any order: the same floats as the passes
+      // below (test Harris.VectorLoopsGiveTheSameCornersAsTheScalarLoops compares the response planes).
+      for (int py = g.y - 1; py < g.y + g.height + 1; ++py) {
+        const int slot = (py - (g.y - 1)) % 3;
+        float* __restrict hxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
+        float* __restrict hyy = hxx + wz;
+        float* __restrict hxy = hyy + wz;
+        sobel_row(image, py, px0, px1, gxr, gyr);
+        const float* __restrict ax = gxr;
+        const float* __restrict ay = gyr;
+        for (int x = g.x; x < g.x + g.width; ++x) {
+          const float a0 = ax[x - 1], a1 = ax[x], a2 = ax[x + 1], c0 = ay[x - 1], c1 = ay[x], c2 = ay[x + 1];
+          hxx[x] = a0 * a0 + a1 * a1 + a2 * a2;
+          hyy[x] = c0 * c0 + c1 * c1 + c2 * c2;
+          hxy[x] = a0 * c0 + a1 * c1 + a2 * c2;
+        }
+        if (py < g.y + 1) continue;  // window not full yet
+        const float* __restrict s0 = ring_.data();
+        const float* __restrict s1 = s0 + 3 * wz;
+        const float* __restrict s2 = s0 + 6 * wz;
+        float* __restrict out_row = resp.row(py - 1);
+        for (int x = g.x; x < g.x + g.width; ++x) {
+          const float sxx = s0[x] + s1[x] + s2[x];
+          const float syy = s0[wz + x] + s1[wz + x] + s2[wz + x];
+          const float sxy = s0[2 * wz + x] + s1[2 * wz + x] + s2[2 * wz + x];
+          const float tr = sxx + syy;
+          out_row[x] = sxx * syy - sxy * sxy - k * tr * tr;
+        }
+      }
+      return;
+    }
+  }
   for (int py = g.y - r; py < g.y + g.height + r; ++py) {
     const int slot = (py - (g.y - r)) % nrows;
     float* __restrict pxx = ring_.data() + static_cast<std::size_t>(3 * slot) * wz;
@@ -434,21 +557,41 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
   for (int i = 0; i < ncell; ++i) csum[i] = ccount[i] = 0.0f;
   float rmax = 0.0f;
   double pos_sum = 0.0;
+  // With SIMD, runs of 4 whole 16-pixel cells take cells16_x4 (the same sums; the max in a vector
+  // folded into rmax at the end: the max of a set of non-NaN values and the +0 start, where a -0 never
+  // replaces +0 and equal values are the same bits, so the order does not matter).
+  F4 mv = {0.0f, 0.0f, 0.0f, 0.0f};
+  const int xend = det.x + det.width;
   for (int y = det.y; y < det.y + det.height; ++y) {
     const float* row = resp.row(y);
     float* crow_sum = csum + (y / cell) * cw;
     float* crow_cnt = ccount + (y / cell) * cw;
-    for (int x0 = det.x; x0 < det.x + det.width;) {
+    for (int x0 = det.x; x0 < xend;) {
       const int cx = x0 / cell;
+      if (!kHarrisIntegerTensor && simd_) {
+        if (cell == 16 && x0 == cx * 16 && x0 + 64 <= xend) {
+          float s4[4];
+          cells16_x4(row + x0, mv, s4);
+          for (int c = 0; c < 4; ++c) {
+            crow_sum[cx + c] += s4[c];
+            crow_cnt[cx + c] += 16.0f;
+            pos_sum += static_cast<double>(s4[c]);
+          }
+          x0 += 64;
+          continue;
+        }
+      }
       const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
       float s = 0.0f;
-      max_and_positive_sum(row + x0, x1 - x0, rmax, s);
+      max_and_positive_sum(row + x0, x1 - x0, rmax, s, simd_);
       crow_sum[cx] += s;
       crow_cnt[cx] += static_cast<float>(x1 - x0);
       pos_sum += static_cast<double>(s);
       x0 = x1;
     }
   }
+  if (!kHarrisIntegerTensor)
+    for (int k = 0; k < 4; ++k) rmax = mv[k] > rmax ? mv[k] : rmax;
   const double area = static_cast<double>(det.width) * static_cast<double>(det.height);
   const float global_mean = static_cast<float>(pos_sum / area);
   const float floor_v = config_.norm_floor * global_mean;
@@ -500,26 +643,40 @@ std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det,
     // With SIMD the full window maximum (max over the ring) is a few vector instructions per pixel, and
     // then only local maxima take a branch: the per-pixel compares and their mispredicted branches were
     // most of the host's Harris time. The same candidates either way (v < max of the ring <=> v below
-    // one of its rows; own is one of them).
-    float* __restrict wmax = colsum_.data();  // scratch (the float tensor's column sums are done with)
-    if constexpr (!kHarrisIntegerTensor) {
+    // one of its rows; own is one of them). The candidates of 16 pixels are one bit mask (the window
+    // maximum and the tests in 4-lane vectors, bitwise selections: the scalar expressions' values), so
+    // only the candidates take a branch; the last < 16 pixels take the scalar test.
+    int x = dx0;
+    if (!kHarrisIntegerTensor && simd_) {
       const float* __restrict r0 = nms_ring_.data();
-      for (int x = dx0; x < dx1; ++x) wmax[x] = r0[x];
-      for (int j = 1; j < nwin; ++j) {
-        const float* __restrict rj = r0 + static_cast<std::size_t>(j) * wz;
-        for (int x = dx0; x < dx1; ++x) wmax[x] = rj[x] > wmax[x] ? rj[x] : wmax[x];
+      const F4 t4 = F4{thresh, thresh, thresh, thresh};
+      const I4 w0 = {1, 2, 4, 8}, w1 = w0 << 4, w2 = w0 << 8, w3 = w0 << 12;
+      const auto cand4 = [&](int xs) {
+        F4 w = load4(r0 + xs);
+        for (int j = 1; j < nwin; ++j) {
+          const F4 rj = load4(r0 + static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(xs));
+          w = max4(rj, w);
+        }
+        const F4 v = load4(row + xs);
+        return ~(v < w) & (v > t4);  // the scalar loop's !(v < wmax) && v > thresh
+      };
+      for (; x + 16 <= dx1; x += 16) {
+        const I4 b = (cand4(x) & w0) | (cand4(x + 4) & w1) | (cand4(x + 8) & w2) | (cand4(x + 12) & w3);
+        unsigned bits = static_cast<unsigned>(b[0] | b[1] | b[2] | b[3]);
+        while (bits != 0) {
+          const int xc = x + __builtin_ctz(bits);
+          bits &= bits - 1;
+          const float v = row[xc];
+          if (strict_window_max(resp, nms, xc, y, v)) keep(xc, y, v);
+        }
       }
     }
-    for (int x = dx0; x < dx1; ++x) {
+    for (; x < dx1; ++x) {
       const float v = row[x];
-      if constexpr (!kHarrisIntegerTensor) {
-        if (v < wmax[x] || !(v > thresh)) continue;
-      } else {
-        if (v < own[x] || !(v > thresh)) continue;
-        bool below = false;
-        for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
-        if (below) continue;
-      }
+      if (v < own[x] || !(v > thresh)) continue;
+      bool below = false;
+      for (int j = 0; j < nwin && !below; ++j) below = v < nms_ring_[static_cast<std::size_t>(j) * wz + static_cast<std::size_t>(x)];
+      if (below) continue;
       if (!strict_window_max(resp, nms, x, y, v)) continue;
       keep(x, y, v);
     }

@@ -114,6 +114,11 @@ class HarrisDetector {
   // row maxima (with SIMD, and always on float images). The same corners either way (test
   // Harris.BlockNmsGivesTheSameCornersAsTheRowMaximumNms); a switch for that test.
   void use_block_nms(bool on) noexcept { block_nms_ = on; }
+  // Whether the statistics and the row-maximum NMS use their 4-lane vector loops (the default where
+  // kHarrisIntegerTensor is false, i.e. with SIMD) or the scalar loops (the default without SIMD). The
+  // same floats and corners bit for bit either way (test Harris.VectorLoopsGiveTheSameCornersAsTheScalarLoops);
+  // a switch for that test. Without SIMD the vector loops are compiled out and the switch does nothing.
+  void use_vector_loops(bool on) noexcept { simd_ = on; }
 
  private:
   template <typename Pixel>
@@ -145,6 +150,7 @@ class HarrisDetector {
   Span<float> nms_ring_;   // (2 * nms_radius + 2) rows of max_width: row maxima ring + window max
   ConstImageViewF32 last_response_;
   bool block_nms_ = kHarrisIntegerTensor;
+  bool simd_ = !kHarrisIntegerTensor;
   VisionCounters counters_;
 };
 

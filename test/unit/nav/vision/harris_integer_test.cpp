@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "nav/vision/harris.hpp"
@@ -173,6 +174,82 @@ TEST(HarrisIntegerTensor, RefusesAnAreaTooCloseToTheEdgeOrTooLittleScratch) {
   EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 36, 27}, 0.04f, r, scratch));
   EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 36, 26}, 0.04f, r, Span<float>(ring.data(), 9 * 30)));
   EXPECT_FALSE(harris_response_u8_r1(img, RectI{2, 2, 0, 26}, 0.04f, r, scratch));
+}
+
+
+// The 4-lane vector loops of the statistics and the row-maximum NMS (what detect() runs with SIMD)
+// against the scalar loops (what it runs without): the same corners bit for bit, on 8-bit noise, on
+// float images with special values (NaN, +-inf, -0, huge), with ROIs that start inside a normalisation
+// cell, other cell sizes and radii, and a reached cap.
+TEST(Harris, VectorLoopsGiveTheSameCornersAsTheScalarLoops) {
+  constexpr int kW = 301, kH = 97;
+  struct Case {
+    int nms, cap, cell;
+    RectI roi;
+    bool normalise;
+  };
+  const Case cases[] = {{2, 500, 16, RectI{0, 0, kW, kH}, true},   {2, 25, 16, RectI{0, 0, kW, kH}, true},
+                        {1, 500, 16, RectI{7, 3, 250, 80}, true},  {3, 300, 12, RectI{0, 0, kW, kH}, true},
+                        {2, 500, 16, RectI{21, 5, 270, 70}, false}};
+  std::vector<std::uint8_t> u8(static_cast<std::size_t>(kW * kH));
+  std::vector<float> f32(u8.size());
+  std::uint32_t s = 777u;
+  for (std::size_t i = 0; i < u8.size(); ++i) {
+    s = s * 1664525u + 1013904223u;
+    u8[i] = i < u8.size() / 2 ? static_cast<std::uint8_t>(s >> 24) : ((s >> 31) != 0 ? 255 : 0);  // binary: |Sobel| up to 1020
+    f32[i] = static_cast<float>(u8[i]) * 0.37f - 20.0f;
+  }
+  // Special values in the float image (their neighbourhoods' responses are NaN or inf).
+  const float special[] = {std::nanf(""), std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                           -0.0f, 3e18f};
+  for (int j = 0; j < 5; ++j) f32[static_cast<std::size_t>((20 + 15 * j) * kW + 40 + 50 * j)] = special[j];
+  std::vector<Corner> s1(500), s2(500);
+  BoundedVector<Corner> o1(Span<Corner>(s1.data(), s1.size())), o2(Span<Corner>(s2.data(), s2.size()));
+  std::size_t compared = 0;
+  for (const Case& k : cases) {
+    HarrisConfig c;
+    c.max_width = kW;
+    c.max_height = kH;
+    c.nms_radius = k.nms;
+    c.max_corners = k.cap;
+    c.norm_cell_px = k.cell;
+    c.normalise = k.normalise;
+    ArenaStorage arena(2 * HarrisDetector::arena_bytes(c));
+    HarrisDetector scalar, vector;
+    ASSERT_TRUE(scalar.init(c, arena).is_ok());
+    ASSERT_TRUE(vector.init(c, arena).is_ok());
+    for (HarrisDetector* d : {&scalar, &vector}) d->use_block_nms(false);
+    scalar.use_vector_loops(false);
+    vector.use_vector_loops(true);
+    for (int kind = 0; kind < 2; ++kind) {
+      if (kind == 0) {
+        const ConstImageViewU8 img(ImageViewU8::make(u8.data(), kW, kH).value());
+        ASSERT_TRUE(scalar.detect(img, k.roi, o1).is_ok());
+        ASSERT_TRUE(vector.detect(img, k.roi, o2).is_ok());
+      } else {
+        const ConstImageViewF32 img(ImageViewF32::make(f32.data(), kW, kH).value());
+        ASSERT_TRUE(scalar.detect(img, k.roi, o1).is_ok());
+        ASSERT_TRUE(vector.detect(img, k.roi, o2).is_ok());
+      }
+      ASSERT_EQ(o1.size(), o2.size()) << "image " << kind << " nms " << k.nms;
+      ASSERT_GT(o1.size(), 0u);
+      for (std::size_t i = 0; i < o1.size(); ++i) {
+        EXPECT_EQ(bits(o1[i].x), bits(o2[i].x)) << i;
+        EXPECT_EQ(bits(o1[i].y), bits(o2[i].y)) << i;
+        EXPECT_EQ(bits(o1[i].score), bits(o2[i].score)) << i;
+        EXPECT_EQ(bits(o1[i].response), bits(o2[i].response)) << i;
+      }
+      compared += o1.size();
+      // The response planes (the 8-bit image's tensor passes differ with the switch), where defined.
+      std::size_t differ = 0;
+      for (int y = 2; y < kH - 2; ++y)
+        for (int x = 2; x < kW - 2; ++x)
+          differ += bits(scalar.response()(x, y)) != bits(vector.response()(x, y)) ? 1u : 0u;
+      EXPECT_EQ(differ, 0u) << "image " << kind;
+    }
+    EXPECT_EQ(scalar.counters().get(VisionCounter::kCornerCapReached), vector.counters().get(VisionCounter::kCornerCapReached));
+  }
+  EXPECT_GT(compared, 1000u);
 }
 
 }  // namespace
