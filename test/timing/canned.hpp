@@ -72,6 +72,7 @@ class CannedSonar {
   std::uint64_t scanline(int ping);
   void tile_prepare();            // pushes all but the last scanline of a tile (not counted)
   std::uint64_t tile_build();     // the last push: builds the raster
+  void features_prepare();        // builds the tile first when sonar_tile has not run (not counted)
   std::uint64_t tile_features();  // keypoints of the built tile
 
  private:

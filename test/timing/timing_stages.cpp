@@ -56,7 +56,7 @@ const StageDef kStages[] = {
     {"vo_step", 2, [](Canned& c, int k) { c.vo.vo_reference(k); }, [](Canned& c, int k) { return c.vo.vo_step(k); }},
     {"scanline", CannedSonar::kPings, nothing, [](Canned& c, int k) { return c.sonar.scanline(k); }},
     {"sonar_tile", 1, [](Canned& c, int) { c.sonar.tile_prepare(); }, [](Canned& c, int) { return c.sonar.tile_build(); }},
-    {"tile_features", 1, nothing, [](Canned& c, int) { return c.sonar.tile_features(); }},
+    {"tile_features", 1, [](Canned& c, int) { c.sonar.features_prepare(); }, [](Canned& c, int) { return c.sonar.tile_features(); }},
     {"registration", 3, nothing, [](Canned& c, int k) { return c.route.registration(k); }},
     {"route_update", CannedRoute::kUpdates, [](Canned& c, int) { c.route.route_restart(); },
      [](Canned& c, int k) { return c.route.route_update(k); }},
