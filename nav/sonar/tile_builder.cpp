@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace qnav::sonar {
 
@@ -478,10 +479,12 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
   }
 }
 
-void TileBuilder::normalise() noexcept {
+std::size_t TileBuilder::normalise() noexcept {
   // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
   const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
-  // Normalise and mark coverage. Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
+  // Normalise, mark coverage, count it and quantise to the u8 raster in one pass over the box.
+  // Branch-free: an empty pixel divides 0 by 1 (intensity 0, u8 0). fill_holes() later sets the u8
+  // of the pixels it fills, so the u8 raster is the quantised final intensity everywhere.
   // Row by row into row_, then the accumulator row is emptied (the next tile starts from zero) and
   // row_ goes to the intensity raster, which overlays the accumulator's first half: intensity row y
   // lies over accumulator pixels [(y W) / 2, ((y + 1) W) / 2), all in rows before y for y >= 1 (and
@@ -490,45 +493,42 @@ void TileBuilder::normalise() noexcept {
   // afterwards, as the tile's intensity view needs.
   const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
-  if (bx1 < bx0) return;
+  const float scale = 255.0f / cfg_.display_max;
+  if (bx1 < bx0) return 0;
   const std::size_t len = static_cast<std::size_t>(bx1 - bx0 + 1);
   float* tmp = row_.data();
+  std::size_t covered = 0;
   for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    Acc* acc = acc_.data() + row;
+    const Acc* acc = acc_.data() + row;
     std::uint8_t* cov = coverage_.data() + row;
+    std::uint32_t row_covered = 0;
     for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
       tmp[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
       cov[x] = c ? 1 : 0;
+      row_covered += c ? 1u : 0u;
     }
-    std::fill(acc + bx0, acc + bx0 + len, Acc{0.0f, 0.0f});
+    covered += row_covered;
+    if (!u8_.empty()) {
+      std::uint8_t* out = u8_.data() + row;
+      for (int x = bx0; x <= bx1; ++x) {
+        float u = tmp[x] * scale + 0.5f;
+        u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
+        out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+      }
+    }
+    std::fill(acc_.data() + row + bx0, acc_.data() + row + bx0 + len, Acc{0.0f, 0.0f});
     std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
   }
+  return covered;
 }
 
-std::size_t TileBuilder::quantise() noexcept {
-  // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
-  const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
-  const int W = cfg_.tile_width_px;
-  const float scale = 255.0f / cfg_.display_max;
-  std::size_t covered = 0;
-  for (int y = by0; y <= by1; ++y) {
-    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    const float* in = intensity_ + row;
-    const std::uint8_t* cov = coverage_.data() + row;
-    std::uint32_t row_covered = 0;
-    for (int x = bx0; x <= bx1; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
-    covered += row_covered;
-    if (u8_.empty()) continue;  // no u8 raster (TileBuilderConfig::u8_raster): the count only
-    std::uint8_t* out = u8_.data() + row;
-    for (int x = bx0; x <= bx1; ++x) {
-      float u = in[x] * scale + 0.5f;
-      u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
-      out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
-    }
-  }
-  return covered;
+std::uint8_t TileBuilder::to_u8(float intensity) const noexcept {
+  const float scale = 255.0f / cfg_.display_max;  // the same expression as normalise()'s
+  float u = intensity * scale + 0.5f;
+  u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
+  return static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
 }
 
 void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcept {
@@ -582,22 +582,33 @@ Status TileBuilder::build(int first, int count) noexcept {
   if (bb_y0_ < 0) bb_y0_ = 0;
   if (bb_x1_ > W - 1) bb_x1_ = W - 1;
   if (bb_y1_ > H - 1) bb_y1_ = H - 1;
-  normalise();
-  if (cfg_.hole_fill_radius_px > 0) fill_holes();
-  finish_tile(first, count, quantise());
+  std::size_t covered = normalise();
+  if (cfg_.hole_fill_radius_px > 0) covered += fill_holes();
+  finish_tile(first, count, covered);
   return Status::ok();
 }
 
-void TileBuilder::fill_holes() noexcept {
+std::size_t TileBuilder::fill_holes() noexcept {
   // An empty pixel is filled when measured pixels (coverage 1) lie within R on both sides along a
   // row or along a column: the value is the inverse-distance mean of the nearest measured pixel in
   // each of the four directions found. Reads measured pixels only, so filling never cascades:
   // holes wider than 2R - 1 pixels and the swath edges stay empty. Cost <= 4R reads per empty pixel
-  // inside the touched box.
+  // inside the touched box; covered pixels are skipped four at a time (no zero byte in a word).
   const int W = cfg_.tile_width_px, R = cfg_.hole_fill_radius_px;
   const std::ptrdiff_t steps[4] = {-1, 1, -static_cast<std::ptrdiff_t>(W), static_cast<std::ptrdiff_t>(W)};
+  std::size_t filled = 0;
   for (int y = bb_y0_; y <= bb_y1_; ++y) {
+    const std::uint8_t* cov_row = coverage_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
     for (int x = bb_x0_; x <= bb_x1_; ++x) {
+      // Skip to the next empty pixel: whole 4-byte words without a zero byte at a time (the word's
+      // byte order does not matter: only whether one of its bytes is zero).
+      while (x + 3 <= bb_x1_) {
+        std::uint32_t w;
+        std::memcpy(&w, cov_row + x, sizeof w);
+        if (((w - 0x01010101u) & ~w & 0x80808080u) != 0) break;
+        x += 4;
+      }
+      if (x > bb_x1_) break;
       const std::ptrdiff_t idx = static_cast<std::ptrdiff_t>(y) * W + x;
       if (coverage_[static_cast<std::size_t>(idx)] != 0) continue;
       const int room[4] = {x - bb_x0_, bb_x1_ - x, y - bb_y0_, bb_y1_ - y};
@@ -619,11 +630,15 @@ void TileBuilder::fill_holes() noexcept {
         }
       }
       if (((found[0] && found[1]) || (found[2] && found[3])) && dirs >= cfg_.hole_fill_min_neighbours) {
-        intensity_[static_cast<std::size_t>(idx)] = acc / wsum;
+        const float v = acc / wsum;
+        intensity_[static_cast<std::size_t>(idx)] = v;
         coverage_[static_cast<std::size_t>(idx)] = 2;
+        if (!u8_.empty()) u8_[static_cast<std::size_t>(idx)] = to_u8(v);
+        ++filled;
       }
     }
   }
+  return filled;
 }
 
 }  // namespace qnav::sonar

@@ -164,9 +164,10 @@ class TileBuilder {
   // One side of one sub-step: pixel coordinates (c0, r0) of the sub-step's pose, sb its starboard unit.
   void splat_side(int i, int side, const Slot* next, float t, double c0, double r0, const Vec2d& sb, int across) noexcept;
   inline void splat(float col, float row, float v) noexcept;
-  void normalise() noexcept;                            // intensity and coverage 1 in the touched box
-  void fill_holes() noexcept;
-  std::size_t quantise() noexcept;                      // the u8 raster; returns the covered pixels
+  // Intensity, coverage 1 and the u8 raster in the touched box; returns the pixels with coverage 1.
+  std::size_t normalise() noexcept;
+  std::size_t fill_holes() noexcept;                    // coverage 2 (and their u8); returns how many
+  std::uint8_t to_u8(float intensity) const noexcept;
   void finish_tile(int first, int count, std::size_t covered) noexcept;
 
   TileBuilderConfig cfg_{};
