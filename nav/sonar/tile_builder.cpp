@@ -378,12 +378,14 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
     Acc* base = acc_.data();
     if (!kCarryColumn) {
+      float bf = -1.0f;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
       for (int b = 0; b < bins; ++b) {
+        bf += 1.0f;
         const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
         if (m == 0) continue;
         const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
         if (v < 0.0f) continue;
-        const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+        const float x = cx + bf * dcb, y = cy + bf * drb;
         const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
         const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
         Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
@@ -409,12 +411,14 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
     Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
     Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
+    float bf = -1.0f;  // float(b), counted (as in the plain loop)
     for (int b = 0; b < bins; ++b) {
+      bf += 1.0f;
       const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
       if (m == 0) continue;
       const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
       if (v < 0.0f) continue;
-      const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+      const float x = cx + bf * dcb, y = cy + bf * drb;
       const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
       const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
       Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
@@ -485,8 +489,8 @@ std::size_t TileBuilder::normalise() noexcept {
   // Normalise, mark coverage, count it and quantise to the u8 raster in one pass over the box.
   // Branch-free: an empty pixel divides 0 by 1 (intensity 0, u8 0). fill_holes() later sets the u8
   // of the pixels it fills, so the u8 raster is the quantised final intensity everywhere.
-  // Row by row into row_, then the accumulator row is emptied (the next tile starts from zero) and
-  // row_ goes to the intensity raster, which overlays the accumulator's first half: intensity row y
+  // Row by row; each accumulator row is emptied after it is read (the next tile starts from zero).
+  // The intensity raster overlays the accumulator's first half: intensity row y
   // lies over accumulator pixels [(y W) / 2, ((y + 1) W) / 2), all in rows before y for y >= 1 (and
   // in row 0, already read, for y = 0): rows this loop has read and emptied, or rows outside the box,
   // which hold zero and are not read. So every byte of the block outside the intensity box is zero
@@ -503,9 +507,13 @@ std::size_t TileBuilder::normalise() noexcept {
     const Acc* acc = acc_.data() + row;
     std::uint8_t* cov = coverage_.data() + row;
     std::uint32_t row_covered = 0;
+    // Row 0's intensity overlays its own accumulator row: it goes through row_. Any other row's
+    // intensity lies over accumulator rows before it ((y + 1) W / 2 <= y W for y >= 1), already
+    // emptied or outside the box, and is written in place.
+    float* out_f = y == 0 ? tmp : intensity_ + row;
     for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
-      tmp[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
+      out_f[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
       cov[x] = c ? 1 : 0;
       row_covered += c ? 1u : 0u;
     }
@@ -513,13 +521,13 @@ std::size_t TileBuilder::normalise() noexcept {
     if (!u8_.empty()) {
       std::uint8_t* out = u8_.data() + row;
       for (int x = bx0; x <= bx1; ++x) {
-        float u = tmp[x] * scale + 0.5f;
+        float u = out_f[x] * scale + 0.5f;
         u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
         out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
       }
     }
     std::fill(acc_.data() + row + bx0, acc_.data() + row + bx0 + len, Acc{0.0f, 0.0f});
-    std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
+    if (y == 0) std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
   }
   return covered;
 }
