@@ -378,19 +378,24 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
     Acc* base = acc_.data();
     if (!kCarryColumn) {
-      float bf = -1.0f;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
+      // 1 and 0 as values the compiler cannot fold (one_ is 1.0f): it keeps them in registers instead
+      // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
+      const float one = one_, zero = one - one;
+      const bool first_half = t < 0.5f;  // m == 2 (only the next line valid): its value from t >= 0.5
+      float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
       for (int b = 0; b < bins; ++b) {
-        bf += 1.0f;
+        bf += one;
         const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-        if (m == 0) continue;
-        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
-        if (v < 0.0f) continue;
+        if (m == 0 || (m == 2 && first_half)) continue;
+        // m == 1 (this line only): its value; m == 2 past the half: the next line's; both: interpolated.
+        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
+        if (v < zero) continue;
         const float x = cx + bf * dcb, y = cy + bf * drb;
         const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
         const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
         Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
         Acc* q1 = q0 + W;
-        const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+        const float w00 = (one - ax) * (one - ay), w10 = ax * (one - ay), w01 = (one - ax) * ay, w11 = ax * ay;
         q0[0].sum += w00 * v;
         q0[0].weight += w00;
         q0[1].sum += w10 * v;
@@ -604,22 +609,27 @@ std::size_t TileBuilder::fill_holes() noexcept {
   // inside the touched box; covered pixels are skipped four at a time (no zero byte in a word).
   const int W = cfg_.tile_width_px, R = cfg_.hole_fill_radius_px;
   const std::ptrdiff_t steps[4] = {-1, 1, -static_cast<std::ptrdiff_t>(W), static_cast<std::ptrdiff_t>(W)};
+  const int bx0 = bb_x0_, bx1 = bb_x1_;
   std::size_t filled = 0;
   for (int y = bb_y0_; y <= bb_y1_; ++y) {
     const std::uint8_t* cov_row = coverage_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    for (int x = bb_x0_; x <= bb_x1_; ++x) {
-      // Skip to the next empty pixel: whole 4-byte words without a zero byte at a time (the word's
-      // byte order does not matter: only whether one of its bytes is zero).
-      while (x + 3 <= bb_x1_) {
-        std::uint32_t w;
-        std::memcpy(&w, cov_row + x, sizeof w);
-        if (((w - 0x01010101u) & ~w & 0x80808080u) != 0) break;
-        x += 4;
+    for (int x = bx0;; ++x) {
+      // Skip to the next empty pixel: bytes up to a 4-byte boundary, then aligned 4-byte words
+      // without a zero byte (the word's byte order does not matter, only whether a byte is zero),
+      // then bytes again.
+      while (x <= bx1 && (reinterpret_cast<std::uintptr_t>(cov_row + x) & 3u) != 0 && cov_row[x] != 0) ++x;
+      if (x <= bx1 && cov_row[x] != 0) {
+        while (x + 3 <= bx1) {
+          std::uint32_t w;
+          std::memcpy(&w, __builtin_assume_aligned(cov_row + x, 4), sizeof w);
+          if (((w - 0x01010101u) & ~w & 0x80808080u) != 0) break;
+          x += 4;
+        }
+        while (x <= bx1 && cov_row[x] != 0) ++x;
       }
-      if (x > bb_x1_) break;
+      if (x > bx1) break;
       const std::ptrdiff_t idx = static_cast<std::ptrdiff_t>(y) * W + x;
-      if (coverage_[static_cast<std::size_t>(idx)] != 0) continue;
-      const int room[4] = {x - bb_x0_, bb_x1_ - x, y - bb_y0_, bb_y1_ - y};
+      const int room[4] = {x - bx0, bx1 - x, y - bb_y0_, bb_y1_ - y};
       float acc = 0.0f, wsum = 0.0f;
       bool found[4] = {false, false, false, false};
       int dirs = 0;

@@ -199,6 +199,7 @@ class TileBuilder {
   bool overflow_ = false;      // a ping the next tile needed was dropped
   int first_in_tile(double start_m) const noexcept;
   double inv_res_ = 0.0;        // 1 / resolution_m, set by build()
+  float one_ = 1.0f;            // 1, read once per line by splat_side()'s plain loop (see there)
   int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
   int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};
