@@ -579,7 +579,7 @@ void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcep
 
 Status TileBuilder::build(int first, int count) noexcept {
   // Place the raster on the swath, clear what the previous tile left, splat every scanline (and
-  // its sub-steps toward the next), then normalise, fill holes and quantise inside the touched box.
+  // its sub-steps toward the next), then normalise (and quantise) and fill holes inside the touched box.
   const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
   place_tile(first, count);
   clear_previous_box();
