@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace qnav::sonar {
 
@@ -377,17 +378,24 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
     Acc* base = acc_.data();
     if (!kCarryColumn) {
+      // 1 and 0 as values the compiler cannot fold (one_ is 1.0f): it keeps them in registers instead
+      // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
+      const float one = one_, zero = one - one;
+      const bool first_half = t < 0.5f;  // m == 2 (only the next line valid): its value from t >= 0.5
+      float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
       for (int b = 0; b < bins; ++b) {
+        bf += one;
         const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-        if (m == 0) continue;
-        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
-        if (v < 0.0f) continue;
-        const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+        if (m == 0 || (m == 2 && first_half)) continue;
+        // m == 1 (this line only): its value; m == 2 past the half: the next line's; both: interpolated.
+        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
+        if (v < zero) continue;
+        const float x = cx + bf * dcb, y = cy + bf * drb;
         const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
         const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
         Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
         Acc* q1 = q0 + W;
-        const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+        const float w00 = (one - ax) * (one - ay), w10 = ax * (one - ay), w01 = (one - ax) * ay, w11 = ax * ay;
         q0[0].sum += w00 * v;
         q0[0].weight += w00;
         q0[1].sum += w10 * v;
@@ -408,12 +416,14 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
     Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
     Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
+    float bf = -1.0f;  // float(b), counted (as in the plain loop)
     for (int b = 0; b < bins; ++b) {
+      bf += 1.0f;
       const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
       if (m == 0) continue;
       const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
       if (v < 0.0f) continue;
-      const float x = cx + static_cast<float>(b) * dcb, y = cy + static_cast<float>(b) * drb;
+      const float x = cx + bf * dcb, y = cy + bf * drb;
       const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
       const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
       Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
@@ -478,57 +488,60 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
   }
 }
 
-void TileBuilder::normalise() noexcept {
+std::size_t TileBuilder::normalise() noexcept {
   // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
   const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
-  // Normalise and mark coverage. Branch-free (the compiler vectorises it): an empty pixel divides 0 by 1.
-  // Row by row into row_, then the accumulator row is emptied (the next tile starts from zero) and
-  // row_ goes to the intensity raster, which overlays the accumulator's first half: intensity row y
+  // Normalise, mark coverage, count it and quantise to the u8 raster in one pass over the box.
+  // Branch-free: an empty pixel divides 0 by 1 (intensity 0, u8 0). fill_holes() later sets the u8
+  // of the pixels it fills, so the u8 raster is the quantised final intensity everywhere.
+  // Row by row; each accumulator row is emptied after it is read (the next tile starts from zero).
+  // The intensity raster overlays the accumulator's first half: intensity row y
   // lies over accumulator pixels [(y W) / 2, ((y + 1) W) / 2), all in rows before y for y >= 1 (and
   // in row 0, already read, for y = 0): rows this loop has read and emptied, or rows outside the box,
   // which hold zero and are not read. So every byte of the block outside the intensity box is zero
   // afterwards, as the tile's intensity view needs.
   const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
-  if (bx1 < bx0) return;
+  const float scale = 255.0f / cfg_.display_max;
+  if (bx1 < bx0) return 0;
   const std::size_t len = static_cast<std::size_t>(bx1 - bx0 + 1);
   float* tmp = row_.data();
-  for (int y = by0; y <= by1; ++y) {
-    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    Acc* acc = acc_.data() + row;
-    std::uint8_t* cov = coverage_.data() + row;
-    for (int x = bx0; x <= bx1; ++x) {
-      const bool c = acc[x].weight > eps;
-      tmp[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
-      cov[x] = c ? 1 : 0;
-    }
-    std::fill(acc + bx0, acc + bx0 + len, Acc{0.0f, 0.0f});
-    std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
-  }
-}
-
-std::size_t TileBuilder::quantise() noexcept {
-  // The box in locals: the u8 stores may alias members, which would otherwise be reloaded per pixel.
-  const int bx0 = bb_x0_, bx1 = bb_x1_, by0 = bb_y0_, by1 = bb_y1_;
-  const int W = cfg_.tile_width_px;
-  const float scale = 255.0f / cfg_.display_max;
   std::size_t covered = 0;
   for (int y = by0; y <= by1; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    const float* in = intensity_ + row;
-    const std::uint8_t* cov = coverage_.data() + row;
+    const Acc* acc = acc_.data() + row;
+    std::uint8_t* cov = coverage_.data() + row;
     std::uint32_t row_covered = 0;
-    for (int x = bx0; x <= bx1; ++x) row_covered += cov[x] != 0 ? 1u : 0u;
-    covered += row_covered;
-    if (u8_.empty()) continue;  // no u8 raster (TileBuilderConfig::u8_raster): the count only
-    std::uint8_t* out = u8_.data() + row;
+    // Row 0's intensity overlays its own accumulator row: it goes through row_. Any other row's
+    // intensity lies over accumulator rows before it ((y + 1) W / 2 <= y W for y >= 1), already
+    // emptied or outside the box, and is written in place.
+    float* out_f = y == 0 ? tmp : intensity_ + row;
     for (int x = bx0; x <= bx1; ++x) {
-      float u = in[x] * scale + 0.5f;
-      u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
-      out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+      const bool c = acc[x].weight > eps;
+      out_f[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
+      cov[x] = c ? 1 : 0;
+      row_covered += c ? 1u : 0u;
     }
+    covered += row_covered;
+    if (!u8_.empty()) {
+      std::uint8_t* out = u8_.data() + row;
+      for (int x = bx0; x <= bx1; ++x) {
+        float u = out_f[x] * scale + 0.5f;
+        u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
+        out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+      }
+    }
+    std::fill(acc_.data() + row + bx0, acc_.data() + row + bx0 + len, Acc{0.0f, 0.0f});
+    if (y == 0) std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
   }
   return covered;
+}
+
+std::uint8_t TileBuilder::to_u8(float intensity) const noexcept {
+  const float scale = 255.0f / cfg_.display_max;  // the same expression as normalise()'s
+  float u = intensity * scale + 0.5f;
+  u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
+  return static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
 }
 
 void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcept {
@@ -566,7 +579,7 @@ void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcep
 
 Status TileBuilder::build(int first, int count) noexcept {
   // Place the raster on the swath, clear what the previous tile left, splat every scanline (and
-  // its sub-steps toward the next), then normalise, fill holes and quantise inside the touched box.
+  // its sub-steps toward the next), then normalise (and quantise) and fill holes inside the touched box.
   const int W = cfg_.tile_width_px, H = cfg_.tile_height_px;
   place_tile(first, count);
   clear_previous_box();
@@ -582,25 +595,41 @@ Status TileBuilder::build(int first, int count) noexcept {
   if (bb_y0_ < 0) bb_y0_ = 0;
   if (bb_x1_ > W - 1) bb_x1_ = W - 1;
   if (bb_y1_ > H - 1) bb_y1_ = H - 1;
-  normalise();
-  if (cfg_.hole_fill_radius_px > 0) fill_holes();
-  finish_tile(first, count, quantise());
+  std::size_t covered = normalise();
+  if (cfg_.hole_fill_radius_px > 0) covered += fill_holes();
+  finish_tile(first, count, covered);
   return Status::ok();
 }
 
-void TileBuilder::fill_holes() noexcept {
+std::size_t TileBuilder::fill_holes() noexcept {
   // An empty pixel is filled when measured pixels (coverage 1) lie within R on both sides along a
   // row or along a column: the value is the inverse-distance mean of the nearest measured pixel in
   // each of the four directions found. Reads measured pixels only, so filling never cascades:
   // holes wider than 2R - 1 pixels and the swath edges stay empty. Cost <= 4R reads per empty pixel
-  // inside the touched box.
+  // inside the touched box; covered pixels are skipped four at a time (no zero byte in a word).
   const int W = cfg_.tile_width_px, R = cfg_.hole_fill_radius_px;
   const std::ptrdiff_t steps[4] = {-1, 1, -static_cast<std::ptrdiff_t>(W), static_cast<std::ptrdiff_t>(W)};
+  const int bx0 = bb_x0_, bx1 = bb_x1_;
+  std::size_t filled = 0;
   for (int y = bb_y0_; y <= bb_y1_; ++y) {
-    for (int x = bb_x0_; x <= bb_x1_; ++x) {
+    const std::uint8_t* cov_row = coverage_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
+    for (int x = bx0;; ++x) {
+      // Skip to the next empty pixel: bytes up to a 4-byte boundary, then aligned 4-byte words
+      // without a zero byte (the word's byte order does not matter, only whether a byte is zero),
+      // then bytes again.
+      while (x <= bx1 && (reinterpret_cast<std::uintptr_t>(cov_row + x) & 3u) != 0 && cov_row[x] != 0) ++x;
+      if (x <= bx1 && cov_row[x] != 0) {
+        while (x + 3 <= bx1) {
+          std::uint32_t w;
+          std::memcpy(&w, __builtin_assume_aligned(cov_row + x, 4), sizeof w);
+          if (((w - 0x01010101u) & ~w & 0x80808080u) != 0) break;
+          x += 4;
+        }
+        while (x <= bx1 && cov_row[x] != 0) ++x;
+      }
+      if (x > bx1) break;
       const std::ptrdiff_t idx = static_cast<std::ptrdiff_t>(y) * W + x;
-      if (coverage_[static_cast<std::size_t>(idx)] != 0) continue;
-      const int room[4] = {x - bb_x0_, bb_x1_ - x, y - bb_y0_, bb_y1_ - y};
+      const int room[4] = {x - bx0, bx1 - x, y - bb_y0_, bb_y1_ - y};
       float acc = 0.0f, wsum = 0.0f;
       bool found[4] = {false, false, false, false};
       int dirs = 0;
@@ -619,11 +648,15 @@ void TileBuilder::fill_holes() noexcept {
         }
       }
       if (((found[0] && found[1]) || (found[2] && found[3])) && dirs >= cfg_.hole_fill_min_neighbours) {
-        intensity_[static_cast<std::size_t>(idx)] = acc / wsum;
+        const float v = acc / wsum;
+        intensity_[static_cast<std::size_t>(idx)] = v;
         coverage_[static_cast<std::size_t>(idx)] = 2;
+        if (!u8_.empty()) u8_[static_cast<std::size_t>(idx)] = to_u8(v);
+        ++filled;
       }
     }
   }
+  return filled;
 }
 
 }  // namespace qnav::sonar

@@ -164,9 +164,10 @@ class TileBuilder {
   // One side of one sub-step: pixel coordinates (c0, r0) of the sub-step's pose, sb its starboard unit.
   void splat_side(int i, int side, const Slot* next, float t, double c0, double r0, const Vec2d& sb, int across) noexcept;
   inline void splat(float col, float row, float v) noexcept;
-  void normalise() noexcept;                            // intensity and coverage 1 in the touched box
-  void fill_holes() noexcept;
-  std::size_t quantise() noexcept;                      // the u8 raster; returns the covered pixels
+  // Intensity, coverage 1 and the u8 raster in the touched box; returns the pixels with coverage 1.
+  std::size_t normalise() noexcept;
+  std::size_t fill_holes() noexcept;                    // coverage 2 (and their u8); returns how many
+  std::uint8_t to_u8(float intensity) const noexcept;
   void finish_tile(int first, int count, std::size_t covered) noexcept;
 
   TileBuilderConfig cfg_{};
@@ -198,6 +199,7 @@ class TileBuilder {
   bool overflow_ = false;      // a ping the next tile needed was dropped
   int first_in_tile(double start_m) const noexcept;
   double inv_res_ = 0.0;        // 1 / resolution_m, set by build()
+  float one_ = 1.0f;            // 1, read once per line by splat_side()'s plain loop (see there)
   int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
   int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};
