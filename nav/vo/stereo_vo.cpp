@@ -369,6 +369,11 @@ std::size_t StereoVo::refine_pairs(const VoInput& in, const BoundedVector<match:
     const double sxy = l.position_m.z() / f * lat_old;
     return std::max(0.0, l.sigma_m * l.sigma_m - sxy * sxy);
   };
+  // The reference landmarks by x for the refiner's neighbour search (nn_prev_ is free outside icp_associate).
+  const Span<const match::Landmark3> ref_span(ref.data(), ref.size());
+  const Span<const std::int32_t> ref_by_x =
+      TrackRefiner::sort_by_x(ref_span, nn_prev_) ? Span<const std::int32_t>(nn_prev_.data(), ref.size())
+                                                  : Span<const std::int32_t>();
   std::size_t good = 0;
   for (std::size_t k = 0; k < n; ++k) {
     refined_s2_[k] = -1.0;  // not aligned
@@ -376,8 +381,7 @@ std::size_t StereoVo::refine_pairs(const VoInput& in, const BoundedVector<match:
     const match::Landmark3& a = ref[ia];
     const match::Landmark3& b = cur[static_cast<std::size_t>(pair_cur_[k])];
     Vec3d qd;
-    if (!refiner_.refine(ref_left_, Span<const match::Landmark3>(ref.data(), ref.size()), ia, in.left, in.right, b,
-                         prev_T_cur, qd)
+    if (!refiner_.refine(ref_left_, ref_span, ia, in.left, in.right, b, prev_T_cur, qd, ref_by_x)
              .is_ok()) {
       counters_.increment(VoCounter::kTrackAlignFailed);
       continue;
