@@ -100,6 +100,7 @@ class StereoMatcher {
   // plus the patch width (<= 15) plus the leading 0.
   std::int32_t prefix_sum_[kMaxDisparityRange + 16] = {};
   std::int32_t prefix_sq_[kMaxDisparityRange + 16] = {};
+  std::int32_t cross_[kMaxDisparityRange] = {};  // sum(t v) of each window of the scan (cross_run)
   VisionCounters counters_;
 };
 
