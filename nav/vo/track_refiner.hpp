@@ -14,7 +14,8 @@
 // measured again at the aligned point by aligning along the row into the right image. The result is the
 // current 3D point of the same physical point. refine_disparity(): the row alignment alone, for a
 // stereo point's sub-pixel disparity.
-// Cost: O(ref landmarks * normal_neighbours) for the neighbours + two alignments per pair
+// Cost: O(ref landmarks * normal_neighbours) for the neighbours (with ref_by_x: O(log n + the landmarks
+// within the neighbours' x reach) per pair after one O(n log n) sort) + two alignments per pair
 // (O(iterations * (2r+1)^2)); no heap.
 #pragma once
 
@@ -71,8 +72,14 @@ class TrackRefiner {
   bool plane_affine(const Vec3d& point_ref_m, const Vec3d& normal_ref, const Pose3& prev_T_cur, double u_px,
                     double v_px, float (&affine)[4]) const noexcept;
 
+  // The local plane's normal at ref[index] (reference frame, towards the camera) that refine() warps by:
+  // the smallest-eigenvalue direction of the normal_neighbours nearest landmarks (the landmark itself
+  // included; equal distances by index), or the direction to the camera when they are too few or not
+  // planar. ref_by_x as refine()'s (optional: the same result without it). index < ref.size().
+  Vec3d local_normal(Span<const match::Landmark3> ref, std::size_t index,
+                     Span<const std::int32_t> ref_by_x = {}) const noexcept;
+
  private:
-  Vec3d local_normal(Span<const match::Landmark3> ref, std::size_t index, Span<const std::int32_t> ref_by_x) const noexcept;
   TrackRefineConfig config_{};
   vision::StereoCamera camera_{};
   vision::PatchAligner aligner_;
