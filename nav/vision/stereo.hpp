@@ -73,7 +73,8 @@ class StereoMatcher {
 
   StereoMatcher() noexcept : counters_(kVisionCounterNames) {}
   // Validates config and camera (finite, focal > 0, baseline > 0, ranges sane). No arena needed:
-  // the per-corner score buffer is inline (kMaxDisparityRange floats).
+  // the per-corner buffers are inline (kMaxDisparityRange scores, window correlations and twice that
+  // of prefix sums: about 10 KB).
   Status init(const StereoConfig& config, const StereoCamera& camera) noexcept;
 
   // Matches every corner (in order) and appends accepted points to out (out is cleared first).
