@@ -46,6 +46,7 @@ Status finish(Span<const Vec3d> prev, Span<const Vec3d> cur, Span<const double> 
     const Vec3d r = prev[i] - (rc + e.pose.t);
     r2 += w * r.squaredNorm();
     wsum += w;
+    if (!six_d) continue;  // the 3D covariance needs no information matrix
     Eigen::Matrix<double, 3, 6> J;
     J.leftCols<3>() = skew(rc);
     J.rightCols<3>() = -Mat3d::Identity();

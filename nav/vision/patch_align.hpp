@@ -71,6 +71,9 @@ class PatchAligner {
  private:
   static constexpr int kMaxSide = 2 * kMaxRadius + 1;
   static constexpr int kMaxGrid = kMaxSide + 2;
+  // Samples the template grid (side 2r + 3, centred on the pixel (cx, cy)) of `ref` through `warp` into grid_.
+  // rows_only: the first and last rows are left out (no vertical gradients in row mode).
+  void build_grid(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], int r, bool rows_only) noexcept;
   PatchAlignConfig config_{};
   bool ready_ = false;
   float grid_[kMaxGrid * kMaxGrid] = {};

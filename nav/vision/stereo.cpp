@@ -69,6 +69,39 @@ inline std::int32_t cross_fixed(const std::int32_t* t, ConstImageViewU8 img, int
   return cross;
 }
 
+// cross[m] = sum(t v) over the window of side S whose top-left corner is (x0 + m, y0), m = 0..count-1.
+// Four neighbouring windows at a time share each template load and each pixel load (a pixel at column
+// i + m serves windows m..m+3): about 18 instead of 28 instructions per window row on an in-order core
+// without SIMD. Integer sums: the same values as cross_fixed.
+template <int S>
+inline void cross_run_fixed(const std::int32_t* t, ConstImageViewU8 img, int x0, int y0, int count,
+                            std::int32_t* cross) noexcept {
+  int m = 0;
+  for (; m + 4 <= count; m += 4) {
+    std::int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0;
+    for (int j = 0; j < S; ++j) {
+      const std::uint8_t* row = img.row(y0 + j) + x0 + m;  // columns up to x0 + m + S + 2 <= x0 + count + S - 2
+      const std::int32_t* tj = t + j * S;
+      std::int32_t p0 = row[0], p1 = row[1], p2 = row[2];
+      for (int i = 0; i < S; ++i) {
+        const std::int32_t p3 = row[i + 3], tv = tj[i];
+        c0 += tv * p0;
+        c1 += tv * p1;
+        c2 += tv * p2;
+        c3 += tv * p3;
+        p0 = p1;
+        p1 = p2;
+        p2 = p3;
+      }
+    }
+    cross[m] = c0;
+    cross[m + 1] = c1;
+    cross[m + 2] = c2;
+    cross[m + 3] = c3;
+  }
+  for (; m < count; ++m) cross[m] = cross_fixed<S>(t, img, x0 + m, y0);
+}
+
 inline std::int32_t cross_sum(const Template& t, ConstImageViewU8 img, int x0, int y0, int s) noexcept {
   switch (s) {
     case 5: return cross_fixed<5>(t.v, img, x0, y0);
@@ -85,18 +118,28 @@ inline std::int32_t cross_sum(const Template& t, ConstImageViewU8 img, int x0, i
   return cross;
 }
 
-// ZNCC of template t against the window of `img` whose top-left corner is (x0, y0), side s, with the
-// window's sum and sum of squares given (band_prefix):
+// cross_run_fixed for any side (the usual ones fixed).
+inline void cross_run(const Template& t, ConstImageViewU8 img, int x0, int y0, int s, int count, std::int32_t* cross) noexcept {
+  switch (s) {
+    case 5: return cross_run_fixed<5>(t.v, img, x0, y0, count, cross);
+    case 7: return cross_run_fixed<7>(t.v, img, x0, y0, count, cross);
+    case 9: return cross_run_fixed<9>(t.v, img, x0, y0, count, cross);
+    default: break;
+  }
+  for (int m = 0; m < count; ++m) cross[m] = cross_sum(t, img, x0 + m, y0, s);
+}
+
+// ZNCC of template t against a window of side s, given the window's sum and sum of squares (band_prefix)
+// and sum(t v) (cross_run):
 //   (n sum(t v) - sum(t) sum(v)) / sqrt((n sum(t^2) - sum(t)^2) (n sum(v^2) - sum(v)^2)),
 // in integers up to the final division (225 * 255^2 fits 32 bits; the products are exact in double).
 // Returns -1 when the window is flat (n2var <= min_n2var).
-inline float zncc_window(const Template& t, ConstImageViewU8 img, int x0, int y0, int s, std::int32_t sum, std::int32_t sq,
+inline float zncc_window(const Template& t, int s, std::int32_t sum, std::int32_t sq, std::int32_t cross,
                          double min_n2var) noexcept {
   const double n = static_cast<double>(s * s);
   const double sum_d = static_cast<double>(sum);
   const double n2var = n * static_cast<double>(sq) - sum_d * sum_d;
   if (!(n2var > min_n2var)) return -1.0f;
-  const std::int32_t cross = cross_sum(t, img, x0, y0, s);
   const double num = n * static_cast<double>(cross) - t.sum * sum_d;
   const double z = num / std::sqrt(t.n2var * n2var);
   return z > 1.0 ? 1.0f : (z < -1.0 ? -1.0f : static_cast<float>(z));
@@ -179,9 +222,10 @@ Status StereoMatcher::match_one(ConstImageViewU8 left, ConstImageViewU8 right, f
   // Right windows: left columns xi - dmax - r (i = nd - 1) .. xi - dmin - r (i = 0).
   const int xa = xi - dmax - r;
   band_prefix(right, xa, nd + s - 1, yi - r, s, prefix_sum_, prefix_sq_);
+  cross_run(t, right, xa, yi - r, s, nd, cross_);
   for (int i = 0; i < nd; ++i) {
     const int x0 = xi - (dmin + i) - r, k = x0 - xa;
-    const float v = zncc_window(t, right, x0, yi - r, s, prefix_sum_[k + s] - prefix_sum_[k], prefix_sq_[k + s] - prefix_sq_[k],
+    const float v = zncc_window(t, s, prefix_sum_[k + s] - prefix_sum_[k], prefix_sq_[k + s] - prefix_sq_[k], cross_[k],
                                 min_n2var);
     scores_[i] = v;
     if (v > best_v) {
@@ -227,11 +271,14 @@ Status StereoMatcher::match_one(ConstImageViewU8 left, ConstImageViewU8 right, f
     int lbest = xi;
     float lbest_v = -2.0f;
     const int la = xr + dmin - r;
-    if (lmax >= xr + dmin) band_prefix(left, la, lmax - (xr + dmin) + s, yi - r, s, prefix_sum_, prefix_sq_);
+    if (lmax >= xr + dmin) {
+      band_prefix(left, la, lmax - (xr + dmin) + s, yi - r, s, prefix_sum_, prefix_sq_);
+      cross_run(rt, left, la, yi - r, s, lmax - (xr + dmin) + 1, cross_);
+    }
     for (int xl = xr + dmin; xl <= lmax; ++xl) {
       const int k = xl - r - la;
-      const float v = zncc_window(rt, left, xl - r, yi - r, s, prefix_sum_[k + s] - prefix_sum_[k],
-                                  prefix_sq_[k + s] - prefix_sq_[k], min_n2var);
+      const float v = zncc_window(rt, s, prefix_sum_[k + s] - prefix_sum_[k], prefix_sq_[k + s] - prefix_sq_[k], cross_[k],
+                                  min_n2var);
       if (v > lbest_v) {
         lbest_v = v;
         lbest = xl;

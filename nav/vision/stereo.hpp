@@ -73,7 +73,8 @@ class StereoMatcher {
 
   StereoMatcher() noexcept : counters_(kVisionCounterNames) {}
   // Validates config and camera (finite, focal > 0, baseline > 0, ranges sane). No arena needed:
-  // the per-corner score buffer is inline (kMaxDisparityRange floats).
+  // the per-corner buffers are inline (kMaxDisparityRange scores, window correlations and twice that
+  // of prefix sums: about 10 KB).
   Status init(const StereoConfig& config, const StereoCamera& camera) noexcept;
 
   // Matches every corner (in order) and appends accepted points to out (out is cleared first).
@@ -100,6 +101,7 @@ class StereoMatcher {
   // plus the patch width (<= 15) plus the leading 0.
   std::int32_t prefix_sum_[kMaxDisparityRange + 16] = {};
   std::int32_t prefix_sq_[kMaxDisparityRange + 16] = {};
+  std::int32_t cross_[kMaxDisparityRange] = {};  // sum(t v) of each window of the scan (cross_run)
   VisionCounters counters_;
 };
 

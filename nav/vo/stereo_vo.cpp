@@ -243,13 +243,13 @@ std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
   }
   // Gate terms of the cur landmarks, once: w_ is free until the pairs are written below.
   for (std::size_t j = 0; j < cur.size(); ++j) w_[j] = ns * ns * cur[j].sigma_m * cur[j].sigma_m;
-  // Nearest cur for each prev (O(n_p n_c)), and nearest prev for each cur, both within the gate.
-  for (std::size_t i = 0; i < ref.size(); ++i) {
+  // Nearest cur for each prev within the gate: the cur j with the smallest d2 < gi + w_[j], the lowest j
+  // among equals (what the scan in ascending j below gives: it takes only strictly nearer ones).
+  const std::size_t nc = cur.size();
+  auto scan_all = [&](std::size_t i, const Vec3d& p, double gi) {
     nn_prev_[i] = -1;
-    const Vec3d p = ref[i].position_m;
-    const double gi = ns * ns * ref[i].sigma_m * ref[i].sigma_m;
     double best = 0.0;
-    for (std::size_t j = 0; j < cur.size(); ++j) {
+    for (std::size_t j = 0; j < nc; ++j) {
       // The bound is the gate, or the best so far when nearer; the x term alone rejects most pairs.
       const double bound = nn_prev_[i] >= 0 && best < gi + w_[j] ? best : gi + w_[j];
       const double dx = p.x() - refined_[j].x();
@@ -261,6 +261,62 @@ std::size_t StereoVo::icp_associate(const BoundedVector<match::Landmark3>& ref,
       nn_prev_[i] = static_cast<std::int32_t>(j);
       best = d2;
     }
+  };
+  bool finite = true;
+  double w_max = 0.0;
+  for (std::size_t j = 0; j < nc; ++j) {
+    finite = finite && refined_[j].allFinite() && std::isfinite(w_[j]);
+    w_max = std::max(w_max, w_[j]);
+  }
+  // The curs in ascending x (ties by index; pair_cur_ is free until the pairs are written below). Each
+  // prev is scanned outwards from its x on both sides until dx^2 reaches the largest gate or exceeds the
+  // best d2 so far: d2 (dx^2 plus non-negative rounded squares) is at least dx^2, and dx^2 does not
+  // shrink along either side (rounding is monotone), so no cur the full scan would take is skipped, and
+  // equal d2 are decided by index. The same pairs as scan_all, bit for bit, in O(n log n + n_p k) for k
+  // curs within reach instead of O(n_p n_c). Non-finite values (which the comparisons cannot order)
+  // take scan_all.
+  std::int32_t* order = pair_cur_.data();
+  if (finite) {
+    for (std::size_t j = 0; j < nc; ++j) order[j] = static_cast<std::int32_t>(j);
+    std::sort(order, order + nc, [this](std::int32_t a, std::int32_t b) {
+      const double xa = refined_[static_cast<std::size_t>(a)].x(), xb = refined_[static_cast<std::size_t>(b)].x();
+      return xa < xb || (xa == xb && a < b);
+    });
+  }
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const Vec3d p = ref[i].position_m;
+    const double gi = ns * ns * ref[i].sigma_m * ref[i].sigma_m;
+    const double gate_max = gi + w_max;  // >= gi + w_[j] for every j
+    if (!finite || !p.allFinite() || !std::isfinite(gate_max)) {
+      scan_all(i, p, gi);
+      continue;
+    }
+    std::int32_t best_j = -1;
+    double best = 0.0;
+    auto visit = [&](std::int32_t jj) {  // false once no cur further along this side can be taken
+      const std::size_t j = static_cast<std::size_t>(jj);
+      const double dx = p.x() - refined_[j].x();
+      const double dx2 = dx * dx;
+      if (dx2 >= gate_max || (best_j >= 0 && dx2 > best)) return false;
+      const double gate = gi + w_[j];
+      if (dx2 >= gate) return true;
+      const double dy = p.y() - refined_[j].y(), dz = p.z() - refined_[j].z();
+      const double d2 = dx2 + dy * dy + dz * dz;  // the order of squaredNorm()
+      if (d2 >= gate) return true;
+      if (best_j < 0 || d2 < best || (d2 == best && jj < best_j)) {
+        best_j = jj;
+        best = d2;
+      }
+      return true;
+    };
+    const std::int32_t* split = std::lower_bound(order, order + nc, p.x(), [this](std::int32_t a, double x) {
+      return refined_[static_cast<std::size_t>(a)].x() < x;
+    });
+    for (const std::int32_t* o = split; o != order + nc && visit(*o); ++o) {
+    }
+    for (const std::int32_t* o = split; o != order && visit(*(o - 1)); --o) {
+    }
+    nn_prev_[i] = best_j;
   }
   // Nearest prev for each cur among the prevs that chose it (ascending i, strictly nearer wins: O(n_p)).
   for (std::size_t i = 0; i < ref.size(); ++i) {
@@ -313,6 +369,11 @@ std::size_t StereoVo::refine_pairs(const VoInput& in, const BoundedVector<match:
     const double sxy = l.position_m.z() / f * lat_old;
     return std::max(0.0, l.sigma_m * l.sigma_m - sxy * sxy);
   };
+  // The reference landmarks by x for the refiner's neighbour search (nn_prev_ is free outside icp_associate).
+  const Span<const match::Landmark3> ref_span(ref.data(), ref.size());
+  const Span<const std::int32_t> ref_by_x =
+      TrackRefiner::sort_by_x(ref_span, nn_prev_) ? Span<const std::int32_t>(nn_prev_.data(), ref.size())
+                                                  : Span<const std::int32_t>();
   std::size_t good = 0;
   for (std::size_t k = 0; k < n; ++k) {
     refined_s2_[k] = -1.0;  // not aligned
@@ -320,8 +381,7 @@ std::size_t StereoVo::refine_pairs(const VoInput& in, const BoundedVector<match:
     const match::Landmark3& a = ref[ia];
     const match::Landmark3& b = cur[static_cast<std::size_t>(pair_cur_[k])];
     Vec3d qd;
-    if (!refiner_.refine(ref_left_, Span<const match::Landmark3>(ref.data(), ref.size()), ia, in.left, in.right, b,
-                         prev_T_cur, qd)
+    if (!refiner_.refine(ref_left_, ref_span, ia, in.left, in.right, b, prev_T_cur, qd, ref_by_x)
              .is_ok()) {
       counters_.increment(VoCounter::kTrackAlignFailed);
       continue;

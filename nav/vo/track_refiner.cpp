@@ -1,6 +1,7 @@
 #include "nav/vo/track_refiner.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 namespace qnav::vo {
@@ -20,32 +21,80 @@ Status TrackRefiner::init(const TrackRefineConfig& config, const vision::StereoC
   return Status::ok();
 }
 
-Vec3d TrackRefiner::local_normal(Span<const match::Landmark3> ref, std::size_t index) const noexcept {
+bool TrackRefiner::sort_by_x(Span<const match::Landmark3> ref, Span<std::int32_t> order) noexcept {
+  if (order.size() < ref.size()) return false;
+  for (std::size_t j = 0; j < ref.size(); ++j) {
+    if (!ref[j].position_m.allFinite()) return false;
+    order[j] = static_cast<std::int32_t>(j);
+  }
+  std::sort(order.data(), order.data() + ref.size(), [&ref](std::int32_t a, std::int32_t b) {
+    const double xa = ref[static_cast<std::size_t>(a)].position_m.x(), xb = ref[static_cast<std::size_t>(b)].position_m.x();
+    return xa < xb || (xa == xb && a < b);
+  });
+  return true;
+}
+
+Vec3d TrackRefiner::local_normal(Span<const match::Landmark3> ref, std::size_t index,
+                                 Span<const std::int32_t> ref_by_x) const noexcept {
   const Vec3d& p = ref[index].position_m;
   const Vec3d facing = -p.normalized();  // fallback: a plane facing the camera (scale change only)
-  // The K nearest reference landmarks (insertion into a sorted fixed array; K <= kMaxNeighbours).
+  // The K nearest reference landmarks (insertion into a sorted fixed array; K <= kMaxNeighbours): the K
+  // smallest (squared distance, index) pairs in that order, as the scan in ascending index gives them
+  // (an equal distance later in the scan neither displaces nor passes one held).
   const int k_max = config_.normal_neighbours;
   double d2[kMaxNeighbours];
   std::size_t idx[kMaxNeighbours];
   int k = 0;
-  for (std::size_t j = 0; j < ref.size(); ++j) {
-    const Vec3d& q = ref[j].position_m;
-    // Once K are held, a point whose x difference alone reaches the K-th distance is out: the squared
-    // norm (a sum of non-negative rounded squares) is at least dx^2, so the test below would drop it too.
-    if (k == k_max) {
+  if (ref_by_x.size() == ref.size() && p.allFinite()) {
+    // Outwards from p's x along ref_by_x on both sides; a side ends once K are held and dx^2 exceeds the
+    // K-th distance (every later one there is at least as far in x, and its squared norm, dx^2 plus
+    // non-negative rounded squares, at least dx^2). Equal distances are decided by index.
+    auto visit = [&](std::int32_t jj) {
+      const std::size_t j = static_cast<std::size_t>(jj);
+      const Vec3d& q = ref[j].position_m;
       const double dx = q.x() - p.x();
-      if (dx * dx >= d2[k - 1]) continue;
+      if (k == k_max && dx * dx > d2[k - 1]) return false;
+      const double d = (q - p).squaredNorm();
+      if (k == k_max && (d > d2[k - 1] || (d == d2[k - 1] && j > idx[k - 1]))) return true;
+      int pos = k < k_max ? k++ : k - 1;
+      while (pos > 0 && (d2[pos - 1] > d || (d2[pos - 1] == d && idx[pos - 1] > j))) {
+        d2[pos] = d2[pos - 1];
+        idx[pos] = idx[pos - 1];
+        --pos;
+      }
+      d2[pos] = d;
+      idx[pos] = j;
+      return true;
+    };
+    const std::int32_t* first = ref_by_x.data();
+    const std::int32_t* last = first + ref_by_x.size();
+    const std::int32_t* split = std::lower_bound(first, last, p.x(), [&ref](std::int32_t a, double x) {
+      return ref[static_cast<std::size_t>(a)].position_m.x() < x;
+    });
+    for (const std::int32_t* o = split; o != last && visit(*o); ++o) {
     }
-    const double d = (q - p).squaredNorm();
-    if (k == k_max && d >= d2[k - 1]) continue;
-    int pos = k < k_max ? k++ : k - 1;
-    while (pos > 0 && d2[pos - 1] > d) {
-      d2[pos] = d2[pos - 1];
-      idx[pos] = idx[pos - 1];
-      --pos;
+    for (const std::int32_t* o = split; o != first && visit(*(o - 1)); --o) {
     }
-    d2[pos] = d;
-    idx[pos] = j;
+  } else {
+    for (std::size_t j = 0; j < ref.size(); ++j) {
+      const Vec3d& q = ref[j].position_m;
+      // Once K are held, a point whose x difference alone reaches the K-th distance is out: the squared
+      // norm (a sum of non-negative rounded squares) is at least dx^2, so the test below would drop it too.
+      if (k == k_max) {
+        const double dx = q.x() - p.x();
+        if (dx * dx >= d2[k - 1]) continue;
+      }
+      const double d = (q - p).squaredNorm();
+      if (k == k_max && d >= d2[k - 1]) continue;
+      int pos = k < k_max ? k++ : k - 1;
+      while (pos > 0 && d2[pos - 1] > d) {
+        d2[pos] = d2[pos - 1];
+        idx[pos] = idx[pos - 1];
+        --pos;
+      }
+      d2[pos] = d;
+      idx[pos] = j;
+    }
   }
   if (k < 3) return facing;
   Vec3d mean = Vec3d::Zero();
@@ -94,12 +143,12 @@ bool TrackRefiner::plane_affine(const Vec3d& point_ref_m, const Vec3d& normal_re
 
 Status TrackRefiner::refine(ConstImageViewU8 ref_left, Span<const match::Landmark3> ref, std::size_t ref_index,
                             ConstImageViewU8 left, ConstImageViewU8 right, const match::Landmark3& cur,
-                            const Pose3& prev_T_cur, Vec3d& cur_point_m) noexcept {
+                            const Pose3& prev_T_cur, Vec3d& cur_point_m, Span<const std::int32_t> ref_by_x) noexcept {
   if (!ready_) return Status(StatusCode::kNotReady, "TrackRefiner::refine before init");
   if (ref_index >= ref.size()) return Status(StatusCode::kOutOfRange, "track refine: reference index");
   const match::Landmark3& a = ref[ref_index];
   float warp[4] = {1.0f, 0.0f, 0.0f, 1.0f};
-  const Vec3d n = local_normal(ref, ref_index);
+  const Vec3d n = local_normal(ref, ref_index, ref_by_x);
   if (!plane_affine(a.position_m, n, prev_T_cur, static_cast<double>(cur.u_px), static_cast<double>(cur.v_px), warp)) {
     warp[0] = 1.0f;
     warp[1] = 0.0f;

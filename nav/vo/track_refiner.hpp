@@ -14,7 +14,8 @@
 // measured again at the aligned point by aligning along the row into the right image. The result is the
 // current 3D point of the same physical point. refine_disparity(): the row alignment alone, for a
 // stereo point's sub-pixel disparity.
-// Cost: O(ref landmarks * normal_neighbours) for the neighbours + two alignments per pair
+// Cost: O(ref landmarks * normal_neighbours) for the neighbours (with ref_by_x: O(log n + the landmarks
+// within the neighbours' x reach) per pair after one O(n log n) sort) + two alignments per pair
 // (O(iterations * (2r+1)^2)); no heap.
 #pragma once
 
@@ -49,9 +50,16 @@ class TrackRefiner {
   // cur its matched landmark in the current frame (start of the search), prev_T_cur the step estimate
   // (p = R c + t). On success writes the current-frame point. kNotReady, kOutOfRange (index),
   // kNotFound (an alignment failed or the disparity is not positive).
+  // ref_by_x (optional, for many calls on one ref): the indices of ref ordered by position x, equal x by
+  // index, every position finite (the caller's promise; sort_by_x() makes it). The neighbours of the
+  // local plane are then searched outwards from the landmark's x (O(log n + the landmarks within reach)
+  // instead of O(n)), with the same result bit for bit.
   Status refine(ConstImageViewU8 ref_left, Span<const match::Landmark3> ref, std::size_t ref_index,
                 ConstImageViewU8 left, ConstImageViewU8 right, const match::Landmark3& cur, const Pose3& prev_T_cur,
-                Vec3d& cur_point_m) noexcept;
+                Vec3d& cur_point_m, Span<const std::int32_t> ref_by_x = {}) noexcept;
+  // Writes ref's indices ordered as refine()'s ref_by_x needs into order (size >= ref.size()) and returns
+  // true; false (order unspecified) when a position is not finite or order is too small.
+  static bool sort_by_x(Span<const match::Landmark3> ref, Span<std::int32_t> order) noexcept;
 
   // Sub-pixel disparity of p by row alignment from its current disparity; updates disparity, point and
   // depth sigma (disparity_sigma_px) on success. kNotFound when it does not align or moves too far.
@@ -64,8 +72,14 @@ class TrackRefiner {
   bool plane_affine(const Vec3d& point_ref_m, const Vec3d& normal_ref, const Pose3& prev_T_cur, double u_px,
                     double v_px, float (&affine)[4]) const noexcept;
 
+  // The local plane's normal at ref[index] (reference frame, towards the camera) that refine() warps by:
+  // the smallest-eigenvalue direction of the normal_neighbours nearest landmarks (the landmark itself
+  // included; equal distances by index), or the direction to the camera when they are too few or not
+  // planar. ref_by_x as refine()'s (optional: the same result without it). index < ref.size().
+  Vec3d local_normal(Span<const match::Landmark3> ref, std::size_t index,
+                     Span<const std::int32_t> ref_by_x = {}) const noexcept;
+
  private:
-  Vec3d local_normal(Span<const match::Landmark3> ref, std::size_t index) const noexcept;
   TrackRefineConfig config_{};
   vision::StereoCamera camera_{};
   vision::PatchAligner aligner_;

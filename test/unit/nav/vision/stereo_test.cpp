@@ -94,6 +94,42 @@ TEST(Stereo, RecoversAKnownSubPixelDisparityAtHarrisCorners) {
   }
 }
 
+// Every patch radius (sides 5, 7, 9 take the fixed-side correlation, the others the general one) and
+// disparity ranges whose window counts are not multiples of four (the scan correlates four windows at a
+// time and the rest one by one).
+TEST(Stereo, RecoversTheDisparityAtEveryPatchRadiusAndRangeLength) {
+  const int W = 200, H = 120;
+  const double d = 17.4;
+  std::vector<std::uint8_t> l, r;
+  make_pair(l, r, W, H, d, 7);
+  const ConstImageViewU8 lv = ConstImageViewU8::make(l.data(), W, H).value();
+  const ConstImageViewU8 rv = ConstImageViewU8::make(r.data(), W, H).value();
+  for (int radius = 1; radius <= 7; ++radius)
+    for (int max_d : {29, 30, 31, 32}) {
+      StereoMatcher m;
+      StereoConfig sc;
+      sc.patch_radius = radius;
+      sc.max_disparity_px = max_d;
+      sc.min_patch_stddev = 1.0f;
+      ASSERT_TRUE(m.init(sc, test_camera()).is_ok());
+      int matched = 0, tried = 0;
+      double max_err = 0.0;
+      for (int y = 20; y < H - 20; y += 9)
+        for (int x = 60; x < W - 20; x += 11) {
+          ++tried;
+          float disp = 0.0f, z = 0.0f;
+          if (!m.match_one(lv, rv, static_cast<float>(x), static_cast<float>(y), disp, z).is_ok()) continue;
+          ++matched;
+          max_err = std::max(max_err, std::fabs(static_cast<double>(disp) - d));
+          EXPECT_LE(z, 1.0f);
+        }
+      EXPECT_GT(matched, tried * 2 / 3) << "radius " << radius << " max_d " << max_d;
+      // The right integer disparity with the parabola's sub-pixel step (measured: 0.51 px at radius 1, a
+      // 3 x 3 patch on interpolated texture; below 0.5 px from radius 2).
+      EXPECT_LT(max_err, radius == 1 ? 0.75 : 0.5) << "radius " << radius << " max_d " << max_d;
+    }
+}
+
 TEST(Stereo, RejectsFlatWeakAmbiguousAndOutOfBoundsCorners) {
   const int W = 200, H = 100;
   std::vector<std::uint8_t> l(W * H, 100), r(W * H, 100);

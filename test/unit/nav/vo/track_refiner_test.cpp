@@ -88,6 +88,49 @@ TEST(TrackRefiner, PlaneAffineOfAFrontoParallelPlaneIsTheDepthRatio) {
   EXPECT_FALSE(t.plane_affine(p, Vec3d(1.0, 0.0, 0.0), Pose3{}, camera().cu_px, camera().cv_px, a));
 }
 
+TEST(TrackRefiner, NeighbourSearchAlongXGivesTheFullScansNormalBitForBit) {
+  TrackRefiner t;
+  TrackRefineConfig cfg;
+  ASSERT_TRUE(t.init(cfg, camera()).is_ok());
+  // A lattice on a tilted plane in binary fractions of a metre (exact distances: many equal ones, so the
+  // K-th neighbour is decided by index), with a few exact duplicates and points off the plane.
+  std::vector<match::Landmark3> ref;
+  for (int j = 0; j < 9; ++j)
+    for (int i = 0; i < 11; ++i) {
+      match::Landmark3 l;
+      l.position_m = Vec3d(0.125 * (i - 5), 0.125 * (j - 4), 2.0 + 0.0625 * i + 0.03125 * ((i * j) % 3));
+      ref.push_back(l);
+    }
+  // Landmarks appended out of x order: duplicates of earlier ones and a scattered cloud.
+  for (int k = 0; k < 12; ++k) ref.push_back(ref[static_cast<std::size_t>((k * 37) % 99)]);
+  for (int k = 0; k < 40; ++k) {
+    match::Landmark3 l;
+    l.position_m = Vec3d(std::sin(1.7 * k) * 0.8, std::cos(2.3 * k) * 0.6, 2.5 + 0.4 * std::sin(0.9 * k));
+    ref.push_back(l);
+  }
+  const Span<const match::Landmark3> span(ref.data(), ref.size());
+  std::vector<std::int32_t> order(ref.size());
+  ASSERT_TRUE(TrackRefiner::sort_by_x(span, Span<std::int32_t>(order.data(), order.size())));
+  for (std::size_t k = 1; k < order.size(); ++k)
+    ASSERT_LE(ref[static_cast<std::size_t>(order[k - 1])].position_m.x(), ref[static_cast<std::size_t>(order[k])].position_m.x());
+  const Span<const std::int32_t> by_x(order.data(), order.size());
+  int planar = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const Vec3d a = t.local_normal(span, i), b = t.local_normal(span, i, by_x);
+    EXPECT_EQ(a.x(), b.x()) << i;
+    EXPECT_EQ(a.y(), b.y()) << i;
+    EXPECT_EQ(a.z(), b.z()) << i;
+    if (!a.isApprox(-ref[i].position_m.normalized())) ++planar;  // not the facing fallback
+  }
+  EXPECT_GT(planar, 80);
+  // Orders that cannot be made: a non-finite position, too small a buffer.
+  std::vector<match::Landmark3> bad = ref;
+  bad[5].position_m.y() = std::nan("");
+  EXPECT_FALSE(TrackRefiner::sort_by_x(Span<const match::Landmark3>(bad.data(), bad.size()),
+                                       Span<std::int32_t>(order.data(), order.size())));
+  EXPECT_FALSE(TrackRefiner::sort_by_x(span, Span<std::int32_t>(order.data(), order.size() - 1)));
+}
+
 TEST(TrackRefiner, RefinedPointIsTheSamePhysicalPointToAFractionOfAPixel) {
   const Scene s;
   Pose3 ref_pose;  // the reference camera is the world
