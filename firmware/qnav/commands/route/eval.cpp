@@ -684,11 +684,11 @@ void trace_wrong_sides(FILE* log, const std::vector<TileRecord>& records) {
       const TileRecord& q = records[j];
       if (q.pct != r.pct || q.reverse != r.reverse) continue;
       const route::GuidanceOutput& g = q.st.guidance;
-      std::fprintf(log, "    tile %2d truth %2d est %2d %s p %.2f %-13s offsets %-14s S %2u (est %2u%s, rms %.2f) cross %7.2f (true %6.2f, sigma %.2f) side %-9s want %s\n",
+      std::fprintf(log, "    tile %2d truth %2d est %2d %s p %.2f %-13s offsets %-14s S %2u (est %2u%s, rms %.2f) cross %7.2f (true %6.2f, sigma %.2f) side %-9s want %s%s\n",
                    q.tile, q.truth, q.st.estimate, q.st.confident ? "conf" : "unc ", static_cast<double>(q.st.probability), route::to_string(g.status),
                    route::to_string(g.offsets), q.st.best_inliers, q.st.registration.ok ? q.st.registration.inliers : 0,
                    q.st.via_neighbour ? ", via neighbour" : "", q.st.registration.rms_m, g.cross_track_m, q.true_cross_track_m, g.cross_track_sigma_m,
-                   route::to_string(g.side), route::to_string(q.want));
+                   route::to_string(g.side), route::to_string(q.want), g.registration_rejected ? " (registration rejected: disagrees with dead reckoning)" : "");
     }
   }
 }
