@@ -69,10 +69,7 @@ GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const
     const double reg_sigma = std::isfinite(var) && var > 0.0 ? std::sqrt(var) : 0.0;
     const bool fix_recent = have_fix_ && (sensed_nav_pose.translation() - fix_nav_.translation()).norm() <= config_.dead_reckon_side_max_m;
     const bool pending_recent = have_pending_ && (sensed_nav_pose.translation() - pending_nav_.translation()).norm() <= config_.dead_reckon_side_max_m;
-    // Nothing to check against (no fix within dead_reckon_side_max_m): a strong registration stands,
-    // a weak one waits for a second that agrees with it.
-    const bool strong = config_.unconfident_min_inliers == 0 || reg.inliers >= config_.unconfident_min_inliers;
-    if (fix_recent ? agrees(vehicle, reg_sigma, fix_route_, fix_nav_, fix_sigma_m_, sensed_nav_pose) : strong) {
+    if (!fix_recent || agrees(vehicle, reg_sigma, fix_route_, fix_nav_, fix_sigma_m_, sensed_nav_pose)) {
       have_pending_ = false;
     } else if (pending_recent && agrees(vehicle, reg_sigma, pending_route_, pending_nav_, pending_sigma_m_, sensed_nav_pose)) {
       have_pending_ = false;  // confirmed: the last fix was the wrong one

@@ -36,9 +36,7 @@
 // GuidanceOutput::registration_rejected). The next registration that disagrees with dead reckoning
 // is accepted when it agrees, by the same gate, with the rejected one carried forward by the
 // dead-reckoned motion (then it was the last fix that was wrong, and the vehicle recovers after one
-// tile). A registration that agrees with dead reckoning clears the rejected one. Without a fix to
-// check against, a registration under unconfident_min_inliers (when that is set) likewise waits for
-// a second one that agrees with it; a stronger one stands.
+// tile). A registration that agrees with dead reckoning clears the rejected one.
 // Cross-track uncertainty: from the registration's covariance; dead-reckoned, the fix's plus
 // dead_reckon_heading_sigma_rad x the distance travelled since the fix (the heading error of the
 // dead reckoning turns travel into cross-track error). Pure function of its inputs + the held

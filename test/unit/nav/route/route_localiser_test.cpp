@@ -396,39 +396,6 @@ TEST(Guidance, TwoRegistrationsThatAgreeOverruleAWrongFix) {
   EXPECT_EQ(out.side, RouteSide::kStarboard);
 }
 
-// Seabed 2, 2 pings/s at 3 m/s, reverse at 40 %: the pass's first registration, 7 inliers, put the
-// vehicle on the route 39.5 m from the truth. With nothing to check it against, a registration under
-// unconfident_min_inliers waits for a second that agrees with it; a stronger one stands.
-TEST(Guidance, AWeakFirstRegistrationWaitsForASecondThatAgrees) {
-  GuidanceConfig gc;
-  gc.min_inliers = 7;
-  gc.unconfident_min_inliers = 8;
-  gc.dead_reckon_max_m = 150.0;
-  gc.dead_reckon_side_max_m = 450.0;
-  gc.dead_reckon_heading_sigma_rad = 0.025;
-  gc.side_deadband_m = 1.0;
-  gc.verify_gate_m = 10.0;
-  Guidance g(gc);
-  const NodeMeta n0 = node_at(0.0, 0), n1 = node_at(60.0, 1), n2 = node_at(120.0, 2), ahead = node_at(240.0, 4);
-  GuidanceOutput out = g.compute(true, RouteDirection::kForward, n0, ahead, registration(7, Pose2{0.0, -0.1, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0});
-  EXPECT_TRUE(out.registration_rejected);
-  EXPECT_EQ(out.status, GuidanceStatus::kHoldCourse);
-  EXPECT_EQ(out.side, RouteSide::kUnknown);
-  // The next one disagrees with it (the truth, 39.5 m to port) and is weak too: it waits in its place.
-  out = g.compute(true, RouteDirection::kForward, n1, ahead, registration(7, Pose2{0.0, -39.5, 0.0}, 0.04), 0.0, Pose2{60.0, 0.0, 0.0});
-  EXPECT_TRUE(out.registration_rejected);
-  // A third that agrees with the second is accepted.
-  out = g.compute(true, RouteDirection::kForward, n2, ahead, registration(7, Pose2{0.0, -39.0, 0.0}, 0.04), 0.0, Pose2{120.0, 0.0, 0.0});
-  EXPECT_FALSE(out.registration_rejected);
-  EXPECT_EQ(out.status, GuidanceStatus::kTracking);
-  EXPECT_EQ(out.side, RouteSide::kPort);
-  // A strong first registration stands at once.
-  Guidance h(gc);
-  out = h.compute(true, RouteDirection::kForward, n0, ahead, registration(8, Pose2{0.0, -39.5, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0});
-  EXPECT_FALSE(out.registration_rejected);
-  EXPECT_EQ(out.side, RouteSide::kPort);
-}
-
 TEST(RouteLocaliser, StepDoesNotAllocateAfterInit) {
   Scenario s;
   LocaliserConfig c = config(RouteDirection::kForward);
