@@ -130,6 +130,11 @@ route::LocaliserConfig default_localiser_config(route::RouteDirection d, std::si
   c.guidance.dead_reckon_side_max_m = 450.0;  // ~7.5 nodes over which the dead-reckoned side is still reported
   c.guidance.dead_reckon_heading_sigma_rad = 0.025;  // measured: dead-reckoned cross-track error vs travel, `route eval`
   c.guidance.unconfident_min_inliers = 8;  // = lost_evidence_inliers: no registration this strong was wrong in `qnav route eval`
+  // A registration more than 10 m + 3 sigma from where dead reckoning from the last fix puts the
+  // vehicle needs a second one to confirm it (issue 27: a 7-inlier wrong transform 75 m across at
+  // 2 pings/s gave 3 wrong sides; DVL dropouts and 1-2 deg of compass bias stay well inside 10 m).
+  c.guidance.verify_gate_m = 10.0;
+  c.guidance.verify_n_sigma = 3.0;
   return c;
 }
 
@@ -138,6 +143,7 @@ route::LocaliserConfig file_localiser_config(route::RouteDirection d, std::size_
   route::LocaliserConfig lc = default_localiser_config(d, max_nodes);
   lc.guidance.dead_reckon_max_m = 2.5 * spacing_m;  // as in the simulator: ~2.5 nodes after the last fix
   lc.guidance.dead_reckon_side_max_m = 7.5 * spacing_m;  // ... and ~7.5 nodes for the side
+  lc.guidance.verify_gate_m = spacing_m / 6.0;            // as in the simulator: 10 m at 60 m between nodes
   lc.filter.belief_registrations = static_cast<std::uint32_t>(std::max<std::size_t>(1, std::min<std::size_t>(nodes, 8)));
   lc.registration.robust.inlier_threshold_m = 0.75;
   lc.registration.fc.sigma_dist_m = 0.5;

@@ -42,14 +42,47 @@ const char* to_string(OffsetSource s) noexcept {
   return "none";
 }
 
+bool Guidance::agrees(const Pose2& vehicle, double reg_sigma_m, const Pose2& fix_route, const Pose2& fix_nav, double fix_sigma_m,
+                      const Pose2& sensed_nav_pose) const noexcept {
+  const double travelled = (sensed_nav_pose.translation() - fix_nav.translation()).norm();
+  const Pose2 dr = fix_route.compose(fix_nav.inverse().compose(sensed_nav_pose));
+  const double dr_sigma = fix_sigma_m + config_.dead_reckon_heading_sigma_rad * travelled;
+  const double sigma = std::sqrt(reg_sigma_m * reg_sigma_m + dr_sigma * dr_sigma);
+  return (vehicle.translation() - dr.translation()).norm() <= config_.verify_gate_m + config_.verify_n_sigma * sigma;
+}
+
 GuidanceOutput Guidance::compute(bool confident, RouteDirection direction, const NodeMeta& node, const NodeMeta& ahead,
                                  const RegistrationResult& reg, double vehicle_heading_rad, const Pose2& sensed_nav_pose) noexcept {
   GuidanceOutput g;
   g.node = node.index;
   const bool finite_heading = std::isfinite(vehicle_heading_rad);
-  const bool reg_usable = reg.ok && reg.sensed_to_node.is_finite();
-  const bool registered = reg_usable && reg.inliers >= config_.min_inliers;
+  bool reg_usable = reg.ok && reg.sensed_to_node.is_finite();
   const bool nav_ok = sensed_nav_pose.is_finite();
+  // Verification against dead reckoning from the last fix (a wrong transform is rejected until a
+  // second registration confirms it).
+  // Only a registration guidance would use is verified: steered on, or strong enough for the side.
+  const bool would_use = (confident && reg.inliers >= config_.min_inliers) ||
+                         (config_.unconfident_min_inliers > 0 && reg.inliers >= config_.unconfident_min_inliers);
+  if (reg_usable && would_use && config_.verify_gate_m > 0.0 && nav_ok) {
+    const Pose2 vehicle = node.pose.compose(reg.sensed_to_node);
+    const double var = reg.covariance(1, 1);
+    const double reg_sigma = std::isfinite(var) && var > 0.0 ? std::sqrt(var) : 0.0;
+    const bool fix_recent = have_fix_ && (sensed_nav_pose.translation() - fix_nav_.translation()).norm() <= config_.dead_reckon_side_max_m;
+    const bool pending_recent = have_pending_ && (sensed_nav_pose.translation() - pending_nav_.translation()).norm() <= config_.dead_reckon_side_max_m;
+    if (!fix_recent || agrees(vehicle, reg_sigma, fix_route_, fix_nav_, fix_sigma_m_, sensed_nav_pose)) {
+      have_pending_ = false;
+    } else if (pending_recent && agrees(vehicle, reg_sigma, pending_route_, pending_nav_, pending_sigma_m_, sensed_nav_pose)) {
+      have_pending_ = false;  // confirmed: the last fix was the wrong one
+    } else {
+      have_pending_ = true;
+      pending_route_ = vehicle;
+      pending_nav_ = sensed_nav_pose;
+      pending_sigma_m_ = reg_sigma;
+      reg_usable = false;
+      g.registration_rejected = true;
+    }
+  }
+  const bool registered = reg_usable && reg.inliers >= config_.min_inliers;
   // Dead reckoning from the last fix (the node estimate must be trusted: confident filter).
   const bool can_dead_reckon = confident && !registered && have_fix_ && nav_ok;
   const double travelled = can_dead_reckon ? (sensed_nav_pose.translation() - fix_nav_.translation()).norm() : 0.0;

@@ -27,6 +27,16 @@
 // reckoning), and that a confident filter beyond dead_reckon_max_m of travel from the last fix but
 // within dead_reckon_side_max_m still reports the dead-reckoned offsets and side (status kHoldCourse:
 // too far to steer on, not too far to know the side when the offset is large).
+// Verification of a registration against dead reckoning (verify_gate_m > 0): with a fix less than
+// dead_reckon_side_max_m of travel back, a registration whose vehicle position (route frame) lies
+// more than verify_gate_m + verify_n_sigma x sigma from where dead reckoning from that fix puts it
+// (sigma: the registration's cross-track sigma and the dead-reckoned one, root-sum-square) is a
+// wrong transform until a second registration confirms it: it is not steered on, gives no side and
+// is no fix (the offsets are dead-reckoned from the last fix as if it had not registered;
+// GuidanceOutput::registration_rejected). The next registration that disagrees with dead reckoning
+// is accepted when it agrees, by the same gate, with the rejected one carried forward by the
+// dead-reckoned motion (then it was the last fix that was wrong, and the vehicle recovers after one
+// tile). A registration that agrees with dead reckoning clears the rejected one.
 // Cross-track uncertainty: from the registration's covariance; dead-reckoned, the fix's plus
 // dead_reckon_heading_sigma_rad x the distance travelled since the fix (the heading error of the
 // dead reckoning turns travel into cross-track error). Pure function of its inputs + the held
@@ -59,6 +69,8 @@ struct GuidanceConfig {
   double dead_reckon_heading_sigma_rad = 0.01;  // heading error of the dead reckoning (cross-track sigma growth per metre)
   std::uint32_t unconfident_min_inliers = 0;    // side from a registration this strong before the filter is confident; 0 = off
   double side_n_sigma = 2.0;                    // side decided when |cross-track| is this many sigma clear of the dead band
+  double verify_gate_m = 0.0;   // a registration this far (+ verify_n_sigma sigma) from dead reckoning needs confirming; 0 = off
+  double verify_n_sigma = 3.0;
 };
 
 struct GuidanceOutput {
@@ -73,6 +85,7 @@ struct GuidanceOutput {
   Vec2d waypoint_ne = Vec2d::Zero();  // look-ahead waypoint, route frame (north, east)
   double waypoint_bearing_rad = 0.0;  // relative to the vehicle heading, + to starboard
   double commanded_heading_rad = 0.0; // compass
+  bool registration_rejected = false;  // the registration disagreed with dead reckoning from the last fix (not used)
 };
 
 class Guidance {
@@ -86,10 +99,15 @@ class Guidance {
   void reset() noexcept {
     have_command_ = false;
     have_fix_ = false;
+    have_pending_ = false;
   }
 
  private:
   RouteSide decide_side(double cross_track_m, double sigma_m) const noexcept;
+  // Whether a registration putting the vehicle at `vehicle` (route frame, cross-track sigma reg_sigma_m)
+  // agrees with a fix (route pose, nav pose, sigma) carried to sensed_nav_pose by dead reckoning.
+  bool agrees(const Pose2& vehicle, double reg_sigma_m, const Pose2& fix_route, const Pose2& fix_nav, double fix_sigma_m,
+              const Pose2& sensed_nav_pose) const noexcept;
   GuidanceConfig config_;
   bool have_command_ = false;
   double last_command_rad_ = 0.0;
@@ -97,6 +115,10 @@ class Guidance {
   Pose2 fix_route_{};  // vehicle pose in the route frame at the last registration used
   Pose2 fix_nav_{};    // the same instant in the pass's dead-reckoned frame
   double fix_sigma_m_ = 0.0;  // cross-track sigma at the fix
+  bool have_pending_ = false;  // a registration rejected by the verification, awaiting confirmation
+  Pose2 pending_route_{};
+  Pose2 pending_nav_{};
+  double pending_sigma_m_ = 0.0;
 };
 
 }  // namespace qnav::route

@@ -5,7 +5,7 @@
 //                     torn tail, every damaged node
 //   qnav route repeat --route FILE --sim [--offset-pct P] [--reverse] [--csv OUT] [--seed N] [--length-m M]
 //   qnav route eval   [--json] [--out DIR] [--length-m 2000] [--seabeds 3] [--quick] -> Table I, Fig. 5/7/9/10 data
-//   qnav route framing [--json] [--length-m 1000] [--quick]               -> tiles in metres at 2, 5, 15 pings/s, 2 speeds
+//   qnav route framing [--json] [--length-m 1000] [--quick] [--seabed N] [--only R:S] -> tiles in metres at 2, 5, 15 pings/s, 2 speeds
 //   qnav route xtf    --xtf FILE [--train A:B] [--repeat C:D] [--csv OUT]  -> real data: teach on pings A..B,
 //                     repeat on the shifted window C..D of the same pass
 //   qnav route train|repeat --sonar FILE ...                            -> routes from recorded XTF / JSF passes
@@ -490,6 +490,9 @@ void setup_route(CLI::App& cmd, qnav::cli::Runner& run) {
   add_flag(*fr, "--no-ripples", g_opt.no_ripples, "the seabed without sand ripples");
   add_number(*fr, "--entry-prior", g_opt.framing_entry_prior,
              "share of the start belief on the route's entry end, as qnavd's route.entry_prior (default 0.5; 0: the uniform start route eval scores)", "", 0, 0.99);
+  add_number(*fr, "--seabed", g_opt.framing_seabed, "the simulated seabed (default 1)", "", 1, 1000);
+  add_text(*fr, "--only", g_opt.framing_only, "run one configuration (and the 5 pings/s, 1.5 m/s reference), e.g. 2:1.5")->type_name("RATE:SPEED");
+  add_flag(*fr, "--trace-sides", g_opt.trace_sides, "a log line per scored tile whose side was decided wrong (registration, inliers, offsets)");
   run.on(fr, cmd_framing);
 
   CLI::App* x = cmd.add_subcommand("xtf", "real data: teach on pings A..B of a recorded pass, repeat on the shifted window C..D");

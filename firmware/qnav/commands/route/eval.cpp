@@ -672,6 +672,27 @@ int cmd_eval() {
 // repeat it forwards and in reverse at lateral offsets; node within +/-1 and side correct per
 // configuration, against 5 pings/s at 1.5 m/s (the rate and speed the ping-count defaults were tuned
 // on, where tiles by distance are the same 90 m every 60 m).
+// --trace-sides: every scored tile whose side was decided wrong, with what decided it, and the tiles
+// of its pass before it (the registration, its inliers and cross-track against the truth).
+void trace_wrong_sides(FILE* log, const std::vector<TileRecord>& records) {
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const TileRecord& r = records[i];
+    const bool decided = r.tile >= kWarmupTiles && r.want != route::RouteSide::kOnRoute && r.st.guidance.side != route::RouteSide::kUnknown;
+    if (!decided || r.st.guidance.side == r.want) continue;
+    std::fprintf(log, "  wrong side: offset %d%% %s tile %d\n", r.pct, r.reverse ? "reverse" : "forward", r.tile);
+    for (std::size_t j = i >= 4 ? i - 4 : 0; j <= i; ++j) {
+      const TileRecord& q = records[j];
+      if (q.pct != r.pct || q.reverse != r.reverse) continue;
+      const route::GuidanceOutput& g = q.st.guidance;
+      std::fprintf(log, "    tile %2d truth %2d est %2d %s p %.2f %-13s offsets %-14s S %2u (est %2u%s, rms %.2f) cross %7.2f (true %6.2f, sigma %.2f) side %-9s want %s%s\n",
+                   q.tile, q.truth, q.st.estimate, q.st.confident ? "conf" : "unc ", static_cast<double>(q.st.probability), route::to_string(g.status),
+                   route::to_string(g.offsets), q.st.best_inliers, q.st.registration.ok ? q.st.registration.inliers : 0,
+                   q.st.via_neighbour ? ", via neighbour" : "", q.st.registration.rms_m, g.cross_track_m, q.true_cross_track_m, g.cross_track_sigma_m,
+                   route::to_string(g.side), route::to_string(q.want), g.registration_rejected ? " (registration rejected: disagrees with dead reckoning)" : "");
+    }
+  }
+}
+
 int cmd_framing() {
   const double length_m = g_opt.framing_length_m;
   if (!(length_m >= 400.0 && length_m <= 20000.0)) return usage("framing", "--length-m: framing needs 400..20000 m");
@@ -687,22 +708,29 @@ int cmd_framing() {
     int scored, within, side_n, side_ok, rev_scored, rev_within;
     std::uint32_t overflow;
   };
+  double only_rate = 0.0, only_speed = 0.0;
+  if (!g_opt.framing_only.empty() &&
+      (std::sscanf(g_opt.framing_only.c_str(), "%lf:%lf", &only_rate, &only_speed) != 2 || !(only_rate > 0.0) || !(only_speed > 0.0)))
+    return usage("framing", "--only: RATE:SPEED, e.g. 2:1.5");
+  const long seabed = g_opt.framing_seabed;
   std::vector<Row> rows;
   Status s;
   for (double rate : rates)
     for (double speed : speeds) {
       if (!s) break;
+      const bool is_ref = rate == 5.0 && speed == 1.5;
+      if (only_rate > 0.0 && !is_ref && !(rate == only_rate && speed == only_speed)) continue;
       // A pipeline of its own per configuration: the corrector's gain normalisation (EGN) runs on
       // from pass to pass, so with one pipeline a configuration's figures depended on the one before.
       pipeline::RouteTilePipeline pipe;
       s = pipe.init(pipeline::default_route_tile_config());
       if (!s) break;
       pipeline::SimSurvey w;
-      s = w.init(length_m, 1);
+      s = w.init(length_m, static_cast<std::uint64_t>(seabed));
       if (!s) break;
       if (g_opt.no_speckle) w.sonar.speckle = false;
       if (g_opt.no_ripples) {
-        sidescan::SeabedConfig sc = pipeline::default_route_seabed_config(1);
+        sidescan::SeabedConfig sc = pipeline::default_route_seabed_config(static_cast<std::uint64_t>(seabed));
         sc.ripple_wavelength_m = 0.0f;
         s = w.seabed.init(sc);
         if (!s) break;
@@ -729,13 +757,14 @@ int cmd_framing() {
       TileSource src(&train);
       std::fprintf(log, "%.0f pings/s at %.1f m/s (%.2f m between pings): taught %zu nodes (spacing %.1f m, %.1f keypoints/node)\n", rate, speed,
                    speed / rate, train.size(), sp, kp / static_cast<double>(train.size()));
-      SweepInputs in{&pipe, &w, &train, &src, &params, Span<const route::NodeMeta>(meta.data(), meta.size()), &along, &pcts, 1, log,
+      SweepInputs in{&pipe, &w, &train, &src, &params, Span<const route::NodeMeta>(meta.data(), meta.size()), &along, &pcts, static_cast<int>(seabed), log,
                      g_opt.framing_entry_prior};
       std::vector<TileRecord> records;
       std::vector<PassStats> stats;
       int pass_seed = 100;
       s = offset_sweep(in, pass_seed, records, stats, nullptr, nullptr);
       if (!s) break;
+      if (g_opt.trace_sides) trace_wrong_sides(log, records);
       Row r{rate, speed, sp, kp / static_cast<double>(train.size()), train.size(), 0, 0, 0, 0, 0, 0,
             pipe.builder().counters().get(sonar::TileCounter::kTileOverflow)};
       for (const PassStats& p : stats) {
@@ -760,6 +789,10 @@ int cmd_framing() {
   const Row* ref = nullptr;
   for (const Row& r : rows)
     if (r.rate_hz == 5.0 && r.speed_mps == 1.5) ref = &r;
+  if (ref == nullptr) {
+    std::fprintf(stderr, "qnav route framing: no configuration matched --only %s\n", g_opt.framing_only.c_str());
+    return 1;
+  }
   std::fprintf(log, "\npings/s  speed m/s  m/ping  nodes  spacing m  keypoints  node +/-1 %%  (reverse)  side correct %%  vs 5 pings/s 1.5 m/s  tile_overflow\n");
   bool all_within = true;
   for (const Row& r : rows) {

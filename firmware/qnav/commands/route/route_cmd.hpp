@@ -52,6 +52,9 @@ struct RouteOptions {
   double camera_length_m = 12.0;
   double framing_length_m = 1000.0;
   double framing_entry_prior = pipeline::kDefaultEntryPrior;  // route framing: the repeat's start belief, as qnavd's route.entry_prior
+  long framing_seabed = 1;        // route framing: the simulated seabed (and the survey's seed)
+  std::string framing_only;       // route framing: "RATE:SPEED" runs that configuration alone (and the reference)
+  bool trace_sides = false;       // route framing: a log line per tile whose side was decided wrong
   long seed = 1, camera_seed = 7, dump_tile = -1, seabeds = 0, lines = 0, stride = 0;
   double tile_length_m = 0.0, tile_stride_m = 0.0;  // recorded passes: 0 = from the swath (route_defaults)
   bool sim = false, force = false, reverse = false, json = false, quick = false, no_align = false;

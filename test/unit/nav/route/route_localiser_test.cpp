@@ -326,6 +326,76 @@ TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
   EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav1).status, GuidanceStatus::kHoldCourse);
 }
 
+// Issue 27 (2 pings/s, reverse at 20 % of the swath): a 7-inlier registration put the vehicle 55 m to
+// starboard one tile after a fix 20 m to port; that and the two tiles dead-reckoned from it gave three
+// wrong sides. The verification holds such a jump back until a second registration confirms it.
+TEST(Guidance, ARegistrationThatJumpsAwayFromDeadReckoningNeedsConfirming) {
+  GuidanceConfig gc;
+  gc.min_inliers = 7;
+  gc.dead_reckon_max_m = 150.0;
+  gc.dead_reckon_side_max_m = 450.0;
+  gc.dead_reckon_heading_sigma_rad = 0.025;
+  gc.side_deadband_m = 1.0;
+  gc.verify_gate_m = 10.0;
+  gc.verify_n_sigma = 3.0;
+  Guidance g(gc);
+  const NodeMeta n0 = node_at(0.0, 0), n1 = node_at(60.0, 1), n2 = node_at(120.0, 2), ahead = node_at(240.0, 4);
+  GuidanceOutput out = g.compute(true, RouteDirection::kForward, n0, ahead, registration(9, Pose2{0.0, -20.0, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0});
+  ASSERT_EQ(out.side, RouteSide::kPort);
+  EXPECT_FALSE(out.registration_rejected);
+  // 60 m on, a 7-inlier registration 55 m to starboard: 75 m from dead reckoning, gate 10 m + 3 x
+  // sqrt(0.2^2 + (0.2 + 0.025 x 60)^2) = 15.1 m. Not a fix: dead-reckoned from the last one, still port.
+  out = g.compute(true, RouteDirection::kForward, n1, ahead, registration(7, Pose2{0.0, 55.0, 0.0}, 0.04), 0.0, Pose2{60.0, 0.0, 0.0});
+  EXPECT_TRUE(out.registration_rejected);
+  EXPECT_EQ(out.status, GuidanceStatus::kDeadReckoned);
+  EXPECT_EQ(out.offsets, OffsetSource::kDeadReckoning);
+  EXPECT_NEAR(out.cross_track_m, -20.0, 1e-9);
+  EXPECT_EQ(out.side, RouteSide::kPort);
+  // The next registration agrees with dead reckoning (1.5 m off it, inside the gate): a fix again.
+  out = g.compute(true, RouteDirection::kForward, n2, ahead, registration(8, Pose2{0.0, -18.5, 0.0}, 0.04), 0.0, Pose2{120.0, 0.0, 0.0});
+  EXPECT_FALSE(out.registration_rejected);
+  EXPECT_EQ(out.status, GuidanceStatus::kTracking);
+  EXPECT_NEAR(out.cross_track_m, -18.5, 1e-9);
+  // Without the verification the jump is taken as it comes.
+  gc.verify_gate_m = 0.0;
+  Guidance off(gc);
+  ASSERT_EQ(off.compute(true, RouteDirection::kForward, n0, ahead, registration(9, Pose2{0.0, -20.0, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0}).side,
+            RouteSide::kPort);
+  out = off.compute(true, RouteDirection::kForward, n1, ahead, registration(7, Pose2{0.0, 55.0, 0.0}, 0.04), 0.0, Pose2{60.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kTracking);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+}
+
+TEST(Guidance, TwoRegistrationsThatAgreeOverruleAWrongFix) {
+  GuidanceConfig gc;
+  gc.min_inliers = 7;
+  gc.dead_reckon_max_m = 150.0;
+  gc.dead_reckon_side_max_m = 450.0;
+  gc.dead_reckon_heading_sigma_rad = 0.025;
+  gc.side_deadband_m = 1.0;
+  gc.verify_gate_m = 10.0;
+  Guidance g(gc);
+  const NodeMeta n0 = node_at(0.0, 0), n1 = node_at(60.0, 1), n2 = node_at(120.0, 2), n3 = node_at(180.0, 3), ahead = node_at(300.0, 5);
+  // The first fix is the wrong one (nothing to check it against): 55 m to starboard.
+  ASSERT_EQ(g.compute(true, RouteDirection::kForward, n0, ahead, registration(8, Pose2{0.0, 55.0, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0}).side,
+            RouteSide::kStarboard);
+  // The truth, 20 m to port: rejected once (it disagrees with the wrong fix) ...
+  GuidanceOutput out = g.compute(true, RouteDirection::kForward, n1, ahead, registration(9, Pose2{0.0, -20.0, 0.0}, 0.04), 0.0, Pose2{60.0, 0.0, 0.0});
+  EXPECT_TRUE(out.registration_rejected);
+  // ... a tile without registration (dead-reckoned from the wrong fix) ...
+  out = g.compute(true, RouteDirection::kForward, n2, ahead, RegistrationResult{}, 0.0, Pose2{120.0, 0.0, 0.0});
+  EXPECT_EQ(out.status, GuidanceStatus::kDeadReckoned);
+  // ... and accepted when the next registration agrees with it (carried 120 m by dead reckoning).
+  out = g.compute(true, RouteDirection::kForward, n3, ahead, registration(7, Pose2{0.0, -21.0, 0.0}, 0.04), 0.0, Pose2{180.0, 0.0, 0.0});
+  EXPECT_FALSE(out.registration_rejected);
+  EXPECT_EQ(out.status, GuidanceStatus::kTracking);
+  EXPECT_EQ(out.side, RouteSide::kPort);
+  // A fix older than dead_reckon_side_max_m is not checked against: the registration stands.
+  out = g.compute(true, RouteDirection::kForward, n3, ahead, registration(7, Pose2{0.0, 40.0, 0.0}, 0.04), 0.0, Pose2{700.0, 0.0, 0.0});
+  EXPECT_FALSE(out.registration_rejected);
+  EXPECT_EQ(out.side, RouteSide::kStarboard);
+}
+
 TEST(RouteLocaliser, StepDoesNotAllocateAfterInit) {
   Scenario s;
   LocaliserConfig c = config(RouteDirection::kForward);
