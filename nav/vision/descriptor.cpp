@@ -234,6 +234,21 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
   h[56 + o1] += v11;
 }
 
+#if !QNAV_DESCRIPTOR_SIMD
+// 0 < bx < 5 and 0 < by < 5 (k5 = 5).
+inline bool in_window(float bx, float by, float k5) noexcept { return bx > 0.0f && bx < k5 && by > 0.0f && by < k5; }
+
+// One sample of the window (bin coordinates bx, by): its weight, angle bin and scatter into h.
+inline void window_sample(float* h, const float* mrow, const float* arow, int radius, int i, float bx, float by,
+                          float wx, float wy, float ori, float two_pi, float obin) noexcept {
+  const float m = mrow[i - radius] * wx * wy;
+  if (!(m > 0.0f)) return;
+  const float da = arow[i - radius] - ori;
+  const float bo = (da + (bits_of(da) < 0 ? two_pi : 0.0f)) * obin;
+  scatter_sample(h, m, bx, by, bo);
+}
+#endif
+
 // The 4 x 4 x 8 histogram in the frame rotated by ori, trilinear binning, Gaussian weights wxd x wyd,
 // cells of `cell` px, (ox, oy) = support centre - sub-pixel position. Accumulated in a 6 x 6 x 8
 // histogram with a one-cell border (cells -1..4) so the trilinear scatter needs no bounds tests; the
@@ -250,6 +265,7 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
   constexpr float kOBin = 8.0f / kTwoPi;
 #if !QNAV_DESCRIPTOR_SIMD
   float cfx[kOrientedMaxSide], sfx[kOrientedMaxSide];
+  const float k5 = 5.0f, two_pi = kTwoPi, obin = kOBin;
   for (int i = 0; i < side; ++i) {
     const float fx = static_cast<float>(i - radius) + ox;
     cfx[i] = cx * fx;
@@ -289,19 +305,29 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
       scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, pbx[i], pby[i], pbo[i]);  // even / odd samples: two copies
     }
 #else
-    // Without SIMD (LEON3, armhf without NEON) one pass: the window test first, from the products
-    // cfx[i] = cx fx, sfx[i] = sx fx taken once per descriptor (the same for every row), and the
-    // weight, angle bin and scatter only inside the window. The same values as the two passes above
-    // (a weight times keep = 1 is itself; no FMA on these targets), bit for bit.
-    for (int i = 0; i < side; ++i) {
-      const float bx = cfx[i] + bx0, by = by0 - sfx[i];
-      if (!(bx > 0.0f && bx < 5.0f && by > 0.0f && by < 5.0f)) continue;
-      const float m = mrow[i - radius] * wxd[i] * wy;
-      if (!(m > 0.0f)) continue;
-      const float da = arow[i - radius] - ori;
-      const float bo = (da + (bits_of(da) < 0 ? kTwoPi : 0.0f)) * kOBin;
-      scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, bx, by, bo);
+    // Without SIMD (LEON3, armhf without NEON) one pass over the row's samples inside the window,
+    // from the products cfx[i] = cx fx, sfx[i] = sx fx taken once per descriptor (the same for every
+    // row); the weight, angle bin and scatter only inside the window. The same values as the two
+    // passes above (a weight times keep = 1 is itself; no FMA on these targets), bit for bit.
+    // The window's samples of a row are one run i = lo..hi: fx grows with i, and bx = cx fx + bx0,
+    // by = by0 - sx fx are monotone in fx (float rounding is monotone), so each of 0 < bx < 5,
+    // 0 < by < 5 holds on one run of i and so does both. The run's ends are found by testing inwards
+    // from both ends of the row; the samples between them need no window test.
+    int lo = 0, hi = side - 1;
+    while (lo <= hi && !in_window(cfx[lo] + bx0, by0 - sfx[lo], k5)) ++lo;
+    while (hi > lo && !in_window(cfx[hi] + bx0, by0 - sfx[hi], k5)) --hi;
+    // Even samples to the first histogram copy, odd to the second (as the SIMD path), two per step.
+    int i = lo;
+    if (i <= hi && (i & 1) != 0) {
+      window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, two_pi, obin);
+      ++i;
     }
+    for (; i < hi; i += 2) {
+      window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, two_pi, obin);
+      window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i + 1, cfx[i + 1] + bx0, by0 - sfx[i + 1], wxd[i + 1], wy, ori,
+                    two_pi, obin);
+    }
+    if (i == hi) window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, two_pi, obin);
 #endif
   }
 }
