@@ -238,14 +238,39 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
 // 0 < bx < 5 and 0 < by < 5 (k5 = 5).
 inline bool in_window(float bx, float by, float k5) noexcept { return bx > 0.0f && bx < k5 && by > 0.0f && by < k5; }
 
-// One sample of the window (bin coordinates bx, by): its weight, angle bin and scatter into h.
-inline void window_sample(float* h, const float* mrow, const float* arow, int radius, int i, float bx, float by,
-                          float wx, float wy, float ori, float two_pi, float obin) noexcept {
+// The constants of the one-pass loop, read through a pointer the compiler cannot see through (see
+// cell_histograms): 2 pi and the angle-bin factor 8 / (2 pi).
+struct HistConstants {
+  float two_pi, obin;
+};
+
+// One sample of the window (bin coordinates bx, by): its weight, angle bin and trilinear scatter into
+// the histogram copy h6, the values of scatter_sample, bit for bit. The eight bins are reached from
+// two pointers (orientation bins o0 and o1 of cell (y0, x0)) with constant offsets, which SPARC
+// addresses in the load and store themselves.
+inline void window_sample(float* h6, const float* mrow, const float* arow, int radius, int i, float bx, float by,
+                          float wx, float wy, float ori, const HistConstants& k) noexcept {
   const float m = mrow[i - radius] * wx * wy;
   if (!(m > 0.0f)) return;
   const float da = arow[i - radius] - ori;
-  const float bo = (da + (bits_of(da) < 0 ? two_pi : 0.0f)) * obin;
-  scatter_sample(h, m, bx, by, bo);
+  const float bo = (da + (bits_of(da) < 0 ? k.two_pi : 0.0f)) * k.obin;
+  const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
+  const float wxf = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
+  const float m1 = m * wyy, m0 = m - m1;
+  const float m00 = m0 - m0 * wxf, m01 = m0 * wxf;
+  const float m10 = m1 - m1 * wxf, m11 = m1 * wxf;
+  float* h = h6 + (y0 * 6 + x0) * 8;
+  float* p0 = h + (oi & 7);
+  float* p1 = h + ((oi + 1) & 7);
+  const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
+  p0[0] += m00 - v00;
+  p1[0] += v00;
+  p0[8] += m01 - v01;
+  p1[8] += v01;
+  p0[48] += m10 - v10;
+  p1[48] += v10;
+  p0[56] += m11 - v11;
+  p1[56] += v11;
 }
 #endif
 
@@ -265,7 +290,13 @@ inline void window_sample(float* h, const float* mrow, const float* arow, int ra
   constexpr float kOBin = 8.0f / kTwoPi;
 #if !QNAV_DESCRIPTOR_SIMD
   float cfx[kOrientedMaxSide], sfx[kOrientedMaxSide];
-  const float k5 = 5.0f, two_pi = kTwoPi, obin = kOBin;
+  // The constants through an opaque pointer: as literals the compiler rebuilds their addresses
+  // (position-independent code on SPARC: three instructions and a load) inside the loop.
+  static const HistConstants kConsts = {kTwoPi, kOBin};
+  const HistConstants* kc = &kConsts;
+  __asm__("" : "+r"(kc));
+  const HistConstants k = *kc;
+  const float k5 = 5.0f;
   for (int i = 0; i < side; ++i) {
     const float fx = static_cast<float>(i - radius) + ox;
     cfx[i] = cx * fx;
@@ -319,15 +350,15 @@ inline void window_sample(float* h, const float* mrow, const float* arow, int ra
     // Even samples to the first histogram copy, odd to the second (as the SIMD path), two per step.
     int i = lo;
     if (i <= hi && (i & 1) != 0) {
-      window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, two_pi, obin);
+      window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, k);
       ++i;
     }
     for (; i < hi; i += 2) {
-      window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, two_pi, obin);
+      window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, k);
       window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i + 1, cfx[i + 1] + bx0, by0 - sfx[i + 1], wxd[i + 1], wy, ori,
-                    two_pi, obin);
+                    k);
     }
-    if (i == hi) window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, two_pi, obin);
+    if (i == hi) window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, k);
 #endif
   }
 }
