@@ -91,23 +91,43 @@ float zncc(const PatchDescriptor& a, const PatchDescriptor& b) noexcept {
   return d;
 }
 
+namespace {
+
 // atan2 of integer gradients by a minimax polynomial on [0, 1] (max error ~1e-5 rad), in [0, 2 pi).
 // Deterministic and much cheaper than libm's atan2. The octant tests are integer compares and the
 // float steps are unconditional (selects of constants: base + 1 * r and base - r are exactly the
 // values of the branchy form), so the gradient loop vectorises under the default -ftrapping-math.
 // For integer inputs r stays in [0, 2 pi) (r >= 2 pi would need y < 0 and r = 0 before the last
 // step, but y < 0 gives r >= min(|y| / max, pi / 4) > 0), so no final wrap is needed.
-inline float fast_angle(int y, int x) noexcept {
+// The octant offsets pi / 2, pi, 2 pi: literals by default; without SIMD the gradient loops read them
+// through an opaque pointer (angle_constants()), as position-independent SPARC code otherwise rebuilds
+// a literal's address (three instructions and a load) in each taken select of the loop.
+struct AngleConstants {
+  float half_pi = 1.57079637f, pi = 3.14159274f, two_pi = kTwoPi;
+};
+inline float fast_angle(int y, int x, const AngleConstants& k = AngleConstants{}) noexcept {
   const int ax = x < 0 ? -x : x, ay = y < 0 ? -y : y;
   const bool swap = ay > ax;
   const int mx = swap ? ay : ax, mn = swap ? ax : ay;
   const float a = static_cast<float>(mn) / static_cast<float>(mx > 0 ? mx : 1), s = a * a;
   float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
-  r = (swap ? 1.57079637f : 0.0f) + (swap ? -1.0f : 1.0f) * r;
-  r = (x < 0 ? 3.14159274f : 0.0f) + (x < 0 ? -1.0f : 1.0f) * r;
-  r = (y < 0 ? kTwoPi : 0.0f) + (y < 0 ? -1.0f : 1.0f) * r;
+  r = (swap ? k.half_pi : 0.0f) + (swap ? -1.0f : 1.0f) * r;
+  r = (x < 0 ? k.pi : 0.0f) + (x < 0 ? -1.0f : 1.0f) * r;
+  r = (y < 0 ? k.two_pi : 0.0f) + (y < 0 ? -1.0f : 1.0f) * r;
   return r;
 }
+inline AngleConstants angle_constants() noexcept {
+#if QNAV_DESCRIPTOR_SIMD
+  return AngleConstants{};
+#else
+  static const AngleConstants kConsts{};
+  const AngleConstants* k = &kConsts;
+  __asm__("" : "+r"(k));
+  return *k;
+#endif
+}
+
+}  // namespace
 
 inline std::int32_t bits_of(float f) noexcept {
   std::int32_t i;
@@ -151,10 +171,11 @@ namespace {
     }
   }
   const int n = side * side;
+  const AngleConstants kc = angle_constants();
   for (int k = 0; k < n; ++k) {
     const int gx = static_cast<int>(mag[k]), gy = static_cast<int>(ang[k]);
     mag[k] = static_cast<float>(gx * gx + gy * gy);  // exact: at most 2 * 1020^2
-    ang[k] = fast_angle(gy, gx);
+    ang[k] = fast_angle(gy, gx, kc);
   }
   // The sqrt in a separate scalar pass: libm sqrt keeps its errno path, which does not vectorise.
   for (int k = 0; k < n; ++k) mag[k] = std::sqrt(mag[k]);
@@ -168,11 +189,12 @@ namespace {
   const std::uint8_t* b = img.row(y);
   const std::uint8_t* c = img.row(y + 1);
   const int w = img.width();
+  const AngleConstants kc = angle_constants();
   for (int i = 1; i < w - 1; ++i) {
     const int gx = (a[i + 1] - a[i - 1]) + 2 * (b[i + 1] - b[i - 1]) + (c[i + 1] - c[i - 1]);
     const int gy = (c[i - 1] + 2 * c[i] + c[i + 1]) - (a[i - 1] + 2 * a[i] + a[i + 1]);
     mag[i] = static_cast<float>(gx * gx + gy * gy);
-    ang[i] = fast_angle(gy, gx);
+    ang[i] = fast_angle(gy, gx, kc);
   }
   // The sqrt in a separate pass: libm sqrt keeps its errno path, which does not vectorise.
   for (int i = 1; i < w - 1; ++i) mag[i] = std::sqrt(mag[i]);
@@ -253,7 +275,9 @@ inline void window_sample(float* h6, const float* mrow, const float* arow, int r
   const float m = mrow[i - radius] * wx * wy;
   if (!(m > 0.0f)) return;
   const float da = arow[i - radius] - ori;
-  const float bo = (da + (bits_of(da) < 0 ? k.two_pi : 0.0f)) * k.obin;
+  // da < 0 as a float compare (one instruction fewer on SPARC than the sign bit through memory):
+  // the same test, as da is never -0 (angles and ori are >= +0, and a - a = +0).
+  const float bo = (da + (da < 0.0f ? k.two_pi : 0.0f)) * k.obin;
   const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
   const float wxf = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
   const float m1 = m * wyy, m0 = m - m1;
