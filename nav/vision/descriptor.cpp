@@ -321,6 +321,7 @@ inline void window_sample(float* h6, const float* mrow, const float* arow, int r
   __asm__("" : "+r"(kc));
   const HistConstants k = *kc;
   const float k5 = 5.0f;
+  int prev_lo = -1, prev_hi = -1;  // the previous row's run of window samples (-1: none)
   for (int i = 0; i < side; ++i) {
     const float fx = static_cast<float>(i - radius) + ox;
     cfx[i] = cx * fx;
@@ -367,10 +368,45 @@ inline void window_sample(float* h6, const float* mrow, const float* arow, int r
     // The window's samples of a row are one run i = lo..hi: fx grows with i, and bx = cx fx + bx0,
     // by = by0 - sx fx are monotone in fx (float rounding is monotone), so each of 0 < bx < 5,
     // 0 < by < 5 holds on one run of i and so does both. The run's ends are found by testing inwards
-    // from both ends of the row; the samples between them need no window test.
-    int lo = 0, hi = side - 1;
-    while (lo <= hi && !in_window(cfx[lo] + bx0, by0 - sfx[lo], k5)) ++lo;
-    while (hi > lo && !in_window(cfx[hi] + bx0, by0 - sfx[hi], k5)) --hi;
+    // from the previous row's ends (the run moves by a sample or two a row), or from the row's ends
+    // after an empty row; the samples between them need no window test.
+    const auto inside = [&](int j) noexcept { return in_window(cfx[j] + bx0, by0 - sfx[j], k5); };
+    int lo, hi;
+    if (prev_lo >= 0) {
+      lo = prev_lo;
+      if (inside(lo)) {
+        while (lo > 0 && inside(lo - 1)) --lo;  // lo in the run: down to its first sample
+      } else {
+        // lo before the run (the first inside sample above it is the run's first) or after it (none
+        // above: scan from 0).
+        do ++lo;
+        while (lo < side && !inside(lo));
+        if (lo == side) {
+          lo = 0;
+          while (lo < prev_lo && !inside(lo)) ++lo;
+          if (lo == prev_lo) lo = side;  // no sample of the row inside
+        }
+      }
+    } else {
+      lo = 0;
+      while (lo < side && !inside(lo)) ++lo;
+    }
+    if (lo == side) {
+      prev_lo = -1;
+      continue;
+    }
+    // inside(lo): from the previous row's last sample (not before lo; the row's last after an empty
+    // row), up while inside, or down to the last inside sample (hi is past the run's end when
+    // !inside(hi), as hi >= lo, the run's start).
+    hi = prev_lo >= 0 ? (prev_hi > lo ? prev_hi : lo) : side - 1;
+    if (inside(hi)) {
+      while (hi < side - 1 && inside(hi + 1)) ++hi;
+    } else {
+      do --hi;
+      while (!inside(hi));
+    }
+    prev_lo = lo;
+    prev_hi = hi;
     // Even samples to the first histogram copy, odd to the second (as the SIMD path), two per step.
     int i = lo;
     if (i <= hi && (i & 1) != 0) {
