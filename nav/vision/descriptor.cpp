@@ -213,13 +213,20 @@ namespace {
     const float wy = wyo[dy + radius];
     const float* mrow = mag + (dy + radius) * stride + radius;
     const float* arow = ang + (dy + radius) * stride + radius;
-    for (int dx = -hx; dx <= hx; ++dx) {
+    // Two samples a step (in order: the same sums), then the odd one out.
+    const auto add = [&](int dx) noexcept {
       const float wm = mrow[dx] * wxo[dx + radius] * wy;
       int b = static_cast<int>(arow[dx] * (kOriBins / kTwoPi));
       b = b >= kOriBins ? kOriBins - 1 : b;
       hist[b] += wm;
       total += wm;
+    };
+    int dx = -hx;
+    for (; dx < hx; dx += 2) {
+      add(dx);
+      add(dx + 1);
     }
+    if (dx == hx) add(dx);
   }
   if (!(total > 1e-3f)) return false;
   float smooth[kOriBins];
@@ -261,9 +268,9 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
 inline bool in_window(float bx, float by, float k5) noexcept { return bx > 0.0f && bx < k5 && by > 0.0f && by < k5; }
 
 // The constants of the one-pass loop, read through a pointer the compiler cannot see through (see
-// cell_histograms): 2 pi and the angle-bin factor 8 / (2 pi).
+// cell_histograms): 2 pi, the angle-bin factor 8 / (2 pi) and the histogram's row length 6.
 struct HistConstants {
-  float two_pi, obin;
+  float two_pi, obin, six;
 };
 
 // One sample of the window (bin coordinates bx, by): its weight, angle bin and trilinear scatter into
@@ -278,12 +285,15 @@ inline void window_sample(float* h6, const float* mrow, const float* arow, int r
   // da < 0 as a float compare (one instruction fewer on SPARC than the sign bit through memory):
   // the same test, as da is never -0 (angles and ori are >= +0, and a - a = +0).
   const float bo = (da + (da < 0.0f ? k.two_pi : 0.0f)) * k.obin;
-  const int x0 = static_cast<int>(bx), y0 = static_cast<int>(by), oi = static_cast<int>(bo);
-  const float wxf = bx - static_cast<float>(x0), wyy = by - static_cast<float>(y0), wo = bo - static_cast<float>(oi);
+  // The cell's integer coordinates stay in float registers (fstoi then fitos, no trip through
+  // memory); only the cell index y0 * 6 + x0 (exact in float) and the angle bin go to integers.
+  const float x0f = static_cast<float>(static_cast<int>(bx)), y0f = static_cast<float>(static_cast<int>(by));
+  const int cell = static_cast<int>(y0f * k.six + x0f), oi = static_cast<int>(bo);
+  const float wxf = bx - x0f, wyy = by - y0f, wo = bo - static_cast<float>(oi);
   const float m1 = m * wyy, m0 = m - m1;
   const float m00 = m0 - m0 * wxf, m01 = m0 * wxf;
   const float m10 = m1 - m1 * wxf, m11 = m1 * wxf;
-  float* h = h6 + (y0 * 6 + x0) * 8;
+  float* h = h6 + cell * 8;
   float* p0 = h + (oi & 7);
   float* p1 = h + ((oi + 1) & 7);
   const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
@@ -316,7 +326,7 @@ inline void window_sample(float* h6, const float* mrow, const float* arow, int r
   float cfx[kOrientedMaxSide], sfx[kOrientedMaxSide];
   // The constants through an opaque pointer: as literals the compiler rebuilds their addresses
   // (position-independent code on SPARC: three instructions and a load) inside the loop.
-  static const HistConstants kConsts = {kTwoPi, kOBin};
+  static const HistConstants kConsts = {kTwoPi, kOBin, 6.0f};
   const HistConstants* kc = &kConsts;
   __asm__("" : "+r"(kc));
   const HistConstants k = *kc;
