@@ -105,11 +105,28 @@ namespace {
 struct AngleConstants {
   float half_pi = 1.57079637f, pi = 3.14159274f, two_pi = kTwoPi;
 };
+#if !QNAV_DESCRIPTOR_SIMD
+// 0 .. 1020 as floats (the range of a Sobel sum's magnitude): without SIMD fast_angle looks its two
+// integers up here (one load) instead of converting them (through memory on SPARC: store, load, fitos).
+constexpr int kSobelMax = 4 * 255;
+struct SobelFloats {
+  float v[kSobelMax + 1];
+  constexpr SobelFloats() : v() {
+    for (int i = 0; i <= kSobelMax; ++i) v[i] = static_cast<float>(i);
+  }
+};
+constexpr SobelFloats kSobelFloats{};
+#endif
+// x and y are Sobel sums (|x|, |y| <= 1020).
 inline float fast_angle(int y, int x, const AngleConstants& k = AngleConstants{}) noexcept {
   const int ax = x < 0 ? -x : x, ay = y < 0 ? -y : y;
   const bool swap = ay > ax;
   const int mx = swap ? ay : ax, mn = swap ? ax : ay;
+#if QNAV_DESCRIPTOR_SIMD
   const float a = static_cast<float>(mn) / static_cast<float>(mx > 0 ? mx : 1), s = a * a;
+#else
+  const float a = kSobelFloats.v[mn] / kSobelFloats.v[mx > 0 ? mx : 1], s = a * a;
+#endif
   float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
   r = (swap ? k.half_pi : 0.0f) + (swap ? -1.0f : 1.0f) * r;
   r = (x < 0 ? k.pi : 0.0f) + (x < 0 ? -1.0f : 1.0f) * r;
