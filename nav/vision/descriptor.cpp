@@ -151,7 +151,9 @@ inline std::int32_t bits_of(float f) noexcept {
   std::memcpy(&i, &f, sizeof i);
   return i;
 }
+#if QNAV_DESCRIPTOR_SIMD
 constexpr std::uint32_t kBits5 = 0x40a00000u;  // bits of 5.0f
+#endif
 
 // w[i] = exp(-(d0 + i)^2 k), i in [0, n), by the exact recurrence g(i+1) = g(i) r(i),
 // r(i+1) = r(i) exp(-2k): three exp() per table instead of n (relative error ~n * 1e-7).
@@ -259,6 +261,7 @@ namespace {
   return true;
 }
 
+#if QNAV_DESCRIPTOR_SIMD
 // One sample's trilinear scatter into the 6 x 6 x 8 histogram copy h (bin coordinates bx, by in
 // 0 < b < 5, orientation bin bo in [0, 8], weight m > 0).
 inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noexcept {
@@ -279,6 +282,7 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
   h[56 + o0] += m11 - v11;
   h[56 + o1] += v11;
 }
+#endif
 
 #if !QNAV_DESCRIPTOR_SIMD
 // 0 < bx < 5 and 0 < by < 5 (k5 = 5).
