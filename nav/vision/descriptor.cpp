@@ -91,30 +91,69 @@ float zncc(const PatchDescriptor& a, const PatchDescriptor& b) noexcept {
   return d;
 }
 
+namespace {
+
 // atan2 of integer gradients by a minimax polynomial on [0, 1] (max error ~1e-5 rad), in [0, 2 pi).
 // Deterministic and much cheaper than libm's atan2. The octant tests are integer compares and the
 // float steps are unconditional (selects of constants: base + 1 * r and base - r are exactly the
 // values of the branchy form), so the gradient loop vectorises under the default -ftrapping-math.
 // For integer inputs r stays in [0, 2 pi) (r >= 2 pi would need y < 0 and r = 0 before the last
 // step, but y < 0 gives r >= min(|y| / max, pi / 4) > 0), so no final wrap is needed.
-inline float fast_angle(int y, int x) noexcept {
+// The octant offsets pi / 2, pi, 2 pi: literals by default; without SIMD the gradient loops read them
+// through an opaque pointer (angle_constants()), as position-independent SPARC code otherwise rebuilds
+// a literal's address (three instructions and a load) in each taken select of the loop.
+struct AngleConstants {
+  float half_pi = 1.57079637f, pi = 3.14159274f, two_pi = kTwoPi;
+};
+#if !QNAV_DESCRIPTOR_SIMD
+// 0 .. 1020 as floats (the range of a Sobel sum's magnitude): without SIMD fast_angle looks its two
+// integers up here (one load) instead of converting them (through memory on SPARC: store, load, fitos).
+constexpr int kSobelMax = 4 * 255;
+struct SobelFloats {
+  float v[kSobelMax + 1];
+  constexpr SobelFloats() : v() {
+    for (int i = 0; i <= kSobelMax; ++i) v[i] = static_cast<float>(i);
+  }
+};
+constexpr SobelFloats kSobelFloats{};
+#endif
+// x and y are Sobel sums (|x|, |y| <= 1020).
+inline float fast_angle(int y, int x, const AngleConstants& k = AngleConstants{}) noexcept {
   const int ax = x < 0 ? -x : x, ay = y < 0 ? -y : y;
   const bool swap = ay > ax;
   const int mx = swap ? ay : ax, mn = swap ? ax : ay;
+#if QNAV_DESCRIPTOR_SIMD
   const float a = static_cast<float>(mn) / static_cast<float>(mx > 0 ? mx : 1), s = a * a;
+#else
+  const float a = kSobelFloats.v[mn] / kSobelFloats.v[mx > 0 ? mx : 1], s = a * a;
+#endif
   float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
-  r = (swap ? 1.57079637f : 0.0f) + (swap ? -1.0f : 1.0f) * r;
-  r = (x < 0 ? 3.14159274f : 0.0f) + (x < 0 ? -1.0f : 1.0f) * r;
-  r = (y < 0 ? kTwoPi : 0.0f) + (y < 0 ? -1.0f : 1.0f) * r;
+  r = (swap ? k.half_pi : 0.0f) + (swap ? -1.0f : 1.0f) * r;
+  r = (x < 0 ? k.pi : 0.0f) + (x < 0 ? -1.0f : 1.0f) * r;
+  r = (y < 0 ? k.two_pi : 0.0f) + (y < 0 ? -1.0f : 1.0f) * r;
   return r;
 }
+inline AngleConstants angle_constants() noexcept {
+#if QNAV_DESCRIPTOR_SIMD
+  return AngleConstants{};
+#else
+  static const AngleConstants kConsts{};
+  const AngleConstants* k = &kConsts;
+  __asm__("" : "+r"(k));
+  return *k;
+#endif
+}
+
+}  // namespace
 
 inline std::int32_t bits_of(float f) noexcept {
   std::int32_t i;
   std::memcpy(&i, &f, sizeof i);
   return i;
 }
+#if QNAV_DESCRIPTOR_SIMD
 constexpr std::uint32_t kBits5 = 0x40a00000u;  // bits of 5.0f
+#endif
 
 // w[i] = exp(-(d0 + i)^2 k), i in [0, n), by the exact recurrence g(i+1) = g(i) r(i),
 // r(i+1) = r(i) exp(-2k): three exp() per table instead of n (relative error ~n * 1e-7).
@@ -151,10 +190,11 @@ namespace {
     }
   }
   const int n = side * side;
+  const AngleConstants kc = angle_constants();
   for (int k = 0; k < n; ++k) {
     const int gx = static_cast<int>(mag[k]), gy = static_cast<int>(ang[k]);
     mag[k] = static_cast<float>(gx * gx + gy * gy);  // exact: at most 2 * 1020^2
-    ang[k] = fast_angle(gy, gx);
+    ang[k] = fast_angle(gy, gx, kc);
   }
   // The sqrt in a separate scalar pass: libm sqrt keeps its errno path, which does not vectorise.
   for (int k = 0; k < n; ++k) mag[k] = std::sqrt(mag[k]);
@@ -168,11 +208,12 @@ namespace {
   const std::uint8_t* b = img.row(y);
   const std::uint8_t* c = img.row(y + 1);
   const int w = img.width();
+  const AngleConstants kc = angle_constants();
   for (int i = 1; i < w - 1; ++i) {
     const int gx = (a[i + 1] - a[i - 1]) + 2 * (b[i + 1] - b[i - 1]) + (c[i + 1] - c[i - 1]);
     const int gy = (c[i - 1] + 2 * c[i] + c[i + 1]) - (a[i - 1] + 2 * a[i] + a[i + 1]);
     mag[i] = static_cast<float>(gx * gx + gy * gy);
-    ang[i] = fast_angle(gy, gx);
+    ang[i] = fast_angle(gy, gx, kc);
   }
   // The sqrt in a separate pass: libm sqrt keeps its errno path, which does not vectorise.
   for (int i = 1; i < w - 1; ++i) mag[i] = std::sqrt(mag[i]);
@@ -191,13 +232,20 @@ namespace {
     const float wy = wyo[dy + radius];
     const float* mrow = mag + (dy + radius) * stride + radius;
     const float* arow = ang + (dy + radius) * stride + radius;
-    for (int dx = -hx; dx <= hx; ++dx) {
+    // Two samples a step (in order: the same sums), then the odd one out.
+    const auto add = [&](int dx) noexcept {
       const float wm = mrow[dx] * wxo[dx + radius] * wy;
       int b = static_cast<int>(arow[dx] * (kOriBins / kTwoPi));
       b = b >= kOriBins ? kOriBins - 1 : b;
       hist[b] += wm;
       total += wm;
+    };
+    int dx = -hx;
+    for (; dx < hx; dx += 2) {
+      add(dx);
+      add(dx + 1);
     }
+    if (dx == hx) add(dx);
   }
   if (!(total > 1e-3f)) return false;
   float smooth[kOriBins];
@@ -213,6 +261,7 @@ namespace {
   return true;
 }
 
+#if QNAV_DESCRIPTOR_SIMD
 // One sample's trilinear scatter into the 6 x 6 x 8 histogram copy h (bin coordinates bx, by in
 // 0 < b < 5, orientation bin bo in [0, 8], weight m > 0).
 inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noexcept {
@@ -233,6 +282,52 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
   h[56 + o0] += m11 - v11;
   h[56 + o1] += v11;
 }
+#endif
+
+#if !QNAV_DESCRIPTOR_SIMD
+// 0 < bx < 5 and 0 < by < 5 (k5 = 5).
+inline bool in_window(float bx, float by, float k5) noexcept { return bx > 0.0f && bx < k5 && by > 0.0f && by < k5; }
+
+// The constants of the one-pass loop, read through a pointer the compiler cannot see through (see
+// cell_histograms): 2 pi, the angle-bin factor 8 / (2 pi) and the histogram's row length 6.
+struct HistConstants {
+  float two_pi, obin, six;
+};
+
+// One sample of the window (bin coordinates bx, by): its weight, angle bin and trilinear scatter into
+// the histogram copy h6, the values of scatter_sample, bit for bit. The eight bins are reached from
+// two pointers (orientation bins o0 and o1 of cell (y0, x0)) with constant offsets, which SPARC
+// addresses in the load and store themselves.
+inline void window_sample(float* h6, const float* mrow, const float* arow, int radius, int i, float bx, float by,
+                          float wx, float wy, float ori, const HistConstants& k) noexcept {
+  const float m = mrow[i - radius] * wx * wy;
+  if (!(m > 0.0f)) return;
+  const float da = arow[i - radius] - ori;
+  // da < 0 as a float compare (one instruction fewer on SPARC than the sign bit through memory):
+  // the same test, as da is never -0 (angles and ori are >= +0, and a - a = +0).
+  const float bo = (da + (da < 0.0f ? k.two_pi : 0.0f)) * k.obin;
+  // The cell's integer coordinates stay in float registers (fstoi then fitos, no trip through
+  // memory); only the cell index y0 * 6 + x0 (exact in float) and the angle bin go to integers.
+  const float x0f = static_cast<float>(static_cast<int>(bx)), y0f = static_cast<float>(static_cast<int>(by));
+  const int cell = static_cast<int>(y0f * k.six + x0f), oi = static_cast<int>(bo);
+  const float wxf = bx - x0f, wyy = by - y0f, wo = bo - static_cast<float>(oi);
+  const float m1 = m * wyy, m0 = m - m1;
+  const float m00 = m0 - m0 * wxf, m01 = m0 * wxf;
+  const float m10 = m1 - m1 * wxf, m11 = m1 * wxf;
+  float* h = h6 + cell * 8;
+  float* p0 = h + (oi & 7);
+  float* p1 = h + ((oi + 1) & 7);
+  const float v00 = m00 * wo, v01 = m01 * wo, v10 = m10 * wo, v11 = m11 * wo;
+  p0[0] += m00 - v00;
+  p1[0] += v00;
+  p0[8] += m01 - v01;
+  p1[8] += v01;
+  p0[48] += m10 - v10;
+  p1[48] += v10;
+  p0[56] += m11 - v11;
+  p1[56] += v11;
+}
+#endif
 
 // The 4 x 4 x 8 histogram in the frame rotated by ori, trilinear binning, Gaussian weights wxd x wyd,
 // cells of `cell` px, (ox, oy) = support centre - sub-pixel position. Accumulated in a 6 x 6 x 8
@@ -250,6 +345,14 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
   constexpr float kOBin = 8.0f / kTwoPi;
 #if !QNAV_DESCRIPTOR_SIMD
   float cfx[kOrientedMaxSide], sfx[kOrientedMaxSide];
+  // The constants through an opaque pointer: as literals the compiler rebuilds their addresses
+  // (position-independent code on SPARC: three instructions and a load) inside the loop.
+  static const HistConstants kConsts = {kTwoPi, kOBin, 6.0f};
+  const HistConstants* kc = &kConsts;
+  __asm__("" : "+r"(kc));
+  const HistConstants k = *kc;
+  const float k5 = 5.0f;
+  int prev_lo = -1, prev_hi = -1;  // the previous row's run of window samples (-1: none)
   for (int i = 0; i < side; ++i) {
     const float fx = static_cast<float>(i - radius) + ox;
     cfx[i] = cx * fx;
@@ -289,19 +392,64 @@ inline void scatter_sample(float* h6, float m, float bx, float by, float bo) noe
       scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, pbx[i], pby[i], pbo[i]);  // even / odd samples: two copies
     }
 #else
-    // Without SIMD (LEON3, armhf without NEON) one pass: the window test first, from the products
-    // cfx[i] = cx fx, sfx[i] = sx fx taken once per descriptor (the same for every row), and the
-    // weight, angle bin and scatter only inside the window. The same values as the two passes above
-    // (a weight times keep = 1 is itself; no FMA on these targets), bit for bit.
-    for (int i = 0; i < side; ++i) {
-      const float bx = cfx[i] + bx0, by = by0 - sfx[i];
-      if (!(bx > 0.0f && bx < 5.0f && by > 0.0f && by < 5.0f)) continue;
-      const float m = mrow[i - radius] * wxd[i] * wy;
-      if (!(m > 0.0f)) continue;
-      const float da = arow[i - radius] - ori;
-      const float bo = (da + (bits_of(da) < 0 ? kTwoPi : 0.0f)) * kOBin;
-      scatter_sample(h6 + (i & 1) * (6 * 6 * 8), m, bx, by, bo);
+    // Without SIMD (LEON3, armhf without NEON) one pass over the row's samples inside the window,
+    // from the products cfx[i] = cx fx, sfx[i] = sx fx taken once per descriptor (the same for every
+    // row); the weight, angle bin and scatter only inside the window. The same values as the two
+    // passes above (a weight times keep = 1 is itself; no FMA on these targets), bit for bit.
+    // The window's samples of a row are one run i = lo..hi: fx grows with i, and bx = cx fx + bx0,
+    // by = by0 - sx fx are monotone in fx (float rounding is monotone), so each of 0 < bx < 5,
+    // 0 < by < 5 holds on one run of i and so does both. The run's ends are found by testing inwards
+    // from the previous row's ends (the run moves by a sample or two a row), or from the row's ends
+    // after an empty row; the samples between them need no window test.
+    const auto inside = [&](int j) noexcept { return in_window(cfx[j] + bx0, by0 - sfx[j], k5); };
+    int lo, hi;
+    if (prev_lo >= 0) {
+      lo = prev_lo;
+      if (inside(lo)) {
+        while (lo > 0 && inside(lo - 1)) --lo;  // lo in the run: down to its first sample
+      } else {
+        // lo before the run (the first inside sample above it is the run's first) or after it (none
+        // above: scan from 0).
+        do ++lo;
+        while (lo < side && !inside(lo));
+        if (lo == side) {
+          lo = 0;
+          while (lo < prev_lo && !inside(lo)) ++lo;
+          if (lo == prev_lo) lo = side;  // no sample of the row inside
+        }
+      }
+    } else {
+      lo = 0;
+      while (lo < side && !inside(lo)) ++lo;
     }
+    if (lo == side) {
+      prev_lo = -1;
+      continue;
+    }
+    // inside(lo): from the previous row's last sample (not before lo; the row's last after an empty
+    // row), up while inside, or down to the last inside sample (hi is past the run's end when
+    // !inside(hi), as hi >= lo, the run's start).
+    hi = prev_lo >= 0 ? (prev_hi > lo ? prev_hi : lo) : side - 1;
+    if (inside(hi)) {
+      while (hi < side - 1 && inside(hi + 1)) ++hi;
+    } else {
+      do --hi;
+      while (!inside(hi));
+    }
+    prev_lo = lo;
+    prev_hi = hi;
+    // Even samples to the first histogram copy, odd to the second (as the SIMD path), two per step.
+    int i = lo;
+    if (i <= hi && (i & 1) != 0) {
+      window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, k);
+      ++i;
+    }
+    for (; i < hi; i += 2) {
+      window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, k);
+      window_sample(h6 + 6 * 6 * 8, mrow, arow, radius, i + 1, cfx[i + 1] + bx0, by0 - sfx[i + 1], wxd[i + 1], wy, ori,
+                    k);
+    }
+    if (i == hi) window_sample(h6, mrow, arow, radius, i, cfx[i] + bx0, by0 - sfx[i], wxd[i], wy, ori, k);
 #endif
   }
 }
