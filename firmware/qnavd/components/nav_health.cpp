@@ -132,7 +132,7 @@ void NavHealth::log(std::int64_t cpu_now_ns) noexcept {
                "{\"event\":\"health\",\"t_s\":%.1f,\"mode\":\"%s\",\"faults\":%u,\"pings\":%u,\"tiles\":%u,\"deadline_misses\":%u,"
                "\"ping_max_us\":%" PRId64 ",\"tile_max_us\":%" PRId64 ",\"cpu_load_pct\":%.1f,\"can_rx_overflow\":%u,\"can_rx_dropped\":%u,\"can_tx_overflow\":%u,"
                "\"ping_overflow\":%u,\"dvl_rejected\":%u,\"sonar_rejected\":%u,\"device_errors\":%u,\"can_rejected\":%u,\"dr_rejected\":%u,"
-               "\"mode_refused\":%u,\"step_errors\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
+               "\"mode_refused\":%u,\"step_errors\":%u,\"registrations_rejected\":%u,\"writer_errors\":%u,\"software_faults\":%u,\"dvl_overflow\":%u,\"can_tx_errors\":%u,"
                "\"teach_no_odometry\":%u,\"nav_resets\":%u,\"pings_rejected\":%u,\"pings_out_of_order\":%u,\"bus_off\":%s,"
                "\"frames\":%u,\"vo_frames\":%u,\"vo_visual\":%u,\"vo_no_attitude\":%u,\"frames_out_of_order\":%u,\"frame_overflow\":%u,"
                "\"camera_rejected\":%u,\"vo_max_us\":%" PRId64 ",\"map_frames\":%u,\"map_bad_frames\":%u,\"map_saves\":%u,"
@@ -142,7 +142,7 @@ void NavHealth::log(std::int64_t cpu_now_ns) noexcept {
                max_us(Stage::kTile), cpu_load_pct_, io.can_rx_overflow.load(), io.can_rx_dropped.load(),
                publisher_->counters().get(qc::TxCounter::kTxBusy), io.ping_overflow.load(), io.dvl_rejected.load(), io.sonar_rejected.load(),
                io.device_errors.load(), static_cast<unsigned>(in.receiver().counters().total()), in.dr_rejected(), n.mode_refused,
-               p_.repeat->step_errors() + map.step_errors(), p_.teach->errors() + map.save_errors(), SoftwareFaults::count(),
+               p_.repeat->step_errors() + map.step_errors(), p_.repeat->registrations_rejected(), p_.teach->errors() + map.save_errors(), SoftwareFaults::count(),
                io.dvl_overflow.load(), io.can_tx_errors.load(), n.teach_no_odometry, n.nav_resets, pings_rejected(), n.pings_out_of_order,
                in.bus_off() ? "true" : "false", n.frames, vo.frames(), vo.visual_steps(), vo.no_attitude(), n.frames_out_of_order,
                io.frame_overflow.load(), io.camera_rejected.load(), max_us(Stage::kVo), map.frames(), map.bad_frames(), map.saves(),

@@ -115,6 +115,7 @@ bool RouteRepeat::step(const pipeline::RouteTile& t, std::uint32_t tile_seq, boo
       std::fprintf(ctx_.log, "{\"event\":\"error\",\"what\":\"route experiences: %s: %s\"}\n", session_.experiences().path(), r.learn.message());
   }
   if (!r.step) ++step_errors_;
+  if (r.step && out.guidance.registration_rejected) ++registrations_rejected_;
   // The next node in the direction of travel is one spacing ahead of the node the offsets refer to
   // (the taught nodes' own spacing, as the localiser's motion model uses it); values in the DBC ranges.
   pipeline::route_can_messages(out, session_.repeater().localiser().node_spacing_m(), tile_seq, guidance_, route_status_);

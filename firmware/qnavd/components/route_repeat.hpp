@@ -62,6 +62,8 @@ class RouteRepeat {
   // Experiences learnt since start; appends or companions that failed (logged).
   std::uint32_t learned() const noexcept { return learned_; }
   std::uint32_t experience_errors() const noexcept { return experience_errors_; }
+  // Registrations guidance refused: they disagreed with dead reckoning from the last fix (GuidanceConfig::verify_gate_m).
+  std::uint32_t registrations_rejected() const noexcept { return registrations_rejected_; }
 
  private:
   const NavContext& ctx_;  // the worker's: its log is set in NavWorker::init
@@ -74,7 +76,7 @@ class RouteRepeat {
   drivers::qnavcan::RouteStatus route_status_{};
   drivers::qnavcan::RouteGuidance guidance_{};
   bool route_damaged_ = false;
-  std::uint32_t step_errors_ = 0, learned_ = 0, experience_errors_ = 0;
+  std::uint32_t step_errors_ = 0, learned_ = 0, experience_errors_ = 0, registrations_rejected_ = 0;
   void open_experiences(const char* path) noexcept;
 };
 
