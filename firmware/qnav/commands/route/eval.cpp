@@ -712,6 +712,12 @@ int cmd_framing() {
   if (!g_opt.framing_only.empty() &&
       (std::sscanf(g_opt.framing_only.c_str(), "%lf:%lf", &only_rate, &only_speed) != 2 || !(only_rate > 0.0) || !(only_speed > 0.0)))
     return usage("framing", "--only: RATE:SPEED, e.g. 2:1.5");
+  if (only_rate > 0.0) {
+    bool known = false;
+    for (double rate : rates)
+      for (double speed : speeds) known = known || (rate == only_rate && speed == only_speed);
+    if (!known) return usage("framing", "--only: RATE:SPEED must be one of the configurations: 2, 5 or 15 pings/s at 1.5 or 3 m/s");
+  }
   const long seabed = g_opt.framing_seabed;
   std::vector<Row> rows;
   Status s;

@@ -31,4 +31,8 @@ for pass in fast slow_rev; do
            END { printf "%s: tiles %d, side decided %d, %s at 3.5-6.5 m %d, ping ranges out of order %d\n", pass, n, d, want, ok, bad;
                  exit !(n >= 8 && d >= 4 && ok == d && bad == 0) }' "$W/$pass.csv" || fail "$pass results"
 done
+# route framing: a configuration it does not fly is refused by name (it once ran the reference alone).
+"$Q" route framing --only 3:1.5 > /dev/null 2> "$W/only.err"
+rc=$?
+[ $rc -eq 2 ] && grep -q "must be one of the configurations" "$W/only.err" || fail "framing --only 3:1.5: rc $rc, $(cat "$W/only.err")"
 echo "PASS"
