@@ -326,10 +326,8 @@ TEST(Guidance, DeadReckonsFromTheLastFixForABoundedDistance) {
   EXPECT_EQ(g.compute(true, RouteDirection::kForward, next, ahead, none, 0.5, nav1).status, GuidanceStatus::kHoldCourse);
 }
 
-// Issue 27 (2 pings/s, reverse at 20 % of the swath): a 7-inlier registration put the vehicle 55 m to
-// starboard one tile after a fix 20 m to port; that and the two tiles dead-reckoned from it gave three
-// wrong sides. The verification holds such a jump back until a second registration confirms it.
-TEST(Guidance, ARegistrationThatJumpsAwayFromDeadReckoningNeedsConfirming) {
+// The simulator's guidance settings with the registration check on (10 m + 3 sigma).
+GuidanceConfig verifying_guidance() {
   GuidanceConfig gc;
   gc.min_inliers = 7;
   gc.dead_reckon_max_m = 150.0;
@@ -338,6 +336,14 @@ TEST(Guidance, ARegistrationThatJumpsAwayFromDeadReckoningNeedsConfirming) {
   gc.side_deadband_m = 1.0;
   gc.verify_gate_m = 10.0;
   gc.verify_n_sigma = 3.0;
+  return gc;
+}
+
+// Issue 27 (2 pings/s, reverse at 20 % of the swath): a 7-inlier registration put the vehicle 55 m to
+// starboard one tile after a fix 20 m to port; that and the two tiles dead-reckoned from it gave three
+// wrong sides. The verification holds such a jump back until a second registration confirms it.
+TEST(Guidance, ARegistrationThatJumpsAwayFromDeadReckoningNeedsConfirming) {
+  GuidanceConfig gc = verifying_guidance();
   Guidance g(gc);
   const NodeMeta n0 = node_at(0.0, 0), n1 = node_at(60.0, 1), n2 = node_at(120.0, 2), ahead = node_at(240.0, 4);
   GuidanceOutput out = g.compute(true, RouteDirection::kForward, n0, ahead, registration(9, Pose2{0.0, -20.0, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0});
@@ -367,14 +373,7 @@ TEST(Guidance, ARegistrationThatJumpsAwayFromDeadReckoningNeedsConfirming) {
 }
 
 TEST(Guidance, TwoRegistrationsThatAgreeOverruleAWrongFix) {
-  GuidanceConfig gc;
-  gc.min_inliers = 7;
-  gc.dead_reckon_max_m = 150.0;
-  gc.dead_reckon_side_max_m = 450.0;
-  gc.dead_reckon_heading_sigma_rad = 0.025;
-  gc.side_deadband_m = 1.0;
-  gc.verify_gate_m = 10.0;
-  Guidance g(gc);
+  Guidance g(verifying_guidance());
   const NodeMeta n0 = node_at(0.0, 0), n1 = node_at(60.0, 1), n2 = node_at(120.0, 2), n3 = node_at(180.0, 3), ahead = node_at(300.0, 5);
   // The first fix is the wrong one (nothing to check it against): 55 m to starboard.
   ASSERT_EQ(g.compute(true, RouteDirection::kForward, n0, ahead, registration(8, Pose2{0.0, 55.0, 0.0}, 0.04), 0.0, Pose2{0.0, 0.0, 0.0}).side,
