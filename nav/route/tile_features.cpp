@@ -1,6 +1,7 @@
 #include "nav/route/tile_features.hpp"
 
 #include <cmath>
+#include <cstring>
 
 namespace qnav::route {
 
@@ -46,8 +47,118 @@ Status TileFeatureExtractor::init(const TileFeatureConfig& c, Arena& arena) noex
   return Status::ok();
 }
 
+namespace {
+// True when the float stored at p is neither inf nor NaN, read by its exponent bits (an integer load:
+// no float compare sequence, and no float -> integer move through memory on SPARC V8).
+inline bool finite_at(const float* p) noexcept {
+  std::uint32_t b;
+  std::memcpy(&b, __builtin_assume_aligned(p, alignof(float)), sizeof b);  // one word load, not four bytes
+  return (b & 0x7f800000u) != 0x7f800000u;
+}
+
+// Block average over covered pixels (covered: coverage non-zero, or no coverage plane, and a finite
+// intensity); a coarse pixel is covered when >= half its pixels are. Each coarse pixel sums its
+// pixels row by row, left to right, from 0.0f (the order the result depends on). sum / n: the
+// covered coarse pixels' values, for the mean. F: the factor when fixed at compile time (the loops
+// unroll), 0 = f.
+template <int F>
+void block_average_f(ConstImageViewF32 in, ConstImageViewU8 cov, int f_runtime, ImageViewF32 wk, ImageView<std::uint8_t> cv,
+                     double& sum, std::size_t& n) noexcept {
+  const int f = F > 0 ? F : f_runtime;
+  const int w = wk.width(), h = wk.height();
+  const int need = (f * f + 1) / 2;
+  const bool all_covered = cov.empty();
+  for (int y = 0; y < h; ++y) {
+    float* wr = wk.row(y);
+    std::uint8_t* cr = cv.row(y);
+    for (int x = 0; x < w; ++x) {
+      float s = 0.0f;
+      int k = 0;
+      for (int yy = 0; yy < f; ++yy) {
+        const float* ir = in.row(y * f + yy) + x * f;
+        const std::uint8_t* fr = all_covered ? nullptr : cov.row(y * f + yy) + x * f;
+        for (int t = 0; t < f; ++t)
+          if ((all_covered || fr[t] != 0) && finite_at(ir + t)) {
+            s += ir[t];
+            ++k;
+          }
+      }
+      cr[x] = k >= need ? 1 : 0;
+      wr[x] = k > 0 ? s / static_cast<float>(k) : 0.0f;
+      if (k >= need) {
+        sum += static_cast<double>(wr[x]);
+        ++n;
+      }
+    }
+  }
+}
+
+// Separable box blur of radius r (edges clamped), wk -> tp along rows, tp -> wk along columns. Each
+// output sums its 2r + 1 inputs from 0.0f in offset order -r..r, then scales by 1 / (2r + 1):
+// interior pixels skip the clamping, columns run a row at a time. R: the radius when fixed at
+// compile time (the tap loops unroll), 0 = r.
+template <int R>
+void box_blur_r(ImageViewF32 wk, ImageViewF32 tp, int r_runtime) noexcept {
+  const int r = R > 0 ? R : r_runtime;
+  const int w = wk.width(), h = wk.height();
+  const float inv = 1.0f / static_cast<float>(2 * r + 1);
+  const auto clamp = [](int v, int hi) { return v < 0 ? 0 : (v > hi ? hi : v); };
+  for (int y = 0; y < h; ++y) {
+    const float* src = wk.row(y);
+    float* dst = tp.row(y);
+    const int lo = r < w ? r : w, hi = w - r > lo ? w - r : lo;  // [lo, hi): no clamping needed
+    for (int x = 0; x < lo; ++x) {
+      float s = 0.0f;
+      for (int k = -r; k <= r; ++k) s += src[clamp(x + k, w - 1)];
+      dst[x] = s * inv;
+    }
+    for (int x = lo; x < hi; ++x) {
+      float s = 0.0f;
+      for (int k = -r; k <= r; ++k) s += src[x + k];
+      dst[x] = s * inv;
+    }
+    for (int x = hi; x < w; ++x) {
+      float s = 0.0f;
+      for (int k = -r; k <= r; ++k) s += src[clamp(x + k, w - 1)];
+      dst[x] = s * inv;
+    }
+  }
+  const float* rows[2 * 8 + 1];  // blur_radius_px <= 8 (init)
+  for (int y = 0; y < h; ++y) {
+    for (int k = -r; k <= r; ++k) rows[k + r] = tp.row(clamp(y + k, h - 1));
+    float* dst = wk.row(y);
+    for (int x = 0; x < w; ++x) {
+      float s = 0.0f;
+      for (int k = 0; k <= 2 * r; ++k) s += rows[k][x];
+      dst[x] = s * inv;
+    }
+  }
+}
+}  // namespace
+
+void TileFeatureExtractor::block_average(ConstImageViewF32 in, ConstImageViewU8 cov, ImageViewF32 wk,
+                                         ImageView<std::uint8_t> cv, double& sum, std::size_t& n) const noexcept {
+  switch (config_.downsample) {  // the factors route_defaults and camera_tile_pipeline use, unrolled
+    case 1: return block_average_f<1>(in, cov, 1, wk, cv, sum, n);
+    case 2: return block_average_f<2>(in, cov, 2, wk, cv, sum, n);
+    case 3: return block_average_f<3>(in, cov, 3, wk, cv, sum, n);
+    case 4: return block_average_f<4>(in, cov, 4, wk, cv, sum, n);
+    default: return block_average_f<0>(in, cov, config_.downsample, wk, cv, sum, n);
+  }
+}
+
+void TileFeatureExtractor::box_blur(ImageViewF32 wk, ImageViewF32 tp) const noexcept {
+  switch (config_.blur_radius_px) {
+    case 0: return;
+    case 1: return box_blur_r<1>(wk, tp, 1);
+    case 2: return box_blur_r<2>(wk, tp, 2);
+    default: return box_blur_r<0>(wk, tp, config_.blur_radius_px);
+  }
+}
+
 Status TileFeatureExtractor::extract(ConstImageViewF32 in, ConstImageViewU8 cov, const TileGeometry& g, RouteNode& out) noexcept {
   out.keypoints.clear();
+  plane_w_ = plane_h_ = 0;
   if (!ready_) return Status(StatusCode::kNotReady, "tile features: not initialised");
   if (in.empty() || in.width() > config_.max_width || in.height() > config_.max_height ||
       (!cov.empty() && (cov.width() != in.width() || cov.height() != in.height())) || !(g.resolution_m > 0.0) ||
@@ -61,67 +172,30 @@ Status TileFeatureExtractor::extract(ConstImageViewF32 in, ConstImageViewU8 cov,
     counters_.increment(FeatureCounter::kBadTile);
     return Status(StatusCode::kInvalidArgument, "tile features: tile too small for the downsample factor");
   }
-  auto fine_covered = [&](int x, int y) { return (cov.empty() || cov(x, y) != 0) && std::isfinite(in(x, y)); };
-  // Block average over covered pixels; a coarse pixel is covered when >= half its pixels are.
   ImageViewF32 wk = ImageViewF32::unchecked(work_.data(), w, h, w);
   ImageViewF32 tp = ImageViewF32::unchecked(tmp_.data(), w, h, w);
   ImageView<std::uint8_t> cv = ImageView<std::uint8_t>::unchecked(cov_.data(), w, h, w);
   double sum = 0.0;
   std::size_t n = 0;
-  const int need = (f * f + 1) / 2;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float s = 0.0f;
-      int k = 0;
-      for (int yy = y * f; yy < (y + 1) * f; ++yy)
-        for (int xx = x * f; xx < (x + 1) * f; ++xx)
-          if (fine_covered(xx, yy)) {
-            s += in(xx, yy);
-            ++k;
-          }
-      cv(x, y) = k >= need ? 1 : 0;
-      wk(x, y) = k > 0 ? s / static_cast<float>(k) : 0.0f;
-      if (k >= need) {
-        sum += static_cast<double>(wk(x, y));
-        ++n;
-      }
-    }
+  block_average(in, cov, wk, cv, sum, n);
   if (n == 0) {
     counters_.increment(FeatureCounter::kEmptyTile);
     return Status(StatusCode::kEmpty, "tile features: tile has no covered pixel");
   }
   const float mean = static_cast<float>(sum / static_cast<double>(n));
-  auto covered = [&](int x, int y) { return cv(x, y) != 0; };
-  for (int y = 0; y < h; ++y)
+  for (int y = 0; y < h; ++y) {
+    float* wr = wk.row(y);
+    const std::uint8_t* cr = cv.row(y);
     for (int x = 0; x < w; ++x)
-      if (!covered(x, y)) wk(x, y) = mean;
-  const int r = config_.blur_radius_px;
-  if (r > 0) {
-    const float inv = 1.0f / static_cast<float>(2 * r + 1);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        float s = 0.0f;
-        for (int k = -r; k <= r; ++k) {
-          int xx = x + k;
-          xx = xx < 0 ? 0 : (xx >= w ? w - 1 : xx);
-          s += wk(xx, y);
-        }
-        tp(x, y) = s * inv;
-      }
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        float s = 0.0f;
-        for (int k = -r; k <= r; ++k) {
-          int yy = y + k;
-          yy = yy < 0 ? 0 : (yy >= h ? h - 1 : yy);
-          s += tp(x, yy);
-        }
-        wk(x, y) = s * inv;
-      }
+      if (cr[x] == 0) wr[x] = mean;
   }
+  box_blur(wk, tp);
+  plane_w_ = w;
+  plane_h_ = h;
   BoundedVector<vision::Corner> corners(corners_);
   QNAV_RETURN_IF_ERROR(harris_.detect(ConstImageViewF32(wk), corners));
 
+  auto covered = [&](int x, int y) { return cv(x, y) != 0; };
   const int step = config_.descriptor_step_px;
   const Pose2 inv_pose = g.pose.inverse();
   for (const vision::Corner& c : corners) {

@@ -63,8 +63,18 @@ class TileFeatureExtractor {
                  RouteNode& out) noexcept;
   const CounterSet<FeatureCounter>& counters() const noexcept { return counters_; }
   const vision::HarrisDetector& harris() const noexcept { return harris_; }
+  // The plane the last extract found its corners on: the block-averaged tile, uncovered coarse pixels
+  // set to the covered mean, box-blurred (width / downsample x height / downsample). Valid until the
+  // next extract; empty before the first, or when that one failed before the blur.
+  ConstImageViewF32 plane() const noexcept {
+    return plane_w_ > 0 ? ConstImageViewF32::unchecked(work_.data(), plane_w_, plane_h_, plane_w_) : ConstImageViewF32{};
+  }
 
  private:
+  void block_average(ConstImageViewF32 in, ConstImageViewU8 cov, ImageViewF32 wk, ImageView<std::uint8_t> cv,
+                     double& sum, std::size_t& n) const noexcept;
+  void box_blur(ImageViewF32 wk, ImageViewF32 tp) const noexcept;  // blur_radius_px; none at 0
+
   TileFeatureConfig config_{};
   bool ready_ = false;
   vision::HarrisDetector harris_;
@@ -72,6 +82,7 @@ class TileFeatureExtractor {
   Span<float> tmp_;
   Span<std::uint8_t> cov_;
   Span<vision::Corner> corners_;
+  int plane_w_ = 0, plane_h_ = 0;  // plane(): set once the last extract has blurred its plane
   CounterSet<FeatureCounter> counters_;
 };
 
