@@ -103,7 +103,6 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
       !(norm_w <= 16.0f))
     return Status(StatusCode::kInvalidArgument, "patch align: warp not finite or scaling beyond 4x");
   const int r = config_.radius;
-  const int s = 2 * r + 1, g = s + 2, n = s * s;
   if (!std::isfinite(ref_x) || !std::isfinite(ref_y) || !std::isfinite(x0) || !std::isfinite(y0))
     return Status(StatusCode::kOutOfRange, "patch align: position not finite");
   // The template is centred on the reference point's nearest pixel (with the identity warp its samples
@@ -119,8 +118,38 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
                                                            std::fabs(warp[2]) + std::fabs(warp[3]));
   if (!inside(ref, cx, cy, static_cast<int>(std::ceil(reach))) || !inside(target, xs, ys, r))
     return Status(StatusCode::kOutOfRange, "patch align: patch outside the image");
-  // Template grid one pixel wider than the patch (for central-difference gradients), laid out in target
-  // coordinates and sampled in the reference image through the warp.
+  Hessian h;
+  QNAV_RETURN_IF_ERROR(prepare_template(ref, cx, cy, warp, rows_only, h));
+  float x = xs, y = ys;
+  Residual last;
+  QNAV_RETURN_IF_ERROR(iterate(target, xs, ys, rows_only, h, x, y, last));
+  // Quality and uncertainty from the last evaluated patch (the final update was below converge_px).
+  const float zncc = static_cast<float>(last.cross);
+  if (!(zncc >= config_.min_zncc)) return Status(StatusCode::kNotFound, "patch align: final ZNCC below min_zncc");
+  const int s = 2 * r + 1, n = s * s;
+  const int dof = rows_only ? 1 : 2;
+  const double var = last.ess / static_cast<double>(n > dof ? n - dof : 1);
+  out.x_px = x + ox;
+  out.y_px = rows_only ? y0 : y + oy;
+  out.zncc = zncc;
+  out.iterations = last.iterations;
+  if (rows_only) {
+    out.sigma_x_px = static_cast<float>(std::sqrt(var / h.xx));
+    out.sigma_y_px = 0.0f;
+  } else {
+    out.sigma_x_px = static_cast<float>(std::sqrt(var * h.yy / h.det));
+    out.sigma_y_px = static_cast<float>(std::sqrt(var * h.xx / h.det));
+  }
+  return Status::ok();
+}
+
+// Template grid one pixel wider than the patch (for central-difference gradients), laid out in target
+// coordinates and sampled in the reference image through the warp; then the template made zero-mean and
+// unit-norm, its gradients projected off {constant, template}, and their Hessian.
+Status PatchAligner::prepare_template(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], bool rows_only,
+                                      Hessian& h) noexcept {
+  const int r = config_.radius;
+  const int s = 2 * r + 1, g = s + 2, n = s * s;
   build_grid(ref, cx, cy, warp, r, rows_only);
   double sum = 0.0;
   for (int j = 0; j < s; ++j)
@@ -174,81 +203,97 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
       hyy += static_cast<double>(gy_[k]) * static_cast<double>(gy_[k]);
     }
   }
+  h.xx = hxx;
+  h.xy = hxy;
+  h.yy = hyy;
   const double min_e = static_cast<double>(config_.min_gradient_energy);
-  double det = 0.0;
   if (rows_only) {
     if (!(hxx > min_e)) return Status(StatusCode::kDegenerate, "patch align: no texture along the row");
   } else {
     const double tr = hxx + hyy;
-    det = hxx * hyy - hxy * hxy;
-    const double lmin = 0.5 * (tr - std::sqrt(std::max(0.0, tr * tr - 4.0 * det)));
-    if (!(lmin > min_e) || !(det > 0.0)) return Status(StatusCode::kDegenerate, "patch align: template without 2D texture");
+    h.det = hxx * hyy - hxy * hxy;
+    const double lmin = 0.5 * (tr - std::sqrt(std::max(0.0, tr * tr - 4.0 * h.det)));
+    if (!(lmin > min_e) || !(h.det > 0.0)) return Status(StatusCode::kDegenerate, "patch align: template without 2D texture");
   }
-  float x = xs, y = ys;
-  bool converged = false;
-  int it = 0;
-  double ess = 0.0, cross = 0.0;
-  const int ws = s + 1;                 // side of the target window under the patch
-  int win_x = -1, win_y = -1;           // its integer position (none yet)
-  for (; it < config_.max_iterations; ++it) {
+  return Status::ok();
+}
+
+// The normalised target patch at (x, y) against the template: every sample has the same fractional
+// offset, so the bilinear weights are computed once. b = sum of gradient * error, ess = sum of squared
+// errors, cross = the ZNCC.
+Status PatchAligner::evaluate(ConstImageViewU8 target, float x, float y, bool rows_only, Residual& e) noexcept {
+  const int r = config_.radius;
+  const int s = 2 * r + 1, n = s * s;
+  const int ws = s + 1;  // side of the target window under the patch
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= r: truncation is the floor
+  const float ax = x - static_cast<float>(ix), ay = y - static_cast<float>(iy);
+  const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay), w10 = (1.0f - ax) * ay, w11 = ax * ay;
+  const int px0 = ix - r, py0 = iy - r;
+  // The (s+1)^2 target pixels as floats, converted once per integer position (the estimate moves by
+  // sub-pixel steps, so usually once per call) rather than four times per sample and iteration: the
+  // same exact values, so the same sums.
+  if (ix != win_x_ || iy != win_y_) {
+    for (int j = 0; j < ws; ++j) {
+      const std::uint8_t* src = target.row(py0 + j) + px0;
+      float* dst = win_ + j * ws;
+      for (int i = 0; i < ws; ++i) dst[i] = static_cast<float>(src[i]);
+    }
+    win_x_ = ix;
+    win_y_ = iy;
+  }
+  double tsum = 0.0;
+  for (int j = 0; j < s; ++j) {
+    const float* r0 = win_ + j * ws;
+    const float* r1 = r0 + ws;
+    float row_sum = 0.0f;
+    for (int i = 0; i < s; ++i) {
+      const float v = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
+      grid_[j * s + i] = v;
+      row_sum += v;
+    }
+    tsum += static_cast<double>(row_sum);
+  }
+  const float mean_i = static_cast<float>(tsum / n);
+  float iss = 0.0f;
+  for (int k = 0; k < n; ++k) {
+    grid_[k] -= mean_i;
+    iss += grid_[k] * grid_[k];
+  }
+  if (!(iss > 1e-6f)) return Status(StatusCode::kNotFound, "patch align: flat target patch");
+  const float inv_i = 1.0f / std::sqrt(iss);
+  // Single-precision sums over at most (2 kMaxRadius + 1)^2 = 225 terms of unit-norm patches.
+  float sbx = 0.0f, sby = 0.0f, sess = 0.0f, scross = 0.0f;
+  for (int k = 0; k < n; ++k) {
+    const float iv = grid_[k] * inv_i;
+    const float d = iv - t_[k];
+    sbx += gx_[k] * d;
+    if (!rows_only) sby += gy_[k] * d;
+    sess += d * d;
+    scross += iv * t_[k];
+  }
+  e.bx = static_cast<double>(sbx);
+  e.by = static_cast<double>(sby);
+  e.ess = static_cast<double>(sess);
+  e.cross = static_cast<double>(scross);
+  return Status::ok();
+}
+
+// Gauss-Newton from (xs, ys) until the update is below converge_px; (x, y) the estimate, `last` the
+// residual of the last evaluated patch and the iterations taken.
+Status PatchAligner::iterate(ConstImageViewU8 target, float xs, float ys, bool rows_only, const Hessian& h, float& x,
+                             float& y, Residual& last) noexcept {
+  const int r = config_.radius;
+  win_x_ = -1;  // no target window converted yet
+  win_y_ = -1;
+  for (int it = 0; it < config_.max_iterations; ++it) {
     if (!inside(target, x, y, r)) return Status(StatusCode::kOutOfRange, "patch align: left the image");
-    // Normalised target patch at the current estimate: every sample has the same fractional offset, so
-    // the bilinear weights are computed once.
-    const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= r: truncation is the floor
-    const float ax = x - static_cast<float>(ix), ay = y - static_cast<float>(iy);
-    const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay), w10 = (1.0f - ax) * ay, w11 = ax * ay;
-    const int px0 = ix - r, py0 = iy - r;
-    // The (s+1)^2 target pixels as floats, converted once per integer position (the estimate moves by
-    // sub-pixel steps, so usually once per call) rather than four times per sample and iteration: the
-    // same exact values, so the same sums.
-    if (ix != win_x || iy != win_y) {
-      for (int j = 0; j < ws; ++j) {
-        const std::uint8_t* src = target.row(py0 + j) + px0;
-        float* dst = win_ + j * ws;
-        for (int i = 0; i < ws; ++i) dst[i] = static_cast<float>(src[i]);
-      }
-      win_x = ix;
-      win_y = iy;
-    }
-    double tsum = 0.0;
-    for (int j = 0; j < s; ++j) {
-      const float* r0 = win_ + j * ws;
-      const float* r1 = r0 + ws;
-      float row_sum = 0.0f;
-      for (int i = 0; i < s; ++i) {
-        const float v = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
-        grid_[j * s + i] = v;
-        row_sum += v;
-      }
-      tsum += static_cast<double>(row_sum);
-    }
-    const float mean_i = static_cast<float>(tsum / n);
-    float iss = 0.0f;
-    for (int k = 0; k < n; ++k) {
-      grid_[k] -= mean_i;
-      iss += grid_[k] * grid_[k];
-    }
-    if (!(iss > 1e-6f)) return Status(StatusCode::kNotFound, "patch align: flat target patch");
-    const float inv_i = 1.0f / std::sqrt(iss);
-    // Single-precision sums over at most (2 kMaxRadius + 1)^2 = 225 terms of unit-norm patches.
-    float sbx = 0.0f, sby = 0.0f, sess = 0.0f, scross = 0.0f;
-    for (int k = 0; k < n; ++k) {
-      const float iv = grid_[k] * inv_i;
-      const float e = iv - t_[k];
-      sbx += gx_[k] * e;
-      if (!rows_only) sby += gy_[k] * e;
-      sess += e * e;
-      scross += iv * t_[k];
-    }
-    const double bx = static_cast<double>(sbx), by = static_cast<double>(sby);
-    ess = static_cast<double>(sess);
-    cross = static_cast<double>(scross);
+    QNAV_RETURN_IF_ERROR(evaluate(target, x, y, rows_only, last));
     double dx = 0.0, dy = 0.0;
     if (rows_only) {
-      dx = bx / hxx;
+      dx = last.bx / h.xx;
     } else {
-      dx = (hyy * bx - hxy * by) / det;
-      dy = (hxx * by - hxy * bx) / det;
+      dx = (h.yy * last.bx - h.xy * last.by) / h.det;
+      dy = (h.xx * last.by - h.xy * last.bx) / h.det;
     }
     // Inverse compositional update for a translation: p <- p - dp.
     x -= static_cast<float>(dx);
@@ -256,29 +301,11 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
     if (std::fabs(x - xs) > config_.max_shift_px || std::fabs(y - ys) > config_.max_shift_px)
       return Status(StatusCode::kNotFound, "patch align: moved beyond max_shift_px");
     if (std::sqrt(dx * dx + dy * dy) < static_cast<double>(config_.converge_px)) {
-      converged = true;
-      ++it;
-      break;
+      last.iterations = it + 1;
+      return Status::ok();
     }
   }
-  if (!converged) return Status(StatusCode::kNotFound, "patch align: no convergence");
-  // Quality and uncertainty from the last evaluated patch (the final update was below converge_px).
-  const float zncc = static_cast<float>(cross);
-  if (!(zncc >= config_.min_zncc)) return Status(StatusCode::kNotFound, "patch align: final ZNCC below min_zncc");
-  const int dof = rows_only ? 1 : 2;
-  const double var = ess / static_cast<double>(n > dof ? n - dof : 1);
-  out.x_px = x + ox;
-  out.y_px = rows_only ? y0 : y + oy;
-  out.zncc = zncc;
-  out.iterations = it;
-  if (rows_only) {
-    out.sigma_x_px = static_cast<float>(std::sqrt(var / hxx));
-    out.sigma_y_px = 0.0f;
-  } else {
-    out.sigma_x_px = static_cast<float>(std::sqrt(var * hyy / det));
-    out.sigma_y_px = static_cast<float>(std::sqrt(var * hxx / det));
-  }
-  return Status::ok();
+  return Status(StatusCode::kNotFound, "patch align: no convergence");
 }
 
 }  // namespace qnav::vision

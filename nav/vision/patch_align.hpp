@@ -74,6 +74,25 @@ class PatchAligner {
   // Samples the template grid (side 2r + 3, centred on the pixel (cx, cy)) of `ref` through `warp` into grid_.
   // rows_only: the first and last rows are left out (no vertical gradients in row mode).
   void build_grid(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], int r, bool rows_only) noexcept;
+  // The normalised template's Hessian (inverse compositional: computed once per call).
+  struct Hessian {
+    double xx = 0.0, xy = 0.0, yy = 0.0, det = 0.0;
+  };
+  // One evaluation of the target patch against the template.
+  struct Residual {
+    double bx = 0.0, by = 0.0;  // sum of gradient * error
+    double ess = 0.0;           // sum of squared errors
+    double cross = 0.0;         // ZNCC of template and target patch
+    int iterations = 0;
+  };
+  // The template t_, its projected gradients gx_, gy_ and their Hessian; kDegenerate without texture.
+  Status prepare_template(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], bool rows_only,
+                          Hessian& h) noexcept;
+  // The normalised target patch at (x, y) against the template; kNotFound for a flat patch.
+  Status evaluate(ConstImageViewU8 target, float x, float y, bool rows_only, Residual& e) noexcept;
+  // The Gauss-Newton iterations from (xs, ys); kOutOfRange / kNotFound as align_warped.
+  Status iterate(ConstImageViewU8 target, float xs, float ys, bool rows_only, const Hessian& h, float& x, float& y,
+                 Residual& last) noexcept;
   PatchAlignConfig config_{};
   bool ready_ = false;
   float grid_[kMaxGrid * kMaxGrid] = {};
@@ -81,6 +100,7 @@ class PatchAligner {
   float gx_[kMaxSide * kMaxSide] = {};
   float gy_[kMaxSide * kMaxSide] = {};
   float win_[(kMaxSide + 1) * (kMaxSide + 1)] = {};  // target pixels under the patch, as floats
+  int win_x_ = -1, win_y_ = -1;                        // win_'s integer position in the target (none: -1)
 };
 
 }  // namespace qnav::vision
