@@ -37,7 +37,7 @@ def main():
         s = 0.5 * math.sqrt((m[2][1] - m[1][2]) ** 2 + (m[0][2] - m[2][0]) ** 2 + (m[1][0] - m[0][1]) ** 2)
         rmax = max(rmax, math.degrees(math.asin(min(1.0, s))))  # small angles: the skew part
     pct = 100.0 * dmax / path if path > 0 else float("inf")
-    print(f"frames {n} path {path:.6f} m max position difference {dmax:.3e} m = {pct:.5f} % of path, "
+    print(f"frames {n} path {path:.6f} m max position difference {dmax:.3e} m = {pct:.2e} % of path, "
           f"max rotation difference {rmax:.5f} deg")
 
 

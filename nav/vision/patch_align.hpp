@@ -85,7 +85,7 @@ class PatchAligner {
     double cross = 0.0;         // ZNCC of template and target patch
     int iterations = 0;
   };
-  // The template t_, its projected gradients gx_, gy_ and their Hessian; kDegenerate without texture.
+  // The raw template t_, gx_, gy_, its maps tmpl_ and the Hessian; kDegenerate without texture.
   Status prepare_template(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], bool rows_only,
                           Hessian& h) noexcept;
   // The normalised target patch at (x, y) against the template; kNotFound for a flat patch.
@@ -96,11 +96,19 @@ class PatchAligner {
   PatchAlignConfig config_{};
   bool ready_ = false;
   float grid_[kMaxGrid * kMaxGrid] = {};
-  float t_[kMaxSide * kMaxSide] = {};
-  float gx_[kMaxSide * kMaxSide] = {};
-  float gy_[kMaxSide * kMaxSide] = {};
+  float t_[kMaxSide * kMaxSide] = {};   // template samples less the grid's centre
+  float gx_[kMaxSide * kMaxSide] = {};  // twice its central differences along x
+  float gy_[kMaxSide * kMaxSide] = {};  // and along y
   float win_[(kMaxSide + 1) * (kMaxSide + 1)] = {};  // target pixels under the patch, as floats
   int win_x_ = -1, win_y_ = -1;                        // win_'s integer position in the target (none: -1)
+  // The affine maps from the raw template samples (t_, gx_, gy_: the samples less the centre and twice
+  // the central differences) to the normalised template and its projected gradients (prepare_template).
+  struct TemplateMaps {
+    double mt = 0.0, mx = 0.0, my = 0.0;  // means of T, X, Y
+    double inv = 0.0;                     // 1 / |T - mT|
+    double gxt = 0.0, gyt = 0.0;          // the gradients' parts along the normalised template
+  };
+  TemplateMaps tmpl_{};
 };
 
 }  // namespace qnav::vision
