@@ -254,7 +254,8 @@ TEST(PatchAlign, SumsGiveThePerSampleNormalisationsEstimate) {
           const float x0 = static_cast<float>(px) + 0.5f, y0 = static_cast<float>(py) + (rows_only ? 0.41f : 0.0f);
           PatchAlignResult r;
           double xr = 0.0, yr = 0.0, zr = 0.0;
-          const bool ok_ref = reference_align(ref.view(), px, py, tgt.view(), x0, y0, radius, rows_only, xr, yr, zr);
+          const bool ok_ref = reference_align(ref.view(), px, py, tgt.view(), static_cast<double>(x0),
+                                              static_cast<double>(y0), radius, rows_only, xr, yr, zr);
           if (!a.align(ref.view(), static_cast<float>(px), static_cast<float>(py), tgt.view(), x0, y0, rows_only, r).is_ok())
             continue;  // (a ZNCC below min_zncc or no convergence: checked elsewhere)
           ASSERT_TRUE(ok_ref) << px << " " << py;
