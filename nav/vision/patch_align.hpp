@@ -11,7 +11,9 @@
 // sampled bilinearly, made zero-mean and unit-norm, with its gradients (central differences on a grid
 // one pixel wider). Each iteration samples the target patch at the current estimate, normalises it the
 // same way (gain and bias drop out), and solves the 2x2 (1x1 in row mode) normal equations of the
-// template gradients for the update (inverse compositional: the Hessian is computed once). It stops
+// template gradients for the update (inverse compositional: the Hessian is computed once). Both
+// normalisations are applied to sums (one pass over the template, one per iteration; the maps are in
+// patch_align.cpp), the same estimate as per-sample normalisation up to rounding. It stops
 // when the update is below converge_px, after max_iterations, or when the estimate leaves
 // max_shift_px of the start or the image.
 //
@@ -22,7 +24,7 @@
 // smaller Hessian eigenvalue below min_gradient_energy), kNotFound (no convergence, moved beyond
 // max_shift_px, or final ZNCC below min_zncc).
 // Cost: O((2r+3)^2) to build the template + O(iterations * (2r+1)^2); no heap (fixed arrays for
-// radius <= kMaxRadius, about 4.9 KB in the object).
+// radius <= kMaxRadius, about 5 KB in the object).
 #pragma once
 
 #include "nav/core/image.hpp"
