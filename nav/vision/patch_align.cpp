@@ -103,7 +103,6 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
       !(norm_w <= 16.0f))
     return Status(StatusCode::kInvalidArgument, "patch align: warp not finite or scaling beyond 4x");
   const int r = config_.radius;
-  const int s = 2 * r + 1, g = s + 2, n = s * s;
   if (!std::isfinite(ref_x) || !std::isfinite(ref_y) || !std::isfinite(x0) || !std::isfinite(y0))
     return Status(StatusCode::kOutOfRange, "patch align: position not finite");
   // The template is centred on the reference point's nearest pixel (with the identity warp its samples
@@ -119,136 +118,184 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
                                                            std::fabs(warp[2]) + std::fabs(warp[3]));
   if (!inside(ref, cx, cy, static_cast<int>(std::ceil(reach))) || !inside(target, xs, ys, r))
     return Status(StatusCode::kOutOfRange, "patch align: patch outside the image");
-  // Template grid one pixel wider than the patch (for central-difference gradients), laid out in target
-  // coordinates and sampled in the reference image through the warp.
+  Hessian h;
+  QNAV_RETURN_IF_ERROR(prepare_template(ref, cx, cy, warp, rows_only, h));
+  float x = xs, y = ys;
+  Residual last;
+  QNAV_RETURN_IF_ERROR(iterate(target, xs, ys, rows_only, h, x, y, last));
+  // Quality and uncertainty from the last evaluated patch (the final update was below converge_px).
+  const float zncc = static_cast<float>(last.cross);
+  if (!(zncc >= config_.min_zncc)) return Status(StatusCode::kNotFound, "patch align: final ZNCC below min_zncc");
+  const int s = 2 * r + 1, n = s * s;
+  const int dof = rows_only ? 1 : 2;
+  const double var = last.ess / static_cast<double>(n > dof ? n - dof : 1);
+  out.x_px = x + ox;
+  out.y_px = rows_only ? y0 : y + oy;
+  out.zncc = zncc;
+  out.iterations = last.iterations;
+  if (rows_only) {
+    out.sigma_x_px = static_cast<float>(std::sqrt(var / h.xx));
+    out.sigma_y_px = 0.0f;
+  } else {
+    out.sigma_x_px = static_cast<float>(std::sqrt(var * h.yy / h.det));
+    out.sigma_y_px = static_cast<float>(std::sqrt(var * h.xx / h.det));
+  }
+  return Status::ok();
+}
+
+// Template grid one pixel wider than the patch (for central-difference gradients), laid out in target
+// coordinates and sampled in the reference image through the warp. The normalised template and its
+// gradients are affine in the raw samples, so one pass keeps the raw ones and their first and second
+// moments, and the rest is closed form. With T the samples less the grid's centre (an exact bias that
+// keeps the sums small), X and Y twice the central differences, m() a mean, c(A, B) = sum (A - mA)(B - mB)
+// and inv = 1 / sqrt(c(T, T)):
+//   t   = inv (T - mT)                          zero mean, unit norm
+//   gx  = inv (X - mX) / 2 - gxt t,  gxt = inv^2 c(T, X) / 2   the gradient less its mean and its
+//                                                              part along t (the target patch is
+//                                                              normalised too: a shift cannot change
+//                                                              it along {constant, t}; without this a
+//                                                              patch on a brightness ramp gets a Hessian
+//                                                              the error never sees)
+//   hxx = sum gx^2 = inv^2 c(X, X) / 4 - gxt^2,  hxy = inv^2 c(X, Y) / 4 - gxt gyt  (sum t^2 = 1, sum gx t = 0)
+// evaluate() correlates the target patch with the raw T, X, Y and applies the same maps to the sums.
+Status PatchAligner::prepare_template(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], bool rows_only,
+                                      Hessian& h) noexcept {
+  const int r = config_.radius;
+  const int s = 2 * r + 1, g = s + 2, n = s * s;
   build_grid(ref, cx, cy, warp, r, rows_only);
-  double sum = 0.0;
-  for (int j = 0; j < s; ++j)
+  const float base = grid_[(r + 1) * g + (r + 1)];
+  double st = 0.0, sx = 0.0, sy = 0.0, stt = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0, stx = 0.0, sty = 0.0;
+  for (int j = 0; j < s; ++j) {
+    const float* row = grid_ + (j + 1) * g + 1;
+    float* t = t_ + j * s;
+    float* gx = gx_ + j * s;
+    float* gy = gy_ + j * s;
     for (int i = 0; i < s; ++i) {
-      const int k = j * s + i, c = (j + 1) * g + (i + 1);
-      t_[k] = grid_[c];
-      gx_[k] = 0.5f * (grid_[c + 1] - grid_[c - 1]);
-      if (!rows_only) gy_[k] = 0.5f * (grid_[c + g] - grid_[c - g]);
-      sum += static_cast<double>(t_[k]);
-    }
-  const float mean_t = static_cast<float>(sum / n);
-  double ss = 0.0;
-  for (int k = 0; k < n; ++k) {
-    t_[k] -= mean_t;
-    ss += static_cast<double>(t_[k]) * static_cast<double>(t_[k]);
-  }
-  if (!(ss > 1e-6)) return Status(StatusCode::kDegenerate, "patch align: flat template");
-  const float inv = static_cast<float>(1.0 / std::sqrt(ss));
-  double mgx = 0.0, mgy = 0.0;
-  for (int k = 0; k < n; ++k) {
-    t_[k] *= inv;
-    gx_[k] *= inv;
-    mgx += static_cast<double>(gx_[k]);
-    if (!rows_only) {
-      gy_[k] *= inv;
-      mgy += static_cast<double>(gy_[k]);
+      const float tv = row[i] - base, xv = row[i + 1] - row[i - 1];
+      t[i] = tv;
+      gx[i] = xv;
+      const double td = static_cast<double>(tv), xd = static_cast<double>(xv);
+      st += td;
+      sx += xd;
+      stt += td * td;
+      sxx += xd * xd;
+      stx += td * xd;
+      if (!rows_only) {
+        const float yv = row[i + g] - row[i - g];
+        gy[i] = yv;
+        const double yd = static_cast<double>(yv);
+        sy += yd;
+        syy += yd * yd;
+        sxy += xd * yd;
+        sty += td * yd;
+      }
     }
   }
-  // The target patch is normalised too (zero mean, unit norm), so a shift can only change it within the
-  // complement of {constant, template}: project both out of the gradient images. (Without this a patch
-  // on a brightness ramp -- gradients with a large mean -- gets a Hessian the error never sees, and
-  // every step falls short.)
-  mgx /= n;
-  mgy /= n;
-  double gxt = 0.0, gyt = 0.0;
-  for (int k = 0; k < n; ++k) {
-    gx_[k] -= static_cast<float>(mgx);
-    gxt += static_cast<double>(gx_[k]) * static_cast<double>(t_[k]);
-    if (!rows_only) {
-      gy_[k] -= static_cast<float>(mgy);
-      gyt += static_cast<double>(gy_[k]) * static_cast<double>(t_[k]);
-    }
-  }
-  double hxx = 0.0, hxy = 0.0, hyy = 0.0;
-  for (int k = 0; k < n; ++k) {
-    gx_[k] -= static_cast<float>(gxt) * t_[k];
-    hxx += static_cast<double>(gx_[k]) * static_cast<double>(gx_[k]);
-    if (!rows_only) {
-      gy_[k] -= static_cast<float>(gyt) * t_[k];
-      hxy += static_cast<double>(gx_[k]) * static_cast<double>(gy_[k]);
-      hyy += static_cast<double>(gy_[k]) * static_cast<double>(gy_[k]);
-    }
-  }
+  const double inv_n = 1.0 / static_cast<double>(n);
+  const double mt = st * inv_n, mx = sx * inv_n, my = sy * inv_n;
+  const double ctt = stt - st * mt;
+  if (!(ctt > 1e-6)) return Status(StatusCode::kDegenerate, "patch align: flat template");
+  const double inv = 1.0 / std::sqrt(ctt), inv2 = inv * inv;
+  const double gxt = 0.5 * inv2 * (stx - st * mx);
+  const double gyt = rows_only ? 0.0 : 0.5 * inv2 * (sty - st * my);
+  tmpl_ = TemplateMaps{mt, mx, my, inv, gxt, gyt};
+  const double hxx = 0.25 * inv2 * (sxx - sx * mx) - gxt * gxt;
+  h.xx = hxx;
   const double min_e = static_cast<double>(config_.min_gradient_energy);
-  double det = 0.0;
   if (rows_only) {
     if (!(hxx > min_e)) return Status(StatusCode::kDegenerate, "patch align: no texture along the row");
-  } else {
-    const double tr = hxx + hyy;
-    det = hxx * hyy - hxy * hxy;
-    const double lmin = 0.5 * (tr - std::sqrt(std::max(0.0, tr * tr - 4.0 * det)));
-    if (!(lmin > min_e) || !(det > 0.0)) return Status(StatusCode::kDegenerate, "patch align: template without 2D texture");
+    return Status::ok();
   }
-  float x = xs, y = ys;
-  bool converged = false;
-  int it = 0;
-  double ess = 0.0, cross = 0.0;
-  const int ws = s + 1;                 // side of the target window under the patch
-  int win_x = -1, win_y = -1;           // its integer position (none yet)
-  for (; it < config_.max_iterations; ++it) {
+  const double hyy = 0.25 * inv2 * (syy - sy * my) - gyt * gyt;
+  const double hxy = 0.25 * inv2 * (sxy - sx * my) - gxt * gyt;
+  h.xy = hxy;
+  h.yy = hyy;
+  const double tr = hxx + hyy;
+  h.det = hxx * hyy - hxy * hxy;
+  const double lmin = 0.5 * (tr - std::sqrt(std::max(0.0, tr * tr - 4.0 * h.det)));
+  if (!(lmin > min_e) || !(h.det > 0.0)) return Status(StatusCode::kDegenerate, "patch align: template without 2D texture");
+  return Status::ok();
+}
+
+// The normalised target patch at (x, y) against the template, in one pass: every sample has the same
+// fractional offset (the bilinear weights are computed once), and both normalisations are applied to
+// sums rather than to samples. With v the bilinear samples, c = v - mean(v), inv_v = 1 / |c| and the
+// template maps of prepare_template (sum t = sum gx = sum gx t = 0, sum t^2 = 1):
+//   sum t v  = inv (sum T v - mT sum v)
+//   cross    = sum (inv_v c) t = inv_v sum t v                    (the ZNCC)
+//   b        = sum gx (inv_v c - t) = inv_v (inv (sum X v - mX sum v) / 2 - gxt sum t v)
+//   ess      = sum (inv_v c - t)^2 = 2 - 2 cross
+// so one pass gathers sum v, sum v^2, sum T v, sum X v and sum Y v. The target pixels are taken less
+// the window's centre pixel (exact integers: small sums; the normalised patch does not depend on it).
+Status PatchAligner::evaluate(ConstImageViewU8 target, float x, float y, bool rows_only, Residual& e) noexcept {
+  const int r = config_.radius;
+  const int s = 2 * r + 1, n = s * s;
+  const int ws = s + 1;  // side of the target window under the patch
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= r: truncation is the floor
+  const float ax = x - static_cast<float>(ix), ay = y - static_cast<float>(iy);
+  const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay), w10 = (1.0f - ax) * ay, w11 = ax * ay;
+  const int px0 = ix - r, py0 = iy - r;
+  // The (s+1)^2 target pixels less the centre pixel, as floats, converted once per integer position (the
+  // estimate moves by sub-pixel steps, so usually once per call).
+  if (ix != win_x_ || iy != win_y_) {
+    const float base = kU8Float.v[target.row(iy)[ix]];
+    for (int j = 0; j < ws; ++j) {
+      const std::uint8_t* src = target.row(py0 + j) + px0;
+      float* dst = win_ + j * ws;
+      for (int i = 0; i < ws; ++i) dst[i] = kU8Float.v[src[i]] - base;
+    }
+    win_x_ = ix;
+    win_y_ = iy;
+  }
+  double sv = 0.0, svv = 0.0;
+  float stv = 0.0f, sxv = 0.0f, syv = 0.0f;
+  for (int j = 0; j < s; ++j) {
+    const float* r0 = win_ + j * ws;
+    const float* r1 = r0 + ws;
+    const float* t = t_ + j * s;
+    const float* gx = gx_ + j * s;
+    const float* gy = gy_ + j * s;
+    float row_sum = 0.0f, row_sq = 0.0f;
+    for (int i = 0; i < s; ++i) {
+      const float v = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
+      row_sum += v;
+      row_sq += v * v;
+      stv += t[i] * v;
+      sxv += gx[i] * v;
+      if (!rows_only) syv += gy[i] * v;
+    }
+    sv += static_cast<double>(row_sum);
+    svv += static_cast<double>(row_sq);
+  }
+  const double mean = sv / n;
+  const double iss = svv - sv * mean;
+  if (!(iss > 1e-6)) return Status(StatusCode::kNotFound, "patch align: flat target patch");
+  const double inv_v = 1.0 / std::sqrt(iss);
+  const TemplateMaps& m = tmpl_;
+  const double tv = m.inv * (static_cast<double>(stv) - m.mt * sv);
+  e.cross = inv_v * tv;
+  e.bx = inv_v * (0.5 * m.inv * (static_cast<double>(sxv) - m.mx * sv) - m.gxt * tv);
+  e.by = rows_only ? 0.0 : inv_v * (0.5 * m.inv * (static_cast<double>(syv) - m.my * sv) - m.gyt * tv);
+  e.ess = std::max(0.0, 2.0 - 2.0 * e.cross);
+  return Status::ok();
+}
+
+// Gauss-Newton from (xs, ys) until the update is below converge_px; (x, y) the estimate, `last` the
+// residual of the last evaluated patch and the iterations taken.
+Status PatchAligner::iterate(ConstImageViewU8 target, float xs, float ys, bool rows_only, const Hessian& h, float& x,
+                             float& y, Residual& last) noexcept {
+  const int r = config_.radius;
+  win_x_ = -1;  // no target window converted yet
+  win_y_ = -1;
+  for (int it = 0; it < config_.max_iterations; ++it) {
     if (!inside(target, x, y, r)) return Status(StatusCode::kOutOfRange, "patch align: left the image");
-    // Normalised target patch at the current estimate: every sample has the same fractional offset, so
-    // the bilinear weights are computed once.
-    const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= r: truncation is the floor
-    const float ax = x - static_cast<float>(ix), ay = y - static_cast<float>(iy);
-    const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay), w10 = (1.0f - ax) * ay, w11 = ax * ay;
-    const int px0 = ix - r, py0 = iy - r;
-    // The (s+1)^2 target pixels as floats, converted once per integer position (the estimate moves by
-    // sub-pixel steps, so usually once per call) rather than four times per sample and iteration: the
-    // same exact values, so the same sums.
-    if (ix != win_x || iy != win_y) {
-      for (int j = 0; j < ws; ++j) {
-        const std::uint8_t* src = target.row(py0 + j) + px0;
-        float* dst = win_ + j * ws;
-        for (int i = 0; i < ws; ++i) dst[i] = static_cast<float>(src[i]);
-      }
-      win_x = ix;
-      win_y = iy;
-    }
-    double tsum = 0.0;
-    for (int j = 0; j < s; ++j) {
-      const float* r0 = win_ + j * ws;
-      const float* r1 = r0 + ws;
-      float row_sum = 0.0f;
-      for (int i = 0; i < s; ++i) {
-        const float v = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
-        grid_[j * s + i] = v;
-        row_sum += v;
-      }
-      tsum += static_cast<double>(row_sum);
-    }
-    const float mean_i = static_cast<float>(tsum / n);
-    float iss = 0.0f;
-    for (int k = 0; k < n; ++k) {
-      grid_[k] -= mean_i;
-      iss += grid_[k] * grid_[k];
-    }
-    if (!(iss > 1e-6f)) return Status(StatusCode::kNotFound, "patch align: flat target patch");
-    const float inv_i = 1.0f / std::sqrt(iss);
-    // Single-precision sums over at most (2 kMaxRadius + 1)^2 = 225 terms of unit-norm patches.
-    float sbx = 0.0f, sby = 0.0f, sess = 0.0f, scross = 0.0f;
-    for (int k = 0; k < n; ++k) {
-      const float iv = grid_[k] * inv_i;
-      const float e = iv - t_[k];
-      sbx += gx_[k] * e;
-      if (!rows_only) sby += gy_[k] * e;
-      sess += e * e;
-      scross += iv * t_[k];
-    }
-    const double bx = static_cast<double>(sbx), by = static_cast<double>(sby);
-    ess = static_cast<double>(sess);
-    cross = static_cast<double>(scross);
+    QNAV_RETURN_IF_ERROR(evaluate(target, x, y, rows_only, last));
     double dx = 0.0, dy = 0.0;
     if (rows_only) {
-      dx = bx / hxx;
+      dx = last.bx / h.xx;
     } else {
-      dx = (hyy * bx - hxy * by) / det;
-      dy = (hxx * by - hxy * bx) / det;
+      dx = (h.yy * last.bx - h.xy * last.by) / h.det;
+      dy = (h.xx * last.by - h.xy * last.bx) / h.det;
     }
     // Inverse compositional update for a translation: p <- p - dp.
     x -= static_cast<float>(dx);
@@ -256,29 +303,11 @@ Status PatchAligner::align_warped(ConstImageViewU8 ref, float ref_x, float ref_y
     if (std::fabs(x - xs) > config_.max_shift_px || std::fabs(y - ys) > config_.max_shift_px)
       return Status(StatusCode::kNotFound, "patch align: moved beyond max_shift_px");
     if (std::sqrt(dx * dx + dy * dy) < static_cast<double>(config_.converge_px)) {
-      converged = true;
-      ++it;
-      break;
+      last.iterations = it + 1;
+      return Status::ok();
     }
   }
-  if (!converged) return Status(StatusCode::kNotFound, "patch align: no convergence");
-  // Quality and uncertainty from the last evaluated patch (the final update was below converge_px).
-  const float zncc = static_cast<float>(cross);
-  if (!(zncc >= config_.min_zncc)) return Status(StatusCode::kNotFound, "patch align: final ZNCC below min_zncc");
-  const int dof = rows_only ? 1 : 2;
-  const double var = ess / static_cast<double>(n > dof ? n - dof : 1);
-  out.x_px = x + ox;
-  out.y_px = rows_only ? y0 : y + oy;
-  out.zncc = zncc;
-  out.iterations = it;
-  if (rows_only) {
-    out.sigma_x_px = static_cast<float>(std::sqrt(var / hxx));
-    out.sigma_y_px = 0.0f;
-  } else {
-    out.sigma_x_px = static_cast<float>(std::sqrt(var * hyy / det));
-    out.sigma_y_px = static_cast<float>(std::sqrt(var * hxx / det));
-  }
-  return Status::ok();
+  return Status(StatusCode::kNotFound, "patch align: no convergence");
 }
 
 }  // namespace qnav::vision

@@ -11,7 +11,9 @@
 // sampled bilinearly, made zero-mean and unit-norm, with its gradients (central differences on a grid
 // one pixel wider). Each iteration samples the target patch at the current estimate, normalises it the
 // same way (gain and bias drop out), and solves the 2x2 (1x1 in row mode) normal equations of the
-// template gradients for the update (inverse compositional: the Hessian is computed once). It stops
+// template gradients for the update (inverse compositional: the Hessian is computed once). Both
+// normalisations are applied to sums (one pass over the template, one per iteration; the maps are in
+// patch_align.cpp), the same estimate as per-sample normalisation up to rounding. It stops
 // when the update is below converge_px, after max_iterations, or when the estimate leaves
 // max_shift_px of the start or the image.
 //
@@ -22,7 +24,7 @@
 // smaller Hessian eigenvalue below min_gradient_energy), kNotFound (no convergence, moved beyond
 // max_shift_px, or final ZNCC below min_zncc).
 // Cost: O((2r+3)^2) to build the template + O(iterations * (2r+1)^2); no heap (fixed arrays for
-// radius <= kMaxRadius, about 4.9 KB in the object).
+// radius <= kMaxRadius, about 5 KB in the object).
 #pragma once
 
 #include "nav/core/image.hpp"
@@ -74,13 +76,41 @@ class PatchAligner {
   // Samples the template grid (side 2r + 3, centred on the pixel (cx, cy)) of `ref` through `warp` into grid_.
   // rows_only: the first and last rows are left out (no vertical gradients in row mode).
   void build_grid(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], int r, bool rows_only) noexcept;
+  // The normalised template's Hessian (inverse compositional: computed once per call).
+  struct Hessian {
+    double xx = 0.0, xy = 0.0, yy = 0.0, det = 0.0;
+  };
+  // One evaluation of the target patch against the template.
+  struct Residual {
+    double bx = 0.0, by = 0.0;  // sum of gradient * error
+    double ess = 0.0;           // sum of squared errors
+    double cross = 0.0;         // ZNCC of template and target patch
+    int iterations = 0;
+  };
+  // The raw template t_, gx_, gy_, its maps tmpl_ and the Hessian; kDegenerate without texture.
+  Status prepare_template(ConstImageViewU8 ref, float cx, float cy, const float (&warp)[4], bool rows_only,
+                          Hessian& h) noexcept;
+  // The normalised target patch at (x, y) against the template; kNotFound for a flat patch.
+  Status evaluate(ConstImageViewU8 target, float x, float y, bool rows_only, Residual& e) noexcept;
+  // The Gauss-Newton iterations from (xs, ys); kOutOfRange / kNotFound as align_warped.
+  Status iterate(ConstImageViewU8 target, float xs, float ys, bool rows_only, const Hessian& h, float& x, float& y,
+                 Residual& last) noexcept;
   PatchAlignConfig config_{};
   bool ready_ = false;
   float grid_[kMaxGrid * kMaxGrid] = {};
-  float t_[kMaxSide * kMaxSide] = {};
-  float gx_[kMaxSide * kMaxSide] = {};
-  float gy_[kMaxSide * kMaxSide] = {};
+  float t_[kMaxSide * kMaxSide] = {};   // template samples less the grid's centre
+  float gx_[kMaxSide * kMaxSide] = {};  // twice its central differences along x
+  float gy_[kMaxSide * kMaxSide] = {};  // and along y
   float win_[(kMaxSide + 1) * (kMaxSide + 1)] = {};  // target pixels under the patch, as floats
+  int win_x_ = -1, win_y_ = -1;                        // win_'s integer position in the target (none: -1)
+  // The affine maps from the raw template samples (t_, gx_, gy_: the samples less the centre and twice
+  // the central differences) to the normalised template and its projected gradients (prepare_template).
+  struct TemplateMaps {
+    double mt = 0.0, mx = 0.0, my = 0.0;  // means of T, X, Y
+    double inv = 0.0;                     // 1 / |T - mT|
+    double gxt = 0.0, gyt = 0.0;          // the gradients' parts along the normalised template
+  };
+  TemplateMaps tmpl_{};
 };
 
 }  // namespace qnav::vision

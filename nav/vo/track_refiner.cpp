@@ -105,7 +105,10 @@ Vec3d TrackRefiner::local_normal(Span<const match::Landmark3> ref, std::size_t i
     const Vec3d d = ref[idx[i]].position_m - mean;
     cov += d * d.transpose();
   }
-  Eigen::SelfAdjointEigenSolver<Mat3d> es(cov);
+  // The closed-form 3 x 3 solve (the characteristic cubic's roots, eigenvectors by cross products) rather
+  // than the iterative one: on a LEON3 most of local_normal's count was the tridiagonal QL iterations.
+  Eigen::SelfAdjointEigenSolver<Mat3d> es;
+  es.computeDirect(cov);
   if (es.info() != Eigen::Success) return facing;
   const Vec3d ev = es.eigenvalues();  // increasing
   if (!(ev(1) > 0.0) || !(ev(0) <= config_.max_planarity * ev(1))) return facing;

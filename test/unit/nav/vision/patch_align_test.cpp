@@ -183,6 +183,95 @@ TEST(PatchAlign, BadInputIsAnErrorNotAWrongPosition) {
   EXPECT_EQ(a.align_warped(ref.view(), 30, 30, huge_warp, ref.view(), 30, 30, false, r).code(), StatusCode::kInvalidArgument);
 }
 
+// The aligner normalises through sums (one pass per template, one per iteration); this is the per-sample
+// form in double (the template made zero-mean and unit-norm, its gradients projected off {constant,
+// template}, the target patch normalised at every iteration), identity warp, the template on the pixel
+// (cx, cy). Returns false where it does not converge.
+bool reference_align(ConstImageViewU8 ref, int cx, int cy, ConstImageViewU8 tgt, double x, double y, int r, bool rows_only,
+                     double& xo, double& yo, double& zncc) {
+  const int s = 2 * r + 1, n = s * s;
+  const std::size_t nz = static_cast<std::size_t>(n);
+  std::vector<double> t(nz), gx(nz), gy(nz), v(nz);
+  for (int j = 0; j < s; ++j)
+    for (int i = 0; i < s; ++i) {
+      const int u = cx - r + i, w = cy - r + j, k = j * s + i;
+      t[k] = ref(u, w);
+      gx[k] = 0.5 * (ref(u + 1, w) - ref(u - 1, w));
+      gy[k] = rows_only ? 0.0 : 0.5 * (ref(u, w + 1) - ref(u, w - 1));
+    }
+  auto normalise = [n](std::vector<double>& a) {
+    double m = 0.0, ss = 0.0;
+    for (double e : a) m += e / n;
+    for (double& e : a) ss += (e - m) * (e - m);
+    for (double& e : a) e = (e - m) / std::sqrt(ss);
+    return 1.0 / std::sqrt(ss);
+  };
+  const double inv = normalise(t);
+  for (std::vector<double>* g : {&gx, &gy}) {
+    double m = 0.0, gt = 0.0;
+    for (double& e : *g) e *= inv;
+    for (double e : *g) m += e / n;
+    for (int k = 0; k < n; ++k) gt += ((*g)[k] - m) * t[k];
+    for (int k = 0; k < n; ++k) (*g)[k] = (*g)[k] - m - gt * t[k];
+  }
+  double hxx = 0.0, hxy = 0.0, hyy = 0.0;
+  for (int k = 0; k < n; ++k) hxx += gx[k] * gx[k], hxy += gx[k] * gy[k], hyy += gy[k] * gy[k];
+  for (int it = 0; it < 12; ++it) {
+    const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+    const double ax = x - ix, ay = y - iy;
+    for (int j = 0; j < s; ++j)
+      for (int i = 0; i < s; ++i) {
+        const int u = ix - r + i, w = iy - r + j;
+        v[j * s + i] = (1 - ax) * (1 - ay) * tgt(u, w) + ax * (1 - ay) * tgt(u + 1, w) + (1 - ax) * ay * tgt(u, w + 1) +
+                       ax * ay * tgt(u + 1, w + 1);
+      }
+    normalise(v);
+    double bx = 0.0, by = 0.0;
+    zncc = 0.0;
+    for (int k = 0; k < n; ++k) bx += gx[k] * (v[k] - t[k]), by += gy[k] * (v[k] - t[k]), zncc += v[k] * t[k];
+    const double dx = rows_only ? bx / hxx : (hyy * bx - hxy * by) / (hxx * hyy - hxy * hxy);
+    const double dy = rows_only ? 0.0 : (hxx * by - hxy * bx) / (hxx * hyy - hxy * hxy);
+    x -= dx;
+    y -= dy;
+    if (std::hypot(dx, dy) < 0.01) {
+      xo = x, yo = y;
+      return true;
+    }
+  }
+  return false;
+}
+
+TEST(PatchAlign, SumsGiveThePerSampleNormalisationsEstimate) {
+  Img ref(96, 96), tgt(96, 96);
+  ref.render([](double x, double y, double& u, double& v) { u = x; v = y; });
+  tgt.render([](double x, double y, double& u, double& v) { u = x - 0.83 + 0.004 * y; v = y + 0.41; }, 0.7, 40.0);
+  for (int radius : {3, 5}) {
+    PatchAligner a = configured(radius);
+    int checked = 0;
+    for (int py = 24; py <= 72; py += 12)
+      for (int px = 24; px <= 72; px += 8)
+        for (bool rows_only : {false, true}) {
+          const float x0 = static_cast<float>(px) + 0.5f, y0 = static_cast<float>(py) + (rows_only ? 0.41f : 0.0f);
+          PatchAlignResult r;
+          double xr = 0.0, yr = 0.0, zr = 0.0;
+          const bool ok_ref = reference_align(ref.view(), px, py, tgt.view(), static_cast<double>(x0),
+                                              static_cast<double>(y0), radius, rows_only, xr, yr, zr);
+          if (!a.align(ref.view(), static_cast<float>(px), static_cast<float>(py), tgt.view(), x0, y0, rows_only, r).is_ok())
+            continue;  // (a ZNCC below min_zncc or no convergence: checked elsewhere)
+          ASSERT_TRUE(ok_ref) << px << " " << py;
+          // The same iterates up to float rounding: the final positions differ by far less than the
+          // 0.01 px convergence step, the ZNCC to float precision.
+          EXPECT_NEAR(r.x_px, xr, 2e-4) << px << " " << py << " rows " << rows_only;
+          if (!rows_only) {
+            EXPECT_NEAR(r.y_px, yr, 2e-4) << px << " " << py;
+          }
+          EXPECT_NEAR(r.zncc, zr, 2e-6) << px << " " << py << " rows " << rows_only;
+          ++checked;
+        }
+    EXPECT_GT(checked, 50) << radius;
+  }
+}
+
 TEST(PatchAlign, AlignsWithoutHeap) {
   Img ref(64, 64), tgt(64, 64);
   ref.render([](double x, double y, double& u, double& v) { u = x; v = y; });

@@ -131,6 +131,36 @@ TEST(TrackRefiner, NeighbourSearchAlongXGivesTheFullScansNormalBitForBit) {
   EXPECT_FALSE(TrackRefiner::sort_by_x(span, Span<std::int32_t>(order.data(), order.size() - 1)));
 }
 
+// local_normal's closed-form 3 x 3 solve: on points scattered over a tilted plane (an irregular cloud, so
+// the neighbourhoods differ) the normal is the plane's to 1e-9 and faces the camera; with the points lifted
+// off the plane by up to 0.1 mm (neighbours about 0.1 m apart) it stays within 0.5 deg.
+TEST(TrackRefiner, LocalNormalIsThePlanesNormal) {
+  TrackRefiner t;
+  ASSERT_TRUE(t.init(TrackRefineConfig{}, camera()).is_ok());
+  const Vec3d n_true = Vec3d(0.2, -0.5, -1.0).normalized();  // towards the camera (n . p < 0 ahead)
+  const Vec3d e1 = n_true.unitOrthogonal(), e2 = n_true.cross(e1);
+  const Vec3d origin(0.0, 0.0, 2.0);
+  for (const double rough_m : {0.0, 1e-4}) {
+    std::vector<match::Landmark3> ref;
+    for (int k = 0; k < 60; ++k) {
+      match::Landmark3 l;
+      l.position_m = origin + 0.5 * std::sin(1.3 * k + 0.2) * e1 + 0.4 * std::cos(2.1 * k) * e2 +
+                     rough_m * std::sin(5.7 * k) * n_true;
+      ref.push_back(l);
+    }
+    const Span<const match::Landmark3> span(ref.data(), ref.size());
+    for (std::size_t i = 0; i < ref.size(); ++i) {
+      const Vec3d n = t.local_normal(span, i);
+      ASSERT_NEAR(n.norm(), 1.0, 1e-12) << i;
+      const double angle = std::atan2(n.cross(n_true).norm(), n.dot(n_true));
+      if (rough_m == 0.0)
+        EXPECT_LT(angle, 1e-9) << i;
+      else
+        EXPECT_LT(angle, deg_to_rad(0.5)) << i;
+    }
+  }
+}
+
 TEST(TrackRefiner, RefinedPointIsTheSamePhysicalPointToAFractionOfAPixel) {
   const Scene s;
   Pose3 ref_pose;  // the reference camera is the world
