@@ -331,7 +331,7 @@ std::size_t FcMatcher2d::appearance_pruned(const KeypointSet2d& a, const Keypoin
     const double var = static_cast<double>(s2) - static_cast<double>(s1) * s1 / static_cast<double>(d);
     st[0] = static_cast<float>(s1);
     st[1] = var > 1e-9 ? static_cast<float>(1.0 / std::sqrt(var)) : 0.0f;
-    const double i = st[1];
+    const double i = static_cast<double>(st[1]);
     const double cr2 = static_cast<double>(r2) - static_cast<double>(r1) * r1 / static_cast<double>(d - h);
     f[0] = st[1];
     f[1] = static_cast<float>(s1 * i * 0.125);
