@@ -248,46 +248,43 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
       list[pos] = Candidate{static_cast<std::uint16_t>(i), static_cast<std::uint16_t>(j), z, 0.0f};
     };
     if (!scalar) {
-    // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
-    // (independent iterations the compiler pipelines or vectorises), then the selection: the same
-    // float expression per pair as the loop below, so the same z.
-    const std::int16_t* da = wide_a_.data() + i * d;
-    std::int32_t* dots = dot_row_.data();
-    if (d == 64) {
-      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
+      // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
+      // (independent iterations the compiler pipelines or vectorises), then the selection: the same
+      // float expression per pair as the loop below, so the same z.
+      const std::int16_t* da = wide_a_.data() + i * d;
+      std::int32_t* dots = dot_row_.data();
+      if (d == 64) {
+        for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
+      } else {
+        for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
+      }
+      float* zs = z_row_.data();
+      const float* sum_b = sum_b_.data();
+      const float* inv_b = inv_b_.data();
+      for (std::size_t j = 0; j < nb; ++j) {
+        const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
+        zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
+      }
+      for (std::size_t j = 0; j < nb; ++j) keep_best(j, zs[j]);
     } else {
-      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
-    }
-    float* zs = z_row_.data();
-    const float* sum_b = sum_b_.data();
-    const float* inv_b = inv_b_.data();
-    for (std::size_t j = 0; j < nb; ++j) {
-      const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
-      zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
-    }
-    for (std::size_t j = 0; j < nb; ++j) keep_best(j, zs[j]);
-    } else {
-    // Without SIMD: the dot products of rows i and i + 1 are taken together (dot_rows_2, on the int8
-    // descriptors) when row i's are not already in dot_row_'s second half; then the selection in b
-    // order with the same float expression per pair as before, so the same z.
-    const std::int32_t* rows = dot_row_.data() + config_.max_points;  // row i + 1's, taken with row i's
-    if (paired_row != i) {
-      std::int32_t* r0 = dot_row_.data();
-      const std::int8_t* a0 = a.descriptors.data() + i * d;
-      const bool pair = i + 1 < na;
-      const std::int8_t* a1 = pair ? a0 + d : a0;
-      if (d == 64)
-        dot_rows_2<64>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);
-      else
-        dot_rows_2<0>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);
-      paired_row = pair ? i + 1 : na;
-      rows = r0;
-    }
-    for (std::size_t j = 0; j < nb; ++j) {
-      const float ib = stats_b_[2 * j + 1];
-      if (ib == 0.0f) continue;
-      keep_best(j, (static_cast<float>(rows[j]) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
-    }
+      // Without SIMD: the dot products of rows i and i + 1 are taken together (dot_rows_2, on the int8
+      // descriptors) when row i's are not already in dot_row_'s second half; then the selection in b
+      // order with the same float expression per pair as before, so the same z.
+      const std::int32_t* rows = dot_row_.data() + config_.max_points;  // row i + 1's, taken with row i's
+      if (paired_row != i) {
+        std::int32_t* r0 = dot_row_.data();
+        const std::int8_t* a0 = a.descriptors.data() + i * d;
+        const bool pair = i + 1 < na;
+        const std::int8_t* a1 = pair ? a0 + d : a0;
+        dot_rows_2<0>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);  // d != 64 (64: appearance_pruned)
+        paired_row = pair ? i + 1 : na;
+        rows = r0;
+      }
+      for (std::size_t j = 0; j < nb; ++j) {
+        const float ib = stats_b_[2 * j + 1];
+        if (ib == 0.0f) continue;
+        keep_best(j, (static_cast<float>(rows[j]) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
+      }
     }
     nc += have;
   }
