@@ -20,7 +20,7 @@
 // products run on int16 copies of the descriptors (widened once per call; a 16-bit multiply-add the
 // compiler vectorises on x86 and ARM, the same integer sums as int8), with a fixed-length loop for
 // 64-byte descriptors; without SIMD (LEON3, armhf VFP) on the int8 descriptors, two rows of A
-// against four of B per pass (the same integer sums), and for 64-byte descriptors pruned: the last 16
+// against four of B per pass (the same integer sums), and for 64-byte descriptors pruned: the last 12
 // terms of a pair only when a Cauchy-Schwarz bound on them lets it join a's list (the same lists,
 // bit for bit; FcMatch2dConfig::force_scalar_kernels takes this path on any build, for the tests).
 // Memory: init() takes all buffers from an Arena (2 * max_points * max_descriptor_bytes int16 of
