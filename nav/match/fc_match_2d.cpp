@@ -29,6 +29,16 @@ float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcep
 namespace {
 
 #if defined(__SSE2__) || defined(__ARM_NEON)
+constexpr bool kSimd = true;
+#else
+constexpr bool kSimd = false;
+#endif
+
+// The appearance pruning (the no-SIMD path for descriptors of kPrunedBytes): the first kHeadBytes terms
+// of every dot product, the other kPrunedBytes - kHeadBytes only for pairs whose bound can pass.
+constexpr std::size_t kPrunedBytes = 64;
+constexpr std::size_t kHeadBytes = 52;
+
 // Integer dot product of two widened descriptors: int16 x int16 summed in int32 (exact: |product| <=
 // 2^14, at most a few hundred terms). The fixed-length form lets the compiler unroll and vectorise it
 // (pmaddwd on x86, smlal on ARM). Without SIMD the kernels below are used instead.
@@ -44,7 +54,7 @@ inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::s
   for (std::size_t q = 0; q < d; ++q) s += static_cast<std::int32_t>(a[q]) * b[q];
   return s;
 }
-#else
+
 // Without SIMD (LEON3, armhf VFP): two rows of A against four consecutive rows of B (row stride d)
 // in one pass over the terms, on the int8 descriptors themselves: per term 2 + 4 loads for 8
 // multiply-adds instead of 2 loads per multiply-add, the 8 sums held in registers (D > 0: a fixed
@@ -94,6 +104,42 @@ inline void dot_i8_2x1(const std::int8_t* a0, const std::int8_t* a1, const std::
   r1 = s1;
 }
 
+// The first M terms of the dot products of two rows of A with four consecutive rows of B (row stride
+// S), for the pruned path below: the same loop shape as dot_i8_2x4.
+template <std::size_t M, std::size_t S>
+inline void dot_i8_2x4_head(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::int32_t* r0,
+                            std::int32_t* r1) noexcept {
+  std::int32_t s00 = 0, s01 = 0, s02 = 0, s03 = 0, s10 = 0, s11 = 0, s12 = 0, s13 = 0;
+  for (std::size_t q = 0; q < M; ++q) {
+    const std::int32_t x0 = a0[q], x1 = a1[q];
+    const std::int32_t y0 = b[q], y1 = b[S + q], y2 = b[2 * S + q], y3 = b[3 * S + q];
+    s00 += x0 * y0;
+    s01 += x0 * y1;
+    s02 += x0 * y2;
+    s03 += x0 * y3;
+    s10 += x1 * y0;
+    s11 += x1 * y1;
+    s12 += x1 * y2;
+    s13 += x1 * y3;
+  }
+  r0[0] = s00;
+  r0[1] = s01;
+  r0[2] = s02;
+  r0[3] = s03;
+  r1[0] = s10;
+  r1[1] = s11;
+  r1[2] = s12;
+  r1[3] = s13;
+}
+
+// The dot product of n terms of two int8 rows (the pruned path's remaining terms of one pair).
+template <std::size_t N>
+inline std::int32_t dot_i8(const std::int8_t* x, const std::int8_t* y) noexcept {
+  std::int32_t s = 0;
+  for (std::size_t q = 0; q < N; ++q) s += static_cast<std::int32_t>(x[q]) * y[q];
+  return s;
+}
+
 // The dot products of A's rows i0 and i1 (i1 may equal i0) with every row of B, into r0[0, nb) and r1[0, nb).
 template <std::size_t D>
 void dot_rows_2(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t nb, std::size_t d,
@@ -103,7 +149,6 @@ void dot_rows_2(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t*
   for (; j + 4 <= nb; j += 4) dot_i8_2x4<D>(a0, a1, b + j * n, d, r0 + j, r1 + j);
   for (; j < nb; ++j) dot_i8_2x1<D>(a0, a1, b + j * n, d, r0[j], r1[j]);
 }
-#endif
 
 }  // namespace
 
@@ -111,7 +156,7 @@ std::size_t FcMatcher2d::arena_bytes(const FcMatch2dConfig& c) noexcept {
   const std::size_t nc = c.max_points * c.max_candidates_per_point;
   return nc * sizeof(Candidate) + (c.max_points + 1) * sizeof(std::uint32_t) + 3 * nc * sizeof(std::uint32_t) + nc * sizeof(Vec2d) + 4 * nc * sizeof(double) +
          2 * c.max_points + 4 * c.max_points * sizeof(float) + 2 * c.max_points * c.max_descriptor_bytes * sizeof(std::int16_t) +
-         c.max_points * (2 * sizeof(std::int32_t) + 3 * sizeof(float)) +
+         c.max_points * (2 * sizeof(std::int32_t) + 3 * sizeof(float)) + 12 * c.max_points * sizeof(float) +
          128;
 }
 
@@ -142,9 +187,10 @@ Status FcMatcher2d::init(const FcMatch2dConfig& c, Arena& arena) noexcept {
   z_row_ = arena.allocate<float>(c.max_points);
   sum_b_ = arena.allocate<float>(c.max_points);
   inv_b_ = arena.allocate<float>(c.max_points);
+  bound_ = arena.allocate<float>(12 * c.max_points);
   if (cand_.empty() || first_.empty() || order_.empty() || sorted_a_.empty() || near_.empty() || translation_.empty() ||
       sorted_tx_.empty() || sorted_ty_.empty() || sorted_ax_.empty() || sorted_ay_.empty() || used_a_.empty() || used_b_.empty() || stats_a_.empty() || stats_b_.empty() ||
-      wide_a_.empty() || wide_b_.empty() || dot_row_.empty() || z_row_.empty() || sum_b_.empty() || inv_b_.empty())
+      wide_a_.empty() || wide_b_.empty() || dot_row_.empty() || z_row_.empty() || sum_b_.empty() || inv_b_.empty() || bound_.empty())
     return Status(StatusCode::kCapacityExceeded, "fc_match_2d: arena too small");
   config_ = c;
   ready_ = true;
@@ -158,6 +204,9 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
                                                std::size_t nb) noexcept {
   const std::size_t k = config_.max_candidates_per_point;
   const std::size_t d = a.desc_bytes;
+  // Without SIMD (or forced, for the tests): the int8 kernels, pruned for kPrunedBytes descriptors.
+  const bool scalar = !kSimd || config_.force_scalar_kernels;
+  if (scalar && d == kPrunedBytes) return appearance_pruned(a, b, na, nb);
   auto stats = [d](const std::int8_t* p, float* st) {
     std::int32_t s1 = 0, s2 = 0;
     for (std::size_t q = 0; q < d; ++q) {
@@ -170,21 +219,17 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
   };
   for (std::size_t i = 0; i < na; ++i) stats(a.descriptors.data() + i * d, stats_a_.data() + 2 * i);
   for (std::size_t j = 0; j < nb; ++j) stats(b.descriptors.data() + j * d, stats_b_.data() + 2 * j);
-#if defined(__SSE2__) || defined(__ARM_NEON)
-  for (std::size_t j = 0; j < nb; ++j) {  // for the row loop below, which vectorises
-    sum_b_[j] = stats_b_[2 * j];
-    inv_b_[j] = stats_b_[2 * j + 1];
+  if (!scalar) {
+    for (std::size_t j = 0; j < nb; ++j) {  // for the row loop below, which vectorises
+      sum_b_[j] = stats_b_[2 * j];
+      inv_b_[j] = stats_b_[2 * j + 1];
+    }
+    for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
+    for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
   }
-#endif
-#if defined(__SSE2__) || defined(__ARM_NEON)
-  for (std::size_t q = 0; q < na * d; ++q) wide_a_[q] = a.descriptors[q];
-  for (std::size_t q = 0; q < nb * d; ++q) wide_b_[q] = b.descriptors[q];
-#endif
   const float inv_d = 1.0f / static_cast<float>(d);
   std::size_t nc = 0;
-#if !(defined(__SSE2__) || defined(__ARM_NEON))
-  std::size_t paired_row = na;  // the row of A whose dot products are in dot_row_'s second half (na: none)
-#endif
+  std::size_t paired_row = na;  // scalar: the row of A whose dot products are in dot_row_'s second half (na: none)
   for (std::size_t i = 0; i < na; ++i) {
     first_[i] = static_cast<std::uint32_t>(nc);
     const float sa = stats_a_[2 * i], ia = stats_a_[2 * i + 1];
@@ -202,49 +247,171 @@ std::size_t FcMatcher2d::appearance_candidates(const KeypointSet2d& a, const Key
       }
       list[pos] = Candidate{static_cast<std::uint16_t>(i), static_cast<std::uint16_t>(j), z, 0.0f};
     };
-#if defined(__SSE2__) || defined(__ARM_NEON)
-    // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
-    // (independent iterations the compiler pipelines or vectorises), then the selection: the same
-    // float expression per pair as the loop below, so the same z.
-    const std::int16_t* da = wide_a_.data() + i * d;
-    std::int32_t* dots = dot_row_.data();
-    if (d == 64) {
-      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
+    if (!scalar) {
+      // With SIMD: the row's dot products, then its ZNCCs, each in a loop without branches
+      // (independent iterations the compiler pipelines or vectorises), then the selection: the same
+      // float expression per pair as the loop below, so the same z.
+      const std::int16_t* da = wide_a_.data() + i * d;
+      std::int32_t* dots = dot_row_.data();
+      if (d == 64) {
+        for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16<64>(da, wide_b_.data() + j * 64);
+      } else {
+        for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
+      }
+      float* zs = z_row_.data();
+      const float* sum_b = sum_b_.data();
+      const float* inv_b = inv_b_.data();
+      for (std::size_t j = 0; j < nb; ++j) {
+        const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
+        zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
+      }
+      for (std::size_t j = 0; j < nb; ++j) keep_best(j, zs[j]);
     } else {
-      for (std::size_t j = 0; j < nb; ++j) dots[j] = dot_i16(da, wide_b_.data() + j * d, d);
+      // Without SIMD: the dot products of rows i and i + 1 are taken together (dot_rows_2, on the int8
+      // descriptors) when row i's are not already in dot_row_'s second half; then the selection in b
+      // order with the same float expression per pair as before, so the same z.
+      const std::int32_t* rows = dot_row_.data() + config_.max_points;  // row i + 1's, taken with row i's
+      if (paired_row != i) {
+        std::int32_t* r0 = dot_row_.data();
+        const std::int8_t* a0 = a.descriptors.data() + i * d;
+        const bool pair = i + 1 < na;
+        const std::int8_t* a1 = pair ? a0 + d : a0;
+        dot_rows_2<0>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);  // d != 64 (64: appearance_pruned)
+        paired_row = pair ? i + 1 : na;
+        rows = r0;
+      }
+      for (std::size_t j = 0; j < nb; ++j) {
+        const float ib = stats_b_[2 * j + 1];
+        if (ib == 0.0f) continue;
+        keep_best(j, (static_cast<float>(rows[j]) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
+      }
     }
-    float* zs = z_row_.data();
-    const float* sum_b = sum_b_.data();
-    const float* inv_b = inv_b_.data();
-    for (std::size_t j = 0; j < nb; ++j) {
-      const float z = (static_cast<float>(dots[j]) - sa * sum_b[j] * inv_d) * ia * inv_b[j];
-      zs[j] = inv_b[j] == 0.0f ? -std::numeric_limits<float>::infinity() : z;  // a flat b is no candidate
-    }
-    for (std::size_t j = 0; j < nb; ++j) keep_best(j, zs[j]);
-#else
-    // Without SIMD: the dot products of rows i and i + 1 are taken together (dot_rows_2, on the int8
-    // descriptors) when row i's are not already in dot_row_'s second half; then the selection in b
-    // order with the same float expression per pair as before, so the same z.
-    const std::int32_t* rows = dot_row_.data() + config_.max_points;  // row i + 1's, taken with row i's
-    if (paired_row != i) {
-      std::int32_t* r0 = dot_row_.data();
-      const std::int8_t* a0 = a.descriptors.data() + i * d;
-      const bool pair = i + 1 < na;
-      const std::int8_t* a1 = pair ? a0 + d : a0;
-      if (d == 64)
-        dot_rows_2<64>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);
-      else
-        dot_rows_2<0>(a0, a1, b.descriptors.data(), nb, d, r0, r0 + config_.max_points);
-      paired_row = pair ? i + 1 : na;
-      rows = r0;
-    }
-    for (std::size_t j = 0; j < nb; ++j) {
-      const float ib = stats_b_[2 * j + 1];
-      if (ib == 0.0f) continue;
-      keep_best(j, (static_cast<float>(rows[j]) - sa * stats_b_[2 * j] * inv_d) * ia * ib);
-    }
-#endif
     nc += have;
+  }
+  first_[na] = static_cast<std::uint32_t>(nc);
+  return nc;
+}
+
+// appearance_candidates() without SIMD for kPrunedBytes descriptors: the same stats_a_ / stats_b_ and
+// the same candidate lists, bit for bit. A pair (a, b) joins a's list only if its z (the float
+// expression below, monotonic in the integer dot product) clears min_appearance and, once the list is
+// full, its last entry. Rows i and i + 1 of A are taken against four rows of B at a time over the
+// first kHeadBytes terms (p, exact). On the other r = kPrunedBytes - kHeadBytes terms (sums s_r,
+// centred norms c_r = |x_r - mean(x_r)|), Cauchy-Schwarz bounds the rest of the dot product by
+// c_ra c_rb + s_ra s_rb / r, so with i = 1 / sqrt(n var) and s the whole sums,
+//   z <= U = p ia ib - (sa ia / 8) (sb ib / 8) + (s_ra ia / 4) (s_rb ib / 4) + (c_ra ia) (c_rb ib) + margin,
+// margin = 2^-12 (1 + max_A g_a g_b), g = i |x| >= 1: every term of U and z is at most g_a g_b in
+// size, so their float rounding stays below 2^-18 (1 + g_a g_b). A pair whose U cannot join is
+// dropped; else its remaining terms are added and z is computed as in the unpruned path. Each row's
+// list sees the pairs in b order as before (row i + 1's is kept aside until row i's is complete).
+std::size_t FcMatcher2d::appearance_pruned(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na,
+                                           std::size_t nb) noexcept {
+  constexpr std::size_t d = kPrunedBytes, h = kHeadBytes;
+  const std::size_t k = config_.max_candidates_per_point;
+  const float inv_d = 1.0f / static_cast<float>(d);
+  const float min_app = config_.min_appearance;
+  const float inf = std::numeric_limits<float>::infinity();
+  // One pass per descriptor: stats as appearance_candidates() computes them (the same integer sums),
+  // and the bound's factors: f[0] = i, f[1] = s i / 8, f[2] = s_r i / 4, f[3] = c_r i; returns g.
+  const auto factors = [](const std::int8_t* p, float* st, float* f) {
+    std::int32_t s1 = 0, s2 = 0, r1 = 0, r2 = 0;
+    for (std::size_t q = 0; q < h; ++q) {
+      s1 += p[q];
+      s2 += static_cast<std::int32_t>(p[q]) * p[q];
+    }
+    for (std::size_t q = h; q < d; ++q) {
+      r1 += p[q];
+      r2 += static_cast<std::int32_t>(p[q]) * p[q];
+    }
+    s1 += r1;
+    s2 += r2;
+    const double var = static_cast<double>(s2) - static_cast<double>(s1) * s1 / static_cast<double>(d);
+    st[0] = static_cast<float>(s1);
+    st[1] = var > 1e-9 ? static_cast<float>(1.0 / std::sqrt(var)) : 0.0f;
+    const double i = static_cast<double>(st[1]);
+    const double cr2 = static_cast<double>(r2) - static_cast<double>(r1) * r1 / static_cast<double>(d - h);
+    f[0] = st[1];
+    f[1] = static_cast<float>(s1 * i * 0.125);
+    f[2] = static_cast<float>(r1 * i / std::sqrt(static_cast<double>(d - h)));
+    f[3] = static_cast<float>(std::sqrt(cr2 > 0.0 ? cr2 : 0.0) * i);
+    return std::sqrt(static_cast<double>(s2)) * i;
+  };
+  static_assert(d == 64, "the bound's factor 1/8 is 1/sqrt(d)");
+  float* fa = bound_.data();                     // per a: 4 factors
+  float* fb = bound_.data() + 4 * config_.max_points;  // per b: 4 factors, then its constant term
+  double max_ga = 0.0;
+  for (std::size_t i = 0; i < na; ++i) max_ga = std::max(max_ga, factors(a.descriptors.data() + i * d, stats_a_.data() + 2 * i, fa + 4 * i));
+  for (std::size_t j = 0; j < nb; ++j) {
+    const double g = factors(b.descriptors.data() + j * d, stats_b_.data() + 2 * j, fb + 8 * j);
+    fb[8 * j + 4] = fb[8 * j] == 0.0f ? -inf : static_cast<float>(0x1p-12 * (1.0 + max_ga * g));  // a flat b: U = -inf
+  }
+  // Row state; cut: a pair can join only if its z > cut (before the list is full: the float just
+  // below min_appearance, so z > cut is z >= min_appearance; then the list's last z). A flat row's
+  // cut is +inf.
+  const float open_cut = std::nextafter(min_app, -inf);
+  struct Row {
+    const std::int8_t* x;
+    Candidate* list;
+    std::size_t have;
+    std::uint16_t index;
+    float sa, ia;
+  };
+  // The pair passed its bound: its remaining terms, its z as in the unpruned path, the list
+  // insertion; returns the row's new cut. Kept out of line (most pairs do not get here).
+  const auto finish = [&](Row& r, std::size_t j, std::int32_t p) __attribute__((noinline)) -> float {
+    const std::int32_t dot = p + dot_i8<d - h>(r.x + h, b.descriptors.data() + j * d + h);
+    const float ib = stats_b_[2 * j + 1];
+    const float z = (static_cast<float>(dot) - r.sa * stats_b_[2 * j] * inv_d) * r.ia * ib;
+    if (z >= min_app && !(r.have == k && z <= r.list[k - 1].appearance)) {
+      std::size_t pos = r.have < k ? r.have++ : k - 1;
+      while (pos > 0 && r.list[pos - 1].appearance < z) {
+        r.list[pos] = r.list[pos - 1];
+        --pos;
+      }
+      r.list[pos] = Candidate{r.index, static_cast<std::uint16_t>(j), z, 0.0f};
+    }
+    return r.have == k ? r.list[k - 1].appearance : open_cut;
+  };
+  const auto bound = [](std::int32_t p, const float* x, const float* y) {
+    return (((static_cast<float>(p) * x[0] * y[0] - x[1] * y[1]) + x[2] * y[2]) + x[3] * y[3]) + y[4];
+  };
+  Candidate spare[32];  // row i + 1's list while row i's is built (k <= 32, init())
+  std::int32_t head0[4], head1[4];
+  std::size_t nc = 0;
+  for (std::size_t i = 0; i < na; i += 2) {
+    const bool pair = i + 1 < na;
+    const std::int8_t* a0 = a.descriptors.data() + i * d;
+    const std::int8_t* a1 = pair ? a0 + d : a0;
+    Row r0{a0, cand_.data() + nc, 0, static_cast<std::uint16_t>(i), stats_a_[2 * i], stats_a_[2 * i + 1]};
+    Row r1{a1, spare, 0, static_cast<std::uint16_t>(i + 1), pair ? stats_a_[2 * i + 2] : 0.0f, pair ? stats_a_[2 * i + 3] : 0.0f};
+    const float* x0 = fa + 4 * i;
+    const float* x1 = pair ? x0 + 4 : x0;
+    float cut0 = r0.ia != 0.0f ? open_cut : inf, cut1 = r1.ia != 0.0f ? open_cut : inf;  // flat rows: no candidates
+    if (cut0 != inf || cut1 != inf) {
+      std::size_t j = 0;
+      for (; j + 4 <= nb; j += 4) {
+        dot_i8_2x4_head<h, d>(a0, a1, b.descriptors.data() + j * d, head0, head1);
+        for (std::size_t t = 0; t < 4; ++t) {
+          const float* y = fb + 8 * (j + t);
+          if (bound(head0[t], x0, y) > cut0) cut0 = finish(r0, j + t, head0[t]);
+          if (bound(head1[t], x1, y) > cut1) cut1 = finish(r1, j + t, head1[t]);
+        }
+      }
+      for (; j < nb; ++j) {
+        const std::int8_t* yb = b.descriptors.data() + j * d;
+        const std::int32_t p0 = dot_i8<h>(a0, yb), p1 = dot_i8<h>(a1, yb);
+        const float* y = fb + 8 * j;
+        if (bound(p0, x0, y) > cut0) cut0 = finish(r0, j, p0);
+        if (bound(p1, x1, y) > cut1) cut1 = finish(r1, j, p1);
+      }
+    }
+    first_[i] = static_cast<std::uint32_t>(nc);
+    nc += r0.have;
+    if (pair) {
+      first_[i + 1] = static_cast<std::uint32_t>(nc);
+      for (std::size_t q = 0; q < r1.have; ++q) cand_[nc + q] = spare[q];
+      nc += r1.have;
+    }
   }
   first_[na] = static_cast<std::uint32_t>(nc);
   return nc;

@@ -20,10 +20,13 @@
 // products run on int16 copies of the descriptors (widened once per call; a 16-bit multiply-add the
 // compiler vectorises on x86 and ARM, the same integer sums as int8), with a fixed-length loop for
 // 64-byte descriptors; without SIMD (LEON3, armhf VFP) on the int8 descriptors, two rows of A
-// against four of B per pass (the same integer sums).
+// against four of B per pass (the same integer sums), and for 64-byte descriptors pruned: the last 12
+// terms of a pair only when a Cauchy-Schwarz bound on them lets it join a's list (the same lists,
+// bit for bit; FcMatch2dConfig::force_scalar_kernels takes this path on any build, for the tests).
 // Memory: init() takes all buffers from an Arena (2 * max_points * max_descriptor_bytes int16 of
 // them for the widened descriptors; per candidate 4 doubles + 1 uint32 of translation-ordered copies
-// for the scoring's neighbour scan; two rows of dot products, one of ZNCCs); match() never allocates.
+// for the scoring's neighbour scan; two rows of dot products, one of ZNCCs; 12 floats per point for the
+// pruned path's bound factors); match() never allocates.
 #pragma once
 
 #include <cstddef>
@@ -65,6 +68,7 @@ struct FcMatch2dConfig {
   float appearance_weight = 0.5f;         // w in [0, 1]
   float min_support = 1.5f;               // score floor for a match
   std::size_t max_descriptor_bytes = 64;  // longest descriptor match() accepts (the route's 8 x 8)
+  bool force_scalar_kernels = false;      // tests: the no-SIMD (LEON3) appearance kernels on any build
 };
 
 enum class FcMatchCounter : std::uint8_t { kPointsIgnored, kBadInput, kCount };
@@ -90,6 +94,7 @@ class FcMatcher2d {
     float score = 0.0f;
   };
   std::size_t appearance_candidates(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na, std::size_t nb) noexcept;
+  std::size_t appearance_pruned(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na, std::size_t nb) noexcept;
   void translation_gate(const KeypointSet2d& a, const KeypointSet2d& b, std::size_t na, std::size_t nb,
                         double& gate_radius_m, double& abs_max_m) const noexcept;
   FcMatch2dConfig config_{};
@@ -110,6 +115,7 @@ class FcMatcher2d {
   Span<std::int32_t> dot_row_;  // two rows of a's dot products with every b (appearance)
   Span<float> z_row_;           // one a's ZNCC with every b (-inf for a flat b)
   Span<float> sum_b_, inv_b_;   // stats_b_ split in two arrays (a loop over b that vectorises)
+  Span<float> bound_;           // pruned path (no SIMD): 4 bound factors per a, 8 floats per b
   CounterSet<FcMatchCounter> counters_;
 };
 

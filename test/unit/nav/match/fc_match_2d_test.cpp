@@ -318,7 +318,12 @@ TEST(FcMatch2d, SameAsTheReferenceForRaggedCountsAndFlatDescriptors) {
   ArenaStorage arena(FcMatcher2d::arena_bytes(c));
   FcMatcher2d m;
   ASSERT_TRUE(m.init(c, arena).is_ok());
-  std::vector<Match2d> store(64);
+  std::vector<Match2d> store(64), store2(64);
+  FcMatch2dConfig c2 = c;
+  c2.force_scalar_kernels = true;
+  ArenaStorage arena2(FcMatcher2d::arena_bytes(c2));
+  FcMatcher2d m2;
+  ASSERT_TRUE(m2.init(c2, arena2).is_ok());
   for (int run = 0; run < 3; ++run) {
     const Pose2 rel{6.0 - 4.0 * run, 2.0 + run, 0.3 * run - 0.2};
     Sets s = make(37, rel, 0.4, 26, false, 300 + static_cast<std::uint64_t>(run));
@@ -331,6 +336,15 @@ TEST(FcMatch2d, SameAsTheReferenceForRaggedCountsAndFlatDescriptors) {
     KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
     ASSERT_TRUE(m.match(a, b, rel.heading_rad, got).is_ok());
     ASSERT_EQ(got.size(), want.size()) << "run " << run;
+    BoundedVector<Match2d> scalar(Span<Match2d>(store2.data(), store2.size()));  // the no-SIMD kernels
+    ASSERT_TRUE(m2.match(a, b, rel.heading_rad, scalar).is_ok());
+    ASSERT_EQ(scalar.size(), want.size()) << "run " << run;
+    for (std::size_t q = 0; q < want.size(); ++q) {
+      EXPECT_EQ(scalar[q].a, want[q].a);
+      EXPECT_EQ(scalar[q].b, want[q].b);
+      EXPECT_EQ(scalar[q].score, want[q].score);
+      EXPECT_EQ(scalar[q].appearance, want[q].appearance);
+    }
     EXPECT_GT(want.size(), 25u);  // the 34 unflattened true pairs, mostly matched
     for (std::size_t q = 0; q < want.size(); ++q) {
       EXPECT_EQ(got[q].a, want[q].a);
@@ -344,6 +358,64 @@ TEST(FcMatch2d, SameAsTheReferenceForRaggedCountsAndFlatDescriptors) {
       EXPECT_NE(got[q].b, 61);
     }
   }
+}
+
+// The no-SIMD path (LEON3's; forced here on any build) prunes pairs by a bound on their last terms.
+// Held to the all-pairs reference bit for bit where the bound is tight and where it is loose: near
+// ties (rows of B repeated, so equal z compete for a list's last place), exact and negated copies,
+// descriptors with a large offset and little variance (a large |x| / sqrt(n var), the bound's rounding
+// margin), extreme bytes (-128, 127), one to eight candidates per point and floors from -1 (every
+// pair a candidate) to 0.9 (almost none); on SIMD builds the default path too.
+TEST(FcMatch2d, PrunedScalarKernelsSameAsTheReference) {
+  std::vector<Match2d> store(96);
+  int compared = 0;
+  for (int run = 0; run < 8; ++run) {
+    FcMatch2dConfig c;
+    c.max_points = 96;
+    c.max_candidates_per_point = run % 4 == 0 ? 1 : (run % 4 == 1 ? 3 : (run % 4 == 2 ? 8 : 4));
+    const float floors[] = {0.35f, -1.0f, 0.0f, 0.9f, 0.5f, 0.2f, -0.3f, 0.35f};
+    c.min_appearance = floors[run];
+    c.sigma_dir_rad = 0.02;
+    const Pose2 rel{5.0 * run - 15.0, 3.0 - 2.0 * run, 0.4 * run - 1.0};
+    Sets s = make(61, rel, 0.3 + 0.1 * run, 24, false, 700 + static_cast<std::uint64_t>(run));
+    DeterministicRng rng(900 + static_cast<std::uint64_t>(run));
+    const std::size_t nb = s.pb.size();
+    auto row_b = [&](std::size_t j) { return s.db.begin() + static_cast<long>(j * kD); };
+    auto row_a = [&](std::size_t i) { return s.da.begin() + static_cast<long>(i * kD); };
+    std::copy_n(row_b(3), kD, row_b(4));  // repeated rows: ties for a list's places
+    std::copy_n(row_b(3), kD, row_b(nb - 1));
+    std::copy_n(row_b(10), kD, row_b(11));
+    for (std::size_t q = 0; q < kD; ++q) {
+      row_b(20)[static_cast<long>(q)] = static_cast<std::int8_t>(-std::max(-127, static_cast<int>(row_a(7)[static_cast<long>(q)])));  // negated
+      row_b(21)[static_cast<long>(q)] = row_a(8)[static_cast<long>(q)];  // exact copy
+      row_a(9)[static_cast<long>(q)] = static_cast<std::int8_t>(100 + static_cast<int>(rng.below(5)));  // offset, little variance
+      row_b(22)[static_cast<long>(q)] = static_cast<std::int8_t>(98 + static_cast<int>(rng.below(7)));
+      row_a(10)[static_cast<long>(q)] = static_cast<std::int8_t>(q % 2 == 0 ? -128 : 127);  // extremes
+      row_b(23)[static_cast<long>(q)] = static_cast<std::int8_t>(q % 3 == 0 ? -128 : 127);
+      row_a(11)[static_cast<long>(q)] = static_cast<std::int8_t>(q < 52 ? -20 : 120);  // all variance in the last terms
+      row_b(24)[static_cast<long>(q)] = static_cast<std::int8_t>(q < 52 ? 3 : -90 + static_cast<int>(q));
+    }
+    const std::vector<Match2d> want = reference_match(s, rel.heading_rad, c);
+    KeypointSet2d a{Span<const Vec2d>(s.pa.data(), s.pa.size()), Span<const std::int8_t>(s.da.data(), s.da.size()), kD};
+    KeypointSet2d b{Span<const Vec2d>(s.pb.data(), s.pb.size()), Span<const std::int8_t>(s.db.data(), s.db.size()), kD};
+    for (bool force : {true, false}) {
+      c.force_scalar_kernels = force;
+      ArenaStorage arena(FcMatcher2d::arena_bytes(c));
+      FcMatcher2d m;
+      ASSERT_TRUE(m.init(c, arena).is_ok());
+      BoundedVector<Match2d> got(Span<Match2d>(store.data(), store.size()));
+      ASSERT_TRUE(m.match(a, b, rel.heading_rad, got).is_ok());
+      ASSERT_EQ(got.size(), want.size()) << "run " << run << " forced " << force;
+      for (std::size_t q = 0; q < want.size(); ++q) {
+        EXPECT_EQ(got[q].a, want[q].a) << "run " << run;
+        EXPECT_EQ(got[q].b, want[q].b) << "run " << run;
+        EXPECT_EQ(got[q].score, want[q].score) << "run " << run;
+        EXPECT_EQ(got[q].appearance, want[q].appearance) << "run " << run;
+      }
+    }
+    compared += static_cast<int>(want.size());
+  }
+  EXPECT_GT(compared, 150);  // the runs with a floor below 0.9 match most of their 61 keypoints
 }
 
 }  // namespace
