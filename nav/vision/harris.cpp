@@ -122,14 +122,16 @@ void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1,
 
 // Block radius 1 on an 8-bit image: the structure tensor from integer gradients, one pass per image row.
 // Row py's Sobel sums dx, dy (|.| <= 1020: the integers sobel_row scales by 1/8) come from the
-// separable column terms v = a + 2b + c and d = c - a kept in registers; their products, summed over
-// columns x-1..x+1 in integers (|.| < 2^22, exact in float), go to ring slot py % 3 as floats, and
-// once three rows are in, output row py-1 sums the three slots (|.| <= 9 * 1020^2 < 2^24, exact).
-// The same floats as the float path: there gx = dx / 8, so every product and partial box sum is an
-// integer multiple of 1/64 below 2^24 / 64, exact in any order; so sxx = Sxx / 64 (exact) etc., and
-// the response is the same expression on the same values. Per pixel: 3 byte loads, 3 integer
-// multiplies and 3 int -> float conversions, no gradient or product rows (a LEON3 converts through
-// memory, and has no SIMD for the float passes this replaces).
+// separable column terms v = a + 2b + c and d = c - a kept in registers, and are converted to float
+// once each; their products (|.| <= 2^20) and the products' sums over columns x-1..x+1 (|.| < 2^22) are
+// integers, exact in float, and go to ring slot py % 3; once three rows are in, output row py-1 sums
+// the three slots (|.| <= 9 * 1020^2 < 2^24, exact). The same floats as the float path: there gx = dx / 8,
+// so every product and partial box sum is an integer multiple of 1/64 below 2^24 / 64, exact in any
+// order; so sxx = Sxx / 64 (exact) etc. The response is taken on the unscaled sums and scaled by 2^-12
+// at the end: each product, difference and k * tr of the scaled expression is the unscaled one's times
+// a power of two (no operand or result is subnormal: the nonzero ones are at least 0.04 / 4096), so the
+// rounding is the same and so is the result. Per pixel: 3 byte loads, 2 int -> float conversions, the
+// products in float (a LEON3 converts through memory, and has no SIMD for the float passes this replaces).
 template <bool kOutput>
 inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
                              int x0, int x1, float* __restrict slot, const float* __restrict r1, const float* __restrict r2,
@@ -139,21 +141,20 @@ inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_
   // Columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
   const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
   int va = v(x0), da = d(x0), vb = v(x0 + 1), db = d(x0 + 1);
-  int gx0 = va - vm2, gy0 = dm2 + 2 * dm1 + da;
-  int mxx = gx0 * gx0, myy = gy0 * gy0, mxy = gx0 * gy0;
-  gx0 = vb - vm1;
-  gy0 = dm1 + 2 * da + db;
-  int zxx = gx0 * gx0, zyy = gy0 * gy0, zxy = gx0 * gy0;
+  float gx0 = static_cast<float>(va - vm2), gy0 = static_cast<float>(dm2 + 2 * dm1 + da);
+  float mxx = gx0 * gx0, myy = gy0 * gy0, mxy = gx0 * gy0;
+  gx0 = static_cast<float>(vb - vm1);
+  gy0 = static_cast<float>(dm1 + 2 * da + db);
+  float zxx = gx0 * gx0, zyy = gy0 * gy0, zxy = gx0 * gy0;
   // One column x: (v0, d0) = column x, d1 = column x+1's d, p0 = products at x-1, p1 at x. The
   // new column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles
   // swapped make one step of period 2 without register moves (no copies on an in-order core).
-  const auto step = [&](int x, int& v0, int& d0, int d1, int& p0xx, int& p0yy, int& p0xy, int p1xx, int p1yy,
-                        int p1xy) {
+  const auto step = [&](int x, int& v0, int& d0, int d1, float& p0xx, float& p0yy, float& p0xy, float p1xx, float p1yy,
+                        float p1xy) {
     const int v2 = v(x + 2), d2 = d(x + 2);
-    const int gx = v2 - v0, gy = d0 + 2 * d1 + d2;
-    const int pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
-    const float hxx = static_cast<float>(p0xx + p1xx + pxx), hyy = static_cast<float>(p0yy + p1yy + pyy),
-                hxy = static_cast<float>(p0xy + p1xy + pxy);
+    const float gx = static_cast<float>(v2 - v0), gy = static_cast<float>(d0 + 2 * d1 + d2);
+    const float pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
+    const float hxx = p0xx + p1xx + pxx, hyy = p0yy + p1yy + pyy, hxy = p0xy + p1xy + pxy;
     float* __restrict sl = slot + 3 * x;  // this row's slot, xx yy xy interleaved per column
     sl[0] = hxx;
     sl[1] = hyy;
@@ -161,11 +162,11 @@ inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_
     if (kOutput) {
       const float* __restrict q1 = r1 + 3 * x;
       const float* __restrict q2 = r2 + 3 * x;
-      const float sxx = (hxx + q1[0] + q2[0]) * 0.015625f;
-      const float syy = (hyy + q1[1] + q2[1]) * 0.015625f;
-      const float sxy = (hxy + q1[2] + q2[2]) * 0.015625f;
+      const float sxx = hxx + q1[0] + q2[0];
+      const float syy = hyy + q1[1] + q2[1];
+      const float sxy = hxy + q1[2] + q2[2];
       const float tr = sxx + syy;
-      out[x] = sxx * syy - sxy * sxy - k * tr * tr;
+      out[x] = (sxx * syy - sxy * sxy - k * tr * tr) * 0.000244140625f;  // 2^-12
     }
     v0 = v2;
     d0 = d2;
@@ -392,6 +393,52 @@ bool strict_window_max(ConstImageViewF32 resp, int nms, int x, int y, float v) n
   return true;
 }
 
+// The window check of a pixel known to be at least every value of its window (a finite response whose
+// window maximum it equals): it fails only on a tie with an earlier pixel in raster order, so only the
+// nms rows above and the nms pixels to its left are compared, for equality. The same answer as
+// strict_window_max for such a pixel.
+inline bool no_earlier_tie(ConstImageViewF32 resp, int nms, int x, int y, float v) noexcept {
+  bool tie = false;
+  for (int dy = -nms; dy < 0; ++dy) {
+    const float* nr = resp.row(y + dy);
+    for (int dx = -nms; dx <= nms; ++dx) tie |= nr[x + dx] == v;
+  }
+  const float* r0 = resp.row(y);
+  for (int dx = -nms; dx < 0; ++dx) tie |= r0[x + dx] == v;
+  return !tie;
+}
+
+// The window check of a block's maximum (suppress_blocks; a finite response): the other pixels of its
+// block [bx, xe) x [by, ye) (inside the window) are below it or equal and later in raster order, so they
+// are skipped, and strict_window_max's tie rule is split by region: a neighbour before it in raster order
+// fails it when >= v, one after it when > v. The same answer as strict_window_max for a block maximum.
+inline bool block_max_wins(ConstImageViewF32 resp, int nms, int x, int y, float v, int bx, int xe, int by, int ye) noexcept {
+  const int xa = x - nms, xb = x + nms;
+  for (int yy = y - nms; yy <= y + nms; ++yy) {
+    const float* __restrict r = resp.row(yy);
+    const bool own = yy >= by && yy < ye;
+    const int l1 = own ? bx : xb + 1;  // the columns checked: [xa, l1) and [r0, xb]
+    const int r0 = own ? xe : xb + 1;
+    if (yy < y) {
+      for (int xx = xa; xx < l1; ++xx)
+        if (r[xx] >= v) return false;
+      for (int xx = r0; xx <= xb; ++xx)
+        if (r[xx] >= v) return false;
+    } else if (yy > y) {
+      for (int xx = xa; xx < l1; ++xx)
+        if (r[xx] > v) return false;
+      for (int xx = r0; xx <= xb; ++xx)
+        if (r[xx] > v) return false;
+    } else {  // the maximum's own row (a row of its block): left of it before, right of it after
+      for (int xx = xa; xx < l1; ++xx)
+        if (r[xx] >= v) return false;
+      for (int xx = r0; xx <= xb; ++xx)
+        if (r[xx] > v) return false;
+    }
+  }
+  return true;
+}
+
 // A corner at (x, y) of response v; its score normalised by *mean (when given and positive).
 inline Corner make_corner(int x, int y, float v, const float* mean) noexcept {
   Corner c;
@@ -409,19 +456,28 @@ inline Corner make_corner(int x, int y, float v, const float* mean) noexcept {
 }
 
 // Keeps the best cap corners in the min-heap heap[0..hn) (`better` is a total order on distinct
-// pixels, so the corners kept do not depend on the order they are offered in); dropped: one was not.
+// pixels, so the corners kept do not depend on the order they are offered in, nor on how the heap
+// arranges them); dropped: one was not. A corner better than the worst kept (heap[0]) replaces it and
+// is sifted down in one pass (std::pop_heap + push_heap took two: the host's __adjust_heap was 8 % of
+// the Harris samples).
 inline void keep_best(const Corner& c, Corner* heap, std::size_t& hn, std::size_t cap, bool& dropped) noexcept {
   if (hn < cap) {
     heap[hn++] = c;
     std::push_heap(heap, heap + hn, better);
-  } else {
-    dropped = true;
-    if (better(c, heap[0])) {
-      std::pop_heap(heap, heap + hn, better);
-      heap[hn - 1] = c;
-      std::push_heap(heap, heap + hn, better);
-    }
+    return;
   }
+  dropped = true;
+  if (!better(c, heap[0])) return;
+  std::size_t i = 0;
+  for (;;) {
+    std::size_t w = 2 * i + 1;  // the worse child (heap[0] is the worst kept)
+    if (w >= hn) break;
+    if (w + 1 < hn && better(heap[w], heap[w + 1])) ++w;
+    if (!better(c, heap[w])) break;
+    heap[i] = heap[w];
+    i = w;
+  }
+  heap[i] = c;
 }
 
 // Parabola through the 3x3 response around each corner: |offset| <= 0.5 px in x and y.
@@ -612,7 +668,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
 }
 
 std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap,
-                                              bool& dropped) noexcept {
+                                              bool finite, bool& dropped) noexcept {
   const int nms = config_.nms_radius;
   const std::size_t wz = static_cast<std::size_t>(config_.max_width);
   const int cell = config_.norm_cell_px;
@@ -667,7 +723,9 @@ std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det,
           const int xc = x + __builtin_ctz(bits);
           bits &= bits - 1;
           const float v = row[xc];
-          if (strict_window_max(resp, nms, xc, y, v)) keep(xc, y, v);
+          // A finite response: v is at least every value of its window (the max over the ring), so
+          // only a tie with an earlier pixel can fail the window check.
+          if (finite ? no_earlier_tie(resp, nms, xc, y, v) : strict_window_max(resp, nms, xc, y, v)) keep(xc, y, v);
         }
       }
     }
@@ -716,7 +774,7 @@ std::size_t HarrisDetector::suppress_blocks(ConstImageViewF32 resp, RectI det, f
             wy = y;
           }
       }
-      if (!(wv > thresh) || !strict_window_max(resp, nms, wx, wy, wv)) continue;
+      if (!(wv > thresh) || !block_max_wins(resp, nms, wx, wy, wv, bx, xe, by, ye)) continue;
       keep(wx, wy, wv);
     }
   }
@@ -769,7 +827,7 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
   // Without SIMD, on 8-bit images (a finite response), the block NMS; the same corners (see harris.hpp).
   const bool blocks = block_nms_ && std::is_same<Pixel, std::uint8_t>::value;
   const std::size_t hn =
-      blocks ? suppress_blocks(resp, det, thresh, cap, dropped) : suppress_and_keep(resp, det, thresh, cap, dropped);
+      blocks ? suppress_blocks(resp, det, thresh, cap, dropped) : suppress_and_keep(resp, det, thresh, cap, std::is_same<Pixel, std::uint8_t>::value, dropped);
   if (dropped) counters_.increment(VisionCounter::kCornerCapReached);
   Corner* heap = heap_.data();
   std::sort(heap, heap + hn, better);
