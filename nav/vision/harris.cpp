@@ -237,7 +237,16 @@ inline void cells16_x4(const float* __restrict p, F4& mv, float* __restrict sums
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (lane k: v[k], v[k+8], ...;
 // the tail in lane 0; the lanes combined in order 0..7), so the result is deterministic. With SIMD the
 // 8 lanes are two 4-lane vectors (the same lanes, the same order: the same floats).
-inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum, bool simd) noexcept {
+// finite: v holds no NaN (8-bit images' responses), and vmax >= +0 (rmax's start): then x > m is the
+// signed integer compare of their bits (for m >= +0: a positive float's bits order like the float, a
+// negative one's or -0's are negative integers, below m's, as the float is not above m) and x > 0 is
+// bits > 0; no float compare (a LEON3 needs a compare, a nop and a float branch for each).
+inline std::int32_t float_bits(const float* p) noexcept {
+  std::int32_t b;
+  std::memcpy(&b, p, sizeof b);
+  return b;
+}
+inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum, bool simd, bool finite) noexcept {
   float m[8] = {vmax, vmax, vmax, vmax, vmax, vmax, vmax, vmax};
   float s[8] = {};
   int i = 0;
@@ -257,6 +266,22 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
       std::memcpy(s, &s0, sizeof s0);
       std::memcpy(s + 4, &s1, sizeof s1);
     }
+  }
+  if (finite) {
+    std::int32_t mb[8];
+    std::memcpy(mb, m, sizeof mb);
+    for (; i + 8 <= n; i += 8)
+      for (int k = 0; k < 8; ++k) {
+        const std::int32_t xb = float_bits(v + i + k);
+        mb[k] = xb > mb[k] ? xb : mb[k];
+        if (xb > 0) s[k] += v[i + k];  // adding +0 instead leaves s[k] (>= +0) as it is
+      }
+    for (; i < n; ++i) {
+      const std::int32_t xb = float_bits(v + i);
+      mb[0] = xb > mb[0] ? xb : mb[0];
+      if (xb > 0) s[0] += v[i];
+    }
+    std::memcpy(m, mb, sizeof mb);
   }
   {
     for (; i + 8 <= n; i += 8)
@@ -412,29 +437,23 @@ inline bool no_earlier_tie(ConstImageViewF32 resp, int nms, int x, int y, float 
 // block [bx, xe) x [by, ye) (inside the window) are below it or equal and later in raster order, so they
 // are skipped, and strict_window_max's tie rule is split by region: a neighbour before it in raster order
 // fails it when >= v, one after it when > v. The same answer as strict_window_max for a block maximum.
-inline bool block_max_wins(ConstImageViewF32 resp, int nms, int x, int y, float v, int bx, int xe, int by, int ye) noexcept {
+inline bool block_max_wins(ConstImageViewF32 resp, int nms, int x, int y, std::int32_t vb, int bx, int xe, int by,
+                           int ye) noexcept {
+  // v > 0 (above the threshold) and the response has no NaN: r >= v and r > v are the same compares on
+  // the integers of their bits (a negative r or -0 has negative bits).
   const int xa = x - nms, xb = x + nms;
   for (int yy = y - nms; yy <= y + nms; ++yy) {
     const float* __restrict r = resp.row(yy);
     const bool own = yy >= by && yy < ye;
     const int l1 = own ? bx : xb + 1;  // the columns checked: [xa, l1) and [r0, xb]
     const int r0 = own ? xe : xb + 1;
-    if (yy < y) {
-      for (int xx = xa; xx < l1; ++xx)
-        if (r[xx] >= v) return false;
-      for (int xx = r0; xx <= xb; ++xx)
-        if (r[xx] >= v) return false;
-    } else if (yy > y) {
-      for (int xx = xa; xx < l1; ++xx)
-        if (r[xx] > v) return false;
-      for (int xx = r0; xx <= xb; ++xx)
-        if (r[xx] > v) return false;
-    } else {  // the maximum's own row (a row of its block): left of it before, right of it after
-      for (int xx = xa; xx < l1; ++xx)
-        if (r[xx] >= v) return false;
-      for (int xx = r0; xx <= xb; ++xx)
-        if (r[xx] > v) return false;
-    }
+    // Before the maximum in raster order a tie fails it (>=), after it only a greater value (>): the
+    // rows above, the left part of its own row; the rows below, the right part of its own row.
+    const std::int32_t left_limit = yy <= y ? vb - 1 : vb, right_limit = yy < y ? vb - 1 : vb;
+    for (int xx = xa; xx < l1; ++xx)
+      if (float_bits(r + xx) > left_limit) return false;
+    for (int xx = r0; xx <= xb; ++xx)
+      if (float_bits(r + xx) > right_limit) return false;
   }
   return true;
 }
@@ -602,7 +621,7 @@ void HarrisDetector::float_tensor_response(ImageView<const Pixel> image, RectI g
   }
 }
 
-float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noexcept {
+float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det, bool finite) noexcept {
   const int W = resp.width(), H = resp.height();
   const int cell = config_.norm_cell_px;
   const int cw = (W + cell - 1) / cell, ch = (H + cell - 1) / cell;
@@ -639,7 +658,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
       }
       const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
       float s = 0.0f;
-      max_and_positive_sum(row + x0, x1 - x0, rmax, s, simd_);
+      max_and_positive_sum(row + x0, x1 - x0, rmax, s, simd_, finite);
       crow_sum[cx] += s;
       crow_cnt[cx] += static_cast<float>(x1 - x0);
       pos_sum += static_cast<double>(s);
@@ -763,18 +782,24 @@ std::size_t HarrisDetector::suppress_blocks(ConstImageViewF32 resp, RectI det, f
       const int xe = std::min(bx + side, dx1);
       // The block's maximum, the earliest in raster order among equals: the only pixel of the block
       // that can be a maximum of its window (every other one is within nms of it and loses to it).
+      // Compared as the integers of their bits (a finite response, see block_max_wins): where the
+      // block's maximum is positive this is its position, earliest among equals; where it is not, the
+      // value found is not above it either, and neither passes the threshold (>= 0).
       int wx = bx, wy = by;
-      float wv = resp.row(by)[bx];
+      std::int32_t wb = float_bits(resp.row(by) + bx);
       for (int y = by; y < ye; ++y) {
         const float* __restrict row = resp.row(y);
-        for (int x = bx; x < xe; ++x)
-          if (row[x] > wv) {
-            wv = row[x];
+        for (int x = bx; x < xe; ++x) {
+          const std::int32_t b = float_bits(row + x);
+          if (b > wb) {
+            wb = b;
             wx = x;
             wy = y;
           }
+        }
       }
-      if (!(wv > thresh) || !block_max_wins(resp, nms, wx, wy, wv, bx, xe, by, ye)) continue;
+      const float wv = resp.row(wy)[wx];
+      if (!(wv > thresh) || !block_max_wins(resp, nms, wx, wy, wb, bx, xe, by, ye)) continue;
       keep(wx, wy, wv);
     }
   }
@@ -820,7 +845,7 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
 
   // Statistics over the detection area: max (threshold), positive sum (normalisation floor) and the
   // normalisation cell means; then NMS and the top-K heap.
-  const float rmax = response_statistics(resp, det);
+  const float rmax = response_statistics(resp, det, std::is_same<Pixel, std::uint8_t>::value);
   const float thresh = std::max(config_.min_response, config_.quality_level * rmax);
   const std::size_t cap = std::min(static_cast<std::size_t>(config_.max_corners), out.capacity());
   bool dropped = false;

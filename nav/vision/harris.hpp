@@ -128,7 +128,8 @@ class HarrisDetector {
   template <typename Pixel>
   void float_tensor_response(ImageView<const Pixel> image, RectI g, ImageViewF32 resp) noexcept;
   // Max response over det (returned) and the normalisation cell means (cells_).
-  float response_statistics(ConstImageViewF32 resp, RectI det) noexcept;
+  // finite: the response has no NaN (8-bit images): the scalar loops compare the bits as integers.
+  float response_statistics(ConstImageViewF32 resp, RectI det, bool finite) noexcept;
   // NMS over det above thresh, the best cap kept in heap_ (returned: their count; dropped: some were not).
   // finite: the response has no NaN or inf (8-bit images), so a pixel equal to its window maximum needs
   // only the tie check (the vector loops use it).
