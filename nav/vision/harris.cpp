@@ -132,54 +132,104 @@ void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1,
 // a power of two (no operand or result is subnormal: the nonzero ones are at least 0.04 / 4096), so the
 // rounding is the same and so is the result. Per pixel: 3 byte loads, 2 int -> float conversions, the
 // products in float (a LEON3 converts through memory, and has no SIMD for the float passes this replaces).
-template <bool kOutput>
-inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
-                             int x0, int x1, float* __restrict slot, const float* __restrict r1, const float* __restrict r2,
-                             float k, float* __restrict out) noexcept {
-  const auto v = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
-  const auto d = [&](int x) { return c[x] - a[x]; };
-  // Columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
-  const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
-  int va = v(x0), da = d(x0), vb = v(x0 + 1), db = d(x0 + 1);
-  float gx0 = static_cast<float>(va - vm2), gy0 = static_cast<float>(dm2 + 2 * dm1 + da);
-  float mxx = gx0 * gx0, myy = gy0 * gy0, mxy = gx0 * gy0;
-  gx0 = static_cast<float>(vb - vm1);
-  gy0 = static_cast<float>(dm1 + 2 * da + db);
-  float zxx = gx0 * gx0, zyy = gy0 * gy0, zxy = gx0 * gy0;
-  // One column x: (v0, d0) = column x, d1 = column x+1's d, p0 = products at x-1, p1 at x. The
-  // new column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles
-  // swapped make one step of period 2 without register moves (no copies on an in-order core).
-  const auto step = [&](int x, int& v0, int& d0, int d1, float& p0xx, float& p0yy, float& p0xy, float p1xx, float p1yy,
-                        float p1xy) {
-    const int v2 = v(x + 2), d2 = d(x + 2);
-    const float gx = static_cast<float>(v2 - v0), gy = static_cast<float>(d0 + 2 * d1 + d2);
+//
+// Two product rows per pass (kRows 2: rows py and py+1 from image rows a, b, c, e = py-1 .. py+2): the
+// ring is two slots, sa holding row py-2's sums and sb row py-1's on entry and rows py and py+1's on
+// exit; with kOutput, output rows py-1 (out0) and py (out1) share t = row py-1 + row py: 6 loads and 9
+// adds of the ring per column for two rows instead of 12 and 12, and 4 byte loads instead of 6. kRows 1
+// (the last row of an odd count, kOutput) gives output row py-1 alone.
+template <bool kOutput, int kRows>
+inline void tensor_rows_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
+                              const std::uint8_t* __restrict e, int x0, int x1, float* __restrict sa, float* __restrict sb,
+                              float k, float* __restrict out0, float* __restrict out1) noexcept {
+  static_assert(kRows == 2 || kOutput, "a single row is only the last output row");
+  const auto v1 = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
+  const auto d1 = [&](int x) { return c[x] - a[x]; };
+  const auto v2 = [&](int x) { return b[x] + 2 * c[x] + e[x]; };
+  const auto d2 = [&](int x) { return e[x] - b[x]; };
+  const auto response = [k](float sxx, float syy, float sxy) {
+    const float tr = sxx + syy;
+    return (sxx * syy - sxy * sxy - k * tr * tr) * 0.000244140625f;  // 2^-12
+  };
+  // Per row: columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
+  struct Row {
+    int va, da, vb, db;
+    float mxx, myy, mxy, zxx, zyy, zxy;
+  };
+  const auto start = [x0](auto v, auto d) {
+    Row r;
+    const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
+    r.va = v(x0);
+    r.da = d(x0);
+    r.vb = v(x0 + 1);
+    r.db = d(x0 + 1);
+    float gx = static_cast<float>(r.va - vm2), gy = static_cast<float>(dm2 + 2 * dm1 + r.da);
+    r.mxx = gx * gx;
+    r.myy = gy * gy;
+    r.mxy = gx * gy;
+    gx = static_cast<float>(r.vb - vm1);
+    gy = static_cast<float>(dm1 + 2 * r.da + r.db);
+    r.zxx = gx * gx;
+    r.zyy = gy * gy;
+    r.zxy = gx * gy;
+    return r;
+  };
+  Row r1 = start(v1, d1), r2{};
+  if (kRows == 2) r2 = start(v2, d2);
+  // One row at column x: (v0, d0) = column x, dn = column x+1's d, p0 = products at x-1, p1 at x; the new
+  // column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles swapped
+  // make one step of period 2 without register moves (no copies on an in-order core). h: the products
+  // summed over columns x-1..x+1.
+  const auto row_step = [](int vn2, int dn2, int& v0, int& d0, int dn, float& p0xx, float& p0yy, float& p0xy, float p1xx,
+                           float p1yy, float p1xy, float& hxx, float& hyy, float& hxy) {
+    const float gx = static_cast<float>(vn2 - v0), gy = static_cast<float>(d0 + 2 * dn + dn2);
     const float pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
-    const float hxx = p0xx + p1xx + pxx, hyy = p0yy + p1yy + pyy, hxy = p0xy + p1xy + pxy;
-    float* __restrict sl = slot + 3 * x;  // this row's slot, xx yy xy interleaved per column
-    sl[0] = hxx;
-    sl[1] = hyy;
-    sl[2] = hxy;
-    if (kOutput) {
-      const float* __restrict q1 = r1 + 3 * x;
-      const float* __restrict q2 = r2 + 3 * x;
-      const float sxx = hxx + q1[0] + q2[0];
-      const float syy = hyy + q1[1] + q2[1];
-      const float sxy = hxy + q1[2] + q2[2];
-      const float tr = sxx + syy;
-      out[x] = (sxx * syy - sxy * sxy - k * tr * tr) * 0.000244140625f;  // 2^-12
-    }
-    v0 = v2;
-    d0 = d2;
+    hxx = p0xx + p1xx + pxx;
+    hyy = p0yy + p1yy + pyy;
+    hxy = p0xy + p1xy + pxy;
+    v0 = vn2;
+    d0 = dn2;
     p0xx = pxx;
     p0yy = pyy;
     p0xy = pxy;
   };
+  const auto step = [&](int x, bool odd) {
+    float h1xx, h1yy, h1xy, h2xx = 0.0f, h2yy = 0.0f, h2xy = 0.0f;
+    if (!odd) {
+      row_step(v1(x + 2), d1(x + 2), r1.va, r1.da, r1.db, r1.mxx, r1.myy, r1.mxy, r1.zxx, r1.zyy, r1.zxy, h1xx, h1yy, h1xy);
+      if (kRows == 2)
+        row_step(v2(x + 2), d2(x + 2), r2.va, r2.da, r2.db, r2.mxx, r2.myy, r2.mxy, r2.zxx, r2.zyy, r2.zxy, h2xx, h2yy, h2xy);
+    } else {
+      row_step(v1(x + 2), d1(x + 2), r1.vb, r1.db, r1.da, r1.zxx, r1.zyy, r1.zxy, r1.mxx, r1.myy, r1.mxy, h1xx, h1yy, h1xy);
+      if (kRows == 2)
+        row_step(v2(x + 2), d2(x + 2), r2.vb, r2.db, r2.da, r2.zxx, r2.zyy, r2.zxy, r2.mxx, r2.myy, r2.mxy, h2xx, h2yy, h2xy);
+    }
+    float* __restrict qa = sa + 3 * x;  // xx yy xy interleaved per column
+    float* __restrict qb = sb + 3 * x;
+    if (kOutput) {
+      if (kRows == 2) {
+        const float txx = qb[0] + h1xx, tyy = qb[1] + h1yy, txy = qb[2] + h1xy;  // rows py-1 + py
+        out0[x] = response(qa[0] + txx, qa[1] + tyy, qa[2] + txy);
+        out1[x] = response(txx + h2xx, tyy + h2yy, txy + h2xy);
+      } else {
+        out0[x] = response(qa[0] + qb[0] + h1xx, qa[1] + qb[1] + h1yy, qa[2] + qb[2] + h1xy);
+      }
+    }
+    if (kRows == 2) {
+      qa[0] = h1xx;
+      qa[1] = h1yy;
+      qa[2] = h1xy;
+      qb[0] = h2xx;
+      qb[1] = h2yy;
+      qb[2] = h2xy;
+    }
+  };
   int x = x0;
   for (; x + 2 <= x1; x += 2) {
-    step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
-    step(x + 1, vb, db, da, zxx, zyy, zxy, mxx, myy, mxy);
+    step(x, false);
+    step(x + 1, true);
   }
-  if (x < x1) step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
+  if (x < x1) step(x, false);
 }
 
 // Four-lane float / int vectors (GCC and clang vector extensions: SSE2 on x86, NEON on ARM, scalar code
@@ -309,20 +359,19 @@ bool harris_response_u8_r1(ConstImageViewU8 img, RectI g, float k, ImageViewF32 
       resp.width() < g.x + g.width || resp.height() < g.y + g.height || wz < static_cast<std::size_t>(g.x + g.width))
     return false;
   const int x0 = g.x, x1 = g.x + g.width;
-  for (int py = g.y - 1; py <= g.y + g.height; ++py) {
-    const int s = (py - (g.y - 1)) % 3;
-    float* slot = ring.data() + static_cast<std::size_t>(3 * s) * wz;
-    const float* r1 = ring.data() + static_cast<std::size_t>(3 * ((s + 2) % 3)) * wz;  // row py - 1
-    const float* r2 = ring.data() + static_cast<std::size_t>(3 * ((s + 1) % 3)) * wz;  // row py - 2
-    const std::uint8_t* a = img.row(py - 1);
-    const std::uint8_t* b = img.row(py);
-    const std::uint8_t* c = img.row(py + 1);
-    if (py < g.y + 1) {
-      tensor_row_u8_r1<false>(a, b, c, x0, x1, slot, r1, r2, k, nullptr);
-    } else {
-      tensor_row_u8_r1<true>(a, b, c, x0, x1, slot, r1, r2, k, resp.row(py - 1));
-    }
-  }
+  float* sa = ring.data();
+  float* sb = ring.data() + 3 * wz;
+  // Product rows g.y-1 .. g.y+g.height, two per pass; the first pass fills the ring, each later one
+  // gives output rows py-1 and py; an odd last row alone.
+  tensor_rows_u8_r1<false, 2>(img.row(g.y - 2), img.row(g.y - 1), img.row(g.y), img.row(g.y + 1), x0, x1, sa, sb, k, nullptr,
+                              nullptr);
+  int py = g.y + 1;
+  for (; py + 1 <= g.y + g.height; py += 2)
+    tensor_rows_u8_r1<true, 2>(img.row(py - 1), img.row(py), img.row(py + 1), img.row(py + 2), x0, x1, sa, sb, k,
+                               resp.row(py - 1), resp.row(py));
+  if (py == g.y + g.height)
+    tensor_rows_u8_r1<true, 1>(img.row(py - 1), img.row(py), img.row(py + 1), img.row(py + 1), x0, x1, sa, sb, k,
+                               resp.row(py - 1), nullptr);
   return true;
 }
 
