@@ -473,46 +473,41 @@ bool strict_window_max(ConstImageViewF32 resp, int nms, int x, int y, float v) n
 // window maximum it equals): it fails only on a tie with an earlier pixel in raster order, so only the
 // nms rows above and the nms pixels to its left are compared, for equality. The same answer as
 // strict_window_max for such a pixel.
+// v is above the threshold (> 0, not -0), so equal floats are equal bits: the compares are integer ones
+// (no unordered case to test).
 inline bool no_earlier_tie(ConstImageViewF32 resp, int nms, int x, int y, float v) noexcept {
+  const std::int32_t vb = float_bits(&v);
   bool tie = false;
   for (int dy = -nms; dy < 0; ++dy) {
     const float* nr = resp.row(y + dy);
-    for (int dx = -nms; dx <= nms; ++dx) tie |= nr[x + dx] == v;
+    for (int dx = -nms; dx <= nms; ++dx) tie |= float_bits(nr + x + dx) == vb;
   }
   const float* r0 = resp.row(y);
-  for (int dx = -nms; dx < 0; ++dx) tie |= r0[x + dx] == v;
+  for (int dx = -nms; dx < 0; ++dx) tie |= float_bits(r0 + x + dx) == vb;
   return !tie;
 }
 
 // The window check of a block's maximum (suppress_blocks; a finite response): the other pixels of its
 // block [bx, xe) x [by, ye) (inside the window) are below it or equal and later in raster order, so they
 // are skipped, and strict_window_max's tie rule is split by region: a neighbour before it in raster order
-// fails it when >= v, one after it when > v. The window is cut into 3 x 3 cells by the block's rows and
-// columns; bit 3 * row band + column band of skip set: that cell lies in a block whose maximum is below v
-// (nothing there can fail it), not checked (bit 4, the block itself, always set). The same answer as
-// strict_window_max for a block maximum.
-inline bool block_max_wins(ConstImageViewF32 resp, int nms, int x, int y, std::int32_t vb, int bx, int xe, int by, int ye,
-                           unsigned skip) noexcept {
+// fails it when >= v, one after it when > v. The same answer as strict_window_max for a block maximum.
+inline bool block_max_wins(ConstImageViewF32 resp, int nms, int x, int y, std::int32_t vb, int bx, int xe, int by,
+                           int ye) noexcept {
   // v > 0 (above the threshold) and the response has no NaN: r >= v and r > v are the same compares on
   // the integers of their bits (a negative r or -0 has negative bits).
   const int xa = x - nms, xb = x + nms;
   for (int yy = y - nms; yy <= y + nms; ++yy) {
-    const int rb = yy < by ? 0 : (yy < ye ? 1 : 2);
-    const unsigned sk = (skip >> (3 * rb)) & 7u;
-    if (sk == 7u) continue;
     const float* __restrict r = resp.row(yy);
+    const bool own = yy >= by && yy < ye;
+    const int l1 = own ? bx : xb + 1;  // the columns checked: [xa, l1) and [r0, xb]
+    const int r0 = own ? xe : xb + 1;
     // Before the maximum in raster order a tie fails it (>=), after it only a greater value (>): the
     // rows above, the left part of its own row; the rows below, the right part of its own row.
     const std::int32_t left_limit = yy <= y ? vb - 1 : vb, right_limit = yy < y ? vb - 1 : vb;
-    if ((sk & 1u) == 0)
-      for (int xx = xa; xx < bx; ++xx)
-        if (float_bits(r + xx) > left_limit) return false;
-    if ((sk & 2u) == 0)  // rows outside the block (left_limit == right_limit there)
-      for (int xx = bx; xx < xe; ++xx)
-        if (float_bits(r + xx) > left_limit) return false;
-    if ((sk & 4u) == 0)
-      for (int xx = xe; xx <= xb; ++xx)
-        if (float_bits(r + xx) > right_limit) return false;
+    for (int xx = xa; xx < l1; ++xx)
+      if (float_bits(r + xx) > left_limit) return false;
+    for (int xx = r0; xx <= xb; ++xx)
+      if (float_bits(r + xx) > right_limit) return false;
   }
   return true;
 }
@@ -850,81 +845,30 @@ std::size_t HarrisDetector::suppress_blocks(ConstImageViewF32 resp, RectI det, f
               dropped);
   };
   const int dx1 = det.x + det.width, dy1 = det.y + det.height;
-  // The block's maximum, the earliest in raster order among equals: the only pixel of the block that
-  // can be a maximum of its window (every other one is within nms of it and loses to it). Compared as
-  // the integers of their bits (a finite response, see block_max_wins): where the block's maximum is
-  // positive this is its value and position, earliest among equals; where it is not, the value found
-  // is not positive either, and neither passes the threshold (>= 0) nor stops a neighbour's check.
-  const auto block_max = [&](int bx, int xe, int by, int ye, int& wx, int& wy) {
-    wx = bx;
-    wy = by;
-    std::int32_t wb = float_bits(resp.row(by) + bx);
-    for (int y = by; y < ye; ++y) {
-      const float* __restrict row = resp.row(y);
-      for (int x = bx; x < xe; ++x) {
-        const std::int32_t b = float_bits(row + x);
-        if (b > wb) {
-          wb = b;
-          wx = x;
-          wy = y;
+  for (int by = det.y; by < dy1; by += side) {
+    const int ye = std::min(by + side, dy1);
+    for (int bx = det.x; bx < dx1; bx += side) {
+      const int xe = std::min(bx + side, dx1);
+      // The block's maximum, the earliest in raster order among equals: the only pixel of the block
+      // that can be a maximum of its window (every other one is within nms of it and loses to it).
+      // Compared as the integers of their bits (a finite response, see block_max_wins): where the
+      // block's maximum is positive this is its position, earliest among equals; where it is not, the
+      // value found is not above it either, and neither passes the threshold (>= 0).
+      int wx = bx, wy = by;
+      std::int32_t wb = float_bits(resp.row(by) + bx);
+      for (int y = by; y < ye; ++y) {
+        const float* __restrict row = resp.row(y);
+        for (int x = bx; x < xe; ++x) {
+          const std::int32_t b = float_bits(row + x);
+          if (b > wb) {
+            wb = b;
+            wx = x;
+            wy = y;
+          }
         }
       }
-    }
-    return wb;
-  };
-  // The maxima of three rows of blocks (above, this, below) in the NMS ring (unused by this NMS): per
-  // block its value and its offset in the block, so that a block maximum's window check skips the
-  // neighbouring blocks whose maximum is below it (Neubeck and Van Gool).
-  const int nbx = (det.width + side - 1) / side, nby = (det.height + side - 1) / side;
-  float* buf = nms_ring_.data();
-  const std::size_t stride = 2 * static_cast<std::size_t>(nbx);
-  QNAV_ASSERT(3 * stride <= nms_ring_.size(), "harris: block maxima exceed the NMS ring (det.width <= max_width - 4)");
-  const auto fill = [&](int j) {
-    const int by = det.y + j * side, ye = std::min(by + side, dy1);
-    float* val = buf + static_cast<std::size_t>(j % 3) * stride;
-    float* off = val + nbx;
-    for (int i = 0; i < nbx; ++i) {
-      const int bx = det.x + i * side, xe = std::min(bx + side, dx1);
-      int wx = 0, wy = 0;
-      block_max(bx, xe, by, ye, wx, wy);
-      val[i] = resp.row(wy)[wx];
-      off[i] = static_cast<float>((wy - by) * side + (wx - bx));  // < 17^2: exact
-    }
-  };
-  fill(0);
-  for (int j = 0; j < nby; ++j) {
-    if (j + 1 < nby) fill(j + 1);  // overwrites row j - 2's
-    const float* cur = buf + static_cast<std::size_t>(j % 3) * stride;
-    const float* up = j > 0 ? buf + static_cast<std::size_t>((j + 2) % 3) * stride : nullptr;
-    const float* down = j + 1 < nby ? buf + static_cast<std::size_t>((j + 1) % 3) * stride : nullptr;
-    const int by = det.y + j * side, ye = std::min(by + side, dy1);
-    for (int i = 0; i < nbx; ++i) {
-      const float wv = cur[i];
-      if (!(wv > thresh)) continue;
-      const int bx = det.x + i * side, xe = std::min(bx + side, dx1);
-      const int o = static_cast<int>(cur[nbx + i]);
-      const int wx = bx + o % side, wy = by + o / side;
-      const std::int32_t vb = float_bits(cur + i);
-      // A cell can be skipped when it lies inside a neighbouring block (so inside det) whose maximum
-      // is below v. The left and upper cells are inside the full blocks before; the right and lower
-      // ones when the window ends inside det.
-      const bool has_l = i > 0, has_r = i + 1 < nbx && wx + nms < dx1;
-      const bool has_u = up != nullptr, has_d = down != nullptr && wy + nms < dy1;
-      const auto below = [vb](const float* blocks, int k) { return float_bits(blocks + k) < vb; };
-      unsigned skip = 1u << 4;
-      if (has_u) {
-        if (has_l && below(up, i - 1)) skip |= 1u;
-        if (below(up, i)) skip |= 2u;
-        if (has_r && below(up, i + 1)) skip |= 4u;
-      }
-      if (has_l && below(cur, i - 1)) skip |= 8u;
-      if (has_r && below(cur, i + 1)) skip |= 32u;
-      if (has_d) {
-        if (has_l && below(down, i - 1)) skip |= 64u;
-        if (below(down, i)) skip |= 128u;
-        if (has_r && below(down, i + 1)) skip |= 256u;
-      }
-      if (!block_max_wins(resp, nms, wx, wy, vb, bx, xe, by, ye, skip)) continue;
+      const float wv = resp.row(wy)[wx];
+      if (!(wv > thresh) || !block_max_wins(resp, nms, wx, wy, wb, bx, xe, by, ye)) continue;
       keep(wx, wy, wv);
     }
   }
