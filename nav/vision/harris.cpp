@@ -122,63 +122,114 @@ void vertical_sums(const float* ring, std::size_t wz, int nrows, int x0, int x1,
 
 // Block radius 1 on an 8-bit image: the structure tensor from integer gradients, one pass per image row.
 // Row py's Sobel sums dx, dy (|.| <= 1020: the integers sobel_row scales by 1/8) come from the
-// separable column terms v = a + 2b + c and d = c - a kept in registers; their products, summed over
-// columns x-1..x+1 in integers (|.| < 2^22, exact in float), go to ring slot py % 3 as floats, and
-// once three rows are in, output row py-1 sums the three slots (|.| <= 9 * 1020^2 < 2^24, exact).
-// The same floats as the float path: there gx = dx / 8, so every product and partial box sum is an
-// integer multiple of 1/64 below 2^24 / 64, exact in any order; so sxx = Sxx / 64 (exact) etc., and
-// the response is the same expression on the same values. Per pixel: 3 byte loads, 3 integer
-// multiplies and 3 int -> float conversions, no gradient or product rows (a LEON3 converts through
-// memory, and has no SIMD for the float passes this replaces).
-template <bool kOutput>
-inline void tensor_row_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
-                             int x0, int x1, float* __restrict slot, const float* __restrict r1, const float* __restrict r2,
-                             float k, float* __restrict out) noexcept {
-  const auto v = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
-  const auto d = [&](int x) { return c[x] - a[x]; };
-  // Columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
-  const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
-  int va = v(x0), da = d(x0), vb = v(x0 + 1), db = d(x0 + 1);
-  int gx0 = va - vm2, gy0 = dm2 + 2 * dm1 + da;
-  int mxx = gx0 * gx0, myy = gy0 * gy0, mxy = gx0 * gy0;
-  gx0 = vb - vm1;
-  gy0 = dm1 + 2 * da + db;
-  int zxx = gx0 * gx0, zyy = gy0 * gy0, zxy = gx0 * gy0;
-  // One column x: (v0, d0) = column x, d1 = column x+1's d, p0 = products at x-1, p1 at x. The
-  // new column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles
-  // swapped make one step of period 2 without register moves (no copies on an in-order core).
-  const auto step = [&](int x, int& v0, int& d0, int d1, int& p0xx, int& p0yy, int& p0xy, int p1xx, int p1yy,
-                        int p1xy) {
-    const int v2 = v(x + 2), d2 = d(x + 2);
-    const int gx = v2 - v0, gy = d0 + 2 * d1 + d2;
-    const int pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
-    const float hxx = static_cast<float>(p0xx + p1xx + pxx), hyy = static_cast<float>(p0yy + p1yy + pyy),
-                hxy = static_cast<float>(p0xy + p1xy + pxy);
-    float* __restrict sl = slot + 3 * x;  // this row's slot, xx yy xy interleaved per column
-    sl[0] = hxx;
-    sl[1] = hyy;
-    sl[2] = hxy;
-    if (kOutput) {
-      const float* __restrict q1 = r1 + 3 * x;
-      const float* __restrict q2 = r2 + 3 * x;
-      const float sxx = (hxx + q1[0] + q2[0]) * 0.015625f;
-      const float syy = (hyy + q1[1] + q2[1]) * 0.015625f;
-      const float sxy = (hxy + q1[2] + q2[2]) * 0.015625f;
-      const float tr = sxx + syy;
-      out[x] = sxx * syy - sxy * sxy - k * tr * tr;
-    }
-    v0 = v2;
-    d0 = d2;
+// separable column terms v = a + 2b + c and d = c - a kept in registers, and are converted to float
+// once each; their products (|.| <= 2^20) and the products' sums over columns x-1..x+1 (|.| < 2^22) are
+// integers, exact in float, and go to ring slot py % 3; once three rows are in, output row py-1 sums
+// the three slots (|.| <= 9 * 1020^2 < 2^24, exact). The same floats as the float path: there gx = dx / 8,
+// so every product and partial box sum is an integer multiple of 1/64 below 2^24 / 64, exact in any
+// order; so sxx = Sxx / 64 (exact) etc. The response is taken on the unscaled sums and scaled by 2^-12
+// at the end: each product, difference and k * tr of the scaled expression is the unscaled one's times
+// a power of two (no operand or result is subnormal: the nonzero ones are at least 0.04 / 4096), so the
+// rounding is the same and so is the result. Per pixel: 3 byte loads, 2 int -> float conversions, the
+// products in float (a LEON3 converts through memory, and has no SIMD for the float passes this replaces).
+//
+// Two product rows per pass (kRows 2: rows py and py+1 from image rows a, b, c, e = py-1 .. py+2): the
+// ring is two slots, sa holding row py-2's sums and sb row py-1's on entry and rows py and py+1's on
+// exit; with kOutput, output rows py-1 (out0) and py (out1) share t = row py-1 + row py: 6 loads and 9
+// adds of the ring per column for two rows instead of 12 and 12, and 4 byte loads instead of 6. kRows 1
+// (the last row of an odd count, kOutput) gives output row py-1 alone.
+template <bool kOutput, int kRows>
+inline void tensor_rows_u8_r1(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, const std::uint8_t* __restrict c,
+                              const std::uint8_t* __restrict e, int x0, int x1, float* __restrict sa, float* __restrict sb,
+                              float k, float* __restrict out0, float* __restrict out1) noexcept {
+  static_assert(kRows == 2 || kOutput, "a single row is only the last output row");
+  const auto v1 = [&](int x) { return a[x] + 2 * b[x] + c[x]; };
+  const auto d1 = [&](int x) { return c[x] - a[x]; };
+  const auto v2 = [&](int x) { return b[x] + 2 * c[x] + e[x]; };
+  const auto d2 = [&](int x) { return e[x] - b[x]; };
+  const auto response = [k](float sxx, float syy, float sxy) {
+    const float tr = sxx + syy;
+    return (sxx * syy - sxy * sxy - k * tr * tr) * 0.000244140625f;  // 2^-12
+  };
+  // Per row: columns x0-2 .. x0+1 give the products at x0-1 (m) and x0 (z).
+  struct Row {
+    int va, da, vb, db;
+    float mxx, myy, mxy, zxx, zyy, zxy;
+  };
+  const auto start = [x0](auto v, auto d) {
+    Row r;
+    const int vm2 = v(x0 - 2), dm2 = d(x0 - 2), vm1 = v(x0 - 1), dm1 = d(x0 - 1);
+    r.va = v(x0);
+    r.da = d(x0);
+    r.vb = v(x0 + 1);
+    r.db = d(x0 + 1);
+    float gx = static_cast<float>(r.va - vm2), gy = static_cast<float>(dm2 + 2 * dm1 + r.da);
+    r.mxx = gx * gx;
+    r.myy = gy * gy;
+    r.mxy = gx * gy;
+    gx = static_cast<float>(r.vb - vm1);
+    gy = static_cast<float>(dm1 + 2 * r.da + r.db);
+    r.zxx = gx * gx;
+    r.zyy = gy * gy;
+    r.zxy = gx * gy;
+    return r;
+  };
+  Row r1 = start(v1, d1), r2{};
+  if (kRows == 2) r2 = start(v2, d2);
+  // One row at column x: (v0, d0) = column x, dn = column x+1's d, p0 = products at x-1, p1 at x; the new
+  // column x+2 and the products at x+1 overwrite the oldest ones, so two calls with the roles swapped
+  // make one step of period 2 without register moves (no copies on an in-order core). h: the products
+  // summed over columns x-1..x+1.
+  const auto row_step = [](int vn2, int dn2, int& v0, int& d0, int dn, float& p0xx, float& p0yy, float& p0xy, float p1xx,
+                           float p1yy, float p1xy, float& hxx, float& hyy, float& hxy) {
+    const float gx = static_cast<float>(vn2 - v0), gy = static_cast<float>(d0 + 2 * dn + dn2);
+    const float pxx = gx * gx, pyy = gy * gy, pxy = gx * gy;
+    hxx = p0xx + p1xx + pxx;
+    hyy = p0yy + p1yy + pyy;
+    hxy = p0xy + p1xy + pxy;
+    v0 = vn2;
+    d0 = dn2;
     p0xx = pxx;
     p0yy = pyy;
     p0xy = pxy;
   };
+  const auto step = [&](int x, bool odd) {
+    float h1xx, h1yy, h1xy, h2xx = 0.0f, h2yy = 0.0f, h2xy = 0.0f;
+    if (!odd) {
+      row_step(v1(x + 2), d1(x + 2), r1.va, r1.da, r1.db, r1.mxx, r1.myy, r1.mxy, r1.zxx, r1.zyy, r1.zxy, h1xx, h1yy, h1xy);
+      if (kRows == 2)
+        row_step(v2(x + 2), d2(x + 2), r2.va, r2.da, r2.db, r2.mxx, r2.myy, r2.mxy, r2.zxx, r2.zyy, r2.zxy, h2xx, h2yy, h2xy);
+    } else {
+      row_step(v1(x + 2), d1(x + 2), r1.vb, r1.db, r1.da, r1.zxx, r1.zyy, r1.zxy, r1.mxx, r1.myy, r1.mxy, h1xx, h1yy, h1xy);
+      if (kRows == 2)
+        row_step(v2(x + 2), d2(x + 2), r2.vb, r2.db, r2.da, r2.zxx, r2.zyy, r2.zxy, r2.mxx, r2.myy, r2.mxy, h2xx, h2yy, h2xy);
+    }
+    float* __restrict qa = sa + 3 * x;  // xx yy xy interleaved per column
+    float* __restrict qb = sb + 3 * x;
+    if (kOutput) {
+      if (kRows == 2) {
+        const float txx = qb[0] + h1xx, tyy = qb[1] + h1yy, txy = qb[2] + h1xy;  // rows py-1 + py
+        out0[x] = response(qa[0] + txx, qa[1] + tyy, qa[2] + txy);
+        out1[x] = response(txx + h2xx, tyy + h2yy, txy + h2xy);
+      } else {
+        out0[x] = response(qa[0] + qb[0] + h1xx, qa[1] + qb[1] + h1yy, qa[2] + qb[2] + h1xy);
+      }
+    }
+    if (kRows == 2) {
+      qa[0] = h1xx;
+      qa[1] = h1yy;
+      qa[2] = h1xy;
+      qb[0] = h2xx;
+      qb[1] = h2yy;
+      qb[2] = h2xy;
+    }
+  };
   int x = x0;
   for (; x + 2 <= x1; x += 2) {
-    step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
-    step(x + 1, vb, db, da, zxx, zyy, zxy, mxx, myy, mxy);
+    step(x, false);
+    step(x + 1, true);
   }
-  if (x < x1) step(x, va, da, db, mxx, myy, mxy, zxx, zyy, zxy);
+  if (x < x1) step(x, false);
 }
 
 // Four-lane float / int vectors (GCC and clang vector extensions: SSE2 on x86, NEON on ARM, scalar code
@@ -236,7 +287,18 @@ inline void cells16_x4(const float* __restrict p, F4& mv, float* __restrict sums
 // Max and sum of the positive values of v[0..n), in 8 independent lanes (lane k: v[k], v[k+8], ...;
 // the tail in lane 0; the lanes combined in order 0..7), so the result is deterministic. With SIMD the
 // 8 lanes are two 4-lane vectors (the same lanes, the same order: the same floats).
-inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum, bool simd) noexcept {
+// finite: v holds no NaN (8-bit images' responses), and vmax >= +0 (rmax's start): then x > m is the
+// signed integer compare of their bits (for m >= +0: a positive float's bits order like the float, a
+// negative one's or -0's are negative integers, below m's, as the float is not above m) and x > 0 is
+// bits > 0; no float compare (a LEON3 needs a compare, a nop and a float branch for each).
+inline std::int32_t float_bits(const float* p) noexcept {
+  // Aligned as a float: one word load (without the hint SPARC gcc copies the 4 bytes one by one).
+  const void* q = __builtin_assume_aligned(p, alignof(float));
+  std::int32_t b;
+  std::memcpy(&b, q, sizeof b);
+  return b;
+}
+inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, float& psum, bool simd, bool finite) noexcept {
   float m[8] = {vmax, vmax, vmax, vmax, vmax, vmax, vmax, vmax};
   float s[8] = {};
   int i = 0;
@@ -256,6 +318,22 @@ inline void max_and_positive_sum(const float* __restrict v, int n, float& vmax, 
       std::memcpy(s, &s0, sizeof s0);
       std::memcpy(s + 4, &s1, sizeof s1);
     }
+  }
+  if (finite) {
+    std::int32_t mb[8];
+    std::memcpy(mb, m, sizeof mb);
+    for (; i + 8 <= n; i += 8)
+      for (int k = 0; k < 8; ++k) {
+        const std::int32_t xb = float_bits(v + i + k);
+        mb[k] = xb > mb[k] ? xb : mb[k];
+        if (xb > 0) s[k] += v[i + k];  // adding +0 instead leaves s[k] (>= +0) as it is
+      }
+    for (; i < n; ++i) {
+      const std::int32_t xb = float_bits(v + i);
+      mb[0] = xb > mb[0] ? xb : mb[0];
+      if (xb > 0) s[0] += v[i];
+    }
+    std::memcpy(m, mb, sizeof mb);
   }
   {
     for (; i + 8 <= n; i += 8)
@@ -283,20 +361,19 @@ bool harris_response_u8_r1(ConstImageViewU8 img, RectI g, float k, ImageViewF32 
       resp.width() < g.x + g.width || resp.height() < g.y + g.height || wz < static_cast<std::size_t>(g.x + g.width))
     return false;
   const int x0 = g.x, x1 = g.x + g.width;
-  for (int py = g.y - 1; py <= g.y + g.height; ++py) {
-    const int s = (py - (g.y - 1)) % 3;
-    float* slot = ring.data() + static_cast<std::size_t>(3 * s) * wz;
-    const float* r1 = ring.data() + static_cast<std::size_t>(3 * ((s + 2) % 3)) * wz;  // row py - 1
-    const float* r2 = ring.data() + static_cast<std::size_t>(3 * ((s + 1) % 3)) * wz;  // row py - 2
-    const std::uint8_t* a = img.row(py - 1);
-    const std::uint8_t* b = img.row(py);
-    const std::uint8_t* c = img.row(py + 1);
-    if (py < g.y + 1) {
-      tensor_row_u8_r1<false>(a, b, c, x0, x1, slot, r1, r2, k, nullptr);
-    } else {
-      tensor_row_u8_r1<true>(a, b, c, x0, x1, slot, r1, r2, k, resp.row(py - 1));
-    }
-  }
+  float* sa = ring.data();
+  float* sb = ring.data() + 3 * wz;
+  // Product rows g.y-1 .. g.y+g.height, two per pass; the first pass fills the ring, each later one
+  // gives output rows py-1 and py; an odd last row alone.
+  tensor_rows_u8_r1<false, 2>(img.row(g.y - 2), img.row(g.y - 1), img.row(g.y), img.row(g.y + 1), x0, x1, sa, sb, k, nullptr,
+                              nullptr);
+  int py = g.y + 1;
+  for (; py + 1 <= g.y + g.height; py += 2)
+    tensor_rows_u8_r1<true, 2>(img.row(py - 1), img.row(py), img.row(py + 1), img.row(py + 2), x0, x1, sa, sb, k,
+                               resp.row(py - 1), resp.row(py));
+  if (py == g.y + g.height)
+    tensor_rows_u8_r1<true, 1>(img.row(py - 1), img.row(py), img.row(py + 1), img.row(py + 1), x0, x1, sa, sb, k,
+                               resp.row(py - 1), nullptr);
   return true;
 }
 
@@ -392,6 +469,49 @@ bool strict_window_max(ConstImageViewF32 resp, int nms, int x, int y, float v) n
   return true;
 }
 
+// The window check of a pixel known to be at least every value of its window (a finite response whose
+// window maximum it equals): it fails only on a tie with an earlier pixel in raster order, so only the
+// nms rows above and the nms pixels to its left are compared, for equality. The same answer as
+// strict_window_max for such a pixel.
+// v is above the threshold (> 0, not -0), so equal floats are equal bits: the compares are integer ones
+// (no unordered case to test).
+inline bool no_earlier_tie(ConstImageViewF32 resp, int nms, int x, int y, float v) noexcept {
+  const std::int32_t vb = float_bits(&v);
+  bool tie = false;
+  for (int dy = -nms; dy < 0; ++dy) {
+    const float* nr = resp.row(y + dy);
+    for (int dx = -nms; dx <= nms; ++dx) tie |= float_bits(nr + x + dx) == vb;
+  }
+  const float* r0 = resp.row(y);
+  for (int dx = -nms; dx < 0; ++dx) tie |= float_bits(r0 + x + dx) == vb;
+  return !tie;
+}
+
+// The window check of a block's maximum (suppress_blocks; a finite response): the other pixels of its
+// block [bx, xe) x [by, ye) (inside the window) are below it or equal and later in raster order, so they
+// are skipped, and strict_window_max's tie rule is split by region: a neighbour before it in raster order
+// fails it when >= v, one after it when > v. The same answer as strict_window_max for a block maximum.
+inline bool block_max_wins(ConstImageViewF32 resp, int nms, int x, int y, std::int32_t vb, int bx, int xe, int by,
+                           int ye) noexcept {
+  // v > 0 (above the threshold) and the response has no NaN: r >= v and r > v are the same compares on
+  // the integers of their bits (a negative r or -0 has negative bits).
+  const int xa = x - nms, xb = x + nms;
+  for (int yy = y - nms; yy <= y + nms; ++yy) {
+    const float* __restrict r = resp.row(yy);
+    const bool own = yy >= by && yy < ye;
+    const int l1 = own ? bx : xb + 1;  // the columns checked: [xa, l1) and [r0, xb]
+    const int r0 = own ? xe : xb + 1;
+    // Before the maximum in raster order a tie fails it (>=), after it only a greater value (>): the
+    // rows above, the left part of its own row; the rows below, the right part of its own row.
+    const std::int32_t left_limit = yy <= y ? vb - 1 : vb, right_limit = yy < y ? vb - 1 : vb;
+    for (int xx = xa; xx < l1; ++xx)
+      if (float_bits(r + xx) > left_limit) return false;
+    for (int xx = r0; xx <= xb; ++xx)
+      if (float_bits(r + xx) > right_limit) return false;
+  }
+  return true;
+}
+
 // A corner at (x, y) of response v; its score normalised by *mean (when given and positive).
 inline Corner make_corner(int x, int y, float v, const float* mean) noexcept {
   Corner c;
@@ -409,19 +529,43 @@ inline Corner make_corner(int x, int y, float v, const float* mean) noexcept {
 }
 
 // Keeps the best cap corners in the min-heap heap[0..hn) (`better` is a total order on distinct
-// pixels, so the corners kept do not depend on the order they are offered in); dropped: one was not.
+// pixels, so the corners kept do not depend on the order they are offered in, nor on how the heap
+// arranges them); dropped: one was not. A corner better than the worst kept (heap[0]) replaces it and
+// is sifted down in one pass (std::pop_heap + push_heap took two: the host's __adjust_heap was 8 % of
+// the Harris samples).
+// A Corner copied field by field: SPARC gcc copies the 20-byte struct with a call to memcpy (3.6 % of a
+// leon3 Harris count).
+inline void put(Corner& d, const Corner& s) noexcept {
+  d.x = s.x;
+  d.y = s.y;
+  d.score = s.score;
+  d.response = s.response;
+  d.level = s.level;
+}
 inline void keep_best(const Corner& c, Corner* heap, std::size_t& hn, std::size_t cap, bool& dropped) noexcept {
-  if (hn < cap) {
-    heap[hn++] = c;
-    std::push_heap(heap, heap + hn, better);
-  } else {
-    dropped = true;
-    if (better(c, heap[0])) {
-      std::pop_heap(heap, heap + hn, better);
-      heap[hn - 1] = c;
-      std::push_heap(heap, heap + hn, better);
+  if (hn < cap) {  // sift up from the end (std::push_heap)
+    std::size_t i = hn++;
+    while (i > 0) {
+      const std::size_t p = (i - 1) / 2;
+      if (!better(heap[p], c)) break;  // the parent is not better: c (worse or equal) stays below it
+      put(heap[i], heap[p]);
+      i = p;
     }
+    put(heap[i], c);
+    return;
   }
+  dropped = true;
+  if (!better(c, heap[0])) return;
+  std::size_t i = 0;
+  for (;;) {
+    std::size_t w = 2 * i + 1;  // the worse child (heap[0] is the worst kept)
+    if (w >= hn) break;
+    if (w + 1 < hn && better(heap[w], heap[w + 1])) ++w;
+    if (!better(c, heap[w])) break;
+    put(heap[i], heap[w]);
+    i = w;
+  }
+  put(heap[i], c);
 }
 
 // Parabola through the 3x3 response around each corner: |offset| <= 0.5 px in x and y.
@@ -546,7 +690,7 @@ void HarrisDetector::float_tensor_response(ImageView<const Pixel> image, RectI g
   }
 }
 
-float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noexcept {
+float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det, bool finite) noexcept {
   const int W = resp.width(), H = resp.height();
   const int cell = config_.norm_cell_px;
   const int cw = (W + cell - 1) / cell, ch = (H + cell - 1) / cell;
@@ -583,7 +727,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
       }
       const int x1 = std::min(det.x + det.width, (cx + 1) * cell);
       float s = 0.0f;
-      max_and_positive_sum(row + x0, x1 - x0, rmax, s, simd_);
+      max_and_positive_sum(row + x0, x1 - x0, rmax, s, simd_, finite);
       crow_sum[cx] += s;
       crow_cnt[cx] += static_cast<float>(x1 - x0);
       pos_sum += static_cast<double>(s);
@@ -612,7 +756,7 @@ float HarrisDetector::response_statistics(ConstImageViewF32 resp, RectI det) noe
 }
 
 std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap,
-                                              bool& dropped) noexcept {
+                                              bool finite, bool& dropped) noexcept {
   const int nms = config_.nms_radius;
   const std::size_t wz = static_cast<std::size_t>(config_.max_width);
   const int cell = config_.norm_cell_px;
@@ -667,7 +811,9 @@ std::size_t HarrisDetector::suppress_and_keep(ConstImageViewF32 resp, RectI det,
           const int xc = x + __builtin_ctz(bits);
           bits &= bits - 1;
           const float v = row[xc];
-          if (strict_window_max(resp, nms, xc, y, v)) keep(xc, y, v);
+          // A finite response: v is at least every value of its window (the max over the ring), so
+          // only a tie with an earlier pixel can fail the window check.
+          if (finite ? no_earlier_tie(resp, nms, xc, y, v) : strict_window_max(resp, nms, xc, y, v)) keep(xc, y, v);
         }
       }
     }
@@ -705,18 +851,24 @@ std::size_t HarrisDetector::suppress_blocks(ConstImageViewF32 resp, RectI det, f
       const int xe = std::min(bx + side, dx1);
       // The block's maximum, the earliest in raster order among equals: the only pixel of the block
       // that can be a maximum of its window (every other one is within nms of it and loses to it).
+      // Compared as the integers of their bits (a finite response, see block_max_wins): where the
+      // block's maximum is positive this is its position, earliest among equals; where it is not, the
+      // value found is not above it either, and neither passes the threshold (>= 0).
       int wx = bx, wy = by;
-      float wv = resp.row(by)[bx];
+      std::int32_t wb = float_bits(resp.row(by) + bx);
       for (int y = by; y < ye; ++y) {
         const float* __restrict row = resp.row(y);
-        for (int x = bx; x < xe; ++x)
-          if (row[x] > wv) {
-            wv = row[x];
+        for (int x = bx; x < xe; ++x) {
+          const std::int32_t b = float_bits(row + x);
+          if (b > wb) {
+            wb = b;
             wx = x;
             wy = y;
           }
+        }
       }
-      if (!(wv > thresh) || !strict_window_max(resp, nms, wx, wy, wv)) continue;
+      const float wv = resp.row(wy)[wx];
+      if (!(wv > thresh) || !block_max_wins(resp, nms, wx, wy, wb, bx, xe, by, ye)) continue;
       keep(wx, wy, wv);
     }
   }
@@ -762,14 +914,14 @@ Status HarrisDetector::detect_impl(ImageView<const Pixel> image, RectI roi, Boun
 
   // Statistics over the detection area: max (threshold), positive sum (normalisation floor) and the
   // normalisation cell means; then NMS and the top-K heap.
-  const float rmax = response_statistics(resp, det);
+  const float rmax = response_statistics(resp, det, std::is_same<Pixel, std::uint8_t>::value);
   const float thresh = std::max(config_.min_response, config_.quality_level * rmax);
   const std::size_t cap = std::min(static_cast<std::size_t>(config_.max_corners), out.capacity());
   bool dropped = false;
   // Without SIMD, on 8-bit images (a finite response), the block NMS; the same corners (see harris.hpp).
   const bool blocks = block_nms_ && std::is_same<Pixel, std::uint8_t>::value;
   const std::size_t hn =
-      blocks ? suppress_blocks(resp, det, thresh, cap, dropped) : suppress_and_keep(resp, det, thresh, cap, dropped);
+      blocks ? suppress_blocks(resp, det, thresh, cap, dropped) : suppress_and_keep(resp, det, thresh, cap, std::is_same<Pixel, std::uint8_t>::value, dropped);
   if (dropped) counters_.increment(VisionCounter::kCornerCapReached);
   Corner* heap = heap_.data();
   std::sort(heap, heap + hn, better);

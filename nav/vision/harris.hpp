@@ -128,9 +128,13 @@ class HarrisDetector {
   template <typename Pixel>
   void float_tensor_response(ImageView<const Pixel> image, RectI g, ImageViewF32 resp) noexcept;
   // Max response over det (returned) and the normalisation cell means (cells_).
-  float response_statistics(ConstImageViewF32 resp, RectI det) noexcept;
+  // finite: the response has no NaN (8-bit images): the scalar loops compare the bits as integers.
+  float response_statistics(ConstImageViewF32 resp, RectI det, bool finite) noexcept;
   // NMS over det above thresh, the best cap kept in heap_ (returned: their count; dropped: some were not).
-  std::size_t suppress_and_keep(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap, bool& dropped) noexcept;
+  // finite: the response has no NaN or inf (8-bit images), so a pixel equal to its window maximum needs
+  // only the tie check (the vector loops use it).
+  std::size_t suppress_and_keep(ConstImageViewF32 resp, RectI det, float thresh, std::size_t cap, bool finite,
+                                bool& dropped) noexcept;
   // The same by blocks of (nms_radius + 1)^2 pixels (Neubeck and Van Gool's NMS): only each block's
   // maximum gets the window check, so each pixel is compared about once plus the checks of the block
   // maxima. The same corners as suppress_and_keep on a finite response (every pixel of a block is

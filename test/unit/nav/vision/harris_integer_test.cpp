@@ -33,7 +33,8 @@ struct Images {
 };
 
 // 0: uniform noise; 1: binary 0/255 noise (Sobel sums up to +-1020 with both signs of the product);
-// 2: a 255 square on 0 (step corners) plus a 0/255 checkerboard patch.
+// 2: a 255 square on 0 (step corners) plus a 0/255 checkerboard patch; 3: 2 x 2 tiles of 4 random levels
+// (plateaus: many equal responses next to each other, the tie rule decides).
 void make(Images& im, int kind) {
   std::uint32_t s = 12345u + static_cast<std::uint32_t>(kind);
   for (int y = 0; y < Images::kH; ++y)
@@ -43,6 +44,11 @@ void make(Images& im, int kind) {
       if (kind == 0) v = static_cast<std::uint8_t>(s >> 24);
       if (kind == 1) v = (s >> 31) != 0 ? 255 : 0;
       if (kind == 2) v = (x >= 20 && x < 60 && y >= 15 && y < 50) || (x >= 70 && y >= 55 && ((x + y) & 1)) ? 255 : 0;
+      if (kind == 3) {
+        std::uint32_t t = static_cast<std::uint32_t>((y / 2) * 977 + (x / 2)) * 2654435761u;
+        t ^= t >> 13;
+        v = static_cast<std::uint8_t>(85u * ((t * 2246822519u) >> 30));
+      }
       im.u8[static_cast<std::size_t>(y * Images::kW + x)] = v;
     }
   im.sync();
@@ -58,9 +64,11 @@ TEST(HarrisIntegerTensor, SameResponseBitForBitAsTheFloatPasses) {
   ASSERT_TRUE(det.init(c, arena).is_ok());
   std::vector<Corner> storage(500);
   BoundedVector<Corner> out(Span<Corner>(storage.data(), storage.size()));
-  std::vector<float> resp(Images::kW * Images::kH, -1.0f), ring(9 * Images::kW);
-  const RectI area{2, 2, Images::kW - 4, Images::kH - 4};  // every pixel where the response is defined
-  for (int kind = 0; kind < 3; ++kind) {
+  // Every pixel where the response is defined (an even number of rows), and an area with an odd number
+  // of rows and columns (harris_response_u8_r1 takes two rows per pass, an odd last row alone).
+  for (const RectI area : {RectI{2, 2, Images::kW - 4, Images::kH - 4}, RectI{3, 2, Images::kW - 6, Images::kH - 5}})
+  for (int kind = 0; kind < 4; ++kind) {
+    std::vector<float> resp(Images::kW * Images::kH, -1.0f), ring(9 * Images::kW);
     Images im;
     make(im, kind);
     ASSERT_TRUE(det.detect(ConstImageViewF32(ImageViewF32::make(im.f32.data(), Images::kW, Images::kH).value()), out).is_ok());
@@ -74,16 +82,24 @@ TEST(HarrisIntegerTensor, SameResponseBitForBitAsTheFloatPasses) {
     // Where the detector runs the integer tensor (targets without SIMD: LEON3, armhf) it must give the
     // float path's response bit for bit. Elsewhere the float path is what runs, and the compiler may
     // contract its response into fused multiply-adds (aarch64), so the two agree to rounding only.
-    const float tol = kHarrisIntegerTensor ? 0.0f : 1e-6f * rmax;
+    // x86-64 without FMA has no contraction: bit for bit there too.
+#if defined(__x86_64__) && !defined(__FMA__)
+    const bool exact = true;
+#else
+    const bool exact = kHarrisIntegerTensor;
+#endif
+    const float tol = exact ? 0.0f : 1e-6f * rmax;
     int differ = 0;
     for (int y = area.y; y < area.y + area.height; ++y)
       for (int x = area.x; x < area.x + area.width; ++x)
         differ += (tol == 0.0f ? bits(got.row(y)[x]) != bits(ref.row(y)[x]) : std::abs(got.row(y)[x] - ref.row(y)[x]) > tol) ? 1 : 0;
-    EXPECT_EQ(differ, 0) << "image " << kind << (kHarrisIntegerTensor ? " (bit for bit)" : " (to 1e-6 of the largest response)");
+    EXPECT_EQ(differ, 0) << "image " << kind << " area height " << area.height << (exact ? " (bit for bit)" : " (to 1e-6 of the largest response)");
     EXPECT_GT(rmax, 0.0f) << "image " << kind;  // the images do have corners
     // Outside the area nothing is written.
     EXPECT_EQ(got.row(0)[0], -1.0f);
     EXPECT_EQ(got.row(Images::kH - 1)[Images::kW - 1], -1.0f);
+    EXPECT_EQ(got.row(area.y + area.height)[area.x], -1.0f);
+    EXPECT_EQ(got.row(area.y)[area.x + area.width], -1.0f);
   }
 }
 
@@ -112,8 +128,10 @@ TEST(HarrisIntegerTensor, SameCornersFromTheByteAndTheFloatImage) {
 }
 
 // The block NMS (suppress_blocks: only each (nms+1)^2 block's maximum gets the window check; what
-// detect() runs on 8-bit images without SIMD) against the row-maximum NMS: the same corners, bit for bit,
-// in the same order, with ties (the checkerboard's equal responses), a ROI, other radii and a cap.
+// detect() runs on 8-bit images without SIMD) and the row-maximum NMS with its vector loops (with SIMD:
+// a pixel equal to its window maximum gets only the tie check) against the row-maximum NMS's scalar
+// loops (the full window check of every candidate): the same corners, bit for bit, in the same order,
+// with ties (the checkerboard's and the plateaus' equal responses), a ROI, other radii and a cap.
 TEST(Harris, BlockNmsGivesTheSameCornersAsTheRowMaximumNms) {
   struct Case {
     int nms, cap;
@@ -135,31 +153,84 @@ TEST(Harris, BlockNmsGivesTheSameCornersAsTheRowMaximumNms) {
     c.nms_radius = k.nms;
     c.max_corners = k.cap;
     c.normalise = k.normalise;
-    ArenaStorage arena(2 * HarrisDetector::arena_bytes(c));
-    HarrisDetector rows, blocks;
+    ArenaStorage arena(3 * HarrisDetector::arena_bytes(c));
+    HarrisDetector rows, vector_rows, blocks;
     ASSERT_TRUE(rows.init(c, arena).is_ok());
+    ASSERT_TRUE(vector_rows.init(c, arena).is_ok());
     ASSERT_TRUE(blocks.init(c, arena).is_ok());
     rows.use_block_nms(false);
+    rows.use_vector_loops(false);
+    vector_rows.use_block_nms(false);
+    vector_rows.use_vector_loops(true);  // compiled out without SIMD: the scalar loops again
     blocks.use_block_nms(true);
-    for (int kind = 0; kind < 3; ++kind) {
+    for (int kind = 0; kind < 4; ++kind) {
       Images im;
       make(im, kind);
       const ConstImageViewU8 img(ImageViewU8::make(im.u8.data(), Images::kW, Images::kH).value());
       ASSERT_TRUE(rows.detect(img, k.roi, o1).is_ok());
-      ASSERT_TRUE(blocks.detect(img, k.roi, o2).is_ok());
-      ASSERT_EQ(o1.size(), o2.size()) << "image " << kind << " nms " << k.nms;
       ASSERT_GT(o1.size(), 0u);
-      for (std::size_t i = 0; i < o1.size(); ++i) {
-        EXPECT_EQ(bits(o1[i].x), bits(o2[i].x)) << i;
-        EXPECT_EQ(bits(o1[i].y), bits(o2[i].y)) << i;
-        EXPECT_EQ(bits(o1[i].score), bits(o2[i].score)) << i;
-        EXPECT_EQ(bits(o1[i].response), bits(o2[i].response)) << i;
+      for (HarrisDetector* other : {&vector_rows, &blocks}) {
+        ASSERT_TRUE(other->detect(img, k.roi, o2).is_ok());
+        ASSERT_EQ(o1.size(), o2.size()) << "image " << kind << " nms " << k.nms << " blocks " << (other == &blocks);
+        for (std::size_t i = 0; i < o1.size(); ++i) {
+          EXPECT_EQ(bits(o1[i].x), bits(o2[i].x)) << i;
+          EXPECT_EQ(bits(o1[i].y), bits(o2[i].y)) << i;
+          EXPECT_EQ(bits(o1[i].score), bits(o2[i].score)) << i;
+          EXPECT_EQ(bits(o1[i].response), bits(o2[i].response)) << i;
+        }
       }
       compared += o1.size();
     }
-    EXPECT_EQ(rows.counters().get(VisionCounter::kCornerCapReached), blocks.counters().get(VisionCounter::kCornerCapReached));
+    for (HarrisDetector* other : {&vector_rows, &blocks})
+      EXPECT_EQ(rows.counters().get(VisionCounter::kCornerCapReached), other->counters().get(VisionCounter::kCornerCapReached));
   }
   EXPECT_GT(compared, 100u);
+}
+
+// The top-K selection (the heap that keeps the best max_corners while the NMS offers corners in raster
+// order): with a cap, the corners are exactly the first ones of the run without one (the order of the
+// output is a total order, so the best K are one set), for both NMS and several caps, on an image with
+// ties.
+TEST(Harris, TheCapKeepsThePrefixOfTheUncappedCorners) {
+  std::vector<Corner> s1(2000), s2(2000);
+  BoundedVector<Corner> all(Span<Corner>(s1.data(), s1.size())), capped(Span<Corner>(s2.data(), s2.size()));
+  std::size_t checked = 0;
+  for (const bool block_nms : {false, true}) {
+    for (int kind = 0; kind < 4; ++kind) {
+      Images im;
+      make(im, kind);
+      const ConstImageViewU8 img(ImageViewU8::make(im.u8.data(), Images::kW, Images::kH).value());
+      HarrisConfig c;
+      c.max_width = Images::kW;
+      c.max_height = Images::kH;
+      c.max_corners = 2000;
+      ArenaStorage big_arena(HarrisDetector::arena_bytes(c));
+      HarrisDetector big;
+      ASSERT_TRUE(big.init(c, big_arena).is_ok());
+      big.use_block_nms(block_nms);
+      ASSERT_TRUE(big.detect(img, all).is_ok());
+      ASSERT_LT(all.size(), 2000u);  // no cap reached: every corner
+      EXPECT_EQ(big.counters().get(VisionCounter::kCornerCapReached), 0u);
+      for (const int cap : {1, 2, 7, 64, 200}) {
+        if (static_cast<std::size_t>(cap) >= all.size()) continue;
+        c.max_corners = cap;
+        ArenaStorage arena(HarrisDetector::arena_bytes(c));
+        HarrisDetector d;
+        ASSERT_TRUE(d.init(c, arena).is_ok());
+        d.use_block_nms(block_nms);
+        ASSERT_TRUE(d.detect(img, capped).is_ok());
+        ASSERT_EQ(capped.size(), static_cast<std::size_t>(cap));
+        EXPECT_EQ(d.counters().get(VisionCounter::kCornerCapReached), 1u);
+        for (std::size_t i = 0; i < capped.size(); ++i) {
+          EXPECT_EQ(bits(capped[i].x), bits(all[i].x)) << "cap " << cap << " kind " << kind << " i " << i;
+          EXPECT_EQ(bits(capped[i].y), bits(all[i].y)) << i;
+          EXPECT_EQ(bits(capped[i].score), bits(all[i].score)) << i;
+        }
+        checked += capped.size();
+      }
+    }
+  }
+  EXPECT_GT(checked, 300u);
 }
 
 TEST(HarrisIntegerTensor, RefusesAnAreaTooCloseToTheEdgeOrTooLittleScratch) {
