@@ -147,6 +147,7 @@ class TileBuilder {
     double dist_m;  // along-track distance travelled at this scanline
     float bin_m;
     int bins;
+    int run_lo[2], run_hi[2];  // per side: bins [run_lo, run_hi) are all valid (the first valid bin's run)
   };
   Status build(int first, int count) noexcept;
   // Logical index i: 0 = oldest buffered scanline.
@@ -175,7 +176,7 @@ class TileBuilder {
   Span<Slot> slots_;
   Span<float> values_;          // ring of N x 2 x max_bins
   Span<std::uint8_t> valid_;    // same layout
-  struct Acc {
+  struct alignas(8) Acc {  // 8-aligned: one doubleword (SPARC's ldd / std in the splat)
     float sum;
     float weight;
   };
@@ -199,7 +200,7 @@ class TileBuilder {
   bool overflow_ = false;      // a ping the next tile needed was dropped
   int first_in_tile(double start_m) const noexcept;
   double inv_res_ = 0.0;        // 1 / resolution_m, set by build()
-  float one_ = 1.0f;            // 1, read once per line by splat_side()'s plain loop (see there)
+  float one_ = 1.0f;            // 1, read once per line by splat_side()'s plain loop and normalise() (see there)
   int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
   int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};
