@@ -579,9 +579,9 @@ std::size_t TileBuilder::normalise() noexcept {
   const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
   const float scale = 255.0f / cfg_.display_max;
-  // 0.5, 0 and 255 as values the compiler cannot fold (see one_): kept in registers, not reloaded
-  // from the GOT per pixel after each u8 store (a byte store may alias anything).
-  const float half = 0.5f * one_, zero = one_ - one_, top = 255.0f * one_;
+  // 1, 0.5, 0 and 255 as values the compiler cannot fold (see one_): kept in registers, not reloaded
+  // from the GOT per pixel (and after each u8 store: a byte store may alias anything).
+  const float one = one_, half = 0.5f * one, zero = one - one, top = 255.0f * one;
   if (bx1 < bx0) return 0;
   const std::size_t len = static_cast<std::size_t>(bx1 - bx0 + 1);
   float* tmp = row_.data();
@@ -595,9 +595,28 @@ std::size_t TileBuilder::normalise() noexcept {
     // intensity lies over accumulator rows before it ((y + 1) W / 2 <= y W for y >= 1), already
     // emptied or outside the box, and is written in place.
     float* out_f = y == 0 ? tmp : intensity_ + row;
+    if (!kCarryColumn && !u8_.empty()) {
+      // Without SIMD (LEON3) one loop does both: the intensity is quantised while in a register,
+      // not re-read by a second loop.
+      std::uint8_t* out = u8_.data() + row;
+      for (int x = bx0; x <= bx1; ++x) {
+        const bool c = acc[x].weight > eps;
+        const float f = (c ? acc[x].sum : zero) / (c ? acc[x].weight : one);
+        out_f[x] = f;
+        cov[x] = c ? 1 : 0;
+        row_covered += c ? 1u : 0u;
+        float u = f * scale + half;
+        u = u < zero ? zero : (u > top ? top : u);
+        out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+      }
+      covered += row_covered;
+      std::memset(static_cast<void*>(acc_.data() + row + bx0), 0, len * sizeof(Acc));
+      if (y == 0) std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
+      continue;
+    }
     for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
-      out_f[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
+      out_f[x] = (c ? acc[x].sum : zero) / (c ? acc[x].weight : one);
       cov[x] = c ? 1 : 0;
       row_covered += c ? 1u : 0u;
     }
