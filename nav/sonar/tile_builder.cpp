@@ -599,15 +599,22 @@ std::size_t TileBuilder::normalise() noexcept {
       // Without SIMD (LEON3) one loop does both: the intensity is quantised while in a register,
       // not re-read by a second loop.
       std::uint8_t* out = u8_.data() + row;
+      // Branching on the coverage (no selects on SPARC V8): an empty pixel is 0 / 1 = 0, u8 0.
       for (int x = bx0; x <= bx1; ++x) {
-        const bool c = acc[x].weight > eps;
-        const float f = (c ? acc[x].sum : zero) / (c ? acc[x].weight : one);
-        out_f[x] = f;
-        cov[x] = c ? 1 : 0;
-        row_covered += c ? 1u : 0u;
-        float u = f * scale + half;
-        u = u < zero ? zero : (u > top ? top : u);
-        out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+        const float w = acc[x].weight;
+        if (w > eps) {
+          const float f = acc[x].sum / w;
+          out_f[x] = f;
+          cov[x] = 1;
+          ++row_covered;
+          float u = f * scale + half;
+          u = u < zero ? zero : (u > top ? top : u);
+          out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+        } else {
+          out_f[x] = zero;
+          cov[x] = 0;
+          out[x] = 0;
+        }
       }
       covered += row_covered;
       std::memset(static_cast<void*>(acc_.data() + row + bx0), 0, len * sizeof(Acc));
