@@ -46,6 +46,7 @@
 #include "nav/core/geometry.hpp"
 #include "nav/core/image.hpp"
 #include "nav/core/status.hpp"
+#include "nav/sonar/hole_fill.hpp"
 #include "nav/sonar/sonar_types.hpp"
 
 namespace qnav::sonar {
@@ -167,8 +168,6 @@ class TileBuilder {
   inline void splat(float col, float row, float v) noexcept;
   // Intensity, coverage 1 and the u8 raster in the touched box; returns the pixels with coverage 1.
   std::size_t normalise() noexcept;
-  std::size_t fill_holes() noexcept;                    // coverage 2 (and their u8); returns how many
-  std::uint8_t to_u8(float intensity) const noexcept;
   void finish_tile(int first, int count, std::size_t covered) noexcept;
 
   TileBuilderConfig cfg_{};
