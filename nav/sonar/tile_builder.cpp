@@ -172,6 +172,16 @@ Result<bool> TileBuilder::push(const CorrectedScanline& line, const Pose2& pose)
     kp[k] = line.port_valid[k] ? 1 : 0;
     ks[k] = line.stbd_valid[k] ? 1 : 0;
   }
+  // Per side, the run of valid bins that starts at the first valid one (splat_side() needs no masks there).
+  for (int side = 0; side < 2; ++side) {
+    const std::uint8_t* k = side == 0 ? kp : ks;
+    int lo = 0;
+    while (lo < s.bins && k[lo] == 0) ++lo;
+    int hi = lo;
+    while (hi < s.bins && k[hi] != 0) ++hi;
+    s.run_lo[side] = lo;
+    s.run_hi[side] = hi;
+  }
   ++since_tile_;
   if (by_dist) {
     if (dist_m_ < next_end_m_) return false;
@@ -293,7 +303,7 @@ void TileBuilder::clear_previous_box() noexcept {
     const std::size_t len = static_cast<std::size_t>(prev_x1_ - prev_x0_ + 1);
     for (int y = prev_y0_; y <= prev_y1_; ++y) {
       const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(prev_x0_);
-      std::fill(intensity_ + k, intensity_ + k + len, 0.0f);
+      std::memset(static_cast<void*>(intensity_ + k), 0, len * sizeof(float));  // 0.0f is all zero bytes
       std::fill(coverage_.data() + k, coverage_.data() + k + len, std::uint8_t{0});
       if (!u8_.empty()) std::fill(u8_.data() + k, u8_.data() + k + len, std::uint8_t{0});
     }
@@ -377,25 +387,58 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     // Fast path (the common case): the whole line lies inside the raster, one splat per bin.
     const float cx = c0f - 0.5f + 0.5f * dcb, cy = r0f - 0.5f + 0.5f * drb;
     Acc* base = acc_.data();
+    // Bins [lo, hi) are valid on both lines (the overlap of their first runs, see push()): there the
+    // value is always the interpolated one and no mask is read; the bins around it go through the masks.
+    const int rlo = a.run_lo[side] > bslot->run_lo[side] ? a.run_lo[side] : bslot->run_lo[side];
+    const int rhi = a.run_hi[side] < bslot->run_hi[side] ? a.run_hi[side] : bslot->run_hi[side];
+    const int lo = rlo < rhi ? rlo : 0, hi = rlo < rhi ? rhi : 0;
     if (!kCarryColumn) {
       // 1 and 0 as values the compiler cannot fold (one_ is 1.0f): it keeps them in registers instead
       // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
       const float one = one_, zero = one - one;
       const bool first_half = t < 0.5f;  // m == 2 (only the next line valid): its value from t >= 0.5
-      float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
-      for (int b = 0; b < bins; ++b) {
-        bf += one;
+      // The value of a bin outside [lo, hi), or -1 (skipped) when it has none at this sub-step.
+      const auto masked = [&](int b) {
         const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-        if (m == 0 || (m == 2 && first_half)) continue;
+        if (m == 0 || (m == 2 && first_half)) return -one;
         // m == 1 (this line only): its value; m == 2 past the half: the next line's; both: interpolated.
-        const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
-        if (v < zero) continue;
+        return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
+      };
+      const auto put = [&](float bf, float v) {
         const float x = cx + bf * dcb, y = cy + bf * drb;
         const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
         const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
         Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
         Acc* q1 = q0 + W;
         const float w00 = (one - ax) * (one - ay), w10 = ax * (one - ay), w01 = (one - ax) * ay, w11 = ax * ay;
+#if defined(__sparc__)
+        // SPARC: a pixel's {sum, weight} is one aligned doubleword, moved by one ldd / std into and out
+        // of an even/odd float register pair (4 instructions a pixel instead of 6; the compiler splits
+        // the pair into two ld / st). The same additions of the same products as the portable code
+        // below: the same sums bit for bit.
+        const float s00 = w00 * v, s10 = w10 * v, s01 = w01 * v, s11 = w11 * v;
+        double p00, p10, p01, p11;
+        __asm__(
+            "ldd [%6], %0\n\t"
+            "ldd [%6+8], %1\n\t"
+            "ldd [%7], %2\n\t"
+            "ldd [%7+8], %3\n\t"
+            "fadds %0, %8, %0\n\t"
+            "fadds %R0, %9, %R0\n\t"
+            "fadds %1, %10, %1\n\t"
+            "fadds %R1, %11, %R1\n\t"
+            "fadds %2, %12, %2\n\t"
+            "fadds %R2, %13, %R2\n\t"
+            "fadds %3, %14, %3\n\t"
+            "fadds %R3, %15, %R3\n\t"
+            "std %0, [%6]\n\t"
+            "std %1, [%6+8]\n\t"
+            "std %2, [%7]\n\t"
+            "std %3, [%7+8]"
+            : "=&f"(p00), "=&f"(p10), "=&f"(p01), "=&f"(p11), "+m"(*reinterpret_cast<Acc(*)[2]>(q0)),
+              "+m"(*reinterpret_cast<Acc(*)[2]>(q1))
+            : "r"(q0), "r"(q1), "f"(s00), "f"(w00), "f"(s10), "f"(w10), "f"(s01), "f"(w01), "f"(s11), "f"(w11));
+#else
         q0[0].sum += w00 * v;
         q0[0].weight += w00;
         q0[1].sum += w10 * v;
@@ -404,6 +447,24 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
         q1[0].weight += w01;
         q1[1].sum += w11 * v;
         q1[1].weight += w11;
+#endif
+      };
+      float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
+      int b = 0;
+      for (; b < lo; ++b) {
+        bf += one;
+        const float v = masked(b);
+        if (!(v < zero)) put(bf, v);
+      }
+      for (; b < hi; ++b) {
+        bf += one;
+        const float v = va[b] + t * (vb[b] - va[b]);
+        if (!(v < zero)) put(bf, v);
+      }
+      for (; b < bins; ++b) {
+        bf += one;
+        const float v = masked(b);
+        if (!(v < zero)) put(bf, v);
       }
       return;
     }
@@ -416,13 +477,11 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
     Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
     Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
-    float bf = -1.0f;  // float(b), counted (as in the plain loop)
-    for (int b = 0; b < bins; ++b) {
-      bf += 1.0f;
+    const auto masked = [&](int b) {
       const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-      if (m == 0) continue;
-      const float v = m == 3 ? va[b] + t * (vb[b] - va[b]) : ((m == 1 && t < 0.5f) || (m == 1 && kb[b] == 0) ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
-      if (v < 0.0f) continue;
+      return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
+    };
+    const auto put = [&](float bf, float v) {
       const float x = cx + bf * dcb, y = cy + bf * drb;
       const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
       const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
@@ -457,6 +516,23 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
       pending = fresh;
       p0 = f0;
       p1 = f1;
+    };
+    float bf = -1.0f;  // float(b), counted (as in the plain loop)
+    int b = 0;
+    for (; b < lo; ++b) {
+      bf += 1.0f;
+      const float v = masked(b);
+      if (!(v < 0.0f)) put(bf, v);
+    }
+    for (; b < hi; ++b) {
+      bf += 1.0f;
+      const float v = va[b] + t * (vb[b] - va[b]);
+      if (!(v < 0.0f)) put(bf, v);
+    }
+    for (; b < bins; ++b) {
+      bf += 1.0f;
+      const float v = masked(b);
+      if (!(v < 0.0f)) put(bf, v);
     }
     if (pending != nullptr) {
       pending[0] = p0;
@@ -503,6 +579,9 @@ std::size_t TileBuilder::normalise() noexcept {
   const int W = cfg_.tile_width_px;
   const float eps = 1e-3f;
   const float scale = 255.0f / cfg_.display_max;
+  // 1, 0.5, 0 and 255 as values the compiler cannot fold (see one_): kept in registers, not reloaded
+  // from the GOT per pixel (and after each u8 store: a byte store may alias anything).
+  const float one = one_, half = 0.5f * one, zero = one - one, top = 255.0f * one;
   if (bx1 < bx0) return 0;
   const std::size_t len = static_cast<std::size_t>(bx1 - bx0 + 1);
   float* tmp = row_.data();
@@ -516,9 +595,35 @@ std::size_t TileBuilder::normalise() noexcept {
     // intensity lies over accumulator rows before it ((y + 1) W / 2 <= y W for y >= 1), already
     // emptied or outside the box, and is written in place.
     float* out_f = y == 0 ? tmp : intensity_ + row;
+    if (!kCarryColumn && !u8_.empty()) {
+      // Without SIMD (LEON3) one loop does both: the intensity is quantised while in a register,
+      // not re-read by a second loop.
+      std::uint8_t* out = u8_.data() + row;
+      // Branching on the coverage (no selects on SPARC V8): an empty pixel is 0 / 1 = 0, u8 0.
+      for (int x = bx0; x <= bx1; ++x) {
+        const float w = acc[x].weight;
+        if (w > eps) {
+          const float f = acc[x].sum / w;
+          out_f[x] = f;
+          cov[x] = 1;
+          ++row_covered;
+          float u = f * scale + half;
+          u = u < zero ? zero : (u > top ? top : u);
+          out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
+        } else {
+          out_f[x] = zero;
+          cov[x] = 0;
+          out[x] = 0;
+        }
+      }
+      covered += row_covered;
+      std::memset(static_cast<void*>(acc_.data() + row + bx0), 0, len * sizeof(Acc));
+      if (y == 0) std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
+      continue;
+    }
     for (int x = bx0; x <= bx1; ++x) {
       const bool c = acc[x].weight > eps;
-      out_f[x] = (c ? acc[x].sum : 0.0f) / (c ? acc[x].weight : 1.0f);
+      out_f[x] = (c ? acc[x].sum : zero) / (c ? acc[x].weight : one);
       cov[x] = c ? 1 : 0;
       row_covered += c ? 1u : 0u;
     }
@@ -526,22 +631,15 @@ std::size_t TileBuilder::normalise() noexcept {
     if (!u8_.empty()) {
       std::uint8_t* out = u8_.data() + row;
       for (int x = bx0; x <= bx1; ++x) {
-        float u = out_f[x] * scale + 0.5f;
-        u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
+        float u = out_f[x] * scale + half;
+        u = u < zero ? zero : (u > top ? top : u);
         out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
       }
     }
-    std::fill(acc_.data() + row + bx0, acc_.data() + row + bx0 + len, Acc{0.0f, 0.0f});
+    std::memset(static_cast<void*>(acc_.data() + row + bx0), 0, len * sizeof(Acc));  // Acc{0, 0} is all zero bytes
     if (y == 0) std::copy(tmp + bx0, tmp + bx0 + len, intensity_ + row + static_cast<std::size_t>(bx0));
   }
   return covered;
-}
-
-std::uint8_t TileBuilder::to_u8(float intensity) const noexcept {
-  const float scale = 255.0f / cfg_.display_max;  // the same expression as normalise()'s
-  float u = intensity * scale + 0.5f;
-  u = u < 0.0f ? 0.0f : (u > 255.0f ? 255.0f : u);
-  return static_cast<std::uint8_t>(static_cast<std::int32_t>(u));
 }
 
 void TileBuilder::finish_tile(int first, int count, std::size_t covered) noexcept {
@@ -596,67 +694,14 @@ Status TileBuilder::build(int first, int count) noexcept {
   if (bb_x1_ > W - 1) bb_x1_ = W - 1;
   if (bb_y1_ > H - 1) bb_y1_ = H - 1;
   std::size_t covered = normalise();
-  if (cfg_.hole_fill_radius_px > 0) covered += fill_holes();
+  if (cfg_.hole_fill_radius_px > 0) {
+    const HoleFillRaster raster{intensity_, coverage_.data(), u8_.empty() ? nullptr : u8_.data(), W};
+    covered += fill_holes(raster, RasterBox{bb_x0_, bb_y0_, bb_x1_, bb_y1_}, cfg_.hole_fill_radius_px,
+                          cfg_.hole_fill_min_neighbours, 255.0f / cfg_.display_max);  // normalise()'s u8 scale
+  }
   finish_tile(first, count, covered);
   return Status::ok();
 }
 
-std::size_t TileBuilder::fill_holes() noexcept {
-  // An empty pixel is filled when measured pixels (coverage 1) lie within R on both sides along a
-  // row or along a column: the value is the inverse-distance mean of the nearest measured pixel in
-  // each of the four directions found. Reads measured pixels only, so filling never cascades:
-  // holes wider than 2R - 1 pixels and the swath edges stay empty. Cost <= 4R reads per empty pixel
-  // inside the touched box; covered pixels are skipped four at a time (no zero byte in a word).
-  const int W = cfg_.tile_width_px, R = cfg_.hole_fill_radius_px;
-  const std::ptrdiff_t steps[4] = {-1, 1, -static_cast<std::ptrdiff_t>(W), static_cast<std::ptrdiff_t>(W)};
-  const int bx0 = bb_x0_, bx1 = bb_x1_;
-  std::size_t filled = 0;
-  for (int y = bb_y0_; y <= bb_y1_; ++y) {
-    const std::uint8_t* cov_row = coverage_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(W);
-    for (int x = bx0;; ++x) {
-      // Skip to the next empty pixel: bytes up to a 4-byte boundary, then aligned 4-byte words
-      // without a zero byte (the word's byte order does not matter, only whether a byte is zero),
-      // then bytes again.
-      while (x <= bx1 && (reinterpret_cast<std::uintptr_t>(cov_row + x) & 3u) != 0 && cov_row[x] != 0) ++x;
-      if (x <= bx1 && cov_row[x] != 0) {
-        while (x + 3 <= bx1) {
-          std::uint32_t w;
-          std::memcpy(&w, __builtin_assume_aligned(cov_row + x, 4), sizeof w);
-          if (((w - 0x01010101u) & ~w & 0x80808080u) != 0) break;
-          x += 4;
-        }
-        while (x <= bx1 && cov_row[x] != 0) ++x;
-      }
-      if (x > bx1) break;
-      const std::ptrdiff_t idx = static_cast<std::ptrdiff_t>(y) * W + x;
-      const int room[4] = {x - bx0, bx1 - x, y - bb_y0_, bb_y1_ - y};
-      float acc = 0.0f, wsum = 0.0f;
-      bool found[4] = {false, false, false, false};
-      int dirs = 0;
-      for (int d = 0; d < 4; ++d) {
-        const int lim = room[d] < R ? room[d] : R;
-        for (int k = 1; k <= lim; ++k) {
-          const std::size_t j = static_cast<std::size_t>(idx + k * steps[d]);
-          if (coverage_[j] == 1) {
-            const float w = 1.0f / static_cast<float>(k);
-            acc += w * intensity_[j];
-            wsum += w;
-            found[d] = true;
-            ++dirs;
-            break;
-          }
-        }
-      }
-      if (((found[0] && found[1]) || (found[2] && found[3])) && dirs >= cfg_.hole_fill_min_neighbours) {
-        const float v = acc / wsum;
-        intensity_[static_cast<std::size_t>(idx)] = v;
-        coverage_[static_cast<std::size_t>(idx)] = 2;
-        if (!u8_.empty()) u8_[static_cast<std::size_t>(idx)] = to_u8(v);
-        ++filled;
-      }
-    }
-  }
-  return filled;
-}
 
 }  // namespace qnav::sonar

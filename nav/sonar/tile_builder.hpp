@@ -46,6 +46,7 @@
 #include "nav/core/geometry.hpp"
 #include "nav/core/image.hpp"
 #include "nav/core/status.hpp"
+#include "nav/sonar/hole_fill.hpp"
 #include "nav/sonar/sonar_types.hpp"
 
 namespace qnav::sonar {
@@ -147,6 +148,7 @@ class TileBuilder {
     double dist_m;  // along-track distance travelled at this scanline
     float bin_m;
     int bins;
+    int run_lo[2], run_hi[2];  // per side: bins [run_lo, run_hi) are all valid (the first valid bin's run)
   };
   Status build(int first, int count) noexcept;
   // Logical index i: 0 = oldest buffered scanline.
@@ -166,8 +168,6 @@ class TileBuilder {
   inline void splat(float col, float row, float v) noexcept;
   // Intensity, coverage 1 and the u8 raster in the touched box; returns the pixels with coverage 1.
   std::size_t normalise() noexcept;
-  std::size_t fill_holes() noexcept;                    // coverage 2 (and their u8); returns how many
-  std::uint8_t to_u8(float intensity) const noexcept;
   void finish_tile(int first, int count, std::size_t covered) noexcept;
 
   TileBuilderConfig cfg_{};
@@ -175,7 +175,7 @@ class TileBuilder {
   Span<Slot> slots_;
   Span<float> values_;          // ring of N x 2 x max_bins
   Span<std::uint8_t> valid_;    // same layout
-  struct Acc {
+  struct alignas(8) Acc {  // 8-aligned: one doubleword (SPARC's ldd / std in the splat)
     float sum;
     float weight;
   };
@@ -199,7 +199,7 @@ class TileBuilder {
   bool overflow_ = false;      // a ping the next tile needed was dropped
   int first_in_tile(double start_m) const noexcept;
   double inv_res_ = 0.0;        // 1 / resolution_m, set by build()
-  float one_ = 1.0f;            // 1, read once per line by splat_side()'s plain loop (see there)
+  float one_ = 1.0f;            // 1, read once per line by splat_side()'s plain loop and normalise() (see there)
   int bb_x0_ = 0, bb_y0_ = 0, bb_x1_ = -1, bb_y1_ = -1;        // pixels touched by the tile being built
   int prev_x0_ = 0, prev_y0_ = 0, prev_x1_ = -1, prev_y1_ = -1;  // ... by the previous tile (to clear)
   SonarTile tile_{};

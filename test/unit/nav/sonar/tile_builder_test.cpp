@@ -188,6 +188,99 @@ TEST(TileBuilder, ATileCarriesNothingOfThePreviousOneWithOrWithoutTheU8Raster) {
   EXPECT_EQ(tiles, 8);
 }
 
+// Scanlines whose valid bins have gaps that differ from ping to ping (the splat's masked bins around
+// the run valid on both lines), on a turning track, over a flat seabed of intensity 1.5 (negative bins
+// of no data, as a caller may pass them, must not be splatted): every measured pixel is 1.5 (a
+// weighted mean of 1.5s), the u8 raster is the quantised intensity everywhere, and each filled
+// pixel is exactly what the plain four-direction search of the header's rule gives.
+TEST(TileBuilder, IrregularMasksGiveTheMeanTheU8AndTheHoleFillOfTheRule) {
+  for (const int min_neighbours : {2, 3}) {
+    TileBuilderConfig cfg = small_config();
+    cfg.hole_fill_min_neighbours = min_neighbours;
+    cfg.hole_fill_radius_px = 3;
+    ArenaStorage arena(TileBuilder::arena_bytes(cfg));
+    TileBuilder tb;
+    ASSERT_TRUE(tb.init(cfg, arena).is_ok());
+    const int bins = 200;
+    std::vector<float> port(bins), stbd(bins);
+    std::vector<std::uint8_t> pv(bins), sv(bins);
+    double n = 0.0, e = 0.0, heading = 0.3;
+    bool built = false;
+    for (int k = 0; k < 100 && !built; ++k) {
+      heading += deg_to_rad(0.7);
+      n += 0.12 * std::cos(heading);
+      e += 0.12 * std::sin(heading);
+      for (int b = 0; b < bins; ++b) {
+        // Nadir gaps of 3..9 bins, holes every 17 + k % 5 bins, a ragged far end.
+        const bool p_ok = b >= 3 + k % 7 && (b + k) % (17 + k % 5) != 0 && b < bins - (k % 4);
+        const bool s_ok = b >= 5 + k % 3 && (b * 3 + k) % 23 != 0 && b < bins - 1;
+        pv[static_cast<std::size_t>(b)] = p_ok ? 1 : 0;
+        sv[static_cast<std::size_t>(b)] = s_ok ? 1 : 0;
+        port[static_cast<std::size_t>(b)] = p_ok ? 1.5f : -1.0f;
+        stbd[static_cast<std::size_t>(b)] = s_ok ? 1.5f : 0.0f;
+      }
+      CorrectedScanline l;
+      l.ping_number = static_cast<std::uint32_t>(k);
+      l.bin_m = 0.1f;
+      l.port = Span<const float>(port.data(), port.size());
+      l.stbd = Span<const float>(stbd.data(), stbd.size());
+      l.port_valid = Span<const std::uint8_t>(pv.data(), pv.size());
+      l.stbd_valid = Span<const std::uint8_t>(sv.data(), sv.size());
+      const Result<bool> r = tb.push(l, Pose2{n, e, heading});
+      ASSERT_TRUE(r.is_ok());
+      built = r.value();
+    }
+    ASSERT_TRUE(built);
+    const SonarTile& t = tb.tile();
+    const int W = t.coverage.width(), H = t.coverage.height(), R = cfg.hole_fill_radius_px;
+    int measured = 0, filled = 0, u8_wrong = 0, mean_wrong = 0, fill_wrong = 0;
+    for (int r = 0; r < H; ++r)
+      for (int c = 0; c < W; ++c) {
+        const float v = t.intensity(c, r);
+        const float u = std::min(std::max(v * (255.0f / cfg.display_max) + 0.5f, 0.0f), 255.0f);
+        u8_wrong += t.intensity_u8(c, r) != static_cast<std::uint8_t>(static_cast<int>(u)) ? 1 : 0;
+        if (t.coverage(c, r) == 1) {
+          ++measured;
+          mean_wrong += std::fabs(v - 1.5f) > 1e-5f ? 1 : 0;
+          continue;
+        }
+        // The rule: the nearest measured pixel within R left, right, up and down; a pair on a row or a
+        // column, at least min_neighbours directions; the inverse-distance mean in that order.
+        const int dc[4] = {-1, 1, 0, 0}, dr[4] = {0, 0, -1, 1};
+        int kd[4] = {0, 0, 0, 0};
+        for (int d = 0; d < 4; ++d)
+          for (int k = 1; k <= R; ++k) {
+            const int cc = c + k * dc[d], rr = r + k * dr[d];
+            if (cc < 0 || rr < 0 || cc >= W || rr >= H) break;
+            if (t.coverage(cc, rr) == 1) {
+              kd[d] = k;
+              break;
+            }
+          }
+        const int dirs = (kd[0] > 0) + (kd[1] > 0) + (kd[2] > 0) + (kd[3] > 0);
+        const bool fill = ((kd[0] > 0 && kd[1] > 0) || (kd[2] > 0 && kd[3] > 0)) && dirs >= min_neighbours;
+        if (!fill) {
+          fill_wrong += (t.coverage(c, r) != 0 || v != 0.0f) ? 1 : 0;
+          continue;
+        }
+        ++filled;
+        float acc = 0.0f, wsum = 0.0f;
+        for (int d = 0; d < 4; ++d) {
+          if (kd[d] == 0) continue;
+          const float w = 1.0f / static_cast<float>(kd[d]);
+          acc += w * t.intensity(c + kd[d] * dc[d], r + kd[d] * dr[d]);
+          wsum += w;
+        }
+        fill_wrong += (t.coverage(c, r) != 2 || v != acc / wsum) ? 1 : 0;
+      }
+    EXPECT_GT(measured, 20000) << "min_neighbours " << min_neighbours;
+    EXPECT_GT(filled, 100) << "min_neighbours " << min_neighbours;
+    EXPECT_EQ(mean_wrong, 0) << "min_neighbours " << min_neighbours;
+    EXPECT_EQ(u8_wrong, 0) << "min_neighbours " << min_neighbours;
+    EXPECT_EQ(fill_wrong, 0) << "min_neighbours " << min_neighbours;
+  }
+}
+
 TEST(TileBuilder, InterpolatesBetweenSparseScanlinesAndFillsSmallHoles) {
   TileBuilderConfig cfg = small_config();
   cfg.max_substeps = 1;  // no along-track interpolation: 0.3 m gaps leave holes
