@@ -135,14 +135,17 @@ void GeometricMatcher::gather_candidates(std::size_t np, std::size_t nc, const M
 }
 
 // 2. matching scores (eq. 4 with f = fb or fc), max over each other prev landmark's candidates.
-// The same arithmetic as compat(), reordered for the O(N^2) loop without changing a result: the prev
-// side of a pair (its vector, length and sigmas) is the same for every candidate of a group, and the
-// direction test (a division, a dot product) is only made for a pair whose score would raise the
-// group's maximum, since a pair that fails it scores 0 and the maximum starts at 0. Before any square
-// root a pair is dropped when its length difference |la - lb| certainly exceeds the distance at which
-// its score is 0 (fc: f <= 0 beyond eps_n f_max / (f_max - 1); fb: eps_n), bounded with every cur
-// sigma at its largest and a relative margin of 1e-9 (far above the rounding of these sums), tested on
-// the squared length lb^2; the pairs it drops score 0 in the exact test too.
+// The same arithmetic as compat(), reordered for the O(N^2) loop without changing a result: a group
+// holds the candidates of one prev landmark, so the prev side of a pair (its vector, length and
+// sigmas) is the same for every candidate of group g against group h; it is computed once per (g, h)
+// and the candidates of g are scored against h's inside (each candidate's sum still runs over h in
+// ascending order, so the sums are the same). The direction test (a division, a dot product) is only
+// made for a pair whose score would raise the group's maximum, since a pair that fails it scores 0
+// and the maximum starts at 0. Before any square root a pair is dropped when its length difference
+// |la - lb| certainly exceeds the distance at which its score is 0 (fc: f <= 0 beyond
+// eps_n f_max / (f_max - 1); fb: eps_n), bounded with every cur sigma at its largest (the largest of
+// group g's and of all candidates') and a relative margin of 1e-9 (far above the rounding of these
+// sums), tested on the squared length lb^2; the pairs it drops score 0 in the exact test too.
 void GeometricMatcher::score_candidates() noexcept {
   const bool continuous = config_.score == MatchScoreKind::kContinuous;
   const double n_sigma = config_.n_sigma;
@@ -159,26 +162,33 @@ void GeometricMatcher::score_candidates() noexcept {
   }
   std::size_t evaluations = 0;
   for (std::size_t g = 0; g < n_groups_; ++g) {
-    for (std::uint32_t a = groups_[g].first; a < groups_[g].first + groups_[g].count; ++a) {
-      Candidate& ca = cands_[a];
-      const Vec3d pa = prev_pos_[ca.prev];
-      const Vec3d qa = cur_rot_[ca.cur];
-      const double spa = prev_sigma_[ca.prev] * prev_sigma_[ca.prev];
-      const double sca = cur_sigma_[ca.cur] * cur_sigma_[ca.cur];
-      double s = 0.0;
-      for (std::size_t h = 0; h < n_groups_; ++h) {
-        if (h == g) continue;
-        const std::uint32_t b0 = groups_[h].first, b1 = groups_[h].first + groups_[h].count;
-        const std::uint16_t p2 = cands_[b0].prev;  // one prev landmark per group
-        const Vec3d va = pa - prev_pos_[p2];
-        const double la = va.norm();
-        const double sp = spa + prev_sigma_[p2] * prev_sigma_[p2];
-        const bool direction_test = la >= min_vector;
-        const double eps_upper = n_sigma * std::sqrt(sp + sca + max_sc2) + eps_floor;
-        const double t = eps_upper * k_skip;  // |la - lb| > t: the pair scores 0
-        const double hi2 = (la + t) * (la + t) * (1.0 + 1e-9);
-        const double lo = la - t;
-        const double lo2 = lo > 0.0 ? lo * lo * (1.0 - 1e-9) : -1.0;
+    const std::uint32_t a0 = groups_[g].first, a1 = groups_[g].first + groups_[g].count;
+    const std::uint16_t p = cands_[a0].prev;
+    const Vec3d pa = prev_pos_[p];
+    const double spa = prev_sigma_[p] * prev_sigma_[p];
+    double group_sc2 = 0.0;  // the largest cur sigma^2 of g's candidates
+    for (std::uint32_t a = a0; a < a1; ++a) {
+      const double sc = cur_sigma_[cands_[a].cur];
+      if (sc * sc > group_sc2) group_sc2 = sc * sc;
+      cands_[a].score = 0.0;  // the sum over the other groups
+    }
+    for (std::size_t h = 0; h < n_groups_; ++h) {
+      if (h == g) continue;
+      const std::uint32_t b0 = groups_[h].first, b1 = groups_[h].first + groups_[h].count;
+      const std::uint16_t p2 = cands_[b0].prev;  // one prev landmark per group
+      const Vec3d va = pa - prev_pos_[p2];
+      const double la = va.norm();
+      const double sp = spa + prev_sigma_[p2] * prev_sigma_[p2];
+      const bool direction_test = la >= min_vector;
+      const double eps_upper = n_sigma * std::sqrt(sp + group_sc2 + max_sc2) + eps_floor;
+      const double t = eps_upper * k_skip;  // |la - lb| > t: the pair scores 0
+      const double hi2 = (la + t) * (la + t) * (1.0 + 1e-9);
+      const double lo = la - t;
+      const double lo2 = lo > 0.0 ? lo * lo * (1.0 - 1e-9) : -1.0;
+      for (std::uint32_t a = a0; a < a1; ++a) {
+        Candidate& ca = cands_[a];
+        const Vec3d qa = cur_rot_[ca.cur];
+        const double sca = cur_sigma_[ca.cur] * cur_sigma_[ca.cur];
         double best = 0.0;
         for (std::uint32_t b = b0; b < b1; ++b) {
           const Candidate& cb = cands_[b];
@@ -208,18 +218,20 @@ void GeometricMatcher::score_candidates() noexcept {
           }
           best = v;
         }
-        s += best;
+        ca.score += best;
       }
-      if (config_.appearance_weight > 0.0 && continuous) {
+    }
+    if (config_.appearance_weight > 0.0 && continuous) {
+      for (std::uint32_t a = a0; a < a1; ++a) {
+        Candidate& ca = cands_[a];
         const Landmark3& lp = prev_in_[ca.prev];
         const Landmark3& lc = cur_in_[ca.cur];
         if (lp.has_appearance && lc.has_appearance) {
           double r = ncc(lp, lc);
           if (r < 0.0) r = 0.0;
-          s *= (1.0 - config_.appearance_weight) + config_.appearance_weight * r;
+          ca.score *= (1.0 - config_.appearance_weight) + config_.appearance_weight * r;
         }
       }
-      ca.score = s;
     }
   }
   stats_.pair_evaluations += evaluations;
