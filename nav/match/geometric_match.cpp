@@ -129,20 +129,26 @@ void GeometricMatcher::gather_candidates(std::size_t np, std::size_t nc, const M
     }
     if (capped) counters_.increment(MatchCounter::kCandidateCapHit);
     if (count == 0) continue;
-    groups_[n_groups_++] = Group{first, count};
+    groups_[n_groups_++] = Group{first, count, 0.0};
     n_cands_ += count;
   }
 }
 
 // 2. matching scores (eq. 4 with f = fb or fc), max over each other prev landmark's candidates.
-// The same arithmetic as compat(), reordered for the O(N^2) loop without changing a result: the prev
-// side of a pair (its vector, length and sigmas) is the same for every candidate of a group, and the
-// direction test (a division, a dot product) is only made for a pair whose score would raise the
-// group's maximum, since a pair that fails it scores 0 and the maximum starts at 0. Before any square
-// root a pair is dropped when its length difference |la - lb| certainly exceeds the distance at which
-// its score is 0 (fc: f <= 0 beyond eps_n f_max / (f_max - 1); fb: eps_n), bounded with every cur
-// sigma at its largest and a relative margin of 1e-9 (far above the rounding of these sums), tested on
-// the squared length lb^2; the pairs it drops score 0 in the exact test too.
+// The same arithmetic as compat(), reordered for the O(N^2) loop without changing a result. A group
+// holds the candidates of one prev landmark, and a pair of groups (g, h), g < h, is visited once for
+// both directions: the prev side (va = M_g - M_h, its length, the sum of the two prev sigma^2) is the
+// same, negated or swapped exactly, for g's candidates against h's and h's against g's, and so are
+// vb, lb and the dot product; only eps_n is summed in each direction's own order, so each pair's two
+// scores are the ones compat() gives. A candidate's sum still runs over the other groups in ascending
+// order (those before its own group are added while they are the outer group), so the sums are the
+// same. The direction test (a division, a dot product) is only made for a pair whose score would
+// raise the maximum, since a pair that fails it scores 0 and the maximum starts at 0. Before any
+// square root a pair is dropped when its length difference |la - lb| certainly exceeds the distance
+// at which its score is 0 in both directions (fc: f <= 0 beyond eps_n f_max / (f_max - 1); fb:
+// eps_n), bounded with the two groups' largest cur sigma^2 and a relative margin of 1e-9 (far above
+// the rounding of these sums), tested on the squared length lb^2; the pairs it drops score 0 in the
+// exact test too.
 void GeometricMatcher::score_candidates() noexcept {
   const bool continuous = config_.score == MatchScoreKind::kContinuous;
   const double n_sigma = config_.n_sigma;
@@ -152,74 +158,94 @@ void GeometricMatcher::score_candidates() noexcept {
   const double f_max = config_.f_max;
   const double f_slope_num = 1.0 - config_.f_max;
   const double k_skip = (continuous ? f_max / (f_max - 1.0) : 1.0) * (1.0 + 1e-9);
-  double max_sc2 = 0.0;
-  for (std::size_t a = 0; a < n_cands_; ++a) {
-    const double sc = cur_sigma_[cands_[a].cur];
-    if (sc * sc > max_sc2) max_sc2 = sc * sc;
+  for (std::size_t g = 0; g < n_groups_; ++g) {
+    double m = 0.0;  // the largest cur sigma^2 of g's candidates
+    for (std::uint32_t a = groups_[g].first; a < groups_[g].first + groups_[g].count; ++a) {
+      const double sc = cur_sigma_[cands_[a].cur];
+      if (sc * sc > m) m = sc * sc;
+      cands_[a].score = 0.0;  // the sum over the other groups
+    }
+    groups_[g].max_sc2 = m;
   }
+  // The pair's score from eps_n and dl, 0 when its direction test fails (only made when it would
+  // raise best).
+  const auto score = [&](double eps_n, double dl, bool direction, double dot, double la, double lb,
+                         double best) noexcept {
+    double v;
+    if (continuous) {
+      const double f = f_slope_num / eps_n * dl + f_max;
+      v = f > 0.0 ? f : 0.0;
+    } else {
+      v = dl < eps_n ? 1.0 : 0.0;
+    }
+    if (!(v > best)) return best;
+    if (direction) {
+      double tol = att_tol + eps_n / la;
+      if (tol > 1.0) tol = 1.0;
+      const double t2 = tol * tol;
+      const double eps_p = t2 * (0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0)));
+      if (dot < (1.0 - eps_p) * la * lb) return best;  // scores 0
+    }
+    return v;
+  };
+  double best_b[64];  // max_candidates_per_landmark <= 64 (create())
   std::size_t evaluations = 0;
   for (std::size_t g = 0; g < n_groups_; ++g) {
-    for (std::uint32_t a = groups_[g].first; a < groups_[g].first + groups_[g].count; ++a) {
-      Candidate& ca = cands_[a];
-      const Vec3d pa = prev_pos_[ca.prev];
-      const Vec3d qa = cur_rot_[ca.cur];
-      const double spa = prev_sigma_[ca.prev] * prev_sigma_[ca.prev];
-      const double sca = cur_sigma_[ca.cur] * cur_sigma_[ca.cur];
-      double s = 0.0;
-      for (std::size_t h = 0; h < n_groups_; ++h) {
-        if (h == g) continue;
-        const std::uint32_t b0 = groups_[h].first, b1 = groups_[h].first + groups_[h].count;
-        const std::uint16_t p2 = cands_[b0].prev;  // one prev landmark per group
-        const Vec3d va = pa - prev_pos_[p2];
-        const double la = va.norm();
-        const double sp = spa + prev_sigma_[p2] * prev_sigma_[p2];
-        const bool direction_test = la >= min_vector;
-        const double eps_upper = n_sigma * std::sqrt(sp + sca + max_sc2) + eps_floor;
-        const double t = eps_upper * k_skip;  // |la - lb| > t: the pair scores 0
-        const double hi2 = (la + t) * (la + t) * (1.0 + 1e-9);
-        const double lo = la - t;
-        const double lo2 = lo > 0.0 ? lo * lo * (1.0 - 1e-9) : -1.0;
-        double best = 0.0;
+    const std::uint32_t a0 = groups_[g].first, a1 = groups_[g].first + groups_[g].count;
+    const std::uint16_t p = cands_[a0].prev;
+    const Vec3d pa = prev_pos_[p];
+    const double spa = prev_sigma_[p] * prev_sigma_[p];
+    const double gsc2 = groups_[g].max_sc2;
+    for (std::size_t h = g + 1; h < n_groups_; ++h) {
+      const std::uint32_t b0 = groups_[h].first, b1 = groups_[h].first + groups_[h].count;
+      const std::uint16_t p2 = cands_[b0].prev;  // one prev landmark per group
+      const Vec3d va = pa - prev_pos_[p2];
+      const double la = va.norm();
+      const double sp = spa + prev_sigma_[p2] * prev_sigma_[p2];
+      const bool direction_test = la >= min_vector;
+      const double eps_upper = n_sigma * std::sqrt(sp + gsc2 + groups_[h].max_sc2) + eps_floor;
+      const double t = eps_upper * k_skip;  // |la - lb| > t: the pair scores 0 both ways
+      const double hi2 = (la + t) * (la + t) * (1.0 + 1e-9);
+      const double lo = la - t;
+      const double lo2 = lo > 0.0 ? lo * lo * (1.0 - 1e-9) : -1.0;
+      for (std::uint32_t b = b0; b < b1; ++b) best_b[b - b0] = 0.0;
+      for (std::uint32_t a = a0; a < a1; ++a) {
+        Candidate& ca = cands_[a];
+        const Vec3d qa = cur_rot_[ca.cur];
+        const double sca = cur_sigma_[ca.cur] * cur_sigma_[ca.cur];
+        double best_a = 0.0;
         for (std::uint32_t b = b0; b < b1; ++b) {
           const Candidate& cb = cands_[b];
           if (cb.cur == ca.cur) continue;
-          ++evaluations;
+          evaluations += 2;
           const Vec3d vb = qa - cur_rot_[cb.cur];
           const double lb2 = vb.squaredNorm();
           if (lb2 > hi2 || lb2 < lo2) continue;
           const double lb = vb.norm();
           const double dl = std::fabs(la - lb);
-          const double s2 = sp + sca + cur_sigma_[cb.cur] * cur_sigma_[cb.cur];
-          const double eps_n = n_sigma * std::sqrt(s2) + eps_floor;
-          double v;  // the pair's score if its direction test passes
-          if (continuous) {
-            const double f = f_slope_num / eps_n * dl + f_max;
-            v = f > 0.0 ? f : 0.0;
-          } else {
-            v = dl < eps_n ? 1.0 : 0.0;
-          }
-          if (!(v > best)) continue;
-          if (direction_test && lb > 0.0) {
-            double tol = att_tol + eps_n / la;
-            if (tol > 1.0) tol = 1.0;
-            const double t2 = tol * tol;
-            const double eps_p = t2 * (0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0)));
-            if (va.dot(vb) < (1.0 - eps_p) * la * lb) continue;  // scores 0
-          }
-          best = v;
+          const double scb = cur_sigma_[cb.cur] * cur_sigma_[cb.cur];
+          const double eps_ab = n_sigma * std::sqrt(sp + sca + scb) + eps_floor;  // a's score against h
+          const double eps_ba = n_sigma * std::sqrt(sp + scb + sca) + eps_floor;  // b's score against g
+          const bool direction = direction_test && lb > 0.0;
+          const double dot = direction ? va.dot(vb) : 0.0;  // (-va).(-vb) for b's: the same
+          best_a = score(eps_ab, dl, direction, dot, la, lb, best_a);
+          best_b[b - b0] = score(eps_ba, dl, direction, dot, la, lb, best_b[b - b0]);
         }
-        s += best;
+        ca.score += best_a;
       }
-      if (config_.appearance_weight > 0.0 && continuous) {
-        const Landmark3& lp = prev_in_[ca.prev];
-        const Landmark3& lc = cur_in_[ca.cur];
-        if (lp.has_appearance && lc.has_appearance) {
-          double r = ncc(lp, lc);
-          if (r < 0.0) r = 0.0;
-          s *= (1.0 - config_.appearance_weight) + config_.appearance_weight * r;
-        }
+      for (std::uint32_t b = b0; b < b1; ++b) cands_[b].score += best_b[b - b0];
+    }
+  }
+  if (config_.appearance_weight > 0.0 && continuous) {
+    for (std::size_t a = 0; a < n_cands_; ++a) {
+      Candidate& ca = cands_[a];
+      const Landmark3& lp = prev_in_[ca.prev];
+      const Landmark3& lc = cur_in_[ca.cur];
+      if (lp.has_appearance && lc.has_appearance) {
+        double r = ncc(lp, lc);
+        if (r < 0.0) r = 0.0;
+        ca.score *= (1.0 - config_.appearance_weight) + config_.appearance_weight * r;
       }
-      ca.score = s;
     }
   }
   stats_.pair_evaluations += evaluations;

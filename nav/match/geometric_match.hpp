@@ -142,6 +142,7 @@ class GeometricMatcher {
   struct Group {  // candidates of one prev landmark: [first, first + count)
     std::uint32_t first;
     std::uint32_t count;
+    double max_sc2;  // the largest cur sigma^2 of its candidates (score_candidates' skip bound)
   };
 
   // Compatibility of (p, c) with (p2, c2): returns f (0 when incompatible); binary_ok tells fb.

@@ -195,6 +195,67 @@ TEST(GeometricMatch, CapacitiesAreRespected) {
   for (const Match& x : r.value()) EXPECT_TRUE(x.prev < 50 && x.cur < 50);
 }
 
+// Eq. 4 by its definition, pair by pair in double with compat()'s f (the direction test by the same
+// series for 1 - cos), over candidates gathered by brute force: the reference for the reordered
+// score loop (score_candidates computes the prev side once per pair of groups).
+double reference_f(const Vec3d& p, double sp, const Vec3d& c, double sc, const Vec3d& p2, double sp2,
+                   const Vec3d& c2, double sc2, const GeometricMatchConfig& k) {
+  const Vec3d va = p - p2, vb = c - c2;
+  const double la = va.norm(), lb = vb.norm(), dl = std::fabs(la - lb);
+  const double eps_n = k.n_sigma * std::sqrt(sp * sp + sp2 * sp2 + sc * sc + sc2 * sc2) + k.eps_n_floor_m;
+  if (la >= k.min_vector_m && lb > 0.0) {
+    const double tol = std::min(1.0, k.n_sigma * k.attitude_sigma_rad + eps_n / la), t2 = tol * tol;
+    const double eps_p = t2 * (0.5 - t2 * (1.0 / 24.0 - t2 * (1.0 / 720.0)));
+    if (va.dot(vb) < (1.0 - eps_p) * la * lb) return 0.0;
+  }
+  if (k.score == MatchScoreKind::kBinary) return dl < eps_n ? 1.0 : 0.0;
+  return std::max(0.0, (1.0 - k.f_max) / eps_n * dl + k.f_max);
+}
+
+TEST(GeometricMatch, ScoresAreEquationFourOverTheGatedCandidates) {
+  // Dense enough that most prev landmarks have several candidates (the cap of 5 is hit).
+  Scene s = make_scene(150, 80, 0.006, 11);
+  s.prior.translation_sigma_m = 0.05;
+  for (const MatchScoreKind kind : {MatchScoreKind::kContinuous, MatchScoreKind::kBinary}) {
+    GeometricMatcher m = make(kind, false);
+    const GeometricMatchConfig& k = m.config();
+    Result<Span<const Match>> r = m.match(sp(s.prev), sp(s.cur), s.prior);
+    ASSERT_TRUE(r.is_ok());
+    ASSERT_GT(r.value().size(), 50u);
+    EXPECT_GT(m.counters().get(MatchCounter::kCandidateCapHit), 50u);
+    std::vector<Vec3d> q(s.cur.size());
+    for (std::size_t j = 0; j < q.size(); ++j) q[j] = s.prior.R_prev_cur * s.cur[j].position_m;
+    std::vector<std::vector<int>> cands(s.prev.size());
+    const double st2 = s.prior.translation_sigma_m * s.prior.translation_sigma_m;
+    for (std::size_t i = 0; i < s.prev.size(); ++i) {
+      std::vector<std::pair<double, int>> near;
+      for (std::size_t j = 0; j < q.size(); ++j) {
+        const double d = (s.prev[i].position_m - (q[j] + s.prior.t_prev_cur_m)).norm();
+        const double gate = std::min(k.max_gate_m, k.n_sigma * std::sqrt(st2 + s.prev[i].sigma_m * s.prev[i].sigma_m +
+                                                                         s.cur[j].sigma_m * s.cur[j].sigma_m));
+        if (d < gate) near.push_back({d, static_cast<int>(j)});
+      }
+      std::stable_sort(near.begin(), near.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      for (std::size_t n = 0; n < near.size() && n < k.max_candidates_per_landmark; ++n) cands[i].push_back(near[n].second);
+    }
+    for (const Match& x : r.value()) {
+      double ref = 0.0;
+      for (std::size_t i2 = 0; i2 < s.prev.size(); ++i2) {
+        if (i2 == static_cast<std::size_t>(x.prev)) continue;
+        double best = 0.0;
+        for (const int j2 : cands[i2]) {
+          if (j2 == x.cur) continue;
+          best = std::max(best, reference_f(s.prev[x.prev].position_m, s.prev[x.prev].sigma_m, q[x.cur],
+                                            s.cur[x.cur].sigma_m, s.prev[i2].position_m, s.prev[i2].sigma_m, q[j2],
+                                            s.cur[j2].sigma_m, k));
+        }
+        ref += best;
+      }
+      EXPECT_NEAR(x.score, ref, 1e-6 * ref) << "match " << x.prev << " -> " << x.cur;
+    }
+  }
+}
+
 TEST(GeometricMatch, MatchDoesNotAllocate) {
   const Scene s = make_scene(150, 50, 0.002, 9);
   GeometricMatcher m = make(MatchScoreKind::kContinuous, true);
