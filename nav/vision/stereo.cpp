@@ -41,7 +41,35 @@ inline void load_template(ConstImageViewU8 img, int xc, int yc, int r, Template&
 // ps[k] = sum of the grey levels of columns xa .. xa + k - 1, pq the same for their squares. A window
 // of side s whose left column is xa + k then has sum ps[k + s] - ps[k] (likewise sq): each disparity's
 // patch sums cost two subtractions instead of s * s additions.
+// The usual sides get a fixed trip count with the band's row pointers taken once (unrolled: no row
+// address per pixel on an in-order core); integer sums, so the same values as the generic loop.
+template <int S>
+inline void band_prefix_fixed(ConstImageViewU8 img, int xa, int ncols, int y0, std::int32_t* ps, std::int32_t* pq) noexcept {
+  const std::uint8_t* rows[S];
+  for (int j = 0; j < S; ++j) rows[j] = img.row(y0 + j) + xa;
+  std::int32_t run_a = 0, run_q = 0;
+  ps[0] = pq[0] = 0;
+  for (int c = 0; c < ncols; ++c) {
+    std::int32_t a = 0, q = 0;
+    for (int j = 0; j < S; ++j) {
+      const std::int32_t v = rows[j][c];
+      a += v;
+      q += v * v;
+    }
+    run_a += a;
+    run_q += q;
+    ps[c + 1] = run_a;
+    pq[c + 1] = run_q;
+  }
+}
+
 inline void band_prefix(ConstImageViewU8 img, int xa, int ncols, int y0, int s, std::int32_t* ps, std::int32_t* pq) noexcept {
+  switch (s) {
+    case 5: return band_prefix_fixed<5>(img, xa, ncols, y0, ps, pq);
+    case 7: return band_prefix_fixed<7>(img, xa, ncols, y0, ps, pq);
+    case 9: return band_prefix_fixed<9>(img, xa, ncols, y0, ps, pq);
+    default: break;
+  }
   ps[0] = pq[0] = 0;
   for (int c = 0; c < ncols; ++c) {
     std::int32_t a = 0, q = 0;
