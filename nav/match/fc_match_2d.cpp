@@ -55,20 +55,21 @@ inline std::int32_t dot_i16(const std::int16_t* a, const std::int16_t* b, std::s
   return s;
 }
 
-// Without SIMD (LEON3, armhf VFP): two rows of A against four consecutive rows of B (row stride d)
-// in one pass over the terms, on the int8 descriptors themselves: per term 2 + 4 loads for 8
-// multiply-adds instead of 2 loads per multiply-add, the 8 sums held in registers (D > 0: a fixed
-// length, B's row offsets immediates; D == 0: the length d at run time). The same integer sums as
+// Without SIMD (LEON3, armhf VFP): two rows of A against four consecutive rows of B in one pass over
+// their first m terms, on the int8 descriptors themselves: per term 2 + 4 loads for 8 multiply-adds
+// instead of 2 loads per multiply-add, the 8 sums held in registers (M, S > 0: the term count and B's
+// row stride fixed, the row offsets immediates; 0: m and stride at run time). The same integer sums as
 // dot_i16, term by term (exact). On LEON3 this shape counted fewest instructions of those tried
 // (3 or 4 rows of A by 4 of B spill registers; unrolling the term loop adds spills around it).
-template <std::size_t D>
-inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t d,
-                       std::int32_t* r0, std::int32_t* r1) noexcept {
-  const std::size_t n = D > 0 ? D : d;
+template <std::size_t M, std::size_t S>
+inline void dot_i8_2x4_terms(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t m,
+                             std::size_t stride, std::int32_t* r0, std::int32_t* r1) noexcept {
+  const std::size_t n = M > 0 ? M : m;         // terms taken
+  const std::size_t rs = S > 0 ? S : stride;   // B's row stride
   std::int32_t s00 = 0, s01 = 0, s02 = 0, s03 = 0, s10 = 0, s11 = 0, s12 = 0, s13 = 0;
-  const auto term = [&](std::size_t q) {
+  for (std::size_t q = 0; q < n; ++q) {
     const std::int32_t x0 = a0[q], x1 = a1[q];
-    const std::int32_t y0 = b[q], y1 = b[n + q], y2 = b[2 * n + q], y3 = b[3 * n + q];
+    const std::int32_t y0 = b[q], y1 = b[rs + q], y2 = b[2 * rs + q], y3 = b[3 * rs + q];
     s00 += x0 * y0;
     s01 += x0 * y1;
     s02 += x0 * y2;
@@ -77,8 +78,7 @@ inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::
     s11 += x1 * y1;
     s12 += x1 * y2;
     s13 += x1 * y3;
-  };
-  for (std::size_t q = 0; q < n; ++q) term(q);
+  }
   r0[0] = s00;
   r0[1] = s01;
   r0[2] = s02;
@@ -87,6 +87,13 @@ inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::
   r1[1] = s11;
   r1[2] = s12;
   r1[3] = s13;
+}
+
+// All D terms (D > 0 fixed; D == 0: d at run time) of rows of length d.
+template <std::size_t D>
+inline void dot_i8_2x4(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::size_t d,
+                       std::int32_t* r0, std::int32_t* r1) noexcept {
+  dot_i8_2x4_terms<D, D>(a0, a1, b, d, d, r0, r1);
 }
 
 // Two rows of A against one row of B (the last nb % 4 rows).
@@ -105,31 +112,11 @@ inline void dot_i8_2x1(const std::int8_t* a0, const std::int8_t* a1, const std::
 }
 
 // The first M terms of the dot products of two rows of A with four consecutive rows of B (row stride
-// S), for the pruned path below: the same loop shape as dot_i8_2x4.
+// S), for the pruned path below.
 template <std::size_t M, std::size_t S>
 inline void dot_i8_2x4_head(const std::int8_t* a0, const std::int8_t* a1, const std::int8_t* b, std::int32_t* r0,
                             std::int32_t* r1) noexcept {
-  std::int32_t s00 = 0, s01 = 0, s02 = 0, s03 = 0, s10 = 0, s11 = 0, s12 = 0, s13 = 0;
-  for (std::size_t q = 0; q < M; ++q) {
-    const std::int32_t x0 = a0[q], x1 = a1[q];
-    const std::int32_t y0 = b[q], y1 = b[S + q], y2 = b[2 * S + q], y3 = b[3 * S + q];
-    s00 += x0 * y0;
-    s01 += x0 * y1;
-    s02 += x0 * y2;
-    s03 += x0 * y3;
-    s10 += x1 * y0;
-    s11 += x1 * y1;
-    s12 += x1 * y2;
-    s13 += x1 * y3;
-  }
-  r0[0] = s00;
-  r0[1] = s01;
-  r0[2] = s02;
-  r0[3] = s03;
-  r1[0] = s10;
-  r1[1] = s11;
-  r1[2] = s12;
-  r1[3] = s13;
+  dot_i8_2x4_terms<M, S>(a0, a1, b, M, S, r0, r1);
 }
 
 // The dot product of n terms of two int8 rows (the pruned path's remaining terms of one pair).
