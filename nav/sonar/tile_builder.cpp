@@ -392,152 +392,11 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
     const int rlo = a.run_lo[side] > bslot->run_lo[side] ? a.run_lo[side] : bslot->run_lo[side];
     const int rhi = a.run_hi[side] < bslot->run_hi[side] ? a.run_hi[side] : bslot->run_hi[side];
     const int lo = rlo < rhi ? rlo : 0, hi = rlo < rhi ? rhi : 0;
-    if (!kCarryColumn) {
-      // 1 and 0 as values the compiler cannot fold (one_ is 1.0f): it keeps them in registers instead
-      // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
-      const float one = one_, zero = one - one;
-      const bool first_half = t < 0.5f;  // m == 2 (only the next line valid): its value from t >= 0.5
-      // The value of a bin outside [lo, hi), or -1 (skipped) when it has none at this sub-step.
-      const auto masked = [&](int b) {
-        const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-        if (m == 0 || (m == 2 && first_half)) return -one;
-        // m == 1 (this line only): its value; m == 2 past the half: the next line's; both: interpolated.
-        return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
-      };
-      const auto put = [&](float bf, float v) {
-        const float x = cx + bf * dcb, y = cy + bf * drb;
-        const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
-        const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
-        Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
-        Acc* q1 = q0 + W;
-        const float w00 = (one - ax) * (one - ay), w10 = ax * (one - ay), w01 = (one - ax) * ay, w11 = ax * ay;
-#if defined(__sparc__)
-        // SPARC: a pixel's {sum, weight} is one aligned doubleword, moved by one ldd / std into and out
-        // of an even/odd float register pair (4 instructions a pixel instead of 6; the compiler splits
-        // the pair into two ld / st). The same additions of the same products as the portable code
-        // below: the same sums bit for bit.
-        const float s00 = w00 * v, s10 = w10 * v, s01 = w01 * v, s11 = w11 * v;
-        double p00, p10, p01, p11;
-        __asm__(
-            "ldd [%6], %0\n\t"
-            "ldd [%6+8], %1\n\t"
-            "ldd [%7], %2\n\t"
-            "ldd [%7+8], %3\n\t"
-            "fadds %0, %8, %0\n\t"
-            "fadds %R0, %9, %R0\n\t"
-            "fadds %1, %10, %1\n\t"
-            "fadds %R1, %11, %R1\n\t"
-            "fadds %2, %12, %2\n\t"
-            "fadds %R2, %13, %R2\n\t"
-            "fadds %3, %14, %3\n\t"
-            "fadds %R3, %15, %R3\n\t"
-            "std %0, [%6]\n\t"
-            "std %1, [%6+8]\n\t"
-            "std %2, [%7]\n\t"
-            "std %3, [%7+8]"
-            : "=&f"(p00), "=&f"(p10), "=&f"(p01), "=&f"(p11), "+m"(*reinterpret_cast<Acc(*)[2]>(q0)),
-              "+m"(*reinterpret_cast<Acc(*)[2]>(q1))
-            : "r"(q0), "r"(q1), "f"(s00), "f"(w00), "f"(s10), "f"(w10), "f"(s01), "f"(w01), "f"(s11), "f"(w11));
-#else
-        q0[0].sum += w00 * v;
-        q0[0].weight += w00;
-        q0[1].sum += w10 * v;
-        q0[1].weight += w10;
-        q1[0].sum += w01 * v;
-        q1[0].weight += w01;
-        q1[1].sum += w11 * v;
-        q1[1].weight += w11;
-#endif
-      };
-      float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
-      int b = 0;
-      for (; b < lo; ++b) {
-        bf += one;
-        const float v = masked(b);
-        if (!(v < zero)) put(bf, v);
-      }
-      for (; b < hi; ++b) {
-        bf += one;
-        const float v = va[b] + t * (vb[b] - va[b]);
-        if (!(v < zero)) put(bf, v);
-      }
-      for (; b < bins; ++b) {
-        bf += one;
-        const float v = masked(b);
-        if (!(v < zero)) put(bf, v);
-      }
-      return;
-    }
-    // Along a row the next bin's splat usually shares a column of two pixels with this one (the
-    // line moves one pixel a bin). With kCarryColumn that column is kept in registers ("pending")
-    // until the next splat has added to it, instead of a store the next 16-byte load only half
-    // overlaps (no store forwarding: that stall was most of the host's build). Every pixel receives
-    // the same additions in the same order as splatting into memory one bin at a time, so the sums
-    // are the same bit for bit.
-    const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
-    Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
-    Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
-    const auto masked = [&](int b) {
-      const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-      return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
-    };
-    const auto put = [&](float bf, float v) {
-      const float x = cx + bf * dcb, y = cy + bf * drb;
-      const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
-      const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
-      Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
-      const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
-      Acc* shared = east ? q0 : q0 + 1;  // the column the previous splat may have left pending
-      Acc* fresh = east ? q0 + 1 : q0;   // the column the next splat may share
-      const float ws0 = east ? w00 : w10, ws1 = east ? w01 : w11, wf0 = east ? w10 : w00, wf1 = east ? w11 : w01;
-      Acc s0, s1;
-      if (shared == pending) {
-        s0 = p0;
-        s1 = p1;
-      } else {
-        if (pending != nullptr) {
-          pending[0] = p0;
-          pending[W] = p1;
-        }
-        s0 = shared[0];
-        s1 = shared[W];
-      }
-      Acc f0 = fresh[0], f1 = fresh[W];
-      s0.sum += ws0 * v;
-      s0.weight += ws0;
-      f0.sum += wf0 * v;
-      f0.weight += wf0;
-      s1.sum += ws1 * v;
-      s1.weight += ws1;
-      f1.sum += wf1 * v;
-      f1.weight += wf1;
-      shared[0] = s0;
-      shared[W] = s1;
-      pending = fresh;
-      p0 = f0;
-      p1 = f1;
-    };
-    float bf = -1.0f;  // float(b), counted (as in the plain loop)
-    int b = 0;
-    for (; b < lo; ++b) {
-      bf += 1.0f;
-      const float v = masked(b);
-      if (!(v < 0.0f)) put(bf, v);
-    }
-    for (; b < hi; ++b) {
-      bf += 1.0f;
-      const float v = va[b] + t * (vb[b] - va[b]);
-      if (!(v < 0.0f)) put(bf, v);
-    }
-    for (; b < bins; ++b) {
-      bf += 1.0f;
-      const float v = masked(b);
-      if (!(v < 0.0f)) put(bf, v);
-    }
-    if (pending != nullptr) {
-      pending[0] = p0;
-      pending[W] = p1;
-    }
+    const BinRun run{va, vb, ka, kb, t, cx, cy, dcb, drb, lo, hi, bins, base, W};
+    if (!kCarryColumn)
+      splat_run_plain(run);
+    else
+      splat_run_carry(run);
     return;
   }
   for (int b = 0; b < bins; ++b) {
@@ -561,6 +420,173 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
         splat(c0f + g * dcb, r0f + g * drb, v);
       }
     }
+  }
+}
+
+// splat_side's fast path without kCarryColumn (LEON3 and other targets without SIMD): one bilinear
+// splat per bin straight into the accumulator.
+void TileBuilder::splat_run_plain(const BinRun& r) const noexcept {
+  const float* va = r.va;
+  const float* vb = r.vb;
+  const std::uint8_t* ka = r.ka;
+  const std::uint8_t* kb = r.kb;
+  const float t = r.t, cx = r.cx, cy = r.cy, dcb = r.dcb, drb = r.drb;
+  const int lo = r.lo, hi = r.hi, bins = r.bins, W = r.W;
+  Acc* base = r.base;
+  // 1 and 0 as values the compiler cannot fold (one_ is 1.0f): it keeps them in registers instead
+  // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
+  const float one = one_, zero = one - one;
+  const bool first_half = t < 0.5f;  // m == 2 (only the next line valid): its value from t >= 0.5
+  // The value of a bin outside [lo, hi), or -1 (skipped) when it has none at this sub-step.
+  const auto masked = [&](int b) {
+    const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
+    if (m == 0 || (m == 2 && first_half)) return -one;
+    // m == 1 (this line only): its value; m == 2 past the half: the next line's; both: interpolated.
+    return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
+  };
+  const auto put = [&](float bf, float v) {
+    const float x = cx + bf * dcb, y = cy + bf * drb;
+    const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
+    const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+    Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+    Acc* q1 = q0 + W;
+    const float w00 = (one - ax) * (one - ay), w10 = ax * (one - ay), w01 = (one - ax) * ay, w11 = ax * ay;
+#if defined(__sparc__)
+    // SPARC: a pixel's {sum, weight} is one aligned doubleword, moved by one ldd / std into and out
+    // of an even/odd float register pair (4 instructions a pixel instead of 6; the compiler splits
+    // the pair into two ld / st). The same additions of the same products as the portable code
+    // below: the same sums bit for bit.
+    const float s00 = w00 * v, s10 = w10 * v, s01 = w01 * v, s11 = w11 * v;
+    double p00, p10, p01, p11;
+    __asm__(
+        "ldd [%6], %0\n\t"
+        "ldd [%6+8], %1\n\t"
+        "ldd [%7], %2\n\t"
+        "ldd [%7+8], %3\n\t"
+        "fadds %0, %8, %0\n\t"
+        "fadds %R0, %9, %R0\n\t"
+        "fadds %1, %10, %1\n\t"
+        "fadds %R1, %11, %R1\n\t"
+        "fadds %2, %12, %2\n\t"
+        "fadds %R2, %13, %R2\n\t"
+        "fadds %3, %14, %3\n\t"
+        "fadds %R3, %15, %R3\n\t"
+        "std %0, [%6]\n\t"
+        "std %1, [%6+8]\n\t"
+        "std %2, [%7]\n\t"
+        "std %3, [%7+8]"
+        : "=&f"(p00), "=&f"(p10), "=&f"(p01), "=&f"(p11), "+m"(*reinterpret_cast<Acc(*)[2]>(q0)),
+          "+m"(*reinterpret_cast<Acc(*)[2]>(q1))
+        : "r"(q0), "r"(q1), "f"(s00), "f"(w00), "f"(s10), "f"(w10), "f"(s01), "f"(w01), "f"(s11), "f"(w11));
+#else
+    q0[0].sum += w00 * v;
+    q0[0].weight += w00;
+    q0[1].sum += w10 * v;
+    q0[1].weight += w10;
+    q1[0].sum += w01 * v;
+    q1[0].weight += w01;
+    q1[1].sum += w11 * v;
+    q1[1].weight += w11;
+#endif
+  };
+  float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
+  int b = 0;
+  for (; b < lo; ++b) {
+    bf += one;
+    const float v = masked(b);
+    if (!(v < zero)) put(bf, v);
+  }
+  for (; b < hi; ++b) {
+    bf += one;
+    const float v = va[b] + t * (vb[b] - va[b]);
+    if (!(v < zero)) put(bf, v);
+  }
+  for (; b < bins; ++b) {
+    bf += one;
+    const float v = masked(b);
+    if (!(v < zero)) put(bf, v);
+  }
+}
+
+// splat_side's fast path with kCarryColumn (hosts with SIMD): the column two neighbouring splats share
+// is kept in registers.
+void TileBuilder::splat_run_carry(const BinRun& r) const noexcept {
+  const float* va = r.va;
+  const float* vb = r.vb;
+  const std::uint8_t* ka = r.ka;
+  const std::uint8_t* kb = r.kb;
+  const float t = r.t, cx = r.cx, cy = r.cy, dcb = r.dcb, drb = r.drb;
+  const int lo = r.lo, hi = r.hi, bins = r.bins, W = r.W;
+  Acc* base = r.base;
+  // Along a row the next bin's splat usually shares a column of two pixels with this one (the
+  // line moves one pixel a bin). With kCarryColumn that column is kept in registers ("pending")
+  // until the next splat has added to it, instead of a store the next 16-byte load only half
+  // overlaps (no store forwarding: that stall was most of the host's build). Every pixel receives
+  // the same additions in the same order as splatting into memory one bin at a time, so the sums
+  // are the same bit for bit.
+  const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
+  Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
+  Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
+  const auto masked = [&](int b) {
+    const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
+    return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
+  };
+  const auto put = [&](float bf, float v) {
+    const float x = cx + bf * dcb, y = cy + bf * drb;
+    const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
+    const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+    Acc* q0 = base + static_cast<std::size_t>(y0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x0);
+    const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+    Acc* shared = east ? q0 : q0 + 1;  // the column the previous splat may have left pending
+    Acc* fresh = east ? q0 + 1 : q0;   // the column the next splat may share
+    const float ws0 = east ? w00 : w10, ws1 = east ? w01 : w11, wf0 = east ? w10 : w00, wf1 = east ? w11 : w01;
+    Acc s0, s1;
+    if (shared == pending) {
+      s0 = p0;
+      s1 = p1;
+    } else {
+      if (pending != nullptr) {
+        pending[0] = p0;
+        pending[W] = p1;
+      }
+      s0 = shared[0];
+      s1 = shared[W];
+    }
+    Acc f0 = fresh[0], f1 = fresh[W];
+    s0.sum += ws0 * v;
+    s0.weight += ws0;
+    f0.sum += wf0 * v;
+    f0.weight += wf0;
+    s1.sum += ws1 * v;
+    s1.weight += ws1;
+    f1.sum += wf1 * v;
+    f1.weight += wf1;
+    shared[0] = s0;
+    shared[W] = s1;
+    pending = fresh;
+    p0 = f0;
+    p1 = f1;
+  };
+  float bf = -1.0f;  // float(b), counted (as in the plain loop)
+  int b = 0;
+  for (; b < lo; ++b) {
+    bf += 1.0f;
+    const float v = masked(b);
+    if (!(v < 0.0f)) put(bf, v);
+  }
+  for (; b < hi; ++b) {
+    bf += 1.0f;
+    const float v = va[b] + t * (vb[b] - va[b]);
+    if (!(v < 0.0f)) put(bf, v);
+  }
+  for (; b < bins; ++b) {
+    bf += 1.0f;
+    const float v = masked(b);
+    if (!(v < 0.0f)) put(bf, v);
+  }
+  if (pending != nullptr) {
+    pending[0] = p0;
+    pending[W] = p1;
   }
 }
 

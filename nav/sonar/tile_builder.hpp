@@ -179,6 +179,21 @@ class TileBuilder {
     float sum;
     float weight;
   };
+  // One side's line of bins on splat_side()'s fast path: values and masks of this and the next
+  // scanline, the interpolation t, the raster position of bin 0 and the step per bin, the bins valid on
+  // both lines [lo, hi), the accumulator and its width.
+  struct BinRun {
+    const float* va;
+    const float* vb;
+    const std::uint8_t* ka;
+    const std::uint8_t* kb;
+    float t, cx, cy, dcb, drb;
+    int lo, hi, bins;
+    Acc* base;
+    int W;
+  };
+  void splat_run_plain(const BinRun& r) const noexcept;
+  void splat_run_carry(const BinRun& r) const noexcept;
   Span<Acc> acc_;               // weighted sum and weight, interleaved (one cache line per splat row)
   float* intensity_ = nullptr;  // W x H floats over the first half of acc_'s bytes (see normalise())
   Span<float> row_;             // one row of intensity, computed before its accumulator row is emptied
