@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace qnav::match {
@@ -27,6 +29,17 @@ float zncc_i8(const std::int8_t* a, const std::int8_t* b, std::size_t n) noexcep
 }
 
 namespace {
+// The float just below x (std::nextafter(x, -inf)) from its bits: the freestanding LEON3 build's libm
+// has no nextafterf. NaN and -inf are returned as they are.
+inline float next_below(float x) noexcept {
+  if (!(x == x) || x == -std::numeric_limits<float>::infinity()) return x;
+  if (x == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  std::uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  bits = x > 0.0f ? bits - 1u : bits + 1u;
+  std::memcpy(&x, &bits, sizeof x);
+  return x;
+}
 
 #if defined(__SSE2__) || defined(__ARM_NEON)
 constexpr bool kSimd = true;
@@ -335,7 +348,7 @@ std::size_t FcMatcher2d::appearance_pruned(const KeypointSet2d& a, const Keypoin
   // Row state; cut: a pair can join only if its z > cut (before the list is full: the float just
   // below min_appearance, so z > cut is z >= min_appearance; then the list's last z). A flat row's
   // cut is +inf.
-  const float open_cut = std::nextafter(min_app, -inf);
+  const float open_cut = next_below(min_app);
   struct Row {
     const std::int8_t* x;
     Candidate* list;
