@@ -423,27 +423,56 @@ void TileBuilder::splat_side(int i, int side, const Slot* bslot, float t, double
   }
 }
 
-// splat_side's fast path without kCarryColumn (LEON3 and other targets without SIMD): one bilinear
-// splat per bin straight into the accumulator.
-void TileBuilder::splat_run_plain(const BinRun& r) const noexcept {
+namespace {
+// The value of each bin of a fast-path run (TileBuilder::BinRun) at its sub-step, handed with float(b)
+// to put(bf, v) for every bin that has one: over [lo, hi) (valid on both lines) the interpolated value,
+// no mask read; elsewhere by the masks: both lines valid: interpolated; this line only: its value; the
+// next line only: its value from t >= 0.5; none: skipped. float(b) is counted (exact below 2^24: no
+// int-to-float conversion, which goes through memory on SPARC V8). one: 1.0f (as a value the caller
+// keeps in a register, see splat_run_plain).
+template <class Run, class Put>
+inline void for_each_bin_value(const Run& r, float one, Put&& put) noexcept {
   const float* va = r.va;
   const float* vb = r.vb;
   const std::uint8_t* ka = r.ka;
   const std::uint8_t* kb = r.kb;
-  const float t = r.t, cx = r.cx, cy = r.cy, dcb = r.dcb, drb = r.drb;
-  const int lo = r.lo, hi = r.hi, bins = r.bins, W = r.W;
-  Acc* base = r.base;
-  // 1 and 0 as values the compiler cannot fold (one_ is 1.0f): it keeps them in registers instead
-  // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
-  const float one = one_, zero = one - one;
-  const bool first_half = t < 0.5f;  // m == 2 (only the next line valid): its value from t >= 0.5
-  // The value of a bin outside [lo, hi), or -1 (skipped) when it has none at this sub-step.
+  const float t = r.t, zero = one - one;
+  const int lo = r.lo, hi = r.hi, bins = r.bins;
+  const bool first_half = t < 0.5f;
   const auto masked = [&](int b) {
     const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
     if (m == 0 || (m == 2 && first_half)) return -one;
-    // m == 1 (this line only): its value; m == 2 past the half: the next line's; both: interpolated.
     return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : vb[b]);
   };
+  float bf = -one;
+  int b = 0;
+  for (; b < lo; ++b) {
+    bf += one;
+    const float v = masked(b);
+    if (!(v < zero)) put(bf, v);
+  }
+  for (; b < hi; ++b) {
+    bf += one;
+    const float v = va[b] + t * (vb[b] - va[b]);
+    if (!(v < zero)) put(bf, v);
+  }
+  for (; b < bins; ++b) {
+    bf += one;
+    const float v = masked(b);
+    if (!(v < zero)) put(bf, v);
+  }
+}
+}  // namespace
+
+// splat_side's fast path without kCarryColumn (LEON3 and other targets without SIMD): one bilinear
+// splat per bin straight into the accumulator.
+void TileBuilder::splat_run_plain(const BinRun& r) const noexcept {
+  const float cx = r.cx, cy = r.cy, dcb = r.dcb, drb = r.drb;
+  const int W = r.W;
+  Acc* base = r.base;
+  // 1 as a value the compiler cannot fold (one_ is 1.0f): it keeps it (and 0) in registers instead
+  // of loading the constants from the GOT each bin (four instructions each on a PIC SPARC build).
+  const float one = one_;
   const auto put = [&](float bf, float v) {
     const float x = cx + bf * dcb, y = cy + bf * drb;
     const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
@@ -489,34 +518,14 @@ void TileBuilder::splat_run_plain(const BinRun& r) const noexcept {
     q1[1].weight += w11;
 #endif
   };
-  float bf = -one;  // float(b), counted: exact below 2^24, no int-to-float conversion (through memory on SPARC V8)
-  int b = 0;
-  for (; b < lo; ++b) {
-    bf += one;
-    const float v = masked(b);
-    if (!(v < zero)) put(bf, v);
-  }
-  for (; b < hi; ++b) {
-    bf += one;
-    const float v = va[b] + t * (vb[b] - va[b]);
-    if (!(v < zero)) put(bf, v);
-  }
-  for (; b < bins; ++b) {
-    bf += one;
-    const float v = masked(b);
-    if (!(v < zero)) put(bf, v);
-  }
+  for_each_bin_value(r, one, put);
 }
 
 // splat_side's fast path with kCarryColumn (hosts with SIMD): the column two neighbouring splats share
 // is kept in registers.
 void TileBuilder::splat_run_carry(const BinRun& r) const noexcept {
-  const float* va = r.va;
-  const float* vb = r.vb;
-  const std::uint8_t* ka = r.ka;
-  const std::uint8_t* kb = r.kb;
-  const float t = r.t, cx = r.cx, cy = r.cy, dcb = r.dcb, drb = r.drb;
-  const int lo = r.lo, hi = r.hi, bins = r.bins, W = r.W;
+  const float cx = r.cx, cy = r.cy, dcb = r.dcb, drb = r.drb;
+  const int W = r.W;
   Acc* base = r.base;
   // Along a row the next bin's splat usually shares a column of two pixels with this one (the
   // line moves one pixel a bin). With kCarryColumn that column is kept in registers ("pending")
@@ -527,10 +536,6 @@ void TileBuilder::splat_run_carry(const BinRun& r) const noexcept {
   const bool east = dcb >= 0.0f;  // the shared column: the left one moving east, the right one west
   Acc* pending = nullptr;         // top pixel of the column kept in p0 (row y0) and p1 (row y0 + 1)
   Acc p0{0.0f, 0.0f}, p1{0.0f, 0.0f};
-  const auto masked = [&](int b) {
-    const unsigned m = static_cast<unsigned>(ka[b]) | (static_cast<unsigned>(kb[b]) << 1);
-    return m == 3 ? va[b] + t * (vb[b] - va[b]) : (m == 1 ? va[b] : (m == 2 && t >= 0.5f ? vb[b] : -1.0f));
-  };
   const auto put = [&](float bf, float v) {
     const float x = cx + bf * dcb, y = cy + bf * drb;
     const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);  // x, y >= 0 here
@@ -567,23 +572,7 @@ void TileBuilder::splat_run_carry(const BinRun& r) const noexcept {
     p0 = f0;
     p1 = f1;
   };
-  float bf = -1.0f;  // float(b), counted (as in the plain loop)
-  int b = 0;
-  for (; b < lo; ++b) {
-    bf += 1.0f;
-    const float v = masked(b);
-    if (!(v < 0.0f)) put(bf, v);
-  }
-  for (; b < hi; ++b) {
-    bf += 1.0f;
-    const float v = va[b] + t * (vb[b] - va[b]);
-    if (!(v < 0.0f)) put(bf, v);
-  }
-  for (; b < bins; ++b) {
-    bf += 1.0f;
-    const float v = masked(b);
-    if (!(v < 0.0f)) put(bf, v);
-  }
+  for_each_bin_value(r, 1.0f, put);
   if (pending != nullptr) {
     pending[0] = p0;
     pending[W] = p1;
